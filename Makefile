@@ -1,0 +1,44 @@
+# contactqvi: two commands do everything on a fresh machine.
+#   make demo   install what is missing, run the flagship under mpirun -n 2
+#   make test   install what is missing, run the test suite serially and with 2 ranks
+VENV    ?= .venv
+PY      := $(VENV)/bin/python
+NP      ?= 2
+OUT     ?= results
+
+# OpenMPI refuses to run as root unless told to; set only when we are root.
+ifeq ($(shell id -u),0)
+MPIENV := OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+endif
+MPIENV  += OMPI_MCA_rmaps_base_oversubscribe=1 OMPI_MCA_btl=self,sm
+MPIRUN  := $(MPIENV) mpirun -n $(NP)
+
+.PHONY: deps venv demo test test-serial test-mpi benchmarks clean
+
+deps:
+	bash scripts/install-deps.sh
+
+$(PY): scripts/packages.txt pyproject.toml
+	$(MAKE) deps
+	/usr/bin/python3 -m venv --system-site-packages $(VENV)
+	$(PY) -m pip install --quiet --no-build-isolation --no-deps -e .
+	@touch $(PY)
+
+venv: $(PY)
+
+demo: $(PY)
+	$(MPIRUN) $(PY) demos/coulomb3d.py --output $(OUT)/coulomb3d
+
+test: test-serial test-mpi
+
+test-serial: $(PY)
+	$(PY) -m pytest -q -p no:cacheprovider tests
+
+test-mpi: $(PY)
+	$(MPIRUN) $(PY) -m mpi4py -m pytest -q -p no:cacheprovider -m "not serial" tests
+
+benchmarks: $(PY)
+	$(PY) benchmarks/run_all.py
+
+clean:
+	rm -rf $(OUT) .pytest_cache build *.egg-info

@@ -1,0 +1,121 @@
+"""Small-strain isotropic linear elasticity in UFL.
+
+Units are the caller's; the demos use SI (Pa, m, N).
+"""
+
+from __future__ import annotations
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import numpy as np
+import ufl
+
+import dolfinx
+import dolfinx.fem.petsc
+from dolfinx import fem, la
+from dolfinx import mesh as dmesh
+
+from contactqvi.meshes import tag_of
+from contactqvi.parameters import require, require_positive
+
+__all__ = [
+    "lame_parameters",
+    "strain",
+    "stress",
+    "elasticity_forms",
+    "rigid_motions_nullspace",
+]
+
+
+def lame_parameters(young: float, poisson: float) -> tuple[float, float]:
+    """Lamé parameters (mu, lambda) from Young's modulus E and Poisson's ratio nu.
+
+    Raises:
+        ParameterError: if E <= 0 or nu is outside (-1, 0.5).
+    """
+    require_positive("young", young)
+    require(-1.0 < poisson < 0.5, "poisson", f"must lie in (-1, 0.5), got {poisson!r}")
+    mu = young / (2.0 * (1.0 + poisson))
+    lmbda = young * poisson / ((1.0 + poisson) * (1.0 - 2.0 * poisson))
+    return mu, lmbda
+
+
+def strain(u: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+    """Small-strain tensor sym(grad u)."""
+    return ufl.sym(ufl.grad(u))
+
+
+def stress(u: ufl.core.expr.Expr, mu: float, lmbda: float) -> ufl.core.expr.Expr:
+    """Cauchy stress 2 mu eps(u) + lambda tr(eps(u)) I of isotropic Hooke's law."""
+    eps = strain(u)
+    return 2.0 * mu * eps + lmbda * ufl.tr(eps) * ufl.Identity(len(u))
+
+
+def elasticity_forms(
+    V: fem.FunctionSpace,
+    young: float,
+    poisson: float,
+    facet_tags: dmesh.MeshTags,
+    tractions: dict[str, tuple[float, ...]],
+    body_force: tuple[float, ...] | None = None,
+) -> tuple[fem.Form, fem.Form]:
+    """Compiled bilinear form a(u, v) = (sigma(u), eps(v)) and load l(v).
+
+    l(v) = (f, v) + sum over named boundaries of (t, v)_boundary.
+
+    Args:
+        V: vector Lagrange space.
+        young, poisson: E and nu.
+        facet_tags: facet tags with boundary names (see :mod:`contactqvi.meshes`).
+        tractions: surface traction vector per boundary name.
+        body_force: volume force density (or None).
+    """
+    mu, lmbda = lame_parameters(young, poisson)
+    msh = V.mesh
+    gdim = msh.geometry.dim
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    a = ufl.inner(stress(u, mu, lmbda), strain(v)) * ufl.dx
+    ds = ufl.Measure("ds", domain=msh, subdomain_data=facet_tags)
+    zero = fem.Constant(msh, np.zeros(gdim, dtype=PETSc.ScalarType))
+    L = ufl.inner(zero, v) * ufl.dx
+    if body_force is not None:
+        L += ufl.inner(_vector_constant(msh, body_force, "body_force"), v) * ufl.dx
+    for name, traction in tractions.items():
+        L += ufl.inner(_vector_constant(msh, traction, f"traction[{name}]"), v) * ds(tag_of(facet_tags, name))
+    return fem.form(a), fem.form(L)
+
+
+def _vector_constant(msh: dmesh.Mesh, value: tuple[float, ...], name: str) -> fem.Constant:
+    array = np.asarray(value, dtype=PETSc.ScalarType)
+    require(array.shape == (msh.geometry.dim,), name, f"must have {msh.geometry.dim} components, got {value!r}")
+    require(bool(np.all(np.isfinite(array))), name, f"must be finite, got {value!r}")
+    return fem.Constant(msh, array)
+
+
+def rigid_motions_nullspace(V: fem.FunctionSpace) -> PETSc.NullSpace:
+    """Orthonormal rigid-body modes (3 translations, 3 rotations in 3D; 2 + 1 in 2D).
+
+    The near-nullspace for smoothed-aggregation AMG on elasticity operators.
+    """
+    msh = V.mesh
+    gdim = msh.geometry.dim
+    index_map, bs = V.dofmap.index_map, V.dofmap.index_map_bs
+    n_rot = 3 if gdim == 3 else 1
+    basis = [la.vector(index_map, bs=bs, dtype=PETSc.ScalarType) for _ in range(gdim + n_rot)]
+    n_owned = index_map.size_local
+    x = V.tabulate_dof_coordinates()[:n_owned]
+    values = [b.array[: n_owned * bs].reshape(-1, bs) for b in basis]
+    for i in range(gdim):
+        values[i][:, i] = 1.0
+    if gdim == 3:
+        values[3][:, 0], values[3][:, 1] = -x[:, 1], x[:, 0]
+        values[4][:, 0], values[4][:, 2] = x[:, 2], -x[:, 0]
+        values[5][:, 2], values[5][:, 1] = x[:, 1], -x[:, 2]
+    else:
+        values[2][:, 0], values[2][:, 1] = -x[:, 1], x[:, 0]
+    la.orthonormalize(basis)
+    vectors = [la.create_petsc_vector_wrap(b) for b in basis]
+    nullspace = PETSc.NullSpace().create(vectors=vectors, comm=msh.comm)
+    nullspace._basis = (basis, vectors)  # the PETSc vectors wrap dolfinx memory: keep it alive
+    return nullspace

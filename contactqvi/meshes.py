@@ -1,0 +1,193 @@
+"""Meshes of the papers' geometries, with named facet tags, and gmsh readers.
+
+Every constructor returns ``(mesh, facet_tags)``; the integer tag of a named
+boundary is ``tag_of(facet_tags, name)``, and the names are stored on the tags
+object as ``facet_tags.names`` (``dict[str, int]``).
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+import typing
+
+from mpi4py import MPI
+
+import numpy as np
+
+import dolfinx
+from dolfinx import mesh as dmesh
+
+from contactqvi.parameters import require
+
+__all__ = [
+    "BOX_BOUNDARIES",
+    "SQUARE_BOUNDARIES",
+    "INTERVAL_BOUNDARIES",
+    "contact_body_sizes",
+    "create_contact_body",
+    "create_unit_square",
+    "create_unit_interval",
+    "read_gmsh",
+    "tag_of",
+    "boundary_facets",
+]
+
+#: Boundary names of the contact body Omega(d) of seed 000, Sect. 7.
+BOX_BOUNDARIES = {"dirichlet": 1, "right": 2, "top": 3, "contact": 4, "front": 5, "back": 6}
+#: Boundary names of the unit square.
+SQUARE_BOUNDARIES = {"left": 1, "right": 2, "bottom": 3, "top": 4}
+#: Boundary names of the unit interval.
+INTERVAL_BOUNDARIES = {"left": 1, "right": 2}
+
+GapFunction = typing.Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+
+def _tag_facets(msh: dmesh.Mesh, markers: dict[str, typing.Callable], names: dict[str, int]) -> dmesh.MeshTags:
+    """Facet tags from boundary markers; a facet takes the first marker that claims it."""
+    fdim = msh.topology.dim - 1
+    msh.topology.create_connectivity(fdim, msh.topology.dim)
+    tagged: dict[int, int] = {}
+    for name, marker in markers.items():
+        for facet in dmesh.locate_entities_boundary(msh, fdim, marker):
+            tagged.setdefault(int(facet), names[name])
+    facets = np.fromiter(sorted(tagged), dtype=np.int32, count=len(tagged))
+    values = np.array([tagged[f] for f in facets], dtype=np.int32)
+    tags = dmesh.meshtags(msh, fdim, facets, values)
+    tags.names = dict(names)
+    return tags
+
+
+def tag_of(facet_tags: dmesh.MeshTags, name: str) -> int:
+    """Integer tag of the boundary called ``name``; unknown names raise."""
+    names = getattr(facet_tags, "names", {})
+    require(name in names, "boundary", f"unknown boundary {name!r}; known: {', '.join(sorted(names))}")
+    return names[name]
+
+
+def boundary_facets(facet_tags: dmesh.MeshTags, name: str) -> np.ndarray:
+    """Local indices of the facets of boundary ``name``."""
+    return facet_tags.find(tag_of(facet_tags, name))
+
+
+def contact_body_sizes(lev: int) -> dict[str, int]:
+    """Cell counts, contact nodes p and free dofs n of Omega(d) at level ``lev``.
+
+    Seed 000, Sect. 7: nx1 = ceil(4 2^(lev/2)), nx2 = nx3 = ceil(2 2^(lev/2)),
+    p = nx1 (nx2 + 1) and n = 3 nx1 (nx2 + 1)(nx3 + 1) (Table 2).
+    """
+    require(isinstance(lev, (int, np.integer)) and lev >= 0, "lev", f"must be an integer >= 0, got {lev!r}")
+    scale = 2.0 ** (lev / 2)
+    nx1 = math.ceil(4 * scale - 1e-12)
+    nx2 = nx3 = math.ceil(2 * scale - 1e-12)
+    return {"nx1": nx1, "nx2": nx2, "nx3": nx3, "p": nx1 * (nx2 + 1), "n": 3 * nx1 * (nx2 + 1) * (nx3 + 1)}
+
+
+def create_contact_body(
+    comm: MPI.Comm, lev: int, gap: GapFunction, length: float = 2.0, width: float = 1.0, height: float = 1.0
+) -> tuple[dmesh.Mesh, dmesh.MeshTags]:
+    """Hexahedral mesh of Omega(d) = {(x1, x2) in (0,L)x(0,W), d(x1,x2) < x3 < H}.
+
+    Seed 000, Sect. 7: the box is cut into nx1 nx2 nx3 hexahedra (see
+    :func:`contact_body_sizes`) and the vertices are moved vertically to
+    x3 = d + s (H - d) for s uniform in [0, 1]. Facet tags: ``dirichlet``
+    (x1 = 0), ``right`` (x1 = L), ``top`` (x3 = H), ``contact`` (bottom),
+    ``front`` (x2 = 0), ``back`` (x2 = W).
+
+    Args:
+        comm: communicator the mesh is distributed over.
+        lev: discretisation level (>= 0).
+        gap: the initial gap d(x1, x2) >= 0, vectorised over numpy arrays.
+        length, width, height: box dimensions (m).
+    """
+    sizes = contact_body_sizes(lev)
+    for name, value in (("length", length), ("width", width), ("height", height)):
+        require(value > 0, name, f"must be > 0, got {value!r}")
+    msh = dmesh.create_box(
+        comm,
+        [np.zeros(3), np.array([length, width, height])],
+        [sizes["nx1"], sizes["nx2"], sizes["nx3"]],
+        dmesh.CellType.hexahedron,
+    )
+    x = msh.geometry.x
+    d = np.asarray(gap(x[:, 0], x[:, 1]), dtype=float)
+    d = np.broadcast_to(d, x[:, 0].shape)
+    lowest = msh.comm.allreduce(float(d.min()), op=MPI.MIN)
+    highest = msh.comm.allreduce(float(d.max()), op=MPI.MAX)
+    require(lowest >= 0, "gap", f"initial gap must be >= 0 everywhere (no initial penetration), min = {lowest:g}")
+    require(highest < height, "gap", f"gap must stay below the height {height:g}, max = {highest:g}")
+    tol = 1e-10 * max(length, width, height)
+    markers = {
+        "dirichlet": lambda p: np.isclose(p[0], 0.0, atol=tol),
+        "right": lambda p: np.isclose(p[0], length, atol=tol),
+        "top": lambda p: np.isclose(p[2], height, atol=tol),
+        "contact": lambda p: np.isclose(p[2], 0.0, atol=tol),
+        "front": lambda p: np.isclose(p[1], 0.0, atol=tol),
+        "back": lambda p: np.isclose(p[1], width, atol=tol),
+    }
+    tags = _tag_facets(msh, markers, BOX_BOUNDARIES)
+    x[:, 2] = d + x[:, 2] / height * (height - d)
+    return msh, tags
+
+
+def create_unit_square(
+    comm: MPI.Comm, n: int, cell_type: str = "quadrilateral"
+) -> tuple[dmesh.Mesh, dmesh.MeshTags]:
+    """Unit square with n x n cells (Q1 quadrilaterals or P1 triangles).
+
+    Facet tags ``left`` (x = 0), ``right`` (x = 1), ``bottom`` (y = 0), ``top`` (y = 1).
+    """
+    require(isinstance(n, (int, np.integer)) and n >= 1, "n", f"must be an integer >= 1, got {n!r}")
+    kinds = {"quadrilateral": dmesh.CellType.quadrilateral, "triangle": dmesh.CellType.triangle}
+    require(cell_type in kinds, "cell_type", f"must be one of {sorted(kinds)}, got {cell_type!r}")
+    msh = dmesh.create_unit_square(comm, n, n, kinds[cell_type])
+    markers = {
+        "left": lambda p: np.isclose(p[0], 0.0),
+        "right": lambda p: np.isclose(p[0], 1.0),
+        "bottom": lambda p: np.isclose(p[1], 0.0),
+        "top": lambda p: np.isclose(p[1], 1.0),
+    }
+    return msh, _tag_facets(msh, markers, SQUARE_BOUNDARIES)
+
+
+def create_unit_interval(comm: MPI.Comm, n: int) -> tuple[dmesh.Mesh, dmesh.MeshTags]:
+    """Unit interval with n cells; facet tags ``left`` and ``right``."""
+    require(isinstance(n, (int, np.integer)) and n >= 1, "n", f"must be an integer >= 1, got {n!r}")
+    msh = dmesh.create_unit_interval(comm, n)
+    markers = {"left": lambda p: np.isclose(p[0], 0.0), "right": lambda p: np.isclose(p[0], 1.0)}
+    return msh, _tag_facets(msh, markers, INTERVAL_BOUNDARIES)
+
+
+def read_gmsh(source: str | pathlib.Path, comm: MPI.Comm, gdim: int = 3) -> tuple[dmesh.Mesh, dmesh.MeshTags]:
+    """Read a gmsh ``.msh`` file (or a ``.py``/``.geo`` script) on rank 0 and distribute it.
+
+    Physical groups of dimension gdim-1 become facet tags; their gmsh names become
+    the boundary names (``facet_tags.names``).
+    """
+    import gmsh
+
+    from dolfinx.io import gmshio
+
+    path = pathlib.Path(source)
+    exists = comm.bcast(path.is_file() if comm.rank == 0 else None, root=0)
+    require(exists, "mesh", f"mesh file {str(path)!r} not found")
+    require(path.suffix in (".msh", ".geo"), "mesh", f"expected a .msh or .geo file, got {path.suffix!r}")
+    initialised = gmsh.isInitialized()
+    if not initialised:
+        gmsh.initialize(interruptible=False)
+    gmsh.option.setNumber("General.Terminal", 0)
+    names: dict[str, int] = {}
+    try:
+        if comm.rank == 0:
+            gmsh.open(str(path))
+            if path.suffix == ".geo":
+                gmsh.model.mesh.generate(gdim)
+            for dim, tag in gmsh.model.getPhysicalGroups(gdim - 1):
+                names[gmsh.model.getPhysicalName(dim, tag) or str(tag)] = tag
+        names = comm.bcast(names, root=0)
+        msh, _, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=gdim)
+    finally:
+        if not initialised:
+            gmsh.finalize()
+    facet_tags.names = names
+    return msh, facet_tags

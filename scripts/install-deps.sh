@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Install the system packages contactqvi needs (DOLFINx 0.9 and friends from Debian).
+#
+# Idempotent: does nothing when every package of scripts/packages.txt is installed.
+# On a Debian release older than trixie (13) it adds the trixie suite with a low
+# pin (Pin-Priority 100) so that only the packages we ask for with `-t trixie`
+# come from it; on trixie or newer it installs them from the release itself.
+set -euo pipefail
+
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+mapfile -t packages < <(grep -v -e '^\s*#' -e '^\s*$' "$here/packages.txt")
+
+# A package is missing when it is not installed or older than its minimum version.
+missing=()
+for spec in "${packages[@]}"; do
+    pkg=${spec%%>=*}
+    status=$(dpkg-query -W -f='${Status} ${Version}' "$pkg" 2>/dev/null || true)
+    if [[ "$status" != "install ok installed "* ]]; then
+        missing+=("$pkg")
+    elif [[ "$spec" == *">="* ]] && ! dpkg --compare-versions "${status##* }" ge "${spec#*>=}"; then
+        missing+=("$pkg")
+    fi
+done
+if [ ${#missing[@]} -eq 0 ]; then
+    echo "install-deps: all ${#packages[@]} packages already installed"
+    exit 0
+fi
+echo "install-deps: missing: ${missing[*]}"
+
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { echo "install-deps: need root or sudo" >&2; exit 1; }
+    sudo="sudo"
+fi
+
+# Installing from trixie upgrades base-files, after which /etc/os-release says 13:
+# our own sources file is what tells that this system is really a pinned older one.
+trixie_sources=/etc/apt/sources.list.d/contactqvi-trixie.sources
+. /etc/os-release
+target=()
+if [ -f "$trixie_sources" ] || { [ "${ID:-}" = debian ] && [ "${VERSION_ID:-99}" -lt 13 ]; }; then
+    echo "install-deps: Debian older than trixie: using trixie with Pin-Priority 100"
+    $sudo tee "$trixie_sources" >/dev/null <<SRC
+Types: deb
+URIs: http://deb.debian.org/debian
+Suites: trixie
+Components: main
+Signed-By: /usr/share/keyrings/debian-archive-keyring.gpg
+SRC
+    $sudo tee /etc/apt/preferences.d/contactqvi-trixie >/dev/null <<PIN
+Package: *
+Pin: release n=trixie
+Pin-Priority: 100
+PIN
+    target=(-t trixie)
+fi
+
+echo "install-deps: apt-get update"
+$sudo apt-get update -q
+echo "install-deps: apt-get install ${target[*]} ${missing[*]}"
+DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q --no-install-recommends "${target[@]}" "${missing[@]}"
+echo "install-deps: done"

@@ -1,0 +1,39 @@
+"""Shared fixtures: the same test files run serially and under ``mpirun -n 2``."""
+
+from __future__ import annotations
+
+import gc
+import pathlib
+import tempfile
+
+from mpi4py import MPI
+
+import pytest
+
+
+@pytest.fixture(autouse=True)
+def _collect_and_synchronise():
+    """Free PETSc objects collectively and keep ranks in step between tests."""
+    yield
+    gc.collect()
+    MPI.COMM_WORLD.Barrier()
+
+
+@pytest.fixture
+def mpi_tmp_path() -> pathlib.Path:
+    """A temporary directory shared by all ranks (pytest's tmp_path differs per rank)."""
+    comm = MPI.COMM_WORLD
+    path = tempfile.mkdtemp(prefix="contactqvi-") if comm.rank == 0 else None
+    yield pathlib.Path(comm.bcast(path, root=0))
+    comm.Barrier()
+
+
+def pytest_collection_modifyitems(config, items):
+    """Tests marked ``serial`` are deselected when running on more than one rank."""
+    if MPI.COMM_WORLD.size == 1:
+        return
+    selected = [item for item in items if "serial" not in item.keywords]
+    deselected = [item for item in items if "serial" in item.keywords]
+    if deselected:
+        config.hook.pytest_deselected(items=deselected)
+        items[:] = selected
