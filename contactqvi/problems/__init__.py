@@ -1,0 +1,1 @@
+"""Problem data of the papers (geometries, loads, materials, reference tables); no algorithms."""
