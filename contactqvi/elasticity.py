@@ -5,14 +5,11 @@ Units are the caller's; the demos use SI (Pa, m, N).
 
 from __future__ import annotations
 
-from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
 import ufl
 
-import dolfinx
-import dolfinx.fem.petsc
 from dolfinx import fem, la
 from dolfinx import mesh as dmesh
 
@@ -115,7 +112,9 @@ def rigid_motions_nullspace(V: fem.FunctionSpace) -> PETSc.NullSpace:
     else:
         values[2][:, 0], values[2][:, 1] = -x[:, 1], x[:, 0]
     la.orthonormalize(basis)
-    vectors = [la.create_petsc_vector_wrap(b) for b in basis]
-    nullspace = PETSc.NullSpace().create(vectors=vectors, comm=msh.comm)
-    nullspace._basis = (basis, vectors)  # the PETSc vectors wrap dolfinx memory: keep it alive
-    return nullspace
+    vectors = []
+    for b in basis:  # PETSc-owned copies: the null space keeps references to them
+        vec = la.create_petsc_vector(index_map, bs)
+        vec.array[:] = b.array[: n_owned * bs]
+        vectors.append(vec)
+    return PETSc.NullSpace().create(vectors=vectors, comm=msh.comm)

@@ -112,20 +112,31 @@ def write_xdmf(
     functions: typing.Sequence[fem.Function] = (),
     meshtags: typing.Sequence[dmesh.MeshTags] = (),
 ) -> None:
-    """Write a mesh, P1/DG0 functions and meshtags to XDMF (+ its .h5 file)."""
-    final = pathlib.Path(path)
-    with atomic_path(msh.comm, final.with_suffix(".h5")) as tmp_h5:
-        tmp_xdmf = tmp_h5.with_suffix(".xdmf")
-        with io.XDMFFile(msh.comm, str(tmp_xdmf), "w") as xdmf:
+    """Write a mesh, P1/DG0 functions and meshtags to ``path`` (.xdmf) and its .h5 file.
+
+    Both are written under temporary names; the .h5 is renamed first and the
+    .xdmf (the file ParaView opens) last, so a complete .xdmf means complete data.
+    """
+    final = pathlib.Path(path).with_suffix(".xdmf")
+    tmp = final.with_name(f".{final.stem}.partial.xdmf")
+    comm = msh.comm
+    try:
+        with io.XDMFFile(comm, str(tmp), "w") as xdmf:
             xdmf.write_mesh(msh)
             for tags in meshtags:
                 xdmf.write_meshtags(tags, msh.geometry)
             for f in functions:
                 xdmf.write_function(f, 0.0)
-        if msh.comm.rank == 0:  # point the .xdmf at the final .h5 name, then move it into place
-            text = tmp_xdmf.read_text().replace(tmp_h5.name, final.with_suffix(".h5").name)
-            tmp_xdmf.write_text(text)
-            os.replace(tmp_xdmf, final.with_suffix(".xdmf"))
+        comm.Barrier()
+        if comm.rank == 0:
+            os.replace(tmp.with_suffix(".h5"), final.with_suffix(".h5"))
+            tmp.write_text(tmp.read_text().replace(tmp.with_suffix(".h5").name, final.with_suffix(".h5").name))
+            os.replace(tmp, final)
+    finally:
+        comm.Barrier()
+        if comm.rank == 0:
+            for leftover in (tmp, tmp.with_suffix(".h5")):
+                leftover.unlink(missing_ok=True)
 
 
 def gather_vertex_values(u: fem.Function) -> tuple[np.ndarray, np.ndarray] | tuple[None, None]:
@@ -144,7 +155,8 @@ def gather_vertex_values(u: fem.Function) -> tuple[np.ndarray, np.ndarray] | tup
     if comm.rank != 0:
         return None, None
     x, values = np.vstack(xs), np.vstack(vs)
-    order = np.lexsort((x[:, 0], x[:, 1], x[:, 2]))
+    keys = np.round(x / max(np.abs(x).max(), 1e-300), 10)  # immune to round-off in the coordinates
+    order = np.lexsort((keys[:, 0], keys[:, 1], keys[:, 2]))
     return x[order], values[order]
 
 

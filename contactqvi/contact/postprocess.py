@@ -52,3 +52,31 @@ def contact_fields(problem: ContactProblem, u: PETSc.Vec, result: SCDNewtonResul
     for f in (traction, slip, state, pressure, gap):
         f.x.scatter_forward()
     return [displacement, traction, slip, state, pressure, gap]
+
+
+def plot_contact_states(path: str, problem: ContactProblem, u: PETSc.Vec, result: SCDNewtonResult) -> bool:
+    """PNG of the deformed contact surface coloured by contact state (seed 000, Fig. 2).
+
+    Gathers the contact nodes on rank 0 (output only). Returns False, with a
+    logged reason, when no display can be had; never raises for plotting issues.
+    """
+    from contactqvi.io import start_virtual_display
+
+    comm = problem.comm
+    x = problem.V.tabulate_dof_coordinates()[problem.contact_blk]
+    x = x + (u.array.reshape(-1, 3)[problem.contact_blk] - problem.shift.array.reshape(-1, 3)[problem.contact_blk])
+    xs, states = comm.gather(x, root=0), comm.gather(result.states, root=0)
+    ok = start_virtual_display() if comm.rank == 0 else None
+    if comm.rank == 0 and ok:
+        import pyvista
+
+        cloud = pyvista.PolyData(np.vstack(xs))
+        cloud["contact_state"] = np.concatenate(states).astype(float)
+        surface = cloud.delaunay_2d()
+        plotter = pyvista.Plotter(off_screen=True, window_size=(1200, 700))
+        plotter.add_mesh(surface, scalars="contact_state", cmap="viridis", clim=(0, 5), show_edges=True)
+        plotter.view_xy()
+        plotter.add_text("contact state: 0 no contact, 1 sliding, 2 sticking, 3-5 weak", font_size=10)
+        plotter.screenshot(path)
+        plotter.close()
+    return bool(comm.bcast(ok, root=0))

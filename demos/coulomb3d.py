@@ -1,0 +1,151 @@
+"""Static contact of an elastic body with a rigid foundation and Coulomb friction (seed 000).
+
+This demo illustrates how to:
+  * build the body Omega(d) of seed 000, Sect. 7, at discretisation level ``--lev``;
+  * assemble the generalized equation 0 in A u - l + Q(u) (6.3) in displacements;
+  * solve it with the SCD semismooth* Newton method (Sects. 4-6) on PETSc objects,
+    in parallel (``mpirun -n 2 python demos/coulomb3d.py``);
+  * optionally start from the interpolated solution of the previous level (Table 3);
+  * write ParaView files, ``summary.json`` and ``solution.npz`` to ``--output``.
+
+Units are SI (m, Pa). Unknown options starting with '-' go to PETSc, e.g.
+``-coulomb_ksp_monitor`` or ``-coulomb_ksp_type preonly -coulomb_pc_type lu``.
+"""
+
+from __future__ import annotations
+
+import logging
+import sys
+import time
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from dolfinx import fem
+
+from contactqvi import cli, io, meshes
+from contactqvi.contact import SCDNewtonSolver, build_contact_problem
+from contactqvi.contact.postprocess import contact_fields, plot_contact_states
+from contactqvi.contact.scd_newton import PARAMETERS
+from contactqvi.parameters import ParameterError, require
+from contactqvi.problems import coulomb as data
+from contactqvi.transfer import interpolate_nonmatching
+
+logger = logging.getLogger("coulomb3d")
+
+
+def parse(argv: list[str] | None = None):
+    parser = cli.make_parser(__doc__.split("\n")[0], "results/coulomb3d")
+    parser.add_argument("--lev", type=int, default=5, help="discretisation level (Table 2)")
+    parser.add_argument("--geometry", default="d1", choices=sorted(data.GEOMETRIES), help="bottom surface d")
+    parser.add_argument("--load", default="L1", choices=sorted(data.LOADS), help="load case")
+    parser.add_argument("--friction", type=float, default=data.FRICTION, help="Coulomb friction coefficient F")
+    parser.add_argument("--young", type=float, default=data.YOUNG, help="Young's modulus E (Pa)")
+    parser.add_argument("--poisson", type=float, default=data.POISSON, help="Poisson's ratio nu")
+    parser.add_argument("--tol", type=float, default=PARAMETERS["tol"][0], help=PARAMETERS["tol"][1])
+    parser.add_argument("--rtol", type=float, default=PARAMETERS["rtol"][0], help=PARAMETERS["rtol"][1])
+    parser.add_argument(
+        "--max-iterations", type=int, default=PARAMETERS["max_iterations"][0], help=PARAMETERS["max_iterations"][1]
+    )
+    parser.add_argument("--state-tol", type=float, default=PARAMETERS["state_tol"][0], help=PARAMETERS["state_tol"][1])
+    parser.add_argument(
+        "--no-elimination", action="store_true", help="keep the identity rows in the Krylov solve (paper's variant)"
+    )
+    parser.add_argument("--initial", default="zero", choices=["zero", "nested"], help="u0 = 0 or nested (Table 3)")
+    parser.add_argument("--nested-from", type=int, default=3, help="coarsest level of a nested start (solved from 0)")
+    parser.add_argument("--no-plot", action="store_true", help="skip the PNG of the contact states")
+    args = cli.parse_args(parser, argv)
+    require(args.lev >= 0, "lev", f"must be >= 0, got {args.lev}")
+    require(args.friction >= 0, "friction", f"must be >= 0, got {args.friction}")
+    require(0 <= args.nested_from < args.lev or args.initial == "zero", "nested-from", "must lie in [0, lev)")
+    return args
+
+
+def solve_level(args, lev: int, initial: fem.Function | None):
+    """Build and solve the problem at level ``lev``; returns (problem, u, result, seconds)."""
+    comm = MPI.COMM_WORLD
+    t0 = time.perf_counter()
+    msh, facet_tags = meshes.create_contact_body(comm, lev, data.gap_function(args.geometry))
+    problem = build_contact_problem(
+        msh, facet_tags, args.young, args.poisson, data.tractions(args.load), args.friction
+    )
+    u = problem.A.createVecRight()
+    if initial is not None:
+        problem.shift.copy(u)
+        u.axpy(1.0, interpolate_nonmatching(initial, problem.V, padding=0.05).x.petsc_vec)
+    assembly = time.perf_counter() - t0
+    parameters = {
+        "tol": args.tol,
+        "rtol": args.rtol,
+        "max_iterations": args.max_iterations,
+        "state_tol": args.state_tol,
+        "eliminate_fixed_rows": not args.no_elimination,
+    }
+    solver = SCDNewtonSolver(problem, parameters)
+    logger.info("lev %d: p = %d contact nodes, n = %d free dofs, %d ranks", lev, problem.n_contact, problem.n_free, comm.size)
+    result = solver.solve(u)
+    result.timings["assembly"] = assembly
+    logger.info(
+        "lev %d: %s after %d Newton steps, %d Krylov iterations, gamma = %.4e",
+        lev, result.status, result.iterations, result.krylov_iterations, result.gamma,
+    )
+    return problem, u, result
+
+
+def main(argv: list[str] | None = None) -> int:
+    comm = MPI.COMM_WORLD
+    try:
+        args = parse(argv)
+    except ParameterError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    out = io.prepare_output_dir(comm, args.output)
+    levels = range(args.nested_from, args.lev + 1) if args.initial == "nested" else [args.lev]
+    initial, runs = None, []
+    for lev in levels:
+        problem, u, result = solve_level(args, lev, initial)
+        runs.append({"lev": lev, "status": result.status, "iterations": result.iterations,
+                     "krylov_iterations": result.krylov_iterations})
+        if not result.converged:
+            break
+        initial = fem.Function(problem.V, name="displacement")
+        problem.physical_displacement(u, initial)
+
+    case = f"{args.geometry}/{args.load}"
+    paper = (data.PAPER_TABLE3 if args.initial == "nested" else data.PAPER_TABLE2).get(args.lev, {}).get(case)
+    summary = {
+        "problem": "coulomb3d",
+        "status": result.status,
+        "parameters": {k: v for k, v in vars(args).items()},
+        "petsc_options": PETSc.Options().getAll(),
+        "mpi_size": comm.size,
+        "p": problem.n_contact,
+        "n": problem.n_free,
+        "iterations": result.iterations,
+        "krylov_iterations": result.krylov_iterations,
+        "gamma": result.gamma,
+        "residual_history": [h["residual"] for h in result.history],
+        "history": result.history,
+        "timings": result.timings,
+        "levels": runs,
+        "paper": None if paper is None else {"iterations": paper[0], "gmres": paper[1]},
+    }
+    if result.converged:
+        fields = contact_fields(problem, u, result)
+        io.write_vtx(out / "displacement.bp", [f for f in fields if f.function_space is problem.V])
+        io.write_xdmf(out / "contact.xdmf", problem.V.mesh, fields)
+        io.write_solution_npz(out / "solution.npz", fields[0])
+        if not args.no_plot:
+            summary["plot"] = plot_contact_states(str(out / "contact_states.png"), problem, u, result)
+        norm = fields[0].x.petsc_vec.norm()
+        if comm.rank == 0:
+            print(f"||u~||_2 = {norm:.10e}  ({result.iterations} Newton steps, {result.krylov_iterations} Krylov)")
+    io.write_summary(comm, out / "summary.json", summary)
+    if not result.converged:
+        logger.error("not converged: status %s (see %s)", result.status, out / "summary.json")
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
