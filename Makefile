@@ -35,7 +35,7 @@ test-serial: $(PY)
 	$(PY) -m pytest -q -p no:cacheprovider tests
 
 test-mpi: $(PY)
-	$(MPIRUN) $(PY) -m mpi4py -m pytest -q -p no:cacheprovider -m "not serial" tests
+	$(MPIRUN) $(PY) -m mpi4py -m pytest -q -p no:cacheprovider tests
 
 benchmarks: $(PY)
 	$(PY) benchmarks/run_all.py

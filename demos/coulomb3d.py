@@ -27,6 +27,7 @@ from contactqvi import cli, io, meshes
 from contactqvi.contact import SCDNewtonSolver, build_contact_problem
 from contactqvi.contact.postprocess import contact_fields, plot_contact_states
 from contactqvi.contact.scd_newton import PARAMETERS
+from contactqvi.elasticity import lame_parameters
 from contactqvi.parameters import ParameterError, require
 from contactqvi.problems import coulomb as data
 from contactqvi.transfer import interpolate_nonmatching
@@ -57,6 +58,9 @@ def parse(argv: list[str] | None = None):
     args = cli.parse_args(parser, argv)
     require(args.lev >= 0, "lev", f"must be >= 0, got {args.lev}")
     require(args.friction >= 0, "friction", f"must be >= 0, got {args.friction}")
+    lame_parameters(args.young, args.poisson)
+    require(0 < args.tol < 1, "tol", f"must lie in (0, 1), got {args.tol}")
+    require(0 < args.rtol < 1, "rtol", f"must lie in (0, 1), got {args.rtol}")
     require(0 <= args.nested_from < args.lev or args.initial == "zero", "nested-from", "must lie in [0, lev)")
     return args
 

@@ -155,7 +155,7 @@ class SCDNewtonSolver:
         diff.destroy()
         return norm, v, z
 
-    def _newton_matrix(self, Wt: np.ndarray, Ut: np.ndarray) -> PETSc.Mat:
+    def newton_matrix(self, Wt: np.ndarray, Ut: np.ndarray) -> PETSc.Mat:
         """J = D A + U with D = W*^T, U = U*^T on contact nodes, (I, 0) elsewhere."""
         blk = self.problem.contact_blk
         _set_diagonal_blocks(self._D, blk, Wt)
@@ -209,7 +209,7 @@ class SCDNewtonSolver:
             # Newton step (5.4): (W*^T A + U*^T) du = -(W*^T y1^ + U*^T y2^), y1^ = gamma y2^ = gamma (u - d^)
             t0 = time.perf_counter()
             Wt, Ut = scd_adjoint_blocks(v, z, states, gamma, problem.friction)
-            J = self._newton_matrix(Wt, Ut)
+            J = self.newton_matrix(Wt, Ut)
             y2.waxpy(-1.0, dhat, u)
             self._D.mult(y2, rhs)
             rhs.scale(gamma)

@@ -1,0 +1,122 @@
+"""Nodal Coulomb law (seed 000, Prop. 6.4, Table 1, Prop. 6.6, Cor. 6.7)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.optimize
+
+from contactqvi.contact.nodal import State, classify, lipschitz_constant, resolvent, scd_adjoint_blocks
+
+GAMMA, FRICTION = 3.0, 0.4
+rng = np.random.default_rng(20221107)
+
+
+def _points(kind: str, m: int = 40) -> np.ndarray:
+    """Resolvent arguments w landing in a given region of Table 1."""
+    w = rng.normal(size=(m, 3))
+    if kind == "no_contact":
+        w[:, 2] = np.abs(w[:, 2]) + 0.1
+    elif kind == "sliding":
+        w[:, 2] = -np.abs(w[:, 2]) - 0.1
+        w[:, :2] *= (FRICTION * np.abs(w[:, 2]) + 0.5)[:, None] / np.linalg.norm(w[:, :2], axis=1)[:, None]
+    elif kind == "sticking":
+        w[:, 2] = -np.abs(w[:, 2]) - 0.1
+        w[:, :2] *= (0.5 * FRICTION * np.abs(w[:, 2]))[:, None] / np.linalg.norm(w[:, :2], axis=1)[:, None]
+    return w
+
+
+@pytest.mark.parametrize("kind", ["no_contact", "sliding", "sticking", "mixed"])
+def test_resolvent_solves_inclusion_and_matches_minimisation(kind):
+    """w - gamma v in Q~(v), and v12 minimises gamma/2 |v12|^2 - w12.v12 + F lambda |v12| (lambda fixed)."""
+    w = _points(kind)
+    v, z = resolvent(w, GAMMA, FRICTION)
+    np.testing.assert_allclose(z, w - GAMMA * v, atol=1e-14)
+    lam = -z[:, 2]
+    assert np.all(v[:, 2] >= 0) and np.all(lam >= 0) and np.allclose(v[:, 2] * lam, 0)
+    g, slip = z[:, :2], np.linalg.norm(v[:, :2], axis=1)
+    assert np.all(np.linalg.norm(g, axis=1) <= FRICTION * lam + 1e-12)
+    sliding = slip > 0
+    expected = (FRICTION * lam[sliding] / slip[sliding])[:, None] * v[sliding, :2]
+    np.testing.assert_allclose(g[sliding], expected, atol=1e-12)
+    for wi, vi, li in zip(w, v, lam):
+        energy = lambda x: 0.5 * GAMMA * x @ x - wi[:2] @ x + FRICTION * li * np.linalg.norm(x)
+        best = scipy.optimize.minimize(energy, x0=wi[:2] / GAMMA, method="Nelder-Mead",
+                                       options={"xatol": 1e-12, "fatol": 1e-14, "maxiter": 4000}).x
+        assert energy(vi[:2]) <= energy(best) + 1e-10
+        assert np.linalg.norm(vi[:2] - best) < 1e-5
+
+
+def test_resolvent_lipschitz_bound():
+    """|v1 - v2| <= sqrt(2 (1 + F^2)) / gamma |w1 - w2| (proof of Prop. 6.4)."""
+    w1, w2 = _points("mixed", 2000), _points("mixed", 2000)
+    w2[:1000] = w1[:1000] + 1e-3 * rng.normal(size=(1000, 3))  # include nearby pairs
+    v1, _ = resolvent(w1, GAMMA, FRICTION)
+    v2, _ = resolvent(w2, GAMMA, FRICTION)
+    ratio = np.linalg.norm(v1 - v2, axis=1) / np.linalg.norm(w1 - w2, axis=1)
+    assert ratio.max() <= lipschitz_constant(GAMMA, FRICTION) * (1 + 1e-12)
+    assert ratio.max() > 0.5 / GAMMA  # not vacuous
+
+
+def test_classify_regions():
+    expected = {"no_contact": State.NO_CONTACT, "sliding": State.SLIDING, "sticking": State.STICKING}
+    for kind, state in expected.items():
+        v, z = resolvent(_points(kind), GAMMA, FRICTION)
+        assert np.all(classify(v, z, GAMMA, FRICTION, 1e-12) == state)
+    weak = np.array([[0.3, 0.0, 0.0], [0.0, 0.0, 0.0], [FRICTION * 2.0, 0.0, -2.0]])
+    v, z = resolvent(weak, GAMMA, FRICTION)
+    states = classify(v, z, GAMMA, FRICTION, 1e-12)
+    assert list(states) == [State.WEAK_CONTACT_SLIDING, State.WEAK_CONTACT_STICKING, State.WEAK_STICKING]
+
+
+def _graph_tangents(w0: np.ndarray, h: float = 1e-7) -> np.ndarray:
+    """Columns (dv, dz) spanning T gph Q~ at (v(w0), z(w0)), by central differences of the resolvent."""
+    cols = []
+    for e in np.eye(3):
+        vp, zp = resolvent((w0 + h * e)[None], GAMMA, FRICTION)
+        vm, zm = resolvent((w0 - h * e)[None], GAMMA, FRICTION)
+        cols.append(np.concatenate([(vp - vm)[0], (zp - zm)[0]]) / (2 * h))
+    return np.array(cols).T  # (6, 3)
+
+
+@pytest.mark.parametrize("kind", ["no_contact", "sliding", "sticking"])
+def test_adjoint_basis_spans_scd_subspace(kind):
+    """rge(W*, U*) is the adjoint L* of L = T gph Q~ (Prop. 6.6): <U* c, dv> = <W* c, dz>."""
+    for w0 in _points(kind, 10):
+        v, z = resolvent(w0[None], GAMMA, FRICTION)
+        states = classify(v, z, GAMMA, FRICTION, 1e-12)
+        Wt, Ut = scd_adjoint_blocks(v, z, states, GAMMA, FRICTION)
+        W, U = Wt[0].T, Ut[0].T
+        tangents = _graph_tangents(w0)
+        assert np.linalg.matrix_rank(tangents, tol=1e-6) == 3
+        pairing = U.T @ tangents[:3] - W.T @ tangents[3:]
+        assert np.abs(pairing).max() < 1e-6 * (1 + np.abs(tangents).max())
+        assert np.linalg.matrix_rank(np.vstack([W, U]), tol=1e-10) == 3
+
+
+def test_sliding_basis_is_paper_basis_rescaled():
+    """(6.15), derived from (6.13) times C, spans the same subspace as our gamma-scaled basis.
+
+    The seed's printed second matrix of (6.15) (-F theta (I - P)) does not: the
+    factor 1/(||v12|| - F theta) is missing there.
+    """
+    v, z = resolvent(_points("sliding", 20), GAMMA, FRICTION)
+    states = classify(v, z, GAMMA, FRICTION, 1e-12)
+    Wt, Ut = scd_adjoint_blocks(v, z, states, GAMMA, FRICTION)
+    for i in range(len(v)):
+        v12, theta = v[i, :2], z[i, 2]
+        s = np.linalg.norm(v12)
+        t, P = v12 / s, np.outer(v12, v12) / s**2
+        W0 = np.zeros((3, 3)); U0 = np.zeros((3, 3))  # (6.13)
+        W0[:2, :2] = np.eye(2); W0[2, :2] = FRICTION * t
+        U0[:2, :2] = -FRICTION * theta / s * (np.eye(2) - P); U0[2, 2] = 1.0
+        C = np.eye(3)
+        C[:2, :2] = np.linalg.inv(np.eye(2) - FRICTION * theta / s * (np.eye(2) - P))
+        paper = np.vstack([W0 @ C, U0 @ C])
+        ours = np.vstack([Wt[i].T, Ut[i].T])
+        coeffs = np.linalg.lstsq(paper, ours, rcond=None)[0]
+        assert np.abs(paper @ coeffs - ours).max() < 1e-10 * np.abs(ours).max()
+        printed = paper.copy()
+        printed[3:5, :2] = -FRICTION * theta * (np.eye(2) - P)
+        coeffs = np.linalg.lstsq(printed, ours, rcond=None)[0]
+        assert np.abs(printed @ coeffs - ours).max() > 1e-6 * np.abs(ours).max()

@@ -1,0 +1,178 @@
+"""Coulomb contact by the SCD semismooth* Newton method (seed 000), on PETSc objects."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import pathlib
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import numpy as np
+import pytest
+
+from contactqvi import io, meshes
+from contactqvi.contact import State, SCDNewtonSolver, build_contact_problem, classify, resolvent, scd_adjoint_blocks
+from contactqvi.linalg import create_snes
+from contactqvi.problems import coulomb as data
+
+DEMO = pathlib.Path(__file__).resolve().parent.parent / "demos" / "coulomb3d.py"
+EXACT = {"ksp_type": "preonly", "pc_type": "lu"}
+
+
+def _problem(comm, lev, geometry="d1", load="L1", friction=data.FRICTION):
+    msh, tags = meshes.create_contact_body(comm, lev, data.gap_function(geometry))
+    return build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions(load), friction)
+
+
+def _solve(problem, prefix, ksp_options=None, **parameters):
+    PETSc.Options().insertString(" ".join(f"-{prefix}{k} {v}" for k, v in (ksp_options or {}).items()))
+    solver = SCDNewtonSolver(problem, parameters, prefix=prefix)
+    u = problem.A.createVecRight()
+    return solver, u, solver.solve(u)
+
+
+@pytest.mark.serial
+def test_newton_matrix_regular():
+    """W*^T A + U*^T is nonsingular for states of every kind (Prop. 5.2 (c)) on a tiny mesh."""
+    problem = _problem(MPI.COMM_WORLD, 0)
+    solver = SCDNewtonSolver(problem)
+    rng = np.random.default_rng(1)
+    m = len(problem.contact_blk)
+    for _ in range(5):
+        w = rng.normal(size=(m, 3)) * np.array([1.0, 1.0, 10.0])
+        v, z = resolvent(w, solver.gamma, problem.friction)
+        states = classify(v, z, solver.gamma, problem.friction, 0.0)
+        assert len(np.unique(states)) >= 3
+        J = solver.newton_matrix(*scd_adjoint_blocks(v, z, states, solver.gamma, problem.friction))
+        free = np.setdiff1d(np.arange(J.getSize()[0]), problem.dirichlet_dofs_loc)  # serial: local = global
+        dense = J.convert("dense").getDenseArray()[np.ix_(free, free)]
+        singular = np.linalg.svd(dense, compute_uv=False)
+        assert singular.min() > 1e-10 * singular.max()
+
+
+def _signorini_snes_vi(problem):
+    """Frictionless oracle: min 1/2 u^T A u - l^T u s.t. u3 >= 0 at contact nodes, by SNES VI."""
+    A, load = problem.A, problem.load
+    snes = create_snes(problem.comm, "signorini_vi_", {
+        "snes_type": "vinewtonrsls", "snes_linesearch_type": "basic", "snes_rtol": 1e-14, "snes_atol": 1e-6,
+        "snes_stol": 0, "snes_max_it": 100, "ksp_type": "preonly", "pc_type": "lu"})
+    residual = A.createVecRight()
+    snes.setFunction(lambda snes, x, f: (A.mult(x, f), f.axpy(-1.0, load)), residual)
+    snes.setJacobian(lambda snes, x, J, P: None, A)
+    lower, upper = A.createVecRight(), A.createVecRight()
+    lower.set(-PETSc.INFINITY)
+    upper.set(PETSc.INFINITY)
+    lower.array.reshape(-1, 3)[problem.contact_blk, 2] = 0.0
+    snes.setVariableBounds(lower, upper)
+    u = A.createVecRight()
+    snes.solve(None, u)
+    assert snes.getConvergedReason() > 0
+    return u
+
+
+def test_frictionless_equals_snes_vi():
+    """With F = 0 the GE is the Signorini problem: same solution as PETSc's SNES VI to 1e-8."""
+    problem = _problem(MPI.COMM_WORLD, 2, "d3", "L2", friction=0.0)
+    _, u, result = _solve(problem, "frictionless_", EXACT)
+    assert result.converged
+    reference = _signorini_snes_vi(problem)
+    difference = u.copy()
+    difference.axpy(-1.0, reference)
+    print(f"F = 0: |u_scd - u_vi| / |u_vi| = {difference.norm() / reference.norm():.2e}")
+    assert difference.norm() <= 1e-8 * reference.norm()
+
+
+@pytest.mark.parametrize("geometry, load", [("d1", "L1"), ("d3", "L2")])
+def test_discrete_coulomb_conditions(geometry, load):
+    """Every contact node of a converged lev-3 solution satisfies the discrete Coulomb law."""
+    problem = _problem(MPI.COMM_WORLD, 3, geometry, load)
+    _, u, result = _solve(problem, f"conditions_{geometry}_", rtol=1e-12)
+    assert result.converged
+    comm, F = problem.comm, problem.friction
+    # Nodal contact forces from the equilibrium A u - l + z = 0, z = (g, theta) in Q~(u):
+    # the foundation pushes the body with (-g, -theta) = A u - l.
+    r = problem.A.createVecRight()
+    problem.A.mult(u, r)
+    r.axpy(-1.0, problem.load)
+    force = r.array.reshape(-1, 3)[problem.contact_blk]  # (friction force, normal force) on the body
+    u_c = u.array.reshape(-1, 3)[problem.contact_blk]
+    scale_u = comm.allreduce(np.abs(u_c).max(initial=0.0), op=MPI.MAX)
+    scale_f = comm.allreduce(np.abs(force).max(initial=0.0), op=MPI.MAX)
+    tol_u, tol_f = 1e-8 * scale_u, 1e-8 * scale_f
+    lam, friction_force, slip = force[:, 2], force[:, :2], u_c[:, :2]
+    assert np.all(u_c[:, 2] >= -tol_u)  # non-penetration
+    assert np.all(lam >= -tol_f)  # non-negative normal reaction
+    assert np.all(np.abs(lam * u_c[:, 2]) <= tol_f * scale_u)  # complementarity
+    assert np.all(np.linalg.norm(friction_force, axis=1) <= F * lam + tol_f)  # Coulomb cone
+    states = result.states
+    stick = np.isin(states, (State.STICKING, State.WEAK_STICKING))
+    assert np.all(np.linalg.norm(slip[stick], axis=1) <= tol_u)
+    slide = states == State.SLIDING
+    direction = slip[slide] / np.linalg.norm(slip[slide], axis=1)[:, None]
+    assert np.allclose(friction_force[slide], -F * lam[slide, None] * direction, atol=tol_f)
+    counts = result.history[-1]["states"]
+    assert counts["sliding"] > 0 and counts["sticking"] > 0 and counts["no_contact"] > 0
+    # The solver's own graph point agrees with the equilibrium forces.
+    assert np.allclose(result.normal_force, lam, atol=tol_f)
+
+
+def test_serial_and_parallel_agree():
+    """Same Newton iterations (+-1) and displacements (1e-8) on COMM_WORLD and on one rank."""
+    world = _problem(MPI.COMM_WORLD, 3, "d2", "L2")
+    _, u_world, res_world = _solve(world, "world_")
+    single = _problem(MPI.COMM_SELF, 3, "d2", "L2")
+    _, u_single, res_single = _solve(single, "single_")
+    assert res_world.converged and res_single.converged
+    assert abs(res_world.iterations - res_single.iterations) <= 1
+    fw, fs = (_displacement(p, u) for p, u in ((world, u_world), (single, u_single)))
+    _, values_world = io.gather_vertex_values(fw)
+    if MPI.COMM_WORLD.rank == 0:
+        _, values_single = io.gather_vertex_values(fs)
+        assert np.abs(values_world - values_single).max() <= 1e-8 * np.abs(values_single).max()
+
+
+def _displacement(problem, u):
+    from dolfinx import fem
+
+    return problem.physical_displacement(u, fem.Function(problem.V))
+
+
+def _demo():
+    spec = importlib.util.spec_from_file_location("coulomb3d_demo", DEMO)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.parametrize(
+    "args, name",
+    [
+        (["--friction", "-0.1"], "friction"),
+        (["--young", "0"], "young"),
+        (["--poisson", "0.5"], "poisson"),
+        (["--lev", "-1"], "lev"),
+        (["--tol", "1.0"], "tol"),
+        (["--rtol", "0"], "rtol"),
+    ],
+)
+def test_demo_rejects_bad_input(args, name, capsys):
+    assert _demo().main(["--no-plot", *args]) == 2
+    assert f"error: {name}:" in capsys.readouterr().err
+
+
+def test_demo_outputs(mpi_tmp_path):
+    demo = _demo()
+    out = mpi_tmp_path / "run"
+    assert demo.main(["--lev", "1", "--geometry", "d3", "--output", str(out), "--no-plot"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "converged" and summary["mpi_size"] == MPI.COMM_WORLD.size
+    assert summary["residual_history"][-1] <= 1e-12 * summary["residual_history"][0]
+    for name in ("solution.npz", "contact.xdmf", "contact.h5", "displacement.bp"):
+        assert (out / name).exists()
+    stopped = mpi_tmp_path / "stopped"
+    assert demo.main(["--lev", "1", "--max-iterations", "2", "--output", str(stopped), "--no-plot"]) == 1
+    summary = json.loads((stopped / "summary.json").read_text())
+    assert summary["status"] == "diverged"
+    assert not (stopped / "solution.npz").exists()
