@@ -16,21 +16,17 @@ from __future__ import annotations
 
 import logging
 import sys
-import time
 
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from dolfinx import fem
-
 from contactqvi import cli, io, meshes
-from contactqvi.contact import SCDNewtonSolver, build_contact_problem
+from contactqvi.contact.driver import solve_nested
 from contactqvi.contact.postprocess import contact_fields, plot_contact_states
 from contactqvi.contact.scd_newton import PARAMETERS
 from contactqvi.elasticity import lame_parameters
 from contactqvi.parameters import ParameterError, require
 from contactqvi.problems import coulomb as data
-from contactqvi.transfer import interpolate_nonmatching
 
 logger = logging.getLogger("coulomb3d")
 
@@ -65,37 +61,6 @@ def parse(argv: list[str] | None = None):
     return args
 
 
-def solve_level(args, lev: int, initial: fem.Function | None):
-    """Build and solve the problem at level ``lev``; returns (problem, u, result, seconds)."""
-    comm = MPI.COMM_WORLD
-    t0 = time.perf_counter()
-    msh, facet_tags = meshes.create_contact_body(comm, lev, data.gap_function(args.geometry))
-    problem = build_contact_problem(
-        msh, facet_tags, args.young, args.poisson, data.tractions(args.load), args.friction
-    )
-    u = problem.A.createVecRight()
-    if initial is not None:
-        problem.shift.copy(u)
-        u.axpy(1.0, interpolate_nonmatching(initial, problem.V, padding=0.05).x.petsc_vec)
-    assembly = time.perf_counter() - t0
-    parameters = {
-        "tol": args.tol,
-        "rtol": args.rtol,
-        "max_iterations": args.max_iterations,
-        "state_tol": args.state_tol,
-        "eliminate_fixed_rows": not args.no_elimination,
-    }
-    solver = SCDNewtonSolver(problem, parameters)
-    logger.info("lev %d: p = %d contact nodes, n = %d free dofs, %d ranks", lev, problem.n_contact, problem.n_free, comm.size)
-    result = solver.solve(u)
-    result.timings["assembly"] = assembly
-    logger.info(
-        "lev %d: %s after %d Newton steps, %d Krylov iterations, gamma = %.4e",
-        lev, result.status, result.iterations, result.krylov_iterations, result.gamma,
-    )
-    return problem, u, result
-
-
 def main(argv: list[str] | None = None) -> int:
     comm = MPI.COMM_WORLD
     try:
@@ -104,16 +69,21 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     out = io.prepare_output_dir(comm, args.output)
+    parameters = {
+        "tol": args.tol,
+        "rtol": args.rtol,
+        "max_iterations": args.max_iterations,
+        "state_tol": args.state_tol,
+        "eliminate_fixed_rows": not args.no_elimination,
+    }
     levels = range(args.nested_from, args.lev + 1) if args.initial == "nested" else [args.lev]
-    initial, runs = None, []
-    for lev in levels:
-        problem, u, result = solve_level(args, lev, initial)
-        runs.append({"lev": lev, "status": result.status, "iterations": result.iterations,
-                     "krylov_iterations": result.krylov_iterations})
-        if not result.converged:
-            break
-        initial = fem.Function(problem.V, name="displacement")
-        problem.physical_displacement(u, initial)
+    solutions = solve_nested(
+        comm, levels, gap=data.gap_function(args.geometry), tractions=data.tractions(args.load),
+        young=args.young, poisson=args.poisson, friction=args.friction, parameters=parameters,
+    )
+    problem, u, result = solutions[-1].problem, solutions[-1].u, solutions[-1].result
+    runs = [{"lev": s.lev, "status": s.result.status, "iterations": s.result.iterations,
+             "krylov_iterations": s.result.krylov_iterations} for s in solutions]
 
     case = f"{args.geometry}/{args.load}"
     paper = (data.PAPER_TABLE3 if args.initial == "nested" else data.PAPER_TABLE2).get(args.lev, {}).get(case)
