@@ -19,6 +19,7 @@ Run, e.g.::
 
 from __future__ import annotations
 
+import argparse
 import logging
 import pathlib
 import sys
@@ -96,9 +97,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--tol", type=float, default=None, help="ALM/Uzawa tolerance on d_lambda (Uzawa: 1e-4)")
     parser.add_argument("--example2-reading", default="x1x2", help="reading of f in Example 2: x1x2 | x1x1")
     parser.add_argument(
-        "--reference", action=__import__("argparse").BooleanOptionalAction, default=True,
+        "--reference", action=argparse.BooleanOptionalAction, default=True,
         help="compute lambda_bar = lambda_{1e16} for d_lambda (needed for Uzawa's stopping test)",
     )  # fmt: skip
+    parser.add_argument(
+        "--png", action=argparse.BooleanOptionalAction, default=True, help="plot y to y.png if a display is available"
+    )
     args = parse_args(parser, argv)
     comm = MPI.COMM_WORLD
     try:
@@ -202,7 +206,7 @@ def main(argv: list[str] | None = None) -> int:
         extra = {"boundary_x": xb[order], "lam": lb[order], "active_set": sb[order]}
     io.write_solution_npz(out / "solution.npz", y, **extra)
     title = f"Example {example.number}, {args.method}, gamma = {args.gamma:g}, N = {args.N}"
-    summary["png"] = "y.png" if write_png(out / "y.png", comm, y, title) else None
+    summary["png"] = "y.png" if args.png and write_png(out / "y.png", comm, y, title) else None
     io.write_summary(comm, out / "summary.json", summary)
 
     if comm.rank == 0:
