@@ -198,9 +198,9 @@ class FrictionProblem:
         """Max-norm of K y + M lambda - F over all free dofs, (3.2a) (global)."""
         self.K.mult(y, work)
         work.axpy(-1.0, self.F)
-        with work.localForm() as local:
-            local.array[self.boundary_dofs] += self.boundary_mass * lam
-        work.array[self._dirichlet_owned] = 0.0
+        values = work.array
+        values[self.boundary_dofs] += self.boundary_mass * lam
+        values[self._dirichlet_owned] = 0.0
         return float(work.norm(PETSc.NormType.NORM_INFINITY))
 
     def energy_norm(self, y: PETSc.Vec) -> float:
