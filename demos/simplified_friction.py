@@ -94,6 +94,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--gamma", type=float, default=1e4, help="regularisation/penalty parameter gamma")
     parser.add_argument("--sigma", type=float, default=1.0, help="sigma of (PDAS) (ignored by ss: 1/gamma)")
     parser.add_argument("--N", type=int, default=80, help="grid points per direction (N - 1 cells)")
+    parser.add_argument("--g", type=float, default=None, help="override the example's friction bound g")
+    parser.add_argument("--mu", type=float, default=None, help="override the example's mu in a(y, z)")
     parser.add_argument("--cell-type", default="quadrilateral", help="quadrilateral (Q1) or triangle (P1)")
     parser.add_argument("--max-iterations", type=int, default=50, help="PDAS/SS iterations (Uzawa: x20)")
     parser.add_argument("--alm-inner", default="exact", help="ALM inner solve: exact | inexact")
@@ -119,7 +121,7 @@ def main(argv: list[str] | None = None) -> int:
         require_positive("sigma", args.sigma)
         require(args.method != "uzawa" or args.reference, "reference", "Uzawa's stopping test needs --reference")
         example = stadler_example(args.example, args.example2_reading)
-        problem = create_stadler_problem(comm, example, args.N, args.cell_type)
+        problem = create_stadler_problem(comm, example, args.N, args.cell_type, g=args.g, mu=args.mu)
     except ParameterError as exc:
         if comm.rank == 0:
             print(f"error: {exc}", file=sys.stderr)

@@ -85,6 +85,9 @@ def test_examples_reject_bad_input():
         (["--sigma", "-1"], "sigma"),
         (["--N", "2"], "N"),
         (["--alm-inner", "maybe"], "alm-inner"),
+        (["--example", "2", "--g", "-0.4"], "g"),
+        (["--example", "3", "--mu", "-0.5"], "mu"),
+        (["--example", "3", "--mu", "0"], "mu"),
     ],
 )
 def test_demo_reports_bad_input(argv, name, capsys, mpi_tmp_path):
