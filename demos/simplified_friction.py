@@ -115,7 +115,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         require(args.method in METHODS, "method", f"must be one of {METHODS}, got {args.method!r}")
         require(args.alm_inner in INNER_SOLVES, "alm-inner", f"must be one of {INNER_SOLVES}, got {args.alm_inner!r}")
-        require(args.alm_schedule in SCHEDULES, "alm-schedule", f"must be one of {SCHEDULES}, got {args.alm_schedule!r}")
+        require(
+            args.alm_schedule in SCHEDULES, "alm-schedule", f"must be one of {SCHEDULES}, got {args.alm_schedule!r}"
+        )
         require(args.example2_reading in EXAMPLE2_READINGS, "example2-reading", f"must be one of {EXAMPLE2_READINGS}")
         require_positive("gamma", args.gamma)
         require_positive("sigma", args.sigma)

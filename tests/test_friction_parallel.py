@@ -44,11 +44,14 @@ def _run_all(comm: MPI.Comm, example: int, cell_type: str) -> dict:
         "alm": augmented_lagrangian(pdas, lambda step: 10.0**step, inner="inexact", max_outer=4),
         "uzawa": uzawa(problem, 0.2, max_iterations=15, tol=1e-12),
     }
-    out = {"reference": (reference.iterations, _gather_y(problem, reference.y), _gather_boundary(problem, reference.lam))}
+    out = {
+        "reference": (reference.iterations, _gather_y(problem, reference.y), _gather_boundary(problem, reference.lam))
+    }
     for name, result in runs.items():
         counts = [h.get("inner_iterations", h.get("A_plus")) for h in result.history]
         iterations = getattr(result, "iterations", None) or getattr(result, "outer_iterations", None)
-        out[name] = ((iterations, counts, result.status), _gather_y(problem, result.y), _gather_boundary(problem, result.lam))
+        info = (iterations, counts, result.status)
+        out[name] = (info, _gather_y(problem, result.y), _gather_boundary(problem, result.lam))
     return out
 
 

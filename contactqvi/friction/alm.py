@@ -96,7 +96,8 @@ def augmented_lagrangian(
         require_positive("gamma", gamma)
         schedule = lambda _l: float(gamma)  # noqa: E731
     require_positive("sigma", sigma)
-    require(isinstance(max_outer, (int, np.integer)) and max_outer >= 1, "max_outer", f"must be >= 1, got {max_outer!r}")
+    valid_outer = isinstance(max_outer, (int, np.integer)) and max_outer >= 1
+    require(valid_outer, "max_outer", f"must be an integer >= 1, got {max_outer!r}")
     if tol is not None:
         require_positive("tol", tol)
     problem = pdas.problem

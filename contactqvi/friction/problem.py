@@ -38,7 +38,14 @@ from dolfinx import mesh as dmesh
 from contactqvi.meshes import tag_of
 from contactqvi.parameters import require, require_positive
 
-__all__ = ["FrictionProblem", "boundary_states", "complementarity_residual"]
+__all__ = [
+    "ACTIVE_MINUS",
+    "ACTIVE_PLUS",
+    "INACTIVE",
+    "FrictionProblem",
+    "boundary_states",
+    "complementarity_residual",
+]
 
 LoadFunction = typing.Callable[[ufl.SpatialCoordinate], ufl.core.expr.Expr]
 

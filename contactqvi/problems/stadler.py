@@ -89,7 +89,9 @@ def stadler_example(number: int, load_reading: str = "x1x2") -> StadlerExample:
             (see the module docstring).
     """
     require(number in EXAMPLE_NUMBERS, "example", f"must be one of {EXAMPLE_NUMBERS}, got {number!r}")
-    require(load_reading in EXAMPLE2_READINGS, "load_reading", f"must be one of {EXAMPLE2_READINGS}, got {load_reading!r}")
+    require(
+        load_reading in EXAMPLE2_READINGS, "load_reading", f"must be one of {EXAMPLE2_READINGS}, got {load_reading!r}"
+    )
     whole_boundary = ("left", "right", "bottom", "top")
     if number == 1:
         return StadlerExample(
