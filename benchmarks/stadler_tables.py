@@ -5,6 +5,7 @@ beside ours) and ``stadler_summary.md`` for
 
 * Table 6.1 (SS iterations, Example 1, N = 80),
 * the table of Fig. 6.1 (|||y_gamma - y_bar|||, Example 1, N = 160, y_bar = y_1e16),
+* Table 6.2 (rates q_lambda^k of SS, Example 2, gamma = 50, N = 160),
 * Table 6.3 (SS and PDAS iterations, Example 2, N = 160; both readings of f),
 * Tables 6.4/6.5 (ALM exact/inexact, Example 2, N = 160),
 * Table 6.6 (iterations over N and gamma, Example 3),
@@ -44,6 +45,7 @@ PAPER = {
     "6.1": {"gamma": [1e2, 1e4, 1e6, 1e8], "ss": [2, 3, 3, 3]},
     "fig6.1": {"gamma": [1, 10, 1e2, 1e3, 1e4, 1e5, 1e6],
                "error": [4.46e-1, 1.79e-1, 2.30e-2, 2.49e-3, 2.54e-4, 2.54e-5, 2.54e-6]},
+    "6.2": {"gamma": 50, "q": [0.58, 0.45, 0.25, 0.18, 0.00]},
     "6.3": {"gamma": [3, 5, 10, 50, 100, 150, 160, 1e3, 1e10],
             "ss": [3, 4, 4, 5, 6, 7, "div", "div", "div"], "pdas": [3, 4, 4, 5, 6, 5, 5, 6, 6]},
     "6.4": {
@@ -183,6 +185,25 @@ def figure_6_1(cell_type: str, quick: bool) -> tuple[dict, str]:
     )
 
 
+def table_6_2(cell_type: str, quick: bool) -> tuple[dict, str]:
+    N = 40 if quick else 160
+    s = Setup.get(2, N, cell_type)
+    gamma = float(PAPER["6.2"]["gamma"])
+    iterates: list[np.ndarray] = []
+    result = s.pdas.solve(
+        gamma, semismooth_newton_sigma(gamma), monitor=lambda k, y, lam, xi: iterates.append(lam.array_r.copy())
+    )
+    distances = [s.problem.boundary_norm(lam - result.lam.array_r) for lam in iterates]
+    q = [b / a for a, b in zip(distances, distances[1:])]
+    data = {"N": N, "gamma": gamma, "status": result.status, "q": q, "paper_q": PAPER["6.2"]["q"]}
+    pad = [None] * max(0, len(q) - len(PAPER["6.2"]["q"]))
+    md = _md_table(["k", *range(1, len(q) + 1)], [["paper q_lambda^k", *PAPER["6.2"]["q"], *pad], ["ours", *q]])
+    return data, (
+        f"Example 2, N = {N}, (SS) with gamma = {gamma:g}: q_lambda^k = ||lambda^k - lambda_gamma|| / "
+        f"||lambda^(k-1) - lambda_gamma|| (lambda^0: the initialisation).\n\n{md}\n"
+    )
+
+
 def table_6_3(cell_type: str, quick: bool) -> tuple[dict, str]:
     N = 40 if quick else 160
     gammas = PAPER["6.3"]["gamma"]
@@ -308,6 +329,7 @@ def uzawa_observations(cell_type: str, quick: bool) -> tuple[dict, str]:
 TABLES: dict[str, typing.Callable[[str, bool], tuple[dict, str]]] = {
     "6.1": table_6_1,
     "fig6.1": figure_6_1,
+    "6.2": table_6_2,
     "6.3": table_6_3,
     "6.4": table_6_4,
     "6.5": table_6_5,

@@ -151,3 +151,32 @@ def test_uzawa_converges_for_small_gamma_to_pdas_solution():
     assert _max(problem, result.lam.array_r) <= problem.g
     stalled = uzawa(problem, 5.0, reference=reference, tol=1e-8, max_iterations=3)
     assert stalled.status == "max_iterations" and stalled.iterations == 3
+
+
+def test_ss_chatters_for_large_gamma_where_pdas_converges():
+    """Sect. 6.2/6.3: for large gamma (SS) moves nodes between A- and A+ and cycles; (PDAS, sigma = 1) does not."""
+    problem = _problem(3, 41)
+    pdas = PrimalDualActiveSet(problem)
+    gamma = 1e10
+    by_ss = pdas.solve(gamma, semismooth_newton_sigma(gamma))
+    by_pdas = pdas.solve(gamma, 1.0)
+    switches_ss = [h["switches_between_active_sets"] for h in by_ss.history[1:]]
+    switches_pdas = [h["switches_between_active_sets"] for h in by_pdas.history[1:]]
+    print("SS A-/A+ switches per iteration:", switches_ss)
+    assert by_ss.status == "cycling" and sum(switches_ss) > 0
+    assert by_pdas.status == "converged" and by_pdas.iterations <= 8 and sum(switches_pdas) == 0
+
+
+def test_ss_converges_superlinearly():
+    """Table 6.2: q_lambda^k = ||lambda^k - lambda_gamma|| / ||lambda^(k-1) - lambda_gamma|| decreases to 0."""
+    problem = _problem(2, 41)
+    pdas = PrimalDualActiveSet(problem)
+    gamma = 50.0
+    iterates = []
+    result = pdas.solve(gamma, 1.0 / gamma, monitor=lambda k, y, lam, xi: iterates.append((k, lam.array_r.copy())))
+    assert [k for k, _ in iterates] == list(range(result.iterations + 1))
+    distances = [problem.boundary_norm(lam - result.lam.array_r) for _, lam in iterates]
+    q = [b / a for a, b in zip(distances, distances[1:])]
+    print("q_lambda^k:", " ".join(f"{v:.2f}" for v in q))
+    assert result.status == "converged" and len(q) >= 3
+    assert q[-1] == 0.0 and all(b < a for a, b in zip(q[:-1], q[1:])) and q[0] < 1.0

@@ -44,6 +44,9 @@ __all__ = [
 
 logger = logging.getLogger(__name__)
 
+#: ``monitor(k, y, lam, xi)``: observer of the iterates of :meth:`PrimalDualActiveSet.solve`.
+Monitor = typing.Callable[[int, fem.Function, PETSc.Vec, PETSc.Vec], None]
+
 #: "All linear systems are solved exactly" (Sect. 6): sparse LU by MUMPS.
 DEFAULT_KSP_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
 
@@ -153,6 +156,7 @@ class PrimalDualActiveSet:
         reference: PETSc.Vec | None = None,
         max_iterations: int = 50,
         residual_reduction: float | None = None,
+        monitor: Monitor | None = None,
     ) -> ActiveSetResult:
         """Run (PDAS) (Algorithm 1) for (P*_gamma) with shift ``lam_hat``.
 
@@ -167,6 +171,9 @@ class PrimalDualActiveSet:
             residual_reduction: if given (e.g. 0.5), stop as soon as the (3.2c)
                 residual is at most this factor times the initial one (the
                 inexact inner solve of (ALM), Sect. 6.2).
+            monitor: called as ``monitor(k, y, lam, xi)`` with the initial iterate
+                (k = 0) and after every iteration (e.g. to record lambda^k for the
+                rates q_lambda^k of Table 6.2); must not modify its arguments.
 
         Returns:
             The final iterate with status and per-iteration history.
@@ -201,6 +208,8 @@ class PrimalDualActiveSet:
             return p.boundary_norm(complementarity_residual(xi.array_r, lam.array_r, g, sigma))
 
         initial_residual = residual()
+        if monitor is not None:
+            monitor(0, y, lam, xi)
         history: list[dict[str, typing.Any]] = []
         previous: list[np.ndarray] = []
         status, iterations = "max_iterations", 0
@@ -232,6 +241,8 @@ class PrimalDualActiveSet:
                 "seconds": time.perf_counter() - start,
             }
             history.append(entry)
+            if monitor is not None:
+                monitor(iterations, y, lam, xi)
             logger.info(
                 "  PDAS k=%3d |A-|=%5d |A+|=%5d |I|=%5d changes=%5s res(3.2c)=%.3e%s",
                 entry["k"], entry["A_minus"], entry["A_plus"], entry["inactive"],
