@@ -133,7 +133,8 @@ def build(
         u0 = _poisson(V, data.f(x), bcs)
     else:
         u0 = _interpolate(V, data.initial(x), "initial")
-    fem.set_bc(u0.x.array, bcs)
+    for bc in bcs:
+        bc.set(u0.x.array)
     exact = None if getattr(data, "exact", None) is None else data.exact(x)
     solver = FixedPointSolver(fmap, params, exact=exact)
     return QVISetup(V, fmap, solver, u0, Phi0)

@@ -92,12 +92,20 @@ class FixedPointResult:
     @property
     def eocs(self) -> list[float]:
         """EOC_i of (71) from the error history (i >= 2)."""
-        e = self.errors
-        out = []
-        for i in range(2, len(e)):
-            if min(e[i], e[i - 1], e[i - 2]) > 0 and e[i - 1] != e[i - 2]:
-                out.append(math.log(e[i] / e[i - 1]) / math.log(e[i - 1] / e[i - 2]))
-        return out
+        return _eocs(self.errors)
+
+    @property
+    def residual_eocs(self) -> list[float]:
+        """(71) with ||R(u_i)|| in place of the error (equivalent near a regular solution)."""
+        return _eocs(self.residuals)
+
+
+def _eocs(e: list[float]) -> list[float]:
+    out = []
+    for i in range(2, len(e)):
+        if min(e[i], e[i - 1], e[i - 2]) > 0 and e[i - 1] != e[i - 2]:
+            out.append(math.log(e[i] / e[i - 1]) / math.log(e[i - 1] / e[i - 2]))
+    return out
 
 
 def _check(params: dict[str, typing.Any]) -> None:
@@ -237,18 +245,18 @@ class FixedPointSolver:
     def _linesearch(self, x: np.ndarray, d: np.ndarray, res: float, step_counts: dict[str, int]):
         """Backtracking Armijo on f = ||R||^2/2 along the Newton direction (f'(0) = -||R||^2)."""
         f0, slope = 0.5 * res**2, -(res**2)
-        alpha = 1.0
+        alpha, accepted = 1.0, 1.0
         for _ in range(self.params["max_backtracks"] + 1):
             x_t = x + alpha * d
             ev_t, res_t = self.evaluate(x_t)
             _add(step_counts, ev_t.counts)
-            f_t = 0.5 * res_t**2
+            f_t, accepted = 0.5 * res_t**2, alpha
             if f_t <= f0 + self.params["armijo_c"] * alpha * slope:
                 break
             denominator = 2.0 * (f_t - f0 - slope * alpha)
             trial = -slope * alpha**2 / denominator if denominator > 0 else 0.5 * alpha
             alpha = min(max(trial, 0.1 * alpha), 0.5 * alpha)
-        return x_t, ev_t, res_t, f"linesearch({alpha:.3g})"
+        return x_t, ev_t, res_t, f"linesearch({accepted:.3g})"
 
     def destroy(self) -> None:
         for obj in (self.h1, self.work, self.image):

@@ -108,7 +108,7 @@ class TemperatureMap:
         self.snes.solve(None, self.x)
         self.x.copy(self.T.x.petsc_vec)
         self.T.x.scatter_forward()
-        self.residual_history = [float(r) for r in self.snes.getConvergenceHistory()[1]]
+        self.residual_history = [float(r) for r in self.snes.getConvergenceHistory()[0]]
         if self.snes.getConvergedReason() <= 0:
             raise RuntimeError(f"Phi: semismooth Newton for the temperature failed ({snes_converged_reason(self.snes)})")
         return self.snes.getIterationNumber()

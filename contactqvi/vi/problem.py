@@ -61,7 +61,8 @@ class ObstacleProblem:
         self.free = np.ones(self.n_owned, dtype=bool)
         self.free[bc_loc[bc_loc < self.n_owned]] = False
         self.boundary_values = fem.Function(V)
-        fem.set_bc(self.boundary_values.x.array, bcs)
+        for bc in bcs:
+            bc.set(self.boundary_values.x.array)
         self.dx = dx
 
     def assemble_load(self) -> PETSc.Vec:
