@@ -108,6 +108,7 @@ def build(
     obstacle.x.array[:] = Phi0.x.array
     params = dict(outer_parameters or {})
     params["method"] = "alg1" if method == "c2" else method
+    params.setdefault("label", method)
 
     if isinstance(data, SemilinearVIData):
         y = fem.Function(V, name="y")

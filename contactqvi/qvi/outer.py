@@ -43,6 +43,7 @@ METHODS = ("alg1", "alg2", "c1", "c3")
 
 FIXED_POINT_PARAMETERS: ParameterTable = {
     "method": ("alg2", "outer method: alg1 | alg2 | c1 | c3 (C2 = alg1 on the regularised map)"),
+    "label": (None, "name in progress lines and results (default: the method)"),
     "tol": (1e-12, "stop when ||R(u)||_H1 <= tol"),
     "max_iterations": (50, "maximum number of outer iterations"),
     "radius": (None, "radius R of the projection ball B_R(c) of Sect. 2.3 (None: no projection)"),
@@ -190,12 +191,13 @@ class FixedPointSolver:
         """Run the outer method from ``u0``."""
         prm = self.params
         method = prm["method"]
+        label = prm["label"] or method
         x = u0.x.array[: self.n].copy()
         ev, res = self.evaluate(x)
         residuals, taken, counts = [res], [""], [dict(ev.counts)]
         errors = [self._error(x)] if self.error_form is not None else []
         status = "max_iterations"
-        logger.info("%s it %2d  ||R||_H1 = %.3e  %s", method, 0, res, _format_counts(ev.counts))
+        logger.info("%s it %2d  ||R||_H1 = %.3e  %s", label, 0, res, _format_counts(ev.counts))
         for it in range(1, prm["max_iterations"] + 2):
             if res <= prm["tol"]:
                 status = "converged"
@@ -236,11 +238,11 @@ class FixedPointSolver:
             counts.append(step_counts)
             if self.error_form is not None:
                 errors.append(self._error(x))
-            logger.info("%s it %2d  ||R||_H1 = %.3e  taken %-16s %s", method, it, res, choice, _format_counts(step_counts))
+            logger.info("%s it %2d  ||R||_H1 = %.3e  taken %-16s %s", label, it, res, choice, _format_counts(step_counts))
         self._set(self.iterate, x)
         solution = fem.Function(self.map.V, name="membrane")
         solution.x.array[:] = self.iterate.x.array
-        return FixedPointResult(method, status, residuals, taken, counts, errors, solution, ev)
+        return FixedPointResult(label, status, residuals, taken, counts, errors, solution, ev)
 
     def _linesearch(self, x: np.ndarray, d: np.ndarray, res: float, step_counts: dict[str, int]):
         """Backtracking Armijo on f = ||R||^2/2 along the Newton direction (f'(0) = -||R||^2)."""
