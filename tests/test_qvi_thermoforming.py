@@ -40,13 +40,15 @@ def test_algorithm2_mesh_independent_and_feasible(h):
 
 
 def test_fixed_point_and_newton_reach_the_same_solution():
-    setup_n, newton = _solve(MPI.COMM_WORLD, 0.04, "alg1")
-    setup_f, fixed = _solve(MPI.COMM_WORLD, 0.04, "c1")
+    _, newton = _solve(MPI.COMM_WORLD, 0.04, "alg1")
+    _, fixed = _solve(MPI.COMM_WORLD, 0.04, "c1")
     assert newton.converged and fixed.converged
     assert fixed.iterations > 2 * newton.iterations
-    n = setup_n.fmap.n_owned
-    diff = np.max(np.abs(newton.solution.x.array[:n] - fixed.solution.x.array[:n]))
-    assert MPI.COMM_WORLD.allreduce(float(diff), op=MPI.MAX) < 1e-10
+    # separately built meshes may number their dofs differently in parallel: compare by coordinates
+    _, u_newton = _sorted(*gather_vertex_values(newton.solution))
+    _, u_fixed = _sorted(*gather_vertex_values(fixed.solution))
+    if MPI.COMM_WORLD.rank == 0:
+        assert np.max(np.abs(u_newton - u_fixed)) < 1e-10
 
 
 def test_regularised_c2_and_linesearch_c3_converge():
@@ -75,7 +77,7 @@ def test_serial_and_parallel_runs_agree():
     x_ser, u_ser = _sorted(*gather_vertex_values(serial.solution))
     if MPI.COMM_WORLD.rank == 0:
         assert np.allclose(x_par, x_ser)
-        assert np.max(np.abs(u_par - u_ser)) < 1e-8
+        assert np.max(np.abs(u_par - u_ser)) < 1e-8, (np.max(np.abs(u_par - u_ser)), parallel.residuals, serial.residuals)
     assert abs(parallel.residuals[0] - serial.residuals[0]) < 1e-10
 
 

@@ -31,6 +31,8 @@ class NonlinearFormProblem:
         self.A = dolfinx.fem.petsc.create_matrix(J)
 
     def _update(self, x: PETSc.Vec) -> None:
+        # the lifting below reads x's ghost entries: SNES does not update them
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         x.copy(self.u.x.petsc_vec)
         self.u.x.scatter_forward()
 
