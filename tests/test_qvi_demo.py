@@ -6,7 +6,6 @@ import importlib.util
 import json
 import pathlib
 
-from mpi4py import MPI
 
 import numpy as np
 import pytest

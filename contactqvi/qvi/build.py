@@ -11,7 +11,6 @@ import dataclasses
 from mpi4py import MPI
 from petsc4py import PETSc
 
-import numpy as np
 import ufl
 
 import dolfinx.fem.petsc

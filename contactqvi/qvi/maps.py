@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import dataclasses
 
-from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
@@ -33,10 +32,9 @@ from contactqvi.qvi.newton_system import BlockNewtonSystem, diagonal_matrix
 from contactqvi.qvi.temperature import TemperatureMap
 from contactqvi.vi.moreau_yosida import PathFollowingMoreauYosida, huber_derivative
 from contactqvi.vi.problem import ObstacleProblem
-from contactqvi.vi.solver import ObstacleSolver, rho_path
+from contactqvi.vi.solver import ObstacleResult, ObstacleSolver, rho_path
 
 __all__ = ["Evaluation", "CompositeMap", "ObstacleQVIMap", "SemilinearVIMap", "RegularisedQVIMap"]
-
 
 @dataclasses.dataclass
 class Evaluation:
@@ -57,6 +55,12 @@ class Evaluation:
     active: np.ndarray
     counts: dict[str, int]
     obstacle: fem.Function
+
+
+def _checked(result: ObstacleResult) -> ObstacleResult:
+    if not result.converged:
+        raise RuntimeError("S: the obstacle solver did not converge")
+    return result
 
 
 class CompositeMap:
@@ -121,7 +125,7 @@ class ObstacleQVIMap(CompositeMap):
         p, tm = self.problem, self.temperature
         phi_its = tm.solve(y)
         p.obstacle.x.array[:] = self.Phi0.x.array + tm.varphi.x.array * tm.T.x.array
-        s = self.solver.solve()
+        s = _checked(self.solver.solve())
         counts = {"phi_newton": phi_its, "pfmy": s.pfmy_iterations, "pdas": s.pdas_iterations, "vi": s.vi_iterations}
         return Evaluation(
             self._copy(y, "y"), self._copy(p.u, "membrane"), self._copy(tm.T, "temperature"), self._active(), counts,
@@ -163,7 +167,7 @@ class SemilinearVIMap(CompositeMap):
 
     def evaluate(self, y: fem.Function) -> Evaluation:
         self.y.x.array[:] = y.x.array
-        s = self.solver.solve()
+        s = _checked(self.solver.solve())
         counts = {"phi_newton": 0, "pfmy": s.pfmy_iterations, "pdas": s.pdas_iterations, "vi": s.vi_iterations}
         return Evaluation(
             self._copy(y, "y"), self._copy(self.problem.u, "membrane"), None, self._active(), counts,

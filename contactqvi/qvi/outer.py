@@ -59,7 +59,7 @@ class FixedPointResult:
 
     Attributes:
         method: outer method name.
-        status: ``converged``, ``max_iterations`` or ``diverged``.
+        status: ``converged``, ``max_iterations``, ``diverged`` or ``inner_failure``.
         residuals: ||R(u_i)||_H1 for i = 0, 1, ...
         taken: per iteration the candidate taken (``newton``, ``fixed-point``, ``linesearch(alpha)``).
         counts: per iteration the inner counts (iteration 0 is the initial evaluation).
@@ -208,31 +208,12 @@ class FixedPointSolver:
             if it > prm["max_iterations"]:
                 break
             step_counts: dict[str, int] = {k: 0 for k in ev.counts}
-            if method == "c1":
-                x = ev.value.x.array[: self.n].copy()
-                ev, res = self.evaluate(x)
-                choice = "fixed-point"
-                _add(step_counts, ev.counts)
-            else:
-                d = self.newton_direction(x, ev)
-                if method == "alg1":
-                    x = x + d
-                    ev, res = self.evaluate(x)
-                    choice = "newton"
-                    _add(step_counts, ev.counts)
-                elif method == "alg2":
-                    x_n = x + d
-                    ev_n, res_n = self.evaluate(x_n)
-                    x_b = ev.value.x.array[: self.n].copy()
-                    ev_b, res_b = self.evaluate(x_b)
-                    _add(step_counts, ev_n.counts)
-                    _add(step_counts, ev_b.counts)
-                    if res_n <= res_b:
-                        x, ev, res, choice = x_n, ev_n, res_n, "newton"
-                    else:
-                        x, ev, res, choice = x_b, ev_b, res_b, "fixed-point"
-                else:
-                    x, ev, res, choice = self._linesearch(x, d, res, step_counts)
+            try:
+                x, ev, res, choice = self._step(method, x, ev, res, step_counts)
+            except RuntimeError as exc:  # an inner solver failed: report, keep the last iterate
+                logger.warning("%s it %2d: %s", label, it, exc)
+                status = "inner_failure"
+                break
             residuals.append(res)
             taken.append(choice)
             counts.append(step_counts)
@@ -243,6 +224,29 @@ class FixedPointSolver:
         solution = fem.Function(self.map.V, name="membrane")
         solution.x.array[:] = self.iterate.x.array
         return FixedPointResult(label, status, residuals, taken, counts, errors, solution, ev)
+
+    def _step(self, method: str, x: np.ndarray, ev: Evaluation, res: float, step_counts: dict[str, int]):
+        """One outer iteration; returns (x_{i+1}, H(x_{i+1}), ||R(x_{i+1})||, candidate taken)."""
+        if method == "c1":
+            x_b = ev.value.x.array[: self.n].copy()
+            ev_b, res_b = self.evaluate(x_b)
+            _add(step_counts, ev_b.counts)
+            return x_b, ev_b, res_b, "fixed-point"
+        d = self.newton_direction(x, ev)
+        if method == "c3":
+            return self._linesearch(x, d, res, step_counts)
+        x_n = x + d
+        ev_n, res_n = self.evaluate(x_n)
+        _add(step_counts, ev_n.counts)
+        if method == "alg1":
+            return x_n, ev_n, res_n, "newton"
+        # Algorithm 2, steps 7-13: the fixed-point candidate x_B = H(x_i); ties go to Newton.
+        x_b = ev.value.x.array[: self.n].copy()
+        ev_b, res_b = self.evaluate(x_b)
+        _add(step_counts, ev_b.counts)
+        if res_n <= res_b:
+            return x_n, ev_n, res_n, "newton"
+        return x_b, ev_b, res_b, "fixed-point"
 
     def _linesearch(self, x: np.ndarray, d: np.ndarray, res: float, step_counts: dict[str, int]):
         """Backtracking Armijo on f = ||R||^2/2 along the Newton direction (f'(0) = -||R||^2)."""

@@ -11,7 +11,6 @@ import numpy as np
 
 __all__ = ["plot_surface", "plot_profile", "plot_slice", "plot_convergence"]
 
-
 def _pyplot():
     import matplotlib
 

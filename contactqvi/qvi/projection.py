@@ -12,7 +12,6 @@ from contactqvi.parameters import require_positive
 
 __all__ = ["BallProjection"]
 
-
 class BallProjection:
     """P_B for B = B_R(c) in H^1_0 with the inner product (grad v, grad w), (15)-(16).
 

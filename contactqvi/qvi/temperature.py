@@ -12,7 +12,6 @@ G_Phi(u) h = I_h(varphi xi_h), xi_h solving the linearised equation (33).
 from __future__ import annotations
 
 import dataclasses
-import logging
 import typing
 
 from petsc4py import PETSc
@@ -23,12 +22,10 @@ import dolfinx.fem.petsc
 from dolfinx import fem
 
 from contactqvi.linalg import create_snes
-from contactqvi.parameters import require, require_positive
+from contactqvi.parameters import require_positive
 from contactqvi.vi.nonlinear import NonlinearFormProblem, snes_converged_reason
 
 __all__ = ["ScalarNonlinearity", "TemperatureMap", "DEFAULT_PHI_OPTIONS"]
-
-logger = logging.getLogger(__name__)
 
 UFLMap = typing.Callable[[ufl.core.expr.Expr], ufl.core.expr.Expr]
 

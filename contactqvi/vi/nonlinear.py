@@ -14,7 +14,6 @@ from dolfinx import fem
 
 __all__ = ["NonlinearFormProblem", "snes_converged_reason"]
 
-
 class NonlinearFormProblem:
     """F(u; v) = 0 with Jacobian form J, for ``PETSc.SNES`` callbacks.
 

@@ -21,7 +21,6 @@ from contactqvi.parameters import require
 
 __all__ = ["ObstacleProblem"]
 
-
 class ObstacleProblem:
     """Forms, boundary conditions and nodal data of an obstacle problem.
 
