@@ -66,65 +66,52 @@ def _fmt(ours, paper) -> str:
     return f"{ours} ({paper})"
 
 
-def table2(hs: list[float]) -> tuple[list[dict], str]:
-    rows = []
-    lines = [
-        "# Table 2 (Test 3, thermoforming): ours (paper)",
-        "",
-        "Q1 on (0,1)^2, tol ||R||_H1 <= 1e-12. Counts: outer iterations; totals of inner semismooth",
-        "Newton steps for Phi, PFMY Newton steps, PDAS iterations (linear solves).",
-        "",
-        "| h | method | outer | Phi Newton | PFMY | PDAS | time (s) |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for h in hs:
-        for k, method in enumerate(("alg2", "alg1")):
-            result, secs = solve(3, h, method)
-            t = result.totals
-            paper = PAPER_TABLE2[h][k]
-            row = {
-                "h": h, "method": method, "status": result.status, "outer": result.iterations,
-                "phi_newton": t["phi_newton"], "pfmy": t["pfmy"], "pdas": t["pdas"], "seconds": secs,
-                "residuals": result.residuals, "taken": result.taken,
-                "paper": dict(zip(("outer", "phi_newton", "pfmy", "pdas"), paper)),
-            }
-            rows.append(row)
-            status = "" if result.converged else f" ({result.status})"
-            lines.append(
-                f"| {h:g} | {method} | {_fmt(result.iterations, paper[0])}{status} | {_fmt(t['phi_newton'], paper[1])} "
-                f"| {_fmt(t['pfmy'], paper[2])} | {_fmt(t['pdas'], paper[3])} | {secs:.1f} |"
-            )
-            _log(lines[-1])
-    return rows, "\n".join(lines) + "\n"
+def mesh_table(test: int, hs: dict[float, float], paper_table: dict, counts: tuple[str, ...], title: list[str]):
+    """Alg. 2 and Alg. 1 over a list of mesh sizes (Tables 2 and 3): outer iterations and inner totals.
 
-
-def table3(hs: list[float]) -> tuple[list[dict], str]:
+    Args:
+        hs: the paper's (rounded) h -> the h we run.
+        counts: the inner counters reported after the outer iterations.
+    """
     rows = []
-    lines = [
-        "# Table 3 (Test 4, semilinear VI): ours (paper)",
-        "",
-        "P1 on (0,1), tol ||R||_H1 <= 1e-10, u0 = 0.",
-        "",
-        "| h | method | outer | PFMY | PDAS | time (s) |",
-        "|---|---|---|---|---|---|",
-    ]
-    for h in hs:
+    names = {"phi_newton": "Phi Newton", "pfmy": "PFMY", "pdas": "PDAS"}
+    header = "| h | method | outer | " + " | ".join(names[c] for c in counts) + " | time (s) |"
+    lines = title + ["", header, "|---" * (len(counts) + 4) + "|"]
+    for h_paper, h in hs.items():
         for k, method in enumerate(("alg2", "alg1")):
-            result, secs = solve(4, h, method)
-            t = result.totals
-            paper = PAPER_TABLE3[h][k]
+            result, secs = solve(test, h, method)
+            ours = (result.iterations,) + tuple(result.totals[c] for c in counts)
+            paper = paper_table[h_paper][k]
             rows.append({
-                "h": h, "method": method, "status": result.status, "outer": result.iterations,
-                "pfmy": t["pfmy"], "pdas": t["pdas"], "seconds": secs, "residuals": result.residuals,
-                "paper": dict(zip(("outer", "pfmy", "pdas"), paper)),
+                "h": h, "h_paper": h_paper, "method": method, "status": result.status,
+                **dict(zip(("outer",) + counts, ours)), "seconds": secs,
+                "residuals": result.residuals, "taken": result.taken,
+                "paper": dict(zip(("outer",) + counts, paper)),
             })
             status = "" if result.converged else f" ({result.status})"
-            lines.append(
-                f"| {h:g} | {method} | {_fmt(result.iterations, paper[0])}{status} | {_fmt(t['pfmy'], paper[1])} "
-                f"| {_fmt(t['pdas'], paper[2])} | {secs:.1f} |"
-            )
+            cells = [_fmt(o, q) for o, q in zip(ours, paper)]
+            cells[0] += status
+            lines.append(f"| {h:.3g} | {method} | " + " | ".join(cells) + f" | {secs:.1f} |")
             _log(lines[-1])
     return rows, "\n".join(lines) + "\n"
+
+
+def table2(hmin: float):
+    hs = {h: h for h in PAPER_TABLE2 if h >= hmin - 1e-12}
+    title = [
+        "# Table 2 (Test 3, thermoforming): ours (paper)",
+        "",
+        "Q1 on (0,1)^2 with n = round(1/h) cells per side, tol ||R||_H1 <= 1e-12. Counts: outer iterations;",
+        "totals of inner semismooth Newton steps for Phi, PFMY Newton steps, PDAS iterations (linear solves).",
+    ]
+    return mesh_table(3, hs, PAPER_TABLE2, ("phi_newton", "pfmy", "pdas"), title)
+
+
+def table3():
+    # the paper's h are rounded values of 0.02 / 2^k
+    hs = {h: 0.02 / 2**k for k, h in enumerate(PAPER_TABLE3)}
+    title = ["# Table 3 (Test 4, semilinear VI): ours (paper)", "", "P1 on (0,1), h = 0.02/2^k, tol ||R||_H1 <= 1e-10, u0 = 0."]
+    return mesh_table(4, hs, PAPER_TABLE3, ("pfmy", "pdas"), title)
 
 
 def table1(h: float = 5e-4) -> tuple[list[dict], str]:
@@ -177,9 +164,9 @@ def main() -> None:
     parser.add_argument("--hmin", type=float, default=0.00333, help="Table 2: smallest h")
     args = parser.parse_args()
     if args.table in ("2", "all"):
-        _write("table2", *table2([h for h in PAPER_TABLE2 if h >= args.hmin - 1e-12]))
+        _write("table2", *table2(args.hmin))
     if args.table in ("3", "all"):
-        _write("table3", *table3(list(PAPER_TABLE3)))
+        _write("table3", *table3())
     if args.table in ("1", "all"):
         _write("table1", *table1())
 

@@ -23,7 +23,7 @@ logger = logging.getLogger(__name__)
 DEFAULT_NEWTON_OPTIONS = {
     "snes_type": "newtonls",
     "snes_linesearch_type": "bt",
-    "snes_rtol": 1e-10,
+    "snes_rtol": 1e-9,
     "snes_atol": 1e-13,
     "snes_stol": 1e-12,
     "snes_max_it": 100,
@@ -45,7 +45,7 @@ def huber_derivative(t: ufl.core.expr.Expr, rho: ufl.core.expr.Expr) -> ufl.core
 
 @dataclasses.dataclass
 class PFMYResult:
-    """Outcome of one path-following run: parameters visited and Newton steps per level."""
+    """Outcome of one path-following run: parameters visited, Newton steps per level, all converged?"""
 
     rhos: list[float]
     newton_iterations: list[int]
@@ -93,9 +93,9 @@ class PathFollowingMoreauYosida:
             u.x.scatter_forward()
             iterations.append(self.snes.getIterationNumber())
             if self.snes.getConvergedReason() <= 0:
+                # keep following the path: the next subproblem (and PDAS) start from this iterate
                 converged = False
-                logger.warning("PFMY: Newton failed at rho = %.1e (%s)", rho, snes_converged_reason(self.snes))
-                break
+                logger.info("PFMY: Newton stopped at rho = %.1e (%s)", rho, snes_converged_reason(self.snes))
         return PFMYResult(list(rhos), iterations, converged)
 
     def destroy(self) -> None:
