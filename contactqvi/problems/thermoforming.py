@@ -1,0 +1,143 @@
+"""Paper data of seed 003, Sect. 4: Tests 1-4 (obstacle-type QVIs (58) and the semilinear VI (48)).
+
+Only data live here; :mod:`contactqvi.qvi.build` turns them into solvers.
+"""
+
+from __future__ import annotations
+
+import math
+
+import ufl
+
+from contactqvi.parameters import require
+from contactqvi.qvi.data import ObstacleQVIData, SemilinearVIData
+from contactqvi.qvi.temperature import ScalarNonlinearity
+
+__all__ = [
+    "TESTS",
+    "PARAMETER_SETS",
+    "test1",
+    "test2",
+    "test3",
+    "test4",
+    "critical_radius",
+    "make_test",
+    "paper_tolerance",
+]
+
+#: Test 1 parameter sets (alpha1, alpha2), Sect. 4.2.
+PARAMETER_SETS = {"I": (1 + 1 / math.pi, 101 / 100), "II": (1e-2, 1e-2)}
+TESTS = (1, 2, 3, 4)
+
+
+def test1(alpha1: float, alpha2: float, initial: str = "zero") -> ObstacleQVIData:
+    """(69): 1D QVI with exact solution u = sin(pi x), T = alpha1 (Lemma 4.2).
+
+    Args:
+        alpha1, alpha2: the parameters (set (I): (1 + 1/pi, 1.01), set (II): (0.01, 0.01)).
+        initial: ``zero`` (u0 = 0) or ``poisson`` (u0 = (-Lap)^{-1} f, solved by the builder).
+    """
+    require(alpha1 > 0, "alpha1", f"must be > 0, got {alpha1!r}")
+    require(alpha2 > 0, "alpha2", f"must be > 0, got {alpha2!r}")
+    require(initial in ("zero", "poisson"), "initial", f"must be 'zero' or 'poisson', got {initial!r}")
+
+    def g(s):
+        return alpha1 + ufl.atan(ufl.min_value((1 - s) / 2, 1 - s) / alpha2)
+
+    def dg(s):
+        m = ufl.min_value((1 - s) / 2, 1 - s)
+        return ufl.conditional(ufl.lt(s, 1), -0.5, -1.0) / (alpha2 * (1 + (m / alpha2) ** 2))
+
+    pi = math.pi
+    return ObstacleQVIData(
+        dim=1,
+        k=1.0,
+        g=ScalarNonlinearity(g, dg),
+        Phi0=lambda x: ufl.max_value(0, abs(x[0] - 0.5) - 0.25),
+        f=lambda x: pi**2 * ufl.sin(pi * x[0]) + 100 * ufl.max_value(0, -abs(x[0] - 0.625) + 0.125),
+        varphi=lambda x: ufl.sin(pi * x[0]) / alpha1,
+        Psi0=lambda x: 1.0 + 0 * x[0],
+        psi=lambda x: ufl.sin(pi * x[0]) / alpha1,
+        initial=(lambda x: 0 * x[0]) if initial == "zero" else None,
+        exact=lambda x: ufl.sin(pi * x[0]),
+    )
+
+
+def critical_radius(alpha1: float, alpha2: float) -> float:
+    """R_{alpha1, alpha2} of (75): contraction of Test 2 on B_R(0) for R below it."""
+    pi = math.pi
+    return 3 * alpha1 / (10 * (1 + pi)) * (math.sqrt(((5 * alpha2 + 8) * pi**2 + 8 * pi) / (80 * alpha2)) - pi / 4)
+
+
+def test2(alpha1: float = 10.0, alpha2: float = 1.5) -> ObstacleQVIData:
+    """(72): 1D QVI with the two solutions u1 = 0 and u2 = alpha1 sin(pi x) (Lemma 4.3); u0 = 100 x (1 - x)."""
+    require(alpha1 > 0, "alpha1", f"must be > 0, got {alpha1!r}")
+    require(alpha2 >= 1, "alpha2", f"must be >= 1, got {alpha2!r}")
+    pi = math.pi
+    return ObstacleQVIData(
+        dim=1,
+        k=pi**2,
+        g=ScalarNonlinearity(lambda s: 4 / alpha1 * ufl.min_value(0, s) ** 2, lambda s: 8 / alpha1 * ufl.min_value(0, s)),
+        Phi0=lambda x: 0 * x[0],
+        f=lambda x: alpha1 * pi**2 * ufl.sin(pi * x[0]),
+        varphi=lambda x: alpha2 * 10 * pi**2 * ufl.sin(pi * x[0]) / (5 - ufl.cos(2 * pi * x[0])),
+        Psi0=lambda x: 0 * x[0],
+        psi=lambda x: 5 * pi**2 * ufl.sin(pi * x[0]) / (5 - ufl.cos(2 * pi * x[0])),
+        initial=lambda x: 100 * (1 - x[0]) * x[0],
+        exact=lambda x: 0 * x[0],
+    )
+
+
+def test3() -> ObstacleQVIData:
+    """(78): thermoforming on (0,1)^2 with the pyramidal mould, f = 25, k = 1; u0 = 0."""
+    pi = math.pi
+
+    def Phi0(x):
+        return 1 - 2 * ufl.max_value(abs(x[0] - 0.5), abs(x[1] - 0.5))
+
+    def varphi(x):
+        return ufl.sin(pi * x[0]) * ufl.sin(pi * x[1])
+
+    def g(s):
+        return ufl.conditional(ufl.le(s, 0), 0.2, ufl.conditional(ufl.lt(s, 1), (1 - s) / 5, 0.0))
+
+    def dg(s):
+        return ufl.conditional(ufl.And(ufl.gt(s, 0), ufl.lt(s, 1)), -0.2, 0.0)
+
+    return ObstacleQVIData(
+        dim=2,
+        k=1.0,
+        g=ScalarNonlinearity(g, dg),
+        Phi0=Phi0,
+        f=lambda x: 25.0 + 0 * x[0],
+        varphi=varphi,
+        Psi0=Phi0,
+        psi=varphi,
+        initial=lambda x: 0 * x[0],
+    )
+
+
+def test4() -> SemilinearVIData:
+    """Table 3: the semilinear VI (48) on (0,1), f = 50 sin(2 pi x), b1 = max(0, s), b2 = s + cos s, Phi0 = 1, u0 = 0."""
+    return SemilinearVIData(
+        dim=1,
+        b1=ScalarNonlinearity(lambda s: ufl.max_value(0, s), lambda s: ufl.conditional(ufl.gt(s, 0), 1.0, 0.0)),
+        b2=ScalarNonlinearity(lambda s: s + ufl.cos(s), lambda s: 1 - ufl.sin(s)),
+        f=lambda x: 50 * ufl.sin(2 * math.pi * x[0]),
+        Phi0=lambda x: 1.0 + 0 * x[0],
+        initial=lambda x: 0 * x[0],
+    )
+
+
+def make_test(test: int, parameter_set: str = "I", initial: str = "zero") -> ObstacleQVIData | SemilinearVIData:
+    """Data of Test ``test`` (1-4); ``parameter_set`` and ``initial`` apply to Test 1."""
+    require(test in TESTS, "test", f"unknown test {test!r}; known: {', '.join(map(str, TESTS))}")
+    if test == 1:
+        require(parameter_set in PARAMETER_SETS, "parameter_set", f"must be one of {sorted(PARAMETER_SETS)}, got {parameter_set!r}")
+        return test1(*PARAMETER_SETS[parameter_set], initial=initial)
+    return {2: test2, 3: test3, 4: test4}[test]()
+
+
+def paper_tolerance(test: int) -> float:
+    """Stopping tolerance of the paper: 1e-12 (Tests 1, 3), 1e-13 (Test 2), 1e-10 (Test 4)."""
+    return {1: 1e-12, 2: 1e-13, 3: 1e-12, 4: 1e-10}[test]

@@ -1,0 +1,267 @@
+"""Composite maps H = S o Phi of seed 003 with their Newton systems.
+
+Each map evaluates H at a point y (returning an :class:`Evaluation` with H(y)
+and the data its Newton derivative needs) and solves the linearised system
+
+    (Id - s G_S(Phi(y)) G_Phi(y)) d = b                                   (61)
+
+for a scalar ``s`` (s = 1 without localisation; s = R/||x - c|| when the
+projection P_B of Sect. 2.3 is active, see :mod:`contactqvi.qvi.outer`).
+
+* :class:`ObstacleQVIMap`: obstacle-type QVI (58), S the obstacle solver with
+  obstacle Phi0 + Phi(u), Phi the temperature map; Newton system (62)-(64).
+* :class:`SemilinearVIMap`: the semilinear VI (48)/(53), S = S0 with source
+  Phi(u) = b1(u) b2(u) + f; Newton system from Lemmas 3.16/3.17.
+* :class:`RegularisedQVIMap`: comparison method C2, S replaced by the smoothed
+  Moreau-Yosida solution map S_rho of (60); Newton system (65)-(67).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+from petsc4py import PETSc
+
+import numpy as np
+import ufl
+
+import dolfinx.fem.petsc
+from dolfinx import fem
+
+from contactqvi.qvi.newton_system import BlockNewtonSystem, diagonal_matrix
+from contactqvi.qvi.temperature import TemperatureMap
+from contactqvi.vi.moreau_yosida import PathFollowingMoreauYosida, huber_derivative
+from contactqvi.vi.problem import ObstacleProblem
+from contactqvi.vi.solver import ObstacleResult, ObstacleSolver, rho_path
+
+__all__ = ["Evaluation", "CompositeMap", "ObstacleQVIMap", "SemilinearVIMap", "RegularisedQVIMap"]
+
+@dataclasses.dataclass
+class Evaluation:
+    """H(y) and the state the Newton derivative at y is built from.
+
+    Attributes:
+        y: the point H was evaluated at.
+        value: H(y).
+        temperature: T at y (QVI maps), else None.
+        active: owned nodes of the active set {H(y) = obstacle} (Sect. 4.1).
+        counts: inner iteration counts of this evaluation.
+        obstacle: the obstacle the evaluation of S used (Phi0 + Phi(y) for QVIs).
+    """
+
+    y: fem.Function
+    value: fem.Function
+    temperature: fem.Function | None
+    active: np.ndarray
+    counts: dict[str, int]
+    obstacle: fem.Function
+
+
+def _checked(result: ObstacleResult) -> ObstacleResult:
+    if not result.converged:
+        raise RuntimeError("S: the obstacle solver did not converge")
+    return result
+
+
+class CompositeMap:
+    """Shared parts: the obstacle problem, lumped mass, stiffness without BCs, Newton system."""
+
+    def __init__(self, problem: ObstacleProblem, prefix: str):
+        self.problem = problem
+        self.V, self.comm, self.n_owned = problem.V, problem.comm, problem.n_owned
+        V = self.V
+        v, w = ufl.TestFunction(V), ufl.TrialFunction(V)
+        self.lumped_mass = dolfinx.fem.petsc.assemble_vector(fem.form(v * ufl.dx))
+        self.lumped_mass.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        self.stiffness = dolfinx.fem.petsc.assemble_matrix(fem.form(ufl.inner(ufl.grad(w), ufl.grad(v)) * ufl.dx))
+        self.stiffness.assemble()
+        self.system = BlockNewtonSystem(self.comm, prefix)
+        self.boundary = ~problem.free
+
+    def _diag(self, values: np.ndarray) -> PETSc.Mat:
+        vec = self.lumped_mass.duplicate()
+        vec.array[:] = values
+        D = diagonal_matrix(vec)
+        vec.destroy()
+        return D
+
+    def _copy(self, f: fem.Function, name: str) -> fem.Function:
+        g = fem.Function(self.V, name=name)
+        g.x.array[:] = f.x.array
+        return g
+
+    def _active(self) -> np.ndarray:
+        n = self.n_owned
+        return self.problem.free & (self.problem.u.x.array[:n] >= self.problem.obstacle.x.array[:n])
+
+    def solve_linearized(self, b: np.ndarray) -> np.ndarray:
+        """d with (Id - s G_S G_Phi) d = b (owned values) for the last :meth:`linearize`."""
+        m = self.lumped_mass.array
+        rhs = [m * b] + [None] * (len(self.system.positions) - 1)
+        return self.system.solve(rhs)[0]
+
+    def destroy(self) -> None:
+        self.system.destroy()
+        self.lumped_mass.destroy()
+        self.stiffness.destroy()
+
+
+class ObstacleQVIMap(CompositeMap):
+    """H(u) = S(Phi(u)) for the obstacle-type QVI (58) (E1 then E2 of Sect. 4.1).
+
+    Args:
+        temperature: the map Phi.
+        solver: the obstacle solver S; its problem's obstacle is overwritten with Phi0 + Phi(u).
+        Phi0: the nodal obstacle Phi0.
+        prefix: options prefix of the Newton system's KSP.
+    """
+
+    def __init__(self, temperature: TemperatureMap, solver: ObstacleSolver, Phi0: fem.Function, prefix: str = "qvi_newton_"):
+        super().__init__(solver.problem, prefix)
+        self.temperature, self.solver, self.Phi0 = temperature, solver, Phi0
+
+    def evaluate(self, y: fem.Function) -> Evaluation:
+        """E1: T and Phi(y); E2: u_B = S(Phi(y))."""
+        p, tm = self.problem, self.temperature
+        phi_its = tm.solve(y)
+        p.obstacle.x.array[:] = self.Phi0.x.array + tm.varphi.x.array * tm.T.x.array
+        s = _checked(self.solver.solve())
+        counts = {"phi_newton": phi_its, "pfmy": s.pfmy_iterations, "pdas": s.pdas_iterations, "vi": s.vi_iterations}
+        return Evaluation(
+            self._copy(y, "y"), self._copy(p.u, "membrane"), self._copy(tm.T, "temperature"), self._active(), counts,
+            self._copy(p.obstacle, "mould"),
+        )
+
+    def linearize(self, ev: Evaluation, scale: float = 1.0) -> None:
+        """Block system (68) for (delta u, xi, mu) with mu = 0 on A_i and the boundary."""
+        tm = self.temperature
+        tm.u.x.array[:] = ev.y.x.array
+        tm.T.x.array[:] = ev.temperature.x.array
+        m, phi = self.lumped_mass.array, tm.varphi.x.array[: self.n_owned]
+        K11, K12, K13 = self._diag(m), self._diag(-m * phi), self._diag(-m)
+        K21 = tm.assemble_coupling()
+        K21.scale(scale)
+        K22 = tm.assemble_jacobian()
+        K32 = self.stiffness.duplicate(copy=True)
+        K32.diagonalScale(R=tm.varphi.x.petsc_vec)
+        fixed = [self.boundary, np.zeros(self.n_owned, bool), self.boundary | ev.active]
+        self.system.set_operator([[K11, K12, K13], [K21, K22, None], [None, K32, self.stiffness]], fixed)
+        for M in (K11, K12, K13, K21, K22, K32):
+            M.destroy()
+
+
+class SemilinearVIMap(CompositeMap):
+    """H(u) = S0(Phi(u)), Phi(u) = b1(u) b2(u) + f, for the semilinear VI (48)/(53).
+
+    Args:
+        solver: obstacle solver whose problem's source is Phi(y) written in terms of ``y``.
+        y: the Function the source (and ``coupling``) are expressed in.
+        coupling: UFL form (G_Phi(y) du, q), (50), bilinear in (trial, test) on V.
+        prefix: options prefix of the Newton system's KSP.
+    """
+
+    def __init__(self, solver: ObstacleSolver, y: fem.Function, coupling: ufl.Form, prefix: str = "qvi_newton_"):
+        super().__init__(solver.problem, prefix)
+        self.solver, self.y = solver, y
+        self.coupling_form = fem.form(coupling)
+
+    def evaluate(self, y: fem.Function) -> Evaluation:
+        self.y.x.array[:] = y.x.array
+        s = _checked(self.solver.solve())
+        counts = {"phi_newton": 0, "pfmy": s.pfmy_iterations, "pdas": s.pdas_iterations, "vi": s.vi_iterations}
+        return Evaluation(
+            self._copy(y, "y"), self._copy(self.problem.u, "membrane"), None, self._active(), counts,
+            self._copy(self.problem.obstacle, "obstacle"),
+        )
+
+    def linearize(self, ev: Evaluation, scale: float = 1.0) -> None:
+        """(delta u, z): delta u - z = b, (grad z, grad q) = s (G_Phi delta u, q) on I_i, z = 0 on A_i."""
+        self.y.x.array[:] = ev.y.x.array
+        m = self.lumped_mass.array
+        K11, K12 = self._diag(m), self._diag(-m)
+        K21 = dolfinx.fem.petsc.assemble_matrix(self.coupling_form)
+        K21.assemble()
+        K21.scale(-scale)
+        fixed = [self.boundary, self.boundary | ev.active]
+        self.system.set_operator([[K11, K12], [K21, self.stiffness]], fixed)
+        for M in (K11, K12, K21):
+            M.destroy()
+
+
+class RegularisedQVIMap(CompositeMap):
+    """C2: H_rho(u) = S_rho(Phi(u)) with S_rho the smoothed Moreau-Yosida map (60), fixed rho.
+
+    S_rho is evaluated by Newton's method (warm-started; on the first call along
+    the path rho0, rho0/10, ..., rho). The Newton system (65)-(67) is assembled
+    consistently at the computed u_B = S_rho(Phi(u)), i.e. with
+    G_sigma(u_B - Phi0 - Phi(u)).
+
+    Args:
+        temperature: the map Phi.
+        pfmy: Moreau-Yosida solver on the obstacle problem (obstacle overwritten).
+        Phi0: nodal Phi0.
+        rho: the fixed regularisation parameter.
+        rho0: start of the path on the first evaluation.
+        prefix: options prefix of the Newton system's KSP.
+    """
+
+    def __init__(
+        self,
+        temperature: TemperatureMap,
+        pfmy: PathFollowingMoreauYosida,
+        Phi0: fem.Function,
+        rho: float,
+        rho0: float = 1.0,
+        prefix: str = "qvi_newton_",
+    ):
+        super().__init__(pfmy.problem, prefix)
+        self.temperature, self.pfmy, self.Phi0, self.rho = temperature, pfmy, Phi0, rho
+        self.path = rho_path(rho0, rho, 10.0) if rho < rho0 else [rho]
+        p = self.problem
+        t = p.u - p.obstacle
+        self.penalty_form = fem.form(
+            huber_derivative(t, pfmy.rho) / pfmy.rho * ufl.TrialFunction(self.V) * ufl.TestFunction(self.V) * p.dx
+        )
+        self.state = fem.Function(self.V)
+        self.warm = False
+
+    def evaluate(self, y: fem.Function) -> Evaluation:
+        p, tm = self.problem, self.temperature
+        phi_its = tm.solve(y)
+        p.obstacle.x.array[:] = self.Phi0.x.array + tm.varphi.x.array * tm.T.x.array
+        res = self.pfmy.solve([self.rho] if self.warm else self.path)
+        if not res.converged:
+            raise RuntimeError(f"C2: Newton for S_rho failed at rho = {self.rho:g}")
+        self.warm = True
+        counts = {"phi_newton": phi_its, "pfmy": res.iterations, "pdas": 0, "vi": 0}
+        return Evaluation(
+            self._copy(y, "y"), self._copy(p.u, "membrane"), self._copy(tm.T, "temperature"),
+            np.zeros(self.n_owned, bool), counts, self._copy(p.obstacle, "mould"),
+        )
+
+    def linearize(self, ev: Evaluation, scale: float = 1.0) -> None:
+        """(delta u, xi, w): delta u - w = b; (63); (grad w, grad q) + rho^-1 (G_sigma (w - I_h(varphi xi)), q) = 0."""
+        tm, p = self.temperature, self.problem
+        tm.u.x.array[:] = ev.y.x.array
+        tm.T.x.array[:] = ev.temperature.x.array
+        self.state.x.array[:] = p.u.x.array
+        p.u.x.array[:] = ev.value.x.array
+        p.obstacle.x.array[:] = ev.obstacle.x.array
+        self.pfmy.rho.value = self.rho
+        P = dolfinx.fem.petsc.assemble_matrix(self.penalty_form)
+        P.assemble()
+        p.u.x.array[:] = self.state.x.array
+        m = self.lumped_mass.array
+        K11, K13 = self._diag(m), self._diag(-m)
+        K21 = tm.assemble_coupling()
+        K21.scale(scale)
+        K22 = tm.assemble_jacobian()
+        K32 = P.duplicate(copy=True)
+        K32.diagonalScale(R=tm.varphi.x.petsc_vec)
+        K32.scale(-1.0)
+        K33 = self.stiffness.duplicate(copy=True)
+        K33.axpy(1.0, P)
+        fixed = [self.boundary, np.zeros(self.n_owned, bool), self.boundary]
+        self.system.set_operator([[K11, None, K13], [K21, K22, None], [None, K32, K33]], fixed)
+        for M in (P, K11, K13, K21, K22, K32, K33):
+            M.destroy()

@@ -1,0 +1,88 @@
+"""Monolithic block systems for the Newton step (61), realised as (62)-(64) / (68).
+
+Blocks are PETSc matrices on the same P1/Q1 row layout; they are combined into a
+nest, converted to one AIJ matrix and solved with a direct solver (MUMPS by
+default, options prefix ``qvi_newton_``). Constraints such as mu = 0 on the
+active set A_i are imposed exactly as identity rows of that block (the rows of
+(68) "deleted" in Sect. 4.1), never by penalties.
+"""
+
+from __future__ import annotations
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import numpy as np
+
+from contactqvi.linalg import create_ksp, ksp_converged_reason
+
+__all__ = ["BlockNewtonSystem", "diagonal_matrix", "DEFAULT_NEWTON_KSP_OPTIONS"]
+
+DEFAULT_NEWTON_KSP_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+
+
+def diagonal_matrix(diagonal: PETSc.Vec) -> PETSc.Mat:
+    """Sparse AIJ matrix with the given diagonal (same parallel layout as the vector)."""
+    n, N = diagonal.getLocalSize(), diagonal.getSize()
+    D = PETSc.Mat().createAIJ(((n, N), (n, N)), nnz=(1, 0), comm=diagonal.getComm())
+    D.setDiagonal(diagonal)
+    D.assemble()
+    return D
+
+
+class BlockNewtonSystem:
+    """One block linear system with identity rows on chosen (owned) dofs of each block.
+
+    Args:
+        comm: communicator.
+        prefix: PETSc options prefix of the KSP.
+    """
+
+    def __init__(self, comm: MPI.Comm, prefix: str = "qvi_newton_"):
+        self.comm = comm
+        self.ksp = create_ksp(comm, prefix, DEFAULT_NEWTON_KSP_OPTIONS)
+        self.K: PETSc.Mat | None = None
+        self.nest: PETSc.Mat | None = None
+        self.positions: list[np.ndarray] = []
+        self.fixed: list[np.ndarray] = []
+
+    def set_operator(self, blocks: list[list[PETSc.Mat | None]], fixed: list[np.ndarray]) -> None:
+        """Assemble the monolithic matrix; row i of block j becomes an identity row if fixed[j][i]."""
+        self._release()
+        # The converted matrix shares data with the nest (petsc4py 3.22): keep both alive together.
+        self.nest = nest = PETSc.Mat().createNest(blocks, comm=self.comm)
+        isrows, _ = nest.getNestISs()
+        self.K = nest.convert("aij")
+        self.K.assemble()
+        start = self.K.getOwnershipRange()[0]
+        indices = [is_.getIndices().copy() for is_ in isrows]
+        self.positions = [idx - start for idx in indices]
+        self.fixed = fixed
+        rows = np.concatenate([idx[mask] for idx, mask in zip(indices, fixed)])
+        self.K.zeroRows(rows.astype(PETSc.IntType), 1.0)
+        self.ksp.setOperators(self.K)
+
+    def solve(self, rhs: list[np.ndarray | None]) -> list[np.ndarray]:
+        """Solve with right-hand side blocks (owned values; None = 0); fixed rows get 0."""
+        b, x = self.K.createVecs()
+        b.set(0.0)
+        for pos, values, mask in zip(self.positions, rhs, self.fixed):
+            if values is not None:
+                b.array[pos] = np.where(mask, 0.0, values)
+        self.ksp.solve(b, x)
+        if self.ksp.getConvergedReason() <= 0:
+            raise RuntimeError(f"Newton system: linear solve failed ({ksp_converged_reason(self.ksp)})")
+        out = [x.array[pos].copy() for pos in self.positions]
+        b.destroy()
+        x.destroy()
+        return out
+
+    def _release(self) -> None:
+        for M in (self.K, self.nest):
+            if M is not None:
+                M.destroy()
+        self.K = self.nest = None
+
+    def destroy(self) -> None:
+        self._release()
+        self.ksp.destroy()

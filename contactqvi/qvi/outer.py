@@ -1,0 +1,280 @@
+"""Outer solvers for u = H(u), H = S o Phi (o P_B): Algorithms 1 and 2 of seed 003 and C1, C3.
+
+All methods measure the residual R(x) = x - H(x) in the H^1 norm. The Newton
+step solves G_R(x) d = -R(x), G_R = Id - G_H(P_B x) G_PB(x), through the map's
+linearised system (61); with the projection of Sect. 2.3 active, G_PB is a
+scaled identity plus a rank-one term, handled by Sherman-Morrison with two
+solves of the same factorised system.
+
+* ``alg1``: Algorithm 1, vanilla semismooth Newton, x_{i+1} = x_i + d.
+* ``alg2``: Algorithm 2, take whichever of x_N = x_i + d and x_B = H(x_i) has
+  the smaller residual (ties go to Newton).
+* ``c1``: fixed-point iteration x_{i+1} = H(x_i).
+* ``c3``: Algorithm 1 with a backtracking Armijo line search on the merit
+  function ||R||^2/2 (sufficient decrease c = 1e-4; safeguarded quadratic
+  interpolation of the step in [0.1, 0.5] times the previous one).
+(C2 is ``alg1`` applied to :class:`~contactqvi.qvi.maps.RegularisedQVIMap`.)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import typing
+
+from mpi4py import MPI
+
+import numpy as np
+import ufl
+
+import dolfinx.fem.petsc
+from dolfinx import fem
+
+from contactqvi.parameters import ParameterTable, merge_parameters, require, require_positive
+from contactqvi.qvi.maps import Evaluation
+from contactqvi.qvi.projection import BallProjection
+
+__all__ = ["FIXED_POINT_PARAMETERS", "METHODS", "FixedPointResult", "FixedPointSolver"]
+
+logger = logging.getLogger(__name__)
+
+METHODS = ("alg1", "alg2", "c1", "c3")
+
+FIXED_POINT_PARAMETERS: ParameterTable = {
+    "method": ("alg2", "outer method: alg1 | alg2 | c1 | c3 (C2 = alg1 on the regularised map)"),
+    "label": (None, "name in progress lines and results (default: the method)"),
+    "tol": (1e-12, "stop when ||R(u)||_H1 <= tol"),
+    "max_iterations": (50, "maximum number of outer iterations"),
+    "radius": (None, "radius R of the projection ball B_R(c) of Sect. 2.3 (None: no projection)"),
+    "armijo_c": (1e-4, "C3: sufficient-decrease constant"),
+    "max_backtracks": (30, "C3: maximum number of step reductions"),
+    "divergence_limit": (1e10, "stop (diverged) when the residual exceeds this"),
+}
+
+
+@dataclasses.dataclass
+class FixedPointResult:
+    """History of an outer solve.
+
+    Attributes:
+        method: outer method name.
+        status: ``converged``, ``max_iterations``, ``diverged`` or ``inner_failure``.
+        residuals: ||R(u_i)||_H1 for i = 0, 1, ...
+        taken: per iteration the candidate taken (``newton``, ``fixed-point``, ``linesearch(alpha)``).
+        counts: per iteration the inner counts (iteration 0 is the initial evaluation).
+        errors: ||u_i - u_exact||_{H^1_0} when an exact solution was given.
+        solution: the last iterate u_i.
+        evaluation: the evaluation of H at the last iterate (H(u), T, mould, active set).
+    """
+
+    method: str
+    status: str
+    residuals: list[float]
+    taken: list[str]
+    counts: list[dict[str, int]]
+    errors: list[float]
+    solution: fem.Function
+    evaluation: Evaluation
+
+    @property
+    def iterations(self) -> int:
+        return len(self.residuals) - 1
+
+    @property
+    def converged(self) -> bool:
+        return self.status == "converged"
+
+    @property
+    def totals(self) -> dict[str, int]:
+        keys = self.counts[0].keys()
+        return {k: sum(c.get(k, 0) for c in self.counts) for k in keys}
+
+    @property
+    def eocs(self) -> list[float]:
+        """EOC_i of (71) from the error history (i >= 2)."""
+        return _eocs(self.errors)
+
+    @property
+    def residual_eocs(self) -> list[float]:
+        """(71) with ||R(u_i)|| in place of the error (equivalent near a regular solution)."""
+        return _eocs(self.residuals)
+
+
+def _eocs(e: list[float]) -> list[float]:
+    out = []
+    for i in range(2, len(e)):
+        if min(e[i], e[i - 1], e[i - 2]) > 0 and e[i - 1] != e[i - 2]:
+            out.append(math.log(e[i] / e[i - 1]) / math.log(e[i - 1] / e[i - 2]))
+    return out
+
+
+def _check(params: dict[str, typing.Any]) -> None:
+    require(params["method"] in METHODS, "method", f"unknown outer method {params['method']!r}; known: {', '.join(METHODS)}")
+    require_positive("tol", params["tol"], allow_zero=True)
+    require(int(params["max_iterations"]) >= 0, "max_iterations", "must be >= 0")
+    if params["radius"] is not None:
+        require_positive("radius", params["radius"])
+
+
+class FixedPointSolver:
+    """Solve u = H(u) for a composite map (see :mod:`contactqvi.qvi.maps`).
+
+    Args:
+        fmap: the map (``evaluate``, ``linearize``, ``solve_linearized``).
+        parameters: overrides of :data:`FIXED_POINT_PARAMETERS`.
+        exact: optional exact solution (UFL expression) for error/EOC histories.
+        center: owned values of the ball centre c (default 0).
+    """
+
+    def __init__(self, fmap, parameters: dict | None = None, exact: ufl.core.expr.Expr | None = None, center: np.ndarray | None = None):
+        self.params = merge_parameters(FIXED_POINT_PARAMETERS, parameters)
+        _check(self.params)
+        self.map = fmap
+        V = fmap.V
+        self.comm: MPI.Comm = V.mesh.comm
+        self.n = fmap.n_owned
+        u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+        self.h1 = dolfinx.fem.petsc.assemble_matrix(fem.form((ufl.inner(ufl.grad(u), ufl.grad(v)) + u * v) * ufl.dx))
+        self.h1.assemble()
+        self.work, self.image = self.h1.createVecs()
+        self.iterate = fem.Function(V, name="membrane")
+        self.point = fem.Function(V, name="projected")
+        self.error_form = None
+        if exact is not None:
+            e = self.iterate - exact
+            dx = ufl.dx(metadata={"quadrature_degree": 6})
+            self.error_form = fem.form(ufl.inner(ufl.grad(e), ufl.grad(e)) * dx)
+        radius = self.params["radius"]
+        self.projection = BallProjection(fmap.stiffness, radius, center) if radius is not None else None
+
+    # -- helpers on owned coefficient arrays ------------------------------------------------
+    def norm(self, a: np.ndarray) -> float:
+        """H^1 norm of the function with owned coefficients ``a``."""
+        self.work.array[:] = a
+        self.h1.mult(self.work, self.image)
+        return math.sqrt(max(self.work.dot(self.image), 0.0))
+
+    def _error(self, x: np.ndarray) -> float:
+        self._set(self.iterate, x)
+        local = fem.assemble_scalar(self.error_form)
+        return math.sqrt(max(self.comm.allreduce(local, op=MPI.SUM), 0.0))
+
+    @staticmethod
+    def _set(f: fem.Function, owned: np.ndarray) -> None:
+        f.x.array[: owned.size] = owned
+        f.x.scatter_forward()
+
+    def evaluate(self, x: np.ndarray) -> tuple[Evaluation, float]:
+        """H(x) = S(Phi(P_B x)) and ||R(x)||_H1."""
+        y = x if self.projection is None else self.projection.apply(x)[0]
+        self._set(self.point, y)
+        ev = self.map.evaluate(self.point)
+        return ev, self.norm(x - ev.value.x.array[: self.n])
+
+    def newton_direction(self, x: np.ndarray, ev: Evaluation) -> np.ndarray:
+        """d solving G_R(x) d = -R(x), G_R = Id - G_H(P_B x) G_PB(x) (Lemmas 2.7, 2.9)."""
+        b = ev.value.x.array[: self.n] - x
+        if self.projection is None:
+            self.map.linearize(ev, 1.0)
+            return self.map.solve_linearized(b)
+        _, s, e = self.projection.apply(x)
+        self.map.linearize(ev, s)
+        z0 = self.map.solve_linearized(b)
+        if e is None:
+            return z0
+        # G_R = J_s + u (e, .)_X with J_s = Id - s G_H, u = e - J_s e (Sherman-Morrison).
+        w = self.map.solve_linearized(e) - e
+        return z0 - w * self.projection.dot(e, z0) / (1.0 + self.projection.dot(e, w))
+
+    def solve(self, u0: fem.Function) -> FixedPointResult:
+        """Run the outer method from ``u0``."""
+        prm = self.params
+        method = prm["method"]
+        label = prm["label"] or method
+        x = u0.x.array[: self.n].copy()
+        ev, res = self.evaluate(x)
+        residuals, taken, counts = [res], [""], [dict(ev.counts)]
+        errors = [self._error(x)] if self.error_form is not None else []
+        status = "max_iterations"
+        logger.info("%s it %2d  ||R||_H1 = %.3e  %s", label, 0, res, _format_counts(ev.counts))
+        for it in range(1, prm["max_iterations"] + 2):
+            if res <= prm["tol"]:
+                status = "converged"
+                break
+            if not math.isfinite(res) or res > prm["divergence_limit"]:
+                status = "diverged"
+                break
+            if it > prm["max_iterations"]:
+                break
+            step_counts: dict[str, int] = {k: 0 for k in ev.counts}
+            try:
+                x, ev, res, choice = self._step(method, x, ev, res, step_counts)
+            except RuntimeError as exc:  # an inner solver failed: report, keep the last iterate
+                logger.warning("%s it %2d: %s", label, it, exc)
+                status = "inner_failure"
+                break
+            residuals.append(res)
+            taken.append(choice)
+            counts.append(step_counts)
+            if self.error_form is not None:
+                errors.append(self._error(x))
+            logger.info("%s it %2d  ||R||_H1 = %.3e  taken %-16s %s", label, it, res, choice, _format_counts(step_counts))
+        self._set(self.iterate, x)
+        solution = fem.Function(self.map.V, name="membrane")
+        solution.x.array[:] = self.iterate.x.array
+        return FixedPointResult(label, status, residuals, taken, counts, errors, solution, ev)
+
+    def _step(self, method: str, x: np.ndarray, ev: Evaluation, res: float, step_counts: dict[str, int]):
+        """One outer iteration; returns (x_{i+1}, H(x_{i+1}), ||R(x_{i+1})||, candidate taken)."""
+        if method == "c1":
+            x_b = ev.value.x.array[: self.n].copy()
+            ev_b, res_b = self.evaluate(x_b)
+            _add(step_counts, ev_b.counts)
+            return x_b, ev_b, res_b, "fixed-point"
+        d = self.newton_direction(x, ev)
+        if method == "c3":
+            return self._linesearch(x, d, res, step_counts)
+        x_n = x + d
+        ev_n, res_n = self.evaluate(x_n)
+        _add(step_counts, ev_n.counts)
+        if method == "alg1":
+            return x_n, ev_n, res_n, "newton"
+        # Algorithm 2, steps 7-13: the fixed-point candidate x_B = H(x_i); ties go to Newton.
+        x_b = ev.value.x.array[: self.n].copy()
+        ev_b, res_b = self.evaluate(x_b)
+        _add(step_counts, ev_b.counts)
+        if res_n <= res_b:
+            return x_n, ev_n, res_n, "newton"
+        return x_b, ev_b, res_b, "fixed-point"
+
+    def _linesearch(self, x: np.ndarray, d: np.ndarray, res: float, step_counts: dict[str, int]):
+        """Backtracking Armijo on f = ||R||^2/2 along the Newton direction (f'(0) = -||R||^2)."""
+        f0, slope = 0.5 * res**2, -(res**2)
+        alpha, accepted = 1.0, 1.0
+        for _ in range(self.params["max_backtracks"] + 1):
+            x_t = x + alpha * d
+            ev_t, res_t = self.evaluate(x_t)
+            _add(step_counts, ev_t.counts)
+            f_t, accepted = 0.5 * res_t**2, alpha
+            if f_t <= f0 + self.params["armijo_c"] * alpha * slope:
+                break
+            denominator = 2.0 * (f_t - f0 - slope * alpha)
+            trial = -slope * alpha**2 / denominator if denominator > 0 else 0.5 * alpha
+            alpha = min(max(trial, 0.1 * alpha), 0.5 * alpha)
+        return x_t, ev_t, res_t, f"linesearch({accepted:.3g})"
+
+    def destroy(self) -> None:
+        for obj in (self.h1, self.work, self.image):
+            obj.destroy()
+        if self.projection is not None:
+            self.projection.destroy()
+
+
+def _add(total: dict[str, int], counts: dict[str, int]) -> None:
+    for k, v in counts.items():
+        total[k] = total.get(k, 0) + v
+
+
+def _format_counts(counts: dict[str, int]) -> str:
+    return " ".join(f"{k}={v}" for k, v in counts.items() if v)

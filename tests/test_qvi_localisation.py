@@ -1,0 +1,90 @@
+"""Localisation (Sect. 2.3, Test 2 (72)) and the semilinear VI (48) (Test 4) of seed 003."""
+
+from __future__ import annotations
+
+import math
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+import ufl
+
+import dolfinx.fem.petsc
+from dolfinx import fem
+
+from contactqvi.meshes import create_unit_interval
+from contactqvi.problems import thermoforming
+from contactqvi.qvi import BallProjection, build, create_mesh
+
+
+def test_ball_projection_and_its_newton_derivative():
+    msh, _ = create_unit_interval(MPI.COMM_WORLD, 40)
+    V = fem.functionspace(msh, ("Lagrange", 1))
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    A = dolfinx.fem.petsc.assemble_matrix(fem.form(ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx))
+    A.assemble()
+    f, h = fem.Function(V), fem.Function(V)
+    f.interpolate(lambda x: 3 * np.sin(np.pi * x[0]))
+    h.interpolate(lambda x: x[0] * (1 - x[0]) ** 2)
+    n = V.dofmap.index_map.size_local
+    x, dx = f.x.array[:n].copy(), h.x.array[:n].copy()
+    proj = BallProjection(A, radius=1.0)
+    p, s, e = proj.apply(x)
+    assert e is not None and math.isclose(proj.norm(p), 1.0, rel_tol=1e-12)
+    assert math.isclose(s, 1.0 / proj.norm(x), rel_tol=1e-12)
+    # (16): G h = s (h - (e, h) e) vs finite differences
+    derivative = s * (dx - proj.dot(e, dx) * e)
+    eps = 1e-6
+    fd = (proj.apply(x + eps * dx)[0] - p) / eps
+    assert proj.norm(fd - derivative) < 1e-5 * proj.norm(derivative)
+    inside, s_in, e_in = proj.apply(0.1 * x)
+    assert e_in is None and s_in == 1.0 and np.array_equal(inside, 0.1 * x)
+    A.destroy()
+
+
+def _test2(R: float, method: str, n: int = 500):
+    data = thermoforming.test2()
+    msh, _ = create_mesh(MPI.COMM_WORLD, 1, 1 / n)
+    setup = build(data, msh, method, {"tol": 1e-13, "max_iterations": 15, "radius": R})
+    return setup.solver.solve(setup.initial)
+
+
+@pytest.mark.parametrize("method, most", [("alg2", 4), ("c1", 4), ("alg1", 4)])
+def test_small_ball_isolates_the_zero_solution(method, most):
+    # R = 0.01 < R_{10, 3/2} ~ 0.3136: contraction on B, Theorem 2.8 i): convergence to u1 = 0.
+    assert thermoforming.critical_radius(10, 1.5) == pytest.approx(0.3136, abs=1e-4)
+    result = _test2(0.01, method)
+    assert result.converged and result.iterations <= most
+    assert result.errors[-1] <= 1e-13  # ||u||_{H^1_0}: the distance to u1 = 0
+
+
+def test_newton_converges_in_three_steps_for_larger_radius():
+    result = _test2(2.477, "alg1")
+    assert result.converged and result.iterations == 3 and result.errors[-1] <= 1e-13
+    fixed = _test2(2.477, "c1")
+    assert fixed.converged and fixed.iterations > result.iterations
+
+
+def test_without_projection_both_find_the_inactive_solution_u2():
+    # Without localisation the iteration from u0 = 100 x (1 - x) reaches u2 = alpha1 sin(pi x) (Sect. 4.3).
+    data = thermoforming.test2()
+    msh, _ = create_mesh(MPI.COMM_WORLD, 1, 1 / 500)
+    setup = build(data, msh, "alg2", {"tol": 1e-13})
+    result = setup.solver.solve(setup.initial)
+    assert result.converged and result.iterations <= 2
+    assert result.errors[-1] == pytest.approx(math.sqrt(50) * math.pi, rel=1e-3)
+
+
+@pytest.mark.parametrize("method", ["alg2", "alg1"])
+def test_semilinear_vi_converges_and_is_feasible(method):
+    data = thermoforming.test4()
+    msh, _ = create_mesh(MPI.COMM_WORLD, 1, 1 / 100)
+    setup = build(data, msh, method, {"tol": 1e-10})
+    result = setup.solver.solve(setup.initial)
+    assert result.converged and result.iterations <= 6
+    n = setup.fmap.n_owned
+    comm = msh.comm
+    u = result.solution.x.array[:n]
+    assert comm.allreduce(float(np.max(u)), op=MPI.MAX) <= 1.0  # u <= Phi0 = 1
+    assert comm.allreduce(int(np.count_nonzero(result.evaluation.active))) > 0
