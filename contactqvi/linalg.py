@@ -41,13 +41,22 @@ def set_default_options(prefix: str, options: OptionsDict) -> None:
             opts[prefix + name] = "" if value is None else value
 
 
-def create_ksp(comm: MPI.Comm, prefix: str, options: OptionsDict, A: PETSc.Mat | None = None) -> PETSc.KSP:
-    """KSP with options prefix ``prefix`` (ends with ``_``) and the given defaults."""
+def create_ksp(
+    comm: MPI.Comm, prefix: str, options: OptionsDict, A: PETSc.Mat | None = None, rtol: float | None = None
+) -> PETSc.KSP:
+    """KSP with options prefix ``prefix`` (ends with ``_``) and the given defaults.
+
+    ``rtol`` is set on this KSP only (not in the shared options database, where
+    it would become the default of every later solver with the same prefix); a
+    ``-{prefix}ksp_rtol`` given by the user still wins.
+    """
     set_default_options(prefix, options)
     ksp = PETSc.KSP().create(comm)
     ksp.setOptionsPrefix(prefix)
     if A is not None:
         ksp.setOperators(A)
+    if rtol is not None:
+        ksp.setTolerances(rtol=rtol)
     ksp.setFromOptions()
     return ksp
 

@@ -124,7 +124,7 @@ class SCDNewtonSolver:
         self._D = _block_diagonal_like(A)
         self._U = _block_diagonal_like(A)
         self._J: PETSc.Mat | None = None
-        self.ksp = create_ksp(comm, prefix, {**KSP_DEFAULTS, "ksp_rtol": p["tol"]})
+        self.ksp = create_ksp(comm, prefix, KSP_DEFAULTS, rtol=p["tol"])
         self._steps = line_search_steps(int(p["max_line_search"]))
         self._gamma = None if p["gamma"] is None else float(p["gamma"])
 
