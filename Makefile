@@ -32,10 +32,10 @@ demo: $(PY)
 test: test-serial test-mpi
 
 test-serial: $(PY)
-	$(PY) -m pytest -q -p no:cacheprovider tests
+	$(PY) -m pytest -q --color=no -p no:cacheprovider tests
 
 test-mpi: $(PY)
-	$(MPIRUN) $(PY) -m mpi4py -m pytest -q -p no:cacheprovider tests
+	$(MPIRUN) $(PY) -m mpi4py -m pytest -q --color=no -p no:cacheprovider tests
 
 benchmarks: $(PY)
 	$(PY) benchmarks/run_all.py
