@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import gc
+import importlib.util
 import pathlib
 import tempfile
+import types
 
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -30,6 +32,20 @@ def mpi_tmp_path() -> pathlib.Path:
     path = tempfile.mkdtemp(prefix="contactqvi-") if comm.rank == 0 else None
     yield pathlib.Path(comm.bcast(path, root=0))
     comm.Barrier()
+
+
+@pytest.fixture
+def load_demo():
+    """Import ``demos/<name>.py`` as a module, to call its ``main(argv)``."""
+
+    def load(name: str) -> types.ModuleType:
+        path = pathlib.Path(__file__).resolve().parent.parent / "demos" / f"{name}.py"
+        spec = importlib.util.spec_from_file_location(f"{name}_demo", path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        return module
+
+    return load
 
 
 def pytest_collection_modifyitems(config, items):

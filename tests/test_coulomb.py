@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import pathlib
 
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -17,7 +15,6 @@ from contactqvi.contact import State, SCDNewtonSolver, build_contact_problem, cl
 from contactqvi.linalg import create_snes
 from contactqvi.problems import coulomb as data
 
-DEMO = pathlib.Path(__file__).resolve().parent.parent / "demos" / "coulomb3d.py"
 EXACT = {"ksp_type": "preonly", "pc_type": "lu"}
 
 
@@ -139,13 +136,6 @@ def _displacement(problem, u):
     return problem.physical_displacement(u, fem.Function(problem.V))
 
 
-def _demo():
-    spec = importlib.util.spec_from_file_location("coulomb3d_demo", DEMO)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.mark.parametrize(
     "args, name",
     [
@@ -157,13 +147,13 @@ def _demo():
         (["--rtol", "0"], "rtol"),
     ],
 )
-def test_demo_rejects_bad_input(args, name, capsys):
-    assert _demo().main(["--no-plot", *args]) == 2
+def test_demo_rejects_bad_input(args, name, capsys, load_demo):
+    assert load_demo("coulomb3d").main(["--no-plot", *args]) == 2
     assert f"error: {name}:" in capsys.readouterr().err
 
 
-def test_demo_outputs(mpi_tmp_path):
-    demo = _demo()
+def test_demo_outputs(mpi_tmp_path, load_demo):
+    demo = load_demo("coulomb3d")
     out = mpi_tmp_path / "run"
     assert demo.main(["--lev", "1", "--geometry", "d3", "--output", str(out), "--no-plot"]) == 0
     summary = json.loads((out / "summary.json").read_text())

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import pathlib
 
 from mpi4py import MPI
 
@@ -14,15 +12,6 @@ from contactqvi.friction import FrictionProblem, PrimalDualActiveSet, augmented_
 from contactqvi.meshes import create_unit_square
 from contactqvi.parameters import ParameterError
 from contactqvi.problems.stadler import create_stadler_problem, stadler_example
-
-DEMO = pathlib.Path(__file__).resolve().parent.parent / "demos" / "simplified_friction.py"
-
-
-def _demo():
-    spec = importlib.util.spec_from_file_location("simplified_friction_demo", DEMO)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def _square(n: int = 4):
@@ -90,28 +79,28 @@ def test_examples_reject_bad_input():
         (["--example", "3", "--mu", "0"], "mu"),
     ],
 )
-def test_demo_reports_bad_input(argv, name, capsys, mpi_tmp_path):
-    rc = _demo().main([*argv, "--output", str(mpi_tmp_path / "bad"), "--no-png"])
+def test_demo_reports_bad_input(argv, name, capsys, mpi_tmp_path, load_demo):
+    rc = load_demo("simplified_friction").main([*argv, "--output", str(mpi_tmp_path / "bad"), "--no-png"])
     assert rc == 2
     if MPI.COMM_WORLD.rank == 0:
         assert f"error: {name}:" in capsys.readouterr().err
 
 
-def test_demo_alm_end_to_end(mpi_tmp_path):
+def test_demo_alm_end_to_end(mpi_tmp_path, load_demo):
     out = mpi_tmp_path / "alm"
     argv = ["--example", "2", "--method", "alm", "--alm-inner", "inexact", "--alm-schedule", "power10",
             "--alm-steps", "5", "--tol", "1e-8", "--N", "9", "--output", str(out), "--no-png"]  # fmt: skip
-    assert _demo().main(argv) == 0
+    assert load_demo("simplified_friction").main(argv) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "converged" and summary["d_lambda"] < 1e-8
     assert summary["max_abs_lambda"] <= 0.4 * (1 + 1e-14)
     assert (out / "solution.npz").is_file() and (out / "solution.bp").is_dir()
 
 
-def test_demo_uzawa_nonconvergence_exit_code(mpi_tmp_path):
+def test_demo_uzawa_nonconvergence_exit_code(mpi_tmp_path, load_demo):
     out = mpi_tmp_path / "uzawa"
     argv = ["--example", "2", "--method", "uzawa", "--gamma", "1000", "--max-iterations", "1",
             "--N", "9", "--output", str(out), "--no-png"]  # fmt: skip
-    assert _demo().main(argv) == 1
+    assert load_demo("simplified_friction").main(argv) == 1
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "max_iterations" and summary["iterations"] == 20 and not summary["converged"]

@@ -2,27 +2,16 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import pathlib
 
 
 import numpy as np
 import pytest
 
-DEMO = pathlib.Path(__file__).resolve().parent.parent / "demos" / "thermoforming.py"
 
-
-def _demo():
-    spec = importlib.util.spec_from_file_location("thermoforming_demo", DEMO)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def test_demo_test3_writes_results(mpi_tmp_path):
+def test_demo_test3_writes_results(mpi_tmp_path, load_demo):
     out = mpi_tmp_path / "tf"
-    code = _demo().main(["--test", "3", "--h", "0.1", "--output", str(out), "--log-level", "WARNING"])
+    code = load_demo("thermoforming").main(["--test", "3", "--h", "0.1", "--output", str(out), "--log-level", "WARNING"])
     assert code == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "converged" and summary["outer_iterations"] <= 5
@@ -35,16 +24,16 @@ def test_demo_test3_writes_results(mpi_tmp_path):
         assert npz["x"].shape == (121, 3)
 
 
-def test_demo_test4_runs_without_plots(mpi_tmp_path):
+def test_demo_test4_runs_without_plots(mpi_tmp_path, load_demo):
     out = mpi_tmp_path / "tf4"
-    code = _demo().main(["--test", "4", "--h", "0.05", "--no-plots", "--output", str(out), "--log-level", "WARNING"])
+    code = load_demo("thermoforming").main(["--test", "4", "--h", "0.05", "--no-plots", "--output", str(out), "--log-level", "WARNING"])
     assert code == 0
     assert json.loads((out / "summary.json").read_text())["status"] == "converged"
 
 
-def test_demo_reports_non_convergence(mpi_tmp_path):
+def test_demo_reports_non_convergence(mpi_tmp_path, load_demo):
     out = mpi_tmp_path / "tf_fail"
-    code = _demo().main(
+    code = load_demo("thermoforming").main(
         ["--test", "3", "--h", "0.1", "--method", "c1", "--max-iterations", "2", "--no-plots", "--output", str(out),
          "--log-level", "WARNING"]
     )
@@ -57,7 +46,7 @@ def test_demo_reports_non_convergence(mpi_tmp_path):
     [(["--test", "5"], "test"), (["--h", "-1"], "h"), (["--method", "newton"], "method"), (["--rho-min", "2"], "rho_min"),
      (["--s-solver", "bogus"], "method")],
 )
-def test_demo_bad_input_exits_with_a_message(argv, name, capsys):
-    code = _demo().main(argv + ["--no-plots", "--no-compare", "--output", "/nonexistent-never-written"])
+def test_demo_bad_input_exits_with_a_message(argv, name, capsys, load_demo):
+    code = load_demo("thermoforming").main(argv + ["--no-plots", "--no-compare", "--output", "/nonexistent-never-written"])
     assert code == 2
     assert capsys.readouterr().err.startswith(f"error: {name}:")
