@@ -43,8 +43,12 @@ def test_newton_matrix_regular():
         states = classify(v, z, solver.gamma, problem.friction, 0.0)
         assert len(np.unique(states)) >= 3
         J = solver.newton_matrix(*scd_adjoint_blocks(v, z, states, solver.gamma, problem.friction))
-        free = np.setdiff1d(np.arange(J.getSize()[0]), problem.dirichlet_dofs_loc)  # serial: local = global
-        dense = J.convert("dense").getDenseArray()[np.ix_(free, free)]
+        dense_J = J.convert("dense").getDenseArray()
+        contact_rows = (3 * problem.contact_blk[:, None] + np.arange(3)).ravel()
+        other = np.setdiff1d(np.arange(J.getSize()[0]), contact_rows)  # serial: local = global
+        assert np.array_equal(dense_J[other], problem.A.convert("dense").getDenseArray()[other])  # rge(I, 0)
+        free = np.setdiff1d(np.arange(J.getSize()[0]), problem.dirichlet_dofs_loc)
+        dense = dense_J[np.ix_(free, free)]
         singular = np.linalg.svd(dense, compute_uv=False)
         assert singular.min() > 1e-10 * singular.max()
 

@@ -121,8 +121,8 @@ class SCDNewtonSolver:
             require_positive("gamma", p["gamma"])
         comm = problem.comm
         A = problem.A
-        self._D = _block_diagonal_like(A)
-        self._U = _block_diagonal_like(A)
+        self._D = _block_diagonal_like(A, np.eye(3))  # W*^T = I off the contact nodes
+        self._U = _block_diagonal_like(A, np.zeros((3, 3)))  # U*^T = 0 off the contact nodes
         self._J: PETSc.Mat | None = None
         self.ksp = create_ksp(comm, prefix, KSP_DEFAULTS, rtol=p["tol"])
         self._steps = line_search_steps(int(p["max_line_search"]))
@@ -189,8 +189,6 @@ class SCDNewtonSolver:
         history: list[dict] = []
         krylov_total = 0
         status = "diverged"
-        states = np.zeros(len(blk), dtype=np.int8)
-        state_tol = 0.0
         for k in range(int(p["max_iterations"]) + 1):
             w_scale = comm.allreduce(float(np.abs(gamma * v + z).max(initial=0.0)), op=MPI.MAX)
             state_tol = p["state_tol"] * w_scale
@@ -274,17 +272,17 @@ class SCDNewtonSolver:
         )
 
 
-def _block_diagonal_like(A: PETSc.Mat) -> PETSc.Mat:
-    """Block-diagonal (3x3) AIJ matrix with A's layout; identity blocks stored in full.
+def _block_diagonal_like(A: PETSc.Mat, block: np.ndarray) -> PETSc.Mat:
+    """Block-diagonal AIJ matrix with A's layout and every 3x3 diagonal block = ``block``.
 
     All nine entries of every diagonal block are stored (zeros included), so the
     pattern of D A equals that of A and U fits into it.
     """
-    D = PETSc.Mat().createAIJ(size=A.getSizes(), bsize=3, nnz=(3, 0), comm=A.getComm())
-    D.setOption(PETSc.Mat.Option.IGNORE_ZERO_ENTRIES, False)
+    M = PETSc.Mat().createAIJ(size=A.getSizes(), bsize=3, nnz=(3, 0), comm=A.getComm())
+    M.setOption(PETSc.Mat.Option.IGNORE_ZERO_ENTRIES, False)
     n_blk = A.getLocalSize()[0] // 3
-    _set_diagonal_blocks(D, np.arange(n_blk), np.broadcast_to(np.eye(3), (n_blk, 3, 3)))
-    return D
+    _set_diagonal_blocks(M, np.arange(n_blk), np.broadcast_to(block, (n_blk, 3, 3)))
+    return M
 
 
 def _set_diagonal_blocks(M: PETSc.Mat, blk: np.ndarray, blocks: np.ndarray) -> None:
