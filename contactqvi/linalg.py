@@ -1,4 +1,4 @@
-"""PETSc helpers: prefixed KSP/SNES factories, owned-dof index sets, power iteration.
+"""PETSc helpers: prefixed KSP/SNES factories, power iteration, KSP diagnostics.
 
 Every solver object gets an options prefix; defaults given here are written to
 the PETSc options database under that prefix *unless the user already set them*
@@ -13,16 +13,10 @@ import typing
 from mpi4py import MPI
 from petsc4py import PETSc
 
-import numpy as np
-
-from dolfinx import fem
-
 __all__ = [
     "set_default_options",
     "create_ksp",
     "create_snes",
-    "owned_dofs_glob",
-    "index_set",
     "power_iteration",
     "ksp_converged_reason",
 ]
@@ -68,22 +62,6 @@ def create_snes(comm: MPI.Comm, prefix: str, options: OptionsDict) -> PETSc.SNES
     snes.setOptionsPrefix(prefix)
     snes.setFromOptions()
     return snes
-
-
-def owned_dofs_glob(V: fem.FunctionSpace, dofs_loc: np.ndarray) -> np.ndarray:
-    """PETSc global indices of the owned entries of unrolled local dof indices ``dofs_loc``.
-
-    Ghost entries are dropped, so every rank lists only rows it owns.
-    """
-    index_map, bs = V.dofmap.index_map, V.dofmap.index_map_bs
-    dofs_loc = np.asarray(dofs_loc, dtype=np.int64)
-    owned = dofs_loc[dofs_loc < index_map.size_local * bs]
-    return (owned + index_map.local_range[0] * bs).astype(PETSc.IntType)
-
-
-def index_set(comm: MPI.Comm, rows_glob: np.ndarray) -> PETSc.IS:
-    """Parallel index set of (owned, global) rows, sorted and unique."""
-    return PETSc.IS().createGeneral(np.unique(rows_glob).astype(PETSc.IntType), comm=comm)
 
 
 def power_iteration(A: PETSc.Mat, x0: PETSc.Vec, iterations: int) -> float:

@@ -15,7 +15,6 @@ from mpi4py import MPI
 
 import numpy as np
 
-import dolfinx
 from dolfinx import mesh as dmesh
 
 from contactqvi.parameters import require

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 import typing
 
-__all__ = ["ParameterError", "merge_parameters", "require", "require_positive", "describe"]
+__all__ = ["ParameterError", "merge_parameters", "require", "require_positive"]
 
 ParameterTable = dict[str, tuple[typing.Any, str]]
 
@@ -44,8 +44,3 @@ def merge_parameters(table: ParameterTable, given: dict[str, typing.Any] | None)
         merged[name] = value
     return merged
 
-
-def describe(table: ParameterTable) -> str:
-    """Human-readable listing of a parameter table (for ``--help`` epilogs)."""
-    width = max(len(name) for name in table)
-    return "\n".join(f"  {name:<{width}}  {desc} (default: {default!r})" for name, (default, desc) in table.items())

@@ -20,10 +20,10 @@ import sys
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from contactqvi import cli, io, meshes
+from contactqvi import cli, io
 from contactqvi.contact.driver import solve_nested
 from contactqvi.contact.postprocess import contact_fields, plot_contact_states
-from contactqvi.contact.scd_newton import PARAMETERS
+from contactqvi.contact.scd_newton import PARAMETERS, check_parameters
 from contactqvi.elasticity import lame_parameters
 from contactqvi.parameters import ParameterError, require
 from contactqvi.problems import coulomb as data
@@ -52,35 +52,31 @@ def parse(argv: list[str] | None = None):
     parser.add_argument("--nested-from", type=int, default=3, help="coarsest level of a nested start (solved from 0)")
     parser.add_argument("--no-plot", action="store_true", help="skip the PNG of the contact states")
     args = cli.parse_args(parser, argv)
-    require(args.lev >= 0, "lev", f"must be >= 0, got {args.lev}")
-    require(args.friction >= 0, "friction", f"must be >= 0, got {args.friction}")
     lame_parameters(args.young, args.poisson)
-    require(0 < args.tol < 1, "tol", f"must lie in (0, 1), got {args.tol}")
-    require(0 < args.rtol < 1, "rtol", f"must lie in (0, 1), got {args.rtol}")
     require(0 <= args.nested_from < args.lev or args.initial == "zero", "nested-from", "must lie in [0, lev)")
-    return args
-
-
-def main(argv: list[str] | None = None) -> int:
-    comm = MPI.COMM_WORLD
-    try:
-        args = parse(argv)
-    except ParameterError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    out = io.prepare_output_dir(comm, args.output)
-    parameters = {
+    args.solver_parameters = check_parameters({
         "tol": args.tol,
         "rtol": args.rtol,
         "max_iterations": args.max_iterations,
         "state_tol": args.state_tol,
         "eliminate_fixed_rows": not args.no_elimination,
-    }
-    levels = range(args.nested_from, args.lev + 1) if args.initial == "nested" else [args.lev]
-    solutions = solve_nested(
-        comm, levels, gap=data.gap_function(args.geometry), tractions=data.tractions(args.load),
-        young=args.young, poisson=args.poisson, friction=args.friction, parameters=parameters,
-    )
+    })
+    return args
+
+
+def main(argv: list[str] | None = None) -> int:
+    comm = MPI.COMM_WORLD
+    try:  # every input check (here and in the library) runs before assembly
+        args = parse(argv)
+        levels = range(args.nested_from, args.lev + 1) if args.initial == "nested" else [args.lev]
+        solutions = solve_nested(
+            comm, levels, gap=data.gap_function(args.geometry), tractions=data.tractions(args.load),
+            young=args.young, poisson=args.poisson, friction=args.friction, parameters=args.solver_parameters,
+        )
+    except ParameterError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    out = io.prepare_output_dir(comm, args.output)
     problem, u, result = solutions[-1].problem, solutions[-1].u, solutions[-1].result
     runs = [{"lev": s.lev, "status": s.result.status, "iterations": s.result.iterations,
              "krylov_iterations": s.result.krylov_iterations} for s in solutions]
@@ -90,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
     summary = {
         "problem": "coulomb3d",
         "status": result.status,
-        "parameters": {k: v for k, v in vars(args).items()},
+        "parameters": vars(args),
         "petsc_options": PETSc.Options().getAll(),
         "mpi_size": comm.size,
         "p": problem.n_contact,

@@ -26,7 +26,6 @@ import sys
 import time
 
 from mpi4py import MPI
-from petsc4py import PETSc
 
 import numpy as np
 

@@ -7,6 +7,7 @@ import pytest
 import scipy.optimize
 
 from contactqvi.contact.nodal import State, classify, lipschitz_constant, resolvent, scd_adjoint_blocks
+from contactqvi.contact.scd_newton import line_search_steps
 
 GAMMA, FRICTION = 3.0, 0.4
 rng = np.random.default_rng(20221107)
@@ -120,3 +121,9 @@ def test_sliding_basis_is_paper_basis_rescaled():
         printed[3:5, :2] = -FRICTION * theta * (np.eye(2) - P)
         coeffs = np.linalg.lstsq(printed, ours, rcond=None)[0]
         assert np.abs(printed @ coeffs - ours).max() > 1e-6 * np.abs(ours).max()
+
+
+def test_line_search_steps_of_section_7():
+    expected = [1, 1 / 2, 1 / 4, 1 / 8, 1 / 32, 1 / 128, 0.1 / 128, 0.01 / 128, 0.001 / 128]
+    np.testing.assert_allclose(line_search_steps(9), expected, rtol=1e-15)
+    assert len(line_search_steps(3)) == 3

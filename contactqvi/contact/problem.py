@@ -70,12 +70,6 @@ class ContactProblem:
         out.x.scatter_forward()
         return out
 
-    def shifted_displacement(self, u_physical: fem.Function) -> PETSc.Vec:
-        """u = u~ + d as a new PETSc vector."""
-        u = self.shift.copy()
-        u.axpy(1.0, u_physical.x.petsc_vec)
-        return u
-
 
 def build_contact_problem(
     msh: dmesh.Mesh,

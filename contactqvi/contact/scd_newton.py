@@ -34,7 +34,7 @@ from contactqvi.contact.problem import ContactProblem
 from contactqvi.linalg import create_ksp, ksp_converged_reason, power_iteration
 from contactqvi.parameters import ParameterTable, merge_parameters, require, require_positive
 
-__all__ = ["PARAMETERS", "KSP_DEFAULTS", "SCDNewtonResult", "SCDNewtonSolver", "line_search_steps"]
+__all__ = ["PARAMETERS", "KSP_DEFAULTS", "SCDNewtonResult", "SCDNewtonSolver", "check_parameters", "line_search_steps"]
 
 logger = logging.getLogger(__name__)
 
@@ -96,6 +96,20 @@ class SCDNewtonResult:
         return self.status == "converged"
 
 
+def check_parameters(parameters: dict | None) -> dict:
+    """:data:`PARAMETERS` merged with ``parameters`` and validated (cheap: call before assembly)."""
+    p = merge_parameters(PARAMETERS, parameters)
+    require(0.0 < p["rtol"] < 1.0, "rtol", f"must lie in (0, 1), got {p['rtol']!r}")
+    require_positive("atol", p["atol"], allow_zero=True)
+    require(0.0 < p["tol"] < 1.0, "tol", f"must lie in (0, 1), got {p['tol']!r}")
+    for name in ("max_iterations", "power_iterations", "max_line_search"):
+        require(int(p[name]) >= 1, name, f"must be >= 1, got {p[name]!r}")
+    require_positive("state_tol", p["state_tol"], allow_zero=True)
+    if p["gamma"] is not None:
+        require_positive("gamma", p["gamma"])
+    return p
+
+
 class SCDNewtonSolver:
     """SCD semismooth* Newton solver for :class:`ContactProblem` (seed 000, Sects. 4-7).
 
@@ -109,16 +123,7 @@ class SCDNewtonSolver:
 
     def __init__(self, problem: ContactProblem, parameters: dict | None = None, prefix: str = "coulomb_"):
         self.problem = problem
-        self.parameters = p = merge_parameters(PARAMETERS, parameters)
-        require(0.0 < p["rtol"] < 1.0, "rtol", f"must lie in (0, 1), got {p['rtol']!r}")
-        require_positive("atol", p["atol"], allow_zero=True)
-        require(0.0 < p["tol"] < 1.0, "tol", f"must lie in (0, 1), got {p['tol']!r}")
-        require(int(p["max_iterations"]) >= 1, "max_iterations", "must be >= 1")
-        require(int(p["power_iterations"]) >= 1, "power_iterations", "must be >= 1")
-        require(int(p["max_line_search"]) >= 1, "max_line_search", "must be >= 1")
-        require_positive("state_tol", p["state_tol"], allow_zero=True)
-        if p["gamma"] is not None:
-            require_positive("gamma", p["gamma"])
+        self.parameters = p = check_parameters(parameters)
         comm = problem.comm
         A = problem.A
         self._D = _block_diagonal_like(A, np.eye(3))  # W*^T = I off the contact nodes

@@ -6,10 +6,9 @@ foundation {x3 <= 0}; u = 0 on x1 = 0, tractions P_T on x3 = 1 and P_R on x1 = 2
 
 from __future__ import annotations
 
-import typing
-
 import numpy as np
 
+from contactqvi.meshes import GapFunction
 from contactqvi.parameters import require
 
 __all__ = [
@@ -28,8 +27,6 @@ __all__ = [
 YOUNG = 70e9  #: Young's modulus E (Pa), aluminium
 POISSON = 0.334  #: Poisson's ratio nu
 FRICTION = 0.23  #: Coulomb friction coefficient F
-
-GapFunction = typing.Callable[[np.ndarray, np.ndarray], np.ndarray]
 
 #: Bottom surfaces d1, d2, d3 (m): the initial gap to the foundation.
 GEOMETRIES: dict[str, GapFunction] = {
