@@ -28,6 +28,7 @@ __all__ = [
     "write_summary",
     "write_vtx",
     "write_xdmf",
+    "read_xdmf_point_data",
     "gather_vertex_values",
     "write_solution_npz",
     "start_virtual_display",
@@ -137,6 +138,25 @@ def write_xdmf(
         if comm.rank == 0:
             for leftover in (tmp, tmp.with_suffix(".h5")):
                 leftover.unlink(missing_ok=True)
+
+
+def read_xdmf_point_data(path: str | os.PathLike) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Points (N, 3) and nodal fields by name of an XDMF file from :func:`write_xdmf`, read with meshio.
+
+    DOLFINx writes one temporal collection per function and meshio's reader reads
+    one collection, so each is read in turn (first time step). Scalar fields are
+    (N,) arrays, vector fields (N, 3). Not collective: any rank may call it.
+    """
+    import meshio
+
+    with meshio.xdmf.TimeSeriesReader(str(pathlib.Path(path).with_suffix(".xdmf"))) as reader:
+        points, _ = reader.read_points_cells()
+        fields: dict[str, np.ndarray] = {}
+        for grid in reader.domain:
+            if grid.get("CollectionType") == "Temporal":
+                reader.collection = list(grid)
+                fields.update(reader.read_data(0)[1])
+    return points, {name: v[:, 0] if v.ndim == 2 and v.shape[1] == 1 else v for name, v in fields.items()}
 
 
 def gather_vertex_values(u: fem.Function) -> tuple[np.ndarray, np.ndarray] | tuple[None, None]:

@@ -101,13 +101,15 @@ def main(argv: list[str] | None = None) -> int:
         "paper": None if paper is None else {"iterations": paper[0], "gmres": paper[1]},
     }
     if result.converged:
-        fields = contact_fields(problem, u, result)
-        io.write_vtx(out / "displacement.bp", [f for f in fields if f.function_space is problem.V])
-        io.write_xdmf(out / "contact.xdmf", problem.V.mesh, fields)
-        io.write_solution_npz(out / "solution.npz", fields[0])
+        displacement = solutions[-1].physical_displacement()
+        io.write_vtx(out / "displacement.bp", [displacement])
+        io.write_xdmf(out / "contact.xdmf", problem.V.mesh, [displacement])
+        surface = contact_fields(problem, u, result)
+        io.write_xdmf(out / "contact_surface.xdmf", surface.mesh, surface.functions)
+        io.write_solution_npz(out / "solution.npz", displacement)
         if not args.no_plot:
-            summary["plot"] = plot_contact_states(str(out / "contact_states.png"), problem, u, result)
-        norm = fields[0].x.petsc_vec.norm()
+            summary["plot"] = plot_contact_states(str(out / "contact_states.png"), surface)
+        norm = displacement.x.petsc_vec.norm()
         if comm.rank == 0:
             print(f"||u~||_2 = {norm:.10e}  ({result.iterations} Newton steps, {result.krylov_iterations} Krylov)")
     io.write_summary(comm, out / "summary.json", summary)
