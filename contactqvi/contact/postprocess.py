@@ -28,8 +28,8 @@ from contactqvi.contact.scd_newton import SCDNewtonResult
 
 __all__ = ["ContactSurfaceFields", "contact_fields", "locate_contact_facets", "plot_contact_states"]
 
-# Node kinds used to recover the contact facets (ordered: a facet's minimum and maximum decide).
-_OTHER, _DIRICHLET, _CONTACT = 0, 1, 2
+# Kinds of nodes for recovering the contact facets (other nodes: 0); a facet's minimum and maximum decide.
+_DIRICHLET, _CONTACT = 1, 2
 
 
 @dataclasses.dataclass
@@ -184,9 +184,9 @@ def contact_fields(
 def plot_contact_states(path: str, fields: ContactSurfaceFields) -> bool:
     """PNG of the contact surface coloured by contact state (seed 000, Fig. 2).
 
-    The reference (undeformed) surface is drawn. Gathers the surface pieces on
-    rank 0 (output only). Returns False, with a logged
-    reason, when no display can be had; never raises for plotting issues.
+    The reference (undeformed) surface is drawn, one colour per state. Gathers the
+    surface pieces on rank 0 (output only). Returns False, with a logged reason,
+    when no display can be had.
     """
     import dolfinx.plot
 
@@ -203,7 +203,8 @@ def plot_contact_states(path: str, fields: ContactSurfaceFields) -> bool:
         for topology, cell_types, x, state in pieces:
             grid = pyvista.UnstructuredGrid(topology, cell_types, x)
             grid.point_data["contact_state"] = state
-            plotter.add_mesh(grid, scalars="contact_state", cmap="viridis", clim=(0, len(State) - 1), show_edges=True)
+            plotter.add_mesh(grid, scalars="contact_state", cmap="viridis", n_colors=len(State),
+                             clim=(-0.5, len(State) - 0.5), show_edges=True)
         plotter.view_xy()
         plotter.add_text("contact state: 0 no contact, 1 sliding, 2 sticking, 3-5 weak", font_size=10)
         plotter.screenshot(path)
