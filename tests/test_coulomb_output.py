@@ -93,6 +93,12 @@ def test_contact_surface_file(solution, facets, mpi_tmp_path):
     assert np.allclose(slip[rows, :2], u_contact[:, :2], rtol=0, atol=1e-14)
     assert np.allclose(gap[rows], u_contact[:, 2], rtol=0, atol=1e-14)
 
+    # In memory, ghost entries (under mpirun) hold their owner's values.
+    for f in surface.functions:
+        local = f.x.array.reshape(len(f.function_space.tabulate_dof_coordinates()), -1)
+        rows = _rows(points, f.function_space.tabulate_dof_coordinates())
+        assert np.all(rows >= 0) and np.array_equal(local, fields[f.name][rows].reshape(local.shape))
+
 
 def test_demo_writes_contact_surface(mpi_tmp_path, load_demo):
     out = mpi_tmp_path / "run"

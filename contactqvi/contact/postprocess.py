@@ -137,6 +137,7 @@ def contact_fields(
     n_vertices = surface.topology.index_map(0).size_local
     parent_blk = _vertex_blocks(V)[vertex_map[:n_vertices]]
     n_owned = V.dofmap.index_map.size_local
+    # create_submesh (DOLFINx 0.9) keeps the owner of every vertex; the forces exist on owned nodes only.
     if comm.allreduce(int(np.any(parent_blk >= n_owned)), op=MPI.MAX):
         raise RuntimeError("contact surface: an owned surface vertex has a parent node owned by another rank")
     position = np.full(n_owned, -1, dtype=np.int64)
