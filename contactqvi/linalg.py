@@ -1,20 +1,23 @@
 """PETSc helpers: prefixed KSP/SNES factories, power iteration, KSP diagnostics.
 
-Every solver object gets an options prefix; defaults given here are written to
-the PETSc options database under that prefix *unless the user already set them*
-(e.g. on the command line as ``-coulomb_ksp_type cg``), then ``setFromOptions()``
-reads them. So anything can be overridden without touching code.
+Every solver object gets an options prefix and per-object default options: they
+are put into the PETSc options database under that prefix *unless the user
+already set them* (e.g. on the command line as ``-coulomb_ksp_type cg``), read by
+``setFromOptions()`` and removed again. So anything can be overridden without
+touching code, and two solvers with the same prefix but different defaults do not
+see each other's values.
 """
 
 from __future__ import annotations
 
+import contextlib
 import typing
 
 from mpi4py import MPI
 from petsc4py import PETSc
 
 __all__ = [
-    "set_default_options",
+    "default_options",
     "create_ksp",
     "create_snes",
     "power_iteration",
@@ -24,15 +27,23 @@ __all__ = [
 OptionsDict = dict[str, typing.Any]
 
 
-def set_default_options(prefix: str, options: OptionsDict) -> None:
-    """Write ``options`` under ``prefix`` into the PETSc database, keeping user values.
+@contextlib.contextmanager
+def default_options(prefix: str, options: OptionsDict) -> typing.Iterator[None]:
+    """Temporarily write ``options`` under ``prefix`` into the PETSc database.
 
-    ``None`` values are flags (``-prefix_name`` without a value).
+    Values the user already set are kept; the ones written here are removed on
+    exit. ``True``/``None`` values are flags (``-prefix_name`` without a value).
     """
     opts = PETSc.Options()
-    for name, value in options.items():
-        if not opts.hasName(prefix + name):
-            opts[prefix + name] = "" if value is None else value
+    added = [name for name in options if not opts.hasName(prefix + name)]
+    for name in added:
+        value = options[name]
+        opts[prefix + name] = "" if value is None or value is True else value
+    try:
+        yield
+    finally:
+        for name in added:
+            opts.delValue(prefix + name)
 
 
 def create_ksp(
@@ -40,27 +51,25 @@ def create_ksp(
 ) -> PETSc.KSP:
     """KSP with options prefix ``prefix`` (ends with ``_``) and the given defaults.
 
-    ``rtol`` is set on this KSP only (not in the shared options database, where
-    it would become the default of every later solver with the same prefix); a
-    ``-{prefix}ksp_rtol`` given by the user still wins.
+    ``rtol`` is set on this KSP only; a ``-{prefix}ksp_rtol`` given by the user still wins.
     """
-    set_default_options(prefix, options)
     ksp = PETSc.KSP().create(comm)
     ksp.setOptionsPrefix(prefix)
     if A is not None:
         ksp.setOperators(A)
     if rtol is not None:
         ksp.setTolerances(rtol=rtol)
-    ksp.setFromOptions()
+    with default_options(prefix, options):
+        ksp.setFromOptions()
     return ksp
 
 
 def create_snes(comm: MPI.Comm, prefix: str, options: OptionsDict) -> PETSc.SNES:
     """SNES with options prefix ``prefix`` and the given defaults (``ksp_*``/``pc_*`` included)."""
-    set_default_options(prefix, options)
     snes = PETSc.SNES().create(comm)
     snes.setOptionsPrefix(prefix)
-    snes.setFromOptions()
+    with default_options(prefix, options):
+        snes.setFromOptions()
     return snes
 
 

@@ -8,8 +8,9 @@ This demo illustrates how to:
   * optionally start from the interpolated solution of the previous level (Table 3);
   * write ParaView files, ``summary.json`` and ``solution.npz`` to ``--output``.
 
-Units are SI (m, Pa). Unknown options starting with '-' go to PETSc, e.g.
-``-coulomb_ksp_monitor`` or ``-coulomb_ksp_type preonly -coulomb_pc_type lu``.
+Units are SI (m, Pa). ``--pc`` picks the Newton-step solver (``gamg`` default,
+``paper`` = GMRES + ILU of Sect. 7, ``hypre``, ``lu`` = exact); unknown options
+starting with '-' go to PETSc and override it, e.g. ``-coulomb_ksp_monitor``.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from petsc4py import PETSc
 from contactqvi import cli, io
 from contactqvi.contact.driver import solve_nested
 from contactqvi.contact.postprocess import contact_fields, plot_contact_states
-from contactqvi.contact.scd_newton import PARAMETERS, check_parameters
+from contactqvi.contact.scd_newton import KSP_PRESETS, PARAMETERS, check_parameters
 from contactqvi.elasticity import lame_parameters
 from contactqvi.parameters import ParameterError, require
 from contactqvi.problems import coulomb as data
@@ -39,6 +40,7 @@ def parse(argv: list[str] | None = None):
     parser.add_argument("--friction", type=float, default=data.FRICTION, help="Coulomb friction coefficient F")
     parser.add_argument("--young", type=float, default=data.YOUNG, help="Young's modulus E (Pa)")
     parser.add_argument("--poisson", type=float, default=data.POISSON, help="Poisson's ratio nu")
+    parser.add_argument("--pc", default=PARAMETERS["pc"][0], choices=sorted(KSP_PRESETS), help=PARAMETERS["pc"][1])
     parser.add_argument("--tol", type=float, default=PARAMETERS["tol"][0], help=PARAMETERS["tol"][1])
     parser.add_argument("--rtol", type=float, default=PARAMETERS["rtol"][0], help=PARAMETERS["rtol"][1])
     parser.add_argument(
@@ -55,6 +57,7 @@ def parse(argv: list[str] | None = None):
     lame_parameters(args.young, args.poisson)
     require(0 <= args.nested_from < args.lev or args.initial == "zero", "nested-from", "must lie in [0, lev)")
     args.solver_parameters = check_parameters({
+        "pc": args.pc,
         "tol": args.tol,
         "rtol": args.rtol,
         "max_iterations": args.max_iterations,

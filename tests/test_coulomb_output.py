@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 from mpi4py import MPI
-from petsc4py import PETSc
 
 import numpy as np
 import pytest
 
 from contactqvi import io, meshes
 from contactqvi.contact import SCDNewtonSolver, State, build_contact_problem
-from contactqvi.contact.postprocess import contact_fields, locate_contact_facets
+from contactqvi.contact.postprocess import contact_fields
 from contactqvi.problems import coulomb as data
 
 LEV = 3
@@ -19,14 +18,13 @@ FIELDS = {"contact_state", "contact_pressure", "friction_traction", "slip", "gap
 
 @pytest.fixture(scope="module")
 def solution():
-    """Converged d1/L1 problem at lev 3 (exact inner solves), its facet tags, u and result."""
+    """Converged d1/L1 problem at lev 3 (exact inner solves), u and result."""
     msh, tags = meshes.create_contact_body(MPI.COMM_WORLD, LEV, data.gap_function("d1"))
     problem = build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions("L1"), data.FRICTION)
-    PETSc.Options().insertString("-surface_ksp_type preonly -surface_pc_type lu")
     u = problem.A.createVecRight()
-    result = SCDNewtonSolver(problem, prefix="surface_").solve(u)
+    result = SCDNewtonSolver(problem, {"pc": "lu"}, prefix="surface_").solve(u)
     assert result.converged
-    return problem, tags, u, result
+    return problem, u, result
 
 
 def _rows(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
@@ -39,19 +37,11 @@ def _rows(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
     return lookup[ids[len(points) :]]
 
 
-def test_located_facets_are_the_tagged_contact_facets(solution):
-    problem, tags, _, _ = solution
-    located = locate_contact_facets(problem)
-    assert np.array_equal(np.sort(located), np.sort(meshes.boundary_facets(tags, "contact")))
-
-
-@pytest.mark.parametrize("facets", ["tags", "located"])
-def test_contact_surface_file(solution, facets, mpi_tmp_path):
+def test_contact_surface_file(solution, mpi_tmp_path):
     """The surface fields read back with meshio hold each node's state, forces and slip."""
-    problem, tags, u, result = solution
+    problem, u, result = solution
     comm = problem.comm
-    contact_facets = meshes.boundary_facets(tags, "contact") if facets == "tags" else None
-    surface = contact_fields(problem, u, result, contact_facets)
+    surface = contact_fields(problem, u, result)
     io.write_xdmf(mpi_tmp_path / "contact_surface.xdmf", surface.mesh, surface.functions)
     points, fields = io.read_xdmf_point_data(mpi_tmp_path / "contact_surface.xdmf")
     assert set(fields) == FIELDS

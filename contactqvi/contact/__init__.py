@@ -3,10 +3,10 @@ semismooth* Newton method (seed 000)."""
 
 from contactqvi.contact.nodal import State, classify, lipschitz_constant, resolvent, scd_adjoint_blocks
 from contactqvi.contact.problem import ContactProblem, build_contact_problem
-from contactqvi.contact.scd_newton import KSP_DEFAULTS, PARAMETERS, SCDNewtonResult, SCDNewtonSolver
+from contactqvi.contact.scd_newton import KSP_PRESETS, PARAMETERS, SCDNewtonResult, SCDNewtonSolver
 
 __all__ = [
-    "KSP_DEFAULTS",
+    "KSP_PRESETS",
     "PARAMETERS",
     "ContactProblem",
     "SCDNewtonResult",

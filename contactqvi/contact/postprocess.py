@@ -26,11 +26,7 @@ from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult
 
-__all__ = ["ContactSurfaceFields", "contact_fields", "locate_contact_facets", "plot_contact_states"]
-
-# Kinds of nodes for recovering the contact facets (other nodes: 0); a facet's minimum and maximum decide.
-_DIRICHLET, _CONTACT = 1, 2
-
+__all__ = ["ContactSurfaceFields", "contact_fields", "plot_contact_states"]
 
 @dataclasses.dataclass
 class ContactSurfaceFields:
@@ -82,36 +78,7 @@ def _vertex_blocks(V: fem.FunctionSpace) -> np.ndarray:
     return blocks
 
 
-def locate_contact_facets(problem: ContactProblem) -> np.ndarray:
-    """Owned facets of the contact boundary, recovered from the problem's node sets.
-
-    :class:`ContactProblem` keeps the contact nodes (contact boundary minus Dirichlet
-    nodes) and the Dirichlet nodes, not the facet tags. A facet is taken when it is
-    exterior, all its vertices are contact or Dirichlet nodes and at least one is a
-    contact node. This is the contact boundary whenever no other exterior facet has
-    only contact and Dirichlet vertices, as for Omega(d) of seed 000 (at least two
-    cell layers in x3, so every side facet touching the bottom has a vertex one layer
-    up and off x1 = 0); the tests compare it with the facet tags.
-    """
-    V = problem.V
-    msh = V.mesh
-    fdim = msh.topology.dim - 1
-    msh.topology.create_connectivity(fdim, fdim + 1)
-    msh.topology.create_connectivity(fdim, 0)
-    kind = la.vector(V.dofmap.index_map, 1, np.int8)
-    kind.array[problem.dirichlet_dofs_loc // 3] = _DIRICHLET
-    kind.array[problem.contact_blk] = _CONTACT
-    kind.scatter_forward()  # contact_blk holds owned nodes only
-    vertex_kind = kind.array[_vertex_blocks(V)]
-    facets = dmesh.exterior_facet_indices(msh.topology)
-    facet_vertices = msh.topology.connectivity(fdim, 0)
-    kinds = vertex_kind[facet_vertices.array.reshape(facet_vertices.num_nodes, -1)[facets]]
-    return facets[(kinds.min(axis=1) >= _DIRICHLET) & (kinds.max(axis=1) == _CONTACT)]
-
-
-def contact_fields(
-    problem: ContactProblem, u: PETSc.Vec, result: SCDNewtonResult, contact_facets: np.ndarray | None = None
-) -> ContactSurfaceFields:
+def contact_fields(problem: ContactProblem, u: PETSc.Vec, result: SCDNewtonResult) -> ContactSurfaceFields:
     """Contact state, pressure, friction traction, slip and gap on the contact surface.
 
     Forces and states are those of the last approximation step's graph point
@@ -124,13 +91,10 @@ def contact_fields(
         problem: the contact problem that was solved.
         u: its solution (shifted displacements).
         result: the solver's result for ``u``.
-        contact_facets: owned facets of the contact boundary, e.g. the facet tags'
-            ``contact`` facets; None recovers them with :func:`locate_contact_facets`.
     """
     V = problem.V
     msh, comm = V.mesh, problem.comm
-    facets = locate_contact_facets(problem) if contact_facets is None else contact_facets
-    surface, _, vertex_map, _ = dmesh.create_submesh(msh, msh.topology.dim - 1, facets)
+    surface, _, vertex_map, _ = dmesh.create_submesh(msh, msh.topology.dim - 1, problem.contact_facets)
     scalars = fem.functionspace(surface, ("Lagrange", 1))
     vectors = fem.functionspace(surface, ("Lagrange", 1, (3,)))
 

@@ -42,6 +42,7 @@ class ContactProblem:
         load: shifted load l = l~ + A d (zero on Dirichlet dofs).
         shift: the shift d (gap in the normal component of contact nodes).
         contact_blk: owned local node (block) indices of the contact nodes.
+        contact_facets: local facet indices of the contact boundary (for output on it).
         contact_area: lumped contact-surface area of each owned contact node (m^2).
         friction: friction coefficient F (Coulomb) used by the nodal law.
         dirichlet_dofs_loc: local unrolled indices of Dirichlet dofs (incl. ghosts).
@@ -54,6 +55,7 @@ class ContactProblem:
     load: PETSc.Vec
     shift: PETSc.Vec
     contact_blk: np.ndarray
+    contact_facets: np.ndarray
     contact_area: np.ndarray
     friction: float
     dirichlet_dofs_loc: np.ndarray
@@ -139,6 +141,7 @@ def build_contact_problem(
         load=load,
         shift=shift,
         contact_blk=contact_blk,
+        contact_facets=contact_facets,
         contact_area=contact_area,
         friction=float(friction),
         dirichlet_dofs_loc=(3 * dirichlet_blk[:, None] + np.arange(3)).ravel().astype(np.int32),
