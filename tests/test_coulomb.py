@@ -170,3 +170,13 @@ def test_demo_outputs(mpi_tmp_path, load_demo):
     summary = json.loads((stopped / "summary.json").read_text())
     assert summary["status"] == "diverged"
     assert not (stopped / "solution.npz").exists()
+
+
+@pytest.mark.parametrize("geometry, load", [(g, l) for g in ("d1", "d2", "d3") for l in ("L1", "L2")])
+def test_exact_newton_counts_match_paper_table2(geometry, load):
+    """With exact inner solves the method needs the paper's Table 2 Newton steps (lev 3) within +-3."""
+    problem = _problem(MPI.COMM_WORLD, 3, geometry, load)
+    _, _, result = _solve(problem, f"table2_{geometry}{load}_", pc="lu")
+    assert result.converged
+    paper_iterations = data.PAPER_TABLE2[3][f"{geometry}/{load}"][0]
+    assert abs(result.iterations - paper_iterations) <= 3, (result.iterations, paper_iterations)
