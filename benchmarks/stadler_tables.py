@@ -121,8 +121,8 @@ DISCRETISATION_NOTE = """# Seed 002 (Stadler 2004): paper vs contactqvi
   not exactly.
 * Cross-check: `PaperFiniteDifferences` is the paper's scheme written as K y + M lambda = F, so
   that the same PDAS/SS/Uzawa code runs on it (Table 6.6 and the Uzawa table). It reproduces the
-  paper's Uzawa counts for Example 1 exactly and Table 6.6 within one iteration, including
-  where (SS) chatters.
+  paper's Uzawa counts for Example 1 exactly, Table 6.6 within one iteration, and the chattering
+  of (SS) for N >= 160, gamma >= 1e5.
 * Example 1's load is integrated with the 2 x 2 Gauss rule: the 3 x 3 rule samples the jump of f
   on x1 = 1/2 (the centre line of the middle cell column for even N) and broke the antisymmetry
   of (f, v) and lambda_bar that the paper's grid has.
@@ -203,8 +203,8 @@ class PaperFiniteDifferences(FrictionProblem):
         self.boundary_mass = h / directions
 
 
-#: The ``cell_type`` value of :class:`Setup` that selects :class:`PaperFiniteDifferences`.
-FINITE_DIFFERENCES = "paper-fd"
+#: The ``cell_type`` value of :class:`Setup` that selects :class:`PaperFiniteDifferences`, and its table label.
+FINITE_DIFFERENCES, FD_LABEL = "paper-fd", "paper's FD"
 
 
 class Setup:
@@ -270,10 +270,10 @@ def table_6_1(cell_type: str, quick: bool) -> tuple[dict, str]:
     md = _md_table(
         ["gamma", *[f"{g:.0e}" for g in gammas]],
         [["paper SS", *data["paper_ss"]], ["ours SS", *data["ss"]], ["ours PDAS (sigma=1)", *data["pdas"]],
-         ["paper's FD SS", *data["paper_fd_ss"]]],
+         [f"{FD_LABEL} SS", *data["paper_fd_ss"]]],
     )  # fmt: skip
     changes = _md_table(
-        ["gamma", "ours SS", "paper's FD SS"],
+        ["gamma", "ours SS", f"{FD_LABEL} SS"],
         [[f"{g:.0e}", " ".join(str(c) for c in a[1:]), " ".join(str(c) for c in b[1:])]
          for g, a, b in zip(gammas, data["ss_changes_per_iteration"], data["paper_fd_ss_changes_per_iteration"])],
     )  # fmt: skip
@@ -403,7 +403,7 @@ def table_6_7(cell_type: str, quick: bool) -> tuple[dict, str]:
 def table_6_6(cell_type: str, quick: bool) -> tuple[dict, str]:
     Ns = [20, 40] if quick else PAPER["6.6"]["N"]
     gammas = PAPER["6.6"]["gamma"]
-    schemes = {"ours": cell_type, "paper's FD": FINITE_DIFFERENCES}
+    schemes = {"ours": cell_type, FD_LABEL: FINITE_DIFFERENCES}
     counts: dict[str, dict[str, list]] = {label: {"ss": [], "pdas": []} for label in schemes}
     rows = []
     for i, N in enumerate(Ns):
@@ -437,11 +437,12 @@ def table_6_6(cell_type: str, quick: bool) -> tuple[dict, str]:
     for M in range(N - 4, N + 5):
         problem = create_stadler_problem(MPI.COMM_WORLD, stadler_example(3), M, cell_type)
         neighbours[M] = PrimalDualActiveSet(problem).solve(gamma, 1.0).iterations
-    data = {"N": Ns, "gamma": gammas, "paper": PAPER["6.6"], "done_when_pdas_at_most_8": at_most_8["ours"],
-            "paper_fd_pdas_at_most_8": at_most_8["paper's FD"], "tail": {"N": N, "gamma": gamma, **changes},
-            "neighbour_grids": {"gamma": gamma, "pdas": neighbours},
-            **{("ss" if label == "ours" else "paper_fd_ss"): c_["ss"] for label, c_ in counts.items()},
-            **{("pdas" if label == "ours" else "paper_fd_pdas"): c_["pdas"] for label, c_ in counts.items()}}  # fmt: skip
+    data = {"N": Ns, "gamma": gammas, "paper": PAPER["6.6"],
+            "ss": counts["ours"]["ss"], "pdas": counts["ours"]["pdas"],
+            "paper_fd_ss": counts[FD_LABEL]["ss"], "paper_fd_pdas": counts[FD_LABEL]["pdas"],
+            "done_when_pdas_at_most_8": at_most_8["ours"], "paper_fd_pdas_at_most_8": at_most_8[FD_LABEL],
+            "tail": {"N": N, "gamma": gamma, **changes},
+            "neighbour_grids": {"gamma": gamma, "pdas": neighbours}}  # fmt: skip
     md = _md_table(["N", "", *[f"{g:g}" for g in gammas]], rows)
     tail = _md_table(
         ["", "PDAS iterations", "nodes changing set in iteration 2, 3, ...", "min (g - |lambda|) on I"],
@@ -454,13 +455,15 @@ def table_6_6(cell_type: str, quick: bool) -> tuple[dict, str]:
         "('*' in the paper: PDAS used because SS chatters). 'paper's FD' runs the same solver code on the\n"
         "paper's discretisation (five-point stencil, one-sided normal differences; `PaperFiniteDifferences`).\n\n"
         f"{md}\n\nPDAS <= 8 iterations everywhere: ours {at_most_8['ours']}, "
-        f"paper's FD {data['paper_fd_pdas_at_most_8']}\n\n"
+        f"paper's FD {at_most_8[FD_LABEL]}\n\n"
         f"N = {N}, gamma = {gamma:g}: the sets of the last iterations.\n\n{tail}\n\n"
         f"Our Q1 grids around N = {N}:\n\n{sweep}\n"
     )
 
 
-def neumann_to_dirichlet_eigenvalue(s: Setup, mask: np.ndarray, shift: float = 0.0, iterations: int = 400) -> float:
+def neumann_to_dirichlet_eigenvalue(
+    s: Setup, mask: np.ndarray, shift: float = 0.0, iterations: int = 400
+) -> float:
     """Eigenvalue of C_h = tau K^-1 tau^* M restricted to ``mask`` farthest from ``shift`` (power iteration).
 
     C_h is the discrete Neumann-to-Dirichlet map (4.2), self-adjoint and positive
@@ -541,14 +544,19 @@ def uzawa_observations(cell_type: str, quick: bool) -> tuple[dict, str]:
     steps = (5.0, 10.0, 15.0, 20.0, 25.0, 30.0)
     long_step, long_run = 20.0, 60
     ex1 = {label: _uzawa_example1(Setup.get(1, N1, scheme), N1, steps, long_step, long_run)
-           for label, scheme in (("ours", cell_type), ("paper's FD", FINITE_DIFFERENCES))}  # fmt: skip
+           for label, scheme in (("ours", cell_type), (FD_LABEL, FINITE_DIFFERENCES))}  # fmt: skip
     s2 = Setup.get(2, N2, cell_type)
     ex2 = {}
     for gamma in (0.1, 0.2, 0.3):
         result = uzawa(s2.problem, gamma, reference=s2.reference.lam, tol=1e-4, max_iterations=400)
         ex2[f"{gamma:g}"] = {"iterations": result.iterations, "status": result.status,
                              "final_d_lambda": result.history[-1]["d_lambda"]}  # fmt: skip
-    data = {"example1_N": N1, "example1": ex1, "example2_N": N2, "example2": ex2, "paper": PAPER["uzawa"]}
+    ex2_spectra = {
+        "lambda_max_C_on_Gamma_f": neumann_to_dirichlet_eigenvalue(s2, np.ones(len(s2.problem.boundary_dofs), bool)),
+        "lambda_max_C_on_inactive_set": neumann_to_dirichlet_eigenvalue(s2, s2.reference.states == 0),
+    }
+    data = {"example1_N": N1, "example1": ex1, "example2_N": N2, "example2": ex2, "example2_spectra": ex2_spectra,
+            "paper": PAPER["uzawa"]}  # fmt: skip
     paper = PAPER["uzawa"]["example1_N80"]
     rows = []
     for gamma in (f"{g:g}" for g in steps):
@@ -570,18 +578,26 @@ def uzawa_observations(cell_type: str, quick: bool) -> tuple[dict, str]:
     rows = [[g, "400 its, d=1.03e-2" if g == "0.2" else "", v["iterations"], v["status"], v["final_d_lambda"]]
             for g, v in ex2.items()]  # fmt: skip
     md2 = _md_table(["gamma", "paper", "ours iterations", "ours status", "final d_lambda"], rows)
+    spec2 = _md_table(
+        ["", "lambda_max(C_h), Gamma_f", "2/lambda_max(Gamma_f)", "lambda_max(C_h), I", "2/lambda_max(I)"],
+        [["ours", ex2_spectra["lambda_max_C_on_Gamma_f"], 2 / ex2_spectra["lambda_max_C_on_Gamma_f"],
+          ex2_spectra["lambda_max_C_on_inactive_set"], 2 / ex2_spectra["lambda_max_C_on_inactive_set"]]],
+    )  # fmt: skip
     return data, (
         f"Example 1, N = {N1}: Uzawa iterations, lambda^0 = 0, stopped when d_lambda < 1e-4 (max 1000).\n"
         "'paper's FD' runs the same Uzawa code on the paper's discretisation (`PaperFiniteDifferences`).\n\n"
         f"{md1}\n\n"
         "Discrete Neumann-to-Dirichlet maps C_h (4.2) on Gamma_f and on the inactive set I of lambda_bar\n"
         "(power iteration). Uzawa with frozen sets is Richardson's iteration for C_h on I: stable iff\n"
-        "gamma < 2/lambda_max(I), contraction 1 - gamma lambda_min(I) for small gamma.\n\n"
+        "gamma < 2/lambda_max(I), contraction 1 - gamma lambda_min(I) for small gamma. (Continuous:\n"
+        "lambda_max(C) on Gamma_f = coth(pi/2)/pi = 0.3471.)\n\n"
         f"{spec}\n\n"
         f"gamma = {long_step:g} continued past the stopping test (the data, lambda_bar and the iterates are odd\n"
         "about x1 = 1/2 in exact arithmetic; 'symmetry breaking' = ||lambda + lambda(1 - x1, .)||/2):\n\n"
         f"{md_long}\n\n"
-        f"Example 2, N = {N2} (ours), max 400 iterations:\n\n{md2}\n"
+        f"Example 2, N = {N2} (ours), max 400 iterations:\n\n{md2}\n\n"
+        f"Example 2, N = {N2}: C_h on Gamma_f and on the inactive set I of lambda_bar.\n\n"
+        f"{spec2}\n"
     )
 
 

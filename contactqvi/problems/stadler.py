@@ -104,8 +104,8 @@ def stadler_example(number: int, load_reading: str = "x1x2") -> StadlerExample:
         # loses it too (N = 80: ||lambda_bar + lambda_bar(1 - x1, .)||_{L2(Gamma_f)} = 0.09,
         # 50 inactive nodes instead of 48). It is also inaccurate there: across the jump,
         # the 3-point rule with -10 on the line misses the cut cell's share of (f, phi_i)
-        # by 75-100 %, the 2-point rule by 15 %. The degree-3 rule (2 x 2 points) has no point on cell
-        # centre lines.
+        # by 75-100 %, the 2-point rule by 15 %. The degree-3 rule (2 x 2 points) has no
+        # point on cell centre lines.
         return StadlerExample(
             1, ("bottom", "top"), ("left", "right"), g=1.5, mu=0.0, load=_load_example1,
             description="f = 10 for x1 < 1/2, -10 for x1 >= 1/2", quadrature_degree=3,
