@@ -12,6 +12,10 @@ beside ours) and ``stadler_summary.md`` for
 * Table 6.7 (ALM inexact, Example 3, N = 160) and the exact-ALM system-solve count,
 * the Uzawa observations (Example 1, N = 80, gamma = 10, 20, 30; Example 2, gamma = 0.2).
 
+Table 6.6 and the Uzawa observations also run the same solvers on the paper's own
+discretisation (:class:`PaperFiniteDifferences`, serial) to separate discretisation
+effects from the algorithms.
+
 Discretisation: Q1 finite elements on the unit square with N grid points per
 direction (N - 1 cells) and a lumped boundary mass on Gamma_f, where the paper
 uses the five-point finite-difference stencil with one-sided normal differences
@@ -31,11 +35,22 @@ import time
 import typing
 
 from mpi4py import MPI
+from petsc4py import PETSc
 
 import numpy as np
+import scipy.sparse
 
-from contactqvi.friction import PrimalDualActiveSet, augmented_lagrangian, semismooth_newton_sigma, uzawa
-from contactqvi.problems.stadler import create_stadler_problem, stadler_example
+from dolfinx import fem
+
+from contactqvi.friction import (
+    FrictionProblem,
+    PrimalDualActiveSet,
+    augmented_lagrangian,
+    semismooth_newton_sigma,
+    uzawa,
+)
+from contactqvi.meshes import create_unit_square
+from contactqvi.problems.stadler import StadlerExample, create_stadler_problem, stadler_example
 
 RESULTS = pathlib.Path(__file__).resolve().parent / "results"
 REFERENCE_GAMMA = 1e16
@@ -96,11 +111,21 @@ DISCRETISATION_NOTE = """# Seed 002 (Stadler 2004): paper vs contactqvi
   are Dirichlet nodes (the corners of Example 1) carry no multiplier.
 * Both schemes approximate the same continuous problem, but the discrete Neumann-to-Dirichlet
   maps C_h differ (the FE boundary row contains half a cell of tangential stiffness and load;
-  the FD row is a one-sided difference). Everything that depends on the spectrum of C_h
-  restricted to the inactive set therefore differs by O(1) factors: the contraction of (ALM)
-  per step for fixed gamma, the admissible Uzawa steps, the constants of |||y_gamma - y_bar|||.
-  Iteration counts of the active-set methods depend on how the discrete sets approach their
-  limit, which is a property of the grid; the counts agree closely but not exactly.
+  the FD row is a one-sided difference). On smooth boundary functions they agree (largest
+  eigenvalue on Gamma_f in the Uzawa table), on grid-scale ones the FE map is about half the
+  FD map (smallest eigenvalue on the inactive set). Everything that depends on the spectrum of
+  C_h restricted to the inactive set therefore differs by O(1) factors: the contraction of
+  (ALM) per step for fixed gamma, the speed and admissible steps of Uzawa, the constants of
+  |||y_gamma - y_bar|||. Iteration counts of the active-set methods depend on how the discrete
+  sets approach their limit, which is a property of the grid; the counts agree closely but
+  not exactly.
+* Cross-check: `PaperFiniteDifferences` is the paper's scheme written as K y + M lambda = F, so
+  that the same PDAS/SS/Uzawa code runs on it (Table 6.6 and the Uzawa table). It reproduces the
+  paper's Uzawa counts for Example 1 exactly, Table 6.6 within one iteration, and the chattering
+  of (SS) for N >= 160, gamma >= 1e5.
+* Example 1's load is integrated with the 2 x 2 Gauss rule: the 3 x 3 rule samples the jump of f
+  on x1 = 1/2 (the centre line of the middle cell column for even N) and broke the antisymmetry
+  of (f, v) and lambda_bar that the paper's grid has.
 * Iteration counts are numbers of linear solves after the initialisation (the solution of
   (3.2) with xi = 0), d_lambda^l = ||lambda_bar - lambda^l||_{L2(Gamma_f)} with
   lambda_bar = lambda_{1e16} on the same grid.
@@ -108,13 +133,95 @@ DISCRETISATION_NOTE = """# Seed 002 (Stadler 2004): paper vs contactqvi
 """
 
 
+class PaperFiniteDifferences(FrictionProblem):
+    """An example in the paper's own discretisation (Sect. 6), on the nodes of the Q1 grid (serial).
+
+    Sect. 6 uses the five-point stencil on the N x N grid and one-sided differences
+    for the normal derivative. Scaled by h^2, (2.4)/(3.2a) keeps the form
+    K y + M lambda = F of :class:`FrictionProblem`, so the same solvers run on it:
+
+    * interior node P: 4 y_P - sum_{Q ~ P} y_Q + mu h^2 y_P = h^2 f(P) (f sampled at P);
+    * Gamma_f node: -dy/dn = lambda with the one-sided difference to the inward
+      neighbour, y_P - y_in + h lambda_P = 0 (m_P = h); at a corner between two
+      friction edges the mean of both one-sided differences, times h/2 (m_P = h/2);
+    * Gamma_0 node: y_P = 0.
+
+    Then lambda = (F - K y)_P / m_P is the one-sided -dy/dn at P, the lambda^0 :=
+    -dy^0/dn of (PDAS) step 1, and ||.||_{L2(Gamma_f)} is the trapezoidal rule.
+    """
+
+    def __init__(self, example: StadlerExample, N: int):
+        msh, facet_tags = create_unit_square(MPI.COMM_SELF, N - 1)
+        super().__init__(
+            msh, facet_tags, example.friction_boundaries, example.dirichlet_boundaries, example.load, example.mu,
+            example.g,
+        )  # fmt: skip
+        h = 1.0 / (N - 1)
+        n = self.V.dofmap.index_map.size_local
+        ij = np.rint(self.V.tabulate_dof_coordinates()[:n, :2] / h).astype(np.int64)
+        node = np.empty((N, N), dtype=np.int64)
+        node[ij[:, 0], ij[:, 1]] = np.arange(n)
+        interior = ((ij > 0) & (ij < N - 1)).all(axis=1)
+        dirichlet = ~interior
+        dirichlet[self.boundary_dofs] = False
+        p = np.flatnonzero(interior)
+        rows, cols = [p], [p]
+        vals = [np.full(p.size, 4.0 + self.mu * h**2)]
+        for step in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+            rows.append(p)
+            cols.append(node[ij[p, 0] + step[0], ij[p, 1] + step[1]])
+            vals.append(np.full(p.size, -1.0))
+        b = self.boundary_dofs
+        inward = np.where(ij[b] == 0, 1, np.where(ij[b] == N - 1, -1, 0))
+        directions = np.count_nonzero(inward, axis=1)  # 1 on an edge, 2 at a corner
+        rows.append(b)
+        cols.append(b)
+        vals.append(1.0 / directions)
+        for axis in (0, 1):
+            along = inward[:, axis] != 0
+            neighbour = ij[b[along]].copy()
+            neighbour[:, axis] += inward[along, axis]
+            rows.append(b[along])
+            cols.append(node[neighbour[:, 0], neighbour[:, 1]])
+            vals.append(-1.0 / directions[along] ** 2)
+        d = np.flatnonzero(dirichlet)
+        rows.append(d)
+        cols.append(d)
+        vals.append(np.ones(d.size))
+        rows, cols, vals = (np.concatenate(a) for a in (rows, cols, vals))
+        keep = (rows == cols) | ~dirichlet[cols]  # y = 0 on Gamma_0
+        csr = scipy.sparse.csr_matrix((vals[keep], (rows[keep], cols[keep])), shape=(n, n))
+        csr.sort_indices()
+        self.K.destroy()
+        self.K = PETSc.Mat().createAIJ(
+            (n, n), csr=(csr.indptr.astype(PETSc.IntType), csr.indices.astype(PETSc.IntType), csr.data),
+            comm=MPI.COMM_SELF,
+        )  # fmt: skip
+        f = fem.Function(self.V)
+        f.interpolate(fem.Expression(self.load_expression, self.V.element.interpolation_points(), comm=MPI.COMM_SELF))
+        self.F.array[:] = np.where(interior, h**2 * f.x.array[:n], 0.0)
+        self.boundary_mass = h / directions
+
+
+#: The ``cell_type`` value of :class:`Setup` that selects :class:`PaperFiniteDifferences`, and its table label.
+FINITE_DIFFERENCES, FD_LABEL = "paper-fd", "paper's FD"
+
+
 class Setup:
-    """Problem, PDAS solver and reference lambda_bar = lambda_1e16 of one (example, N), built once."""
+    """Problem, PDAS solver and reference lambda_bar = lambda_1e16 of one (example, N), built once.
+
+    ``cell_type`` is ``quadrilateral``/``triangle`` (our Q1/P1 problem) or
+    :data:`FINITE_DIFFERENCES` (the paper's scheme, serial).
+    """
 
     _cache: typing.ClassVar[dict] = {}
 
     def __init__(self, example: int, N: int, cell_type: str, reading: str = "x1x2"):
-        self.problem = create_stadler_problem(MPI.COMM_WORLD, stadler_example(example, reading), N, cell_type)
+        data = stadler_example(example, reading)
+        if cell_type == FINITE_DIFFERENCES:
+            self.problem: FrictionProblem = PaperFiniteDifferences(data, N)
+        else:
+            self.problem = create_stadler_problem(MPI.COMM_WORLD, data, N, cell_type)
         self.pdas = PrimalDualActiveSet(self.problem)
         self.reference = self.pdas.solve(REFERENCE_GAMMA, 1.0, max_iterations=100)
         assert self.reference.converged, "reference solve failed"
@@ -154,14 +261,28 @@ def table_6_1(cell_type: str, quick: bool) -> tuple[dict, str]:
     data = {"N": N, "gamma": gammas, "ss": [_count(r) for r in ss], "pdas": [_count(r) for r in pd],
             "paper_ss": PAPER["6.1"]["ss"],
             "switches_between_A_minus_and_A_plus_ss": [sum(h["switches_between_active_sets"] or 0 for h in r.history)
-                                                      for r in ss]}  # fmt: skip
+                                                      for r in ss],
+            "ss_changes_per_iteration": [[h["changes"] for h in r.history] for r in ss]}  # fmt: skip
+    fd = Setup.get(1, N, FINITE_DIFFERENCES)
+    fd_ss = [fd.pdas.solve(g, semismooth_newton_sigma(g)) for g in gammas]
+    data["paper_fd_ss"] = [_count(r) for r in fd_ss]
+    data["paper_fd_ss_changes_per_iteration"] = [[h["changes"] for h in r.history] for r in fd_ss]
     md = _md_table(
         ["gamma", *[f"{g:.0e}" for g in gammas]],
-        [["paper SS", *data["paper_ss"]], ["ours SS", *data["ss"]], ["ours PDAS (sigma=1)", *data["pdas"]]],
-    )
+        [["paper SS", *data["paper_ss"]], ["ours SS", *data["ss"]], ["ours PDAS (sigma=1)", *data["pdas"]],
+         [f"{FD_LABEL} SS", *data["paper_fd_ss"]]],
+    )  # fmt: skip
+    changes = _md_table(
+        ["gamma", "ours SS", f"{FD_LABEL} SS"],
+        [[f"{g:.0e}", " ".join(str(c) for c in a[1:]), " ".join(str(c) for c in b[1:])]
+         for g, a, b in zip(gammas, data["ss_changes_per_iteration"], data["paper_fd_ss_changes_per_iteration"])],
+    )  # fmt: skip
     ok = all(isinstance(c, int) and c <= 3 for c in data["ss"])
     data["done_when_ss_at_most_3"] = ok
-    return data, f"Example 1, N = {N}: iterations of (SS).\n\n{md}\n\nSS <= 3 iterations for all gamma: {ok}\n"
+    return data, (
+        f"Example 1, N = {N}: iterations of (SS); 'paper's FD': the same code on the paper's scheme.\n\n{md}\n\n"
+        f"SS <= 3 iterations for all gamma: {ok}\n\nNodes changing set in iteration 2, 3, ...:\n\n{changes}\n"
+    )
 
 
 def figure_6_1(cell_type: str, quick: bool) -> tuple[dict, str]:
@@ -282,92 +403,201 @@ def table_6_7(cell_type: str, quick: bool) -> tuple[dict, str]:
 def table_6_6(cell_type: str, quick: bool) -> tuple[dict, str]:
     Ns = [20, 40] if quick else PAPER["6.6"]["N"]
     gammas = PAPER["6.6"]["gamma"]
-    ss_counts, pd_counts, rows = [], [], []
+    schemes = {"ours": cell_type, FD_LABEL: FINITE_DIFFERENCES}
+    counts: dict[str, dict[str, list]] = {label: {"ss": [], "pdas": []} for label in schemes}
+    rows = []
     for i, N in enumerate(Ns):
-        s = Setup.get(3, N, cell_type)
-        ss = [_count(s.pdas.solve(float(g), semismooth_newton_sigma(float(g)))) for g in gammas]
-        pd = [_count(s.pdas.solve(float(g), 1.0)) for g in gammas]
-        ss_counts.append(ss)
-        pd_counts.append(pd)
         paper = [f"{c}{'*' if star else ''}" for c, star in zip(PAPER["6.6"]["iter"][i], PAPER["6.6"]["pdas_used"][i])]
-        rows += [[N, "paper", *paper], [N, "ours SS", *ss], [N, "ours PDAS", *pd]]
+        rows.append([N, "paper", *paper])
+        for label, scheme in schemes.items():
+            s = Setup.get(3, N, scheme)
+            ss = [_count(s.pdas.solve(float(g), semismooth_newton_sigma(float(g)))) for g in gammas]
+            pd = [_count(s.pdas.solve(float(g), 1.0)) for g in gammas]
+            counts[label]["ss"].append(ss)
+            counts[label]["pdas"].append(pd)
+            rows += [[N, f"{label} SS", *ss], [N, f"{label} PDAS", *pd]]
         logger.info("Table 6.6 N=%d done", N)
-    ok = all(isinstance(c, int) and c <= 8 for row in pd_counts for c in row)
-    data = {"N": Ns, "gamma": gammas, "ss": ss_counts, "pdas": pd_counts, "paper": PAPER["6.6"],
-            "done_when_pdas_at_most_8": ok}  # fmt: skip
+    at_most_8 = {label: all(isinstance(c, int) and c <= 8 for row in c_["pdas"] for c in row)
+                 for label, c_ in counts.items()}  # fmt: skip
+    # The largest count of our finest grid: how the last iterations change the sets, and its grid neighbours.
+    N = Ns[-1]
+    last = counts["ours"]["pdas"][-1]
+    gamma = float(gammas[int(np.argmax([c if isinstance(c, int) else -1 for c in last]))])
+    changes = {}
+    for label, scheme in schemes.items():
+        s = Setup.get(3, N, scheme)
+        result = s.pdas.solve(gamma, 1.0)
+        margin = s.problem.g - np.abs(result.lam.array_r[result.states == 0])
+        changes[label] = {
+            "iterations": result.iterations,
+            "changes": [h["changes"] for h in result.history],
+            "min_g_minus_abs_lambda_on_I": s.problem.comm.allreduce(float(margin.min(initial=np.inf)), op=MPI.MIN),
+        }
+    neighbours = {}
+    for M in range(N - 4, N + 5):
+        problem = create_stadler_problem(MPI.COMM_WORLD, stadler_example(3), M, cell_type)
+        neighbours[M] = PrimalDualActiveSet(problem).solve(gamma, 1.0).iterations
+    data = {"N": Ns, "gamma": gammas, "paper": PAPER["6.6"],
+            "ss": counts["ours"]["ss"], "pdas": counts["ours"]["pdas"],
+            "paper_fd_ss": counts[FD_LABEL]["ss"], "paper_fd_pdas": counts[FD_LABEL]["pdas"],
+            "done_when_pdas_at_most_8": at_most_8["ours"], "paper_fd_pdas_at_most_8": at_most_8[FD_LABEL],
+            "tail": {"N": N, "gamma": gamma, **changes},
+            "neighbour_grids": {"gamma": gamma, "pdas": neighbours}}  # fmt: skip
     md = _md_table(["N", "", *[f"{g:g}" for g in gammas]], rows)
+    tail = _md_table(
+        ["", "PDAS iterations", "nodes changing set in iteration 2, 3, ...", "min (g - |lambda|) on I"],
+        [[label, v["iterations"], " ".join(str(c) for c in v["changes"][1:]), v["min_g_minus_abs_lambda_on_I"]]
+         for label, v in changes.items()],
+    )  # fmt: skip
+    sweep = _md_table(["N", *neighbours], [[f"ours PDAS, gamma = {gamma:g}", *neighbours.values()]])
     return data, (
         "Example 3: iterations for N grid points per direction and gamma\n"
-        "('*' in the paper: PDAS used because SS chatters).\n\n"
-        f"{md}\n\nPDAS <= 8 iterations everywhere: {ok}\n"
+        "('*' in the paper: PDAS used because SS chatters). 'paper's FD' runs the same solver code on the\n"
+        "paper's discretisation (five-point stencil, one-sided normal differences; `PaperFiniteDifferences`).\n\n"
+        f"{md}\n\nPDAS <= 8 iterations everywhere: ours {at_most_8['ours']}, "
+        f"paper's FD {at_most_8[FD_LABEL]}\n\n"
+        f"N = {N}, gamma = {gamma:g}: the sets of the last iterations.\n\n{tail}\n\n"
+        f"Our Q1 grids around N = {N}:\n\n{sweep}\n"
     )
 
 
-def neumann_to_dirichlet_norm(s: Setup, mask: np.ndarray, iterations: int = 200) -> float:
-    """Power-iteration estimate of the largest eigenvalue of C_h = tau K^-1 tau^* M restricted to ``mask``.
+def neumann_to_dirichlet_eigenvalue(
+    s: Setup, mask: np.ndarray, shift: float = 0.0, iterations: int = 400
+) -> float:
+    """Eigenvalue of C_h = tau K^-1 tau^* M restricted to ``mask`` farthest from ``shift`` (power iteration).
 
-    C_h is the discrete Neumann-to-Dirichlet map (4.2), self-adjoint in the lumped
-    L2(Gamma_f) product. Uzawa with frozen sets is Richardson's iteration for C_h on
-    the inactive set and converges iff gamma < 2 / lambda_max.
+    C_h is the discrete Neumann-to-Dirichlet map (4.2), self-adjoint and positive
+    definite in the lumped L2(Gamma_f) product. Power iteration on C_h - shift I
+    gives lambda_max for shift = 0 and lambda_min for shift = lambda_max. Uzawa with
+    frozen sets is Richardson's iteration for C_h on the inactive set: the error
+    contracts by max |1 - gamma lambda| over its spectrum, which is < 1 iff
+    gamma < 2 / lambda_max, and is 1 - gamma lambda_min at best for small gamma.
     """
     problem = s.problem
     rhs, y = problem.K.createVecLeft(), problem.K.createVecLeft()
     ksp = s.pdas.ksp
     ksp.setOperators(problem.K)
-    x = problem.V.tabulate_dof_coordinates()[problem.boundary_dofs]
-    v = np.where(mask, 1.0 + 0.1 * np.sin(13.0 * x[:, 0] + 7.0 * x[:, 1]), 0.0)
+    v = np.where(mask, np.random.default_rng(seed=2004).uniform(0.5, 1.5, mask.size), 0.0)
     estimate = 0.0
     for _ in range(iterations):
         v /= problem.boundary_norm(v)
         rhs.set(0.0)
         rhs.array[problem.boundary_dofs] = problem.boundary_mass * v
         ksp.solve(rhs, y)
-        w = np.where(mask, problem.trace(y), 0.0)
-        estimate = problem.comm.allreduce(float(np.dot(problem.boundary_mass * w, v)), op=MPI.SUM)
+        w = np.where(mask, problem.trace(y) - shift * v, 0.0)
+        estimate = shift + problem.comm.allreduce(float(np.dot(problem.boundary_mass * w, v)), op=MPI.SUM)
         v = w
     rhs.destroy()
     y.destroy()
     return estimate
 
 
+def _mirror_x1(problem: FrictionProblem, N: int) -> np.ndarray:
+    """For every friction node (x1, x2) the index of the friction node (1 - x1, x2) (serial)."""
+    ij = np.rint(problem.V.tabulate_dof_coordinates()[problem.boundary_dofs, :2] * (N - 1)).astype(np.int64)
+    code = ij[:, 0] * N + ij[:, 1]
+    order = np.argsort(code)
+    return order[np.searchsorted(code[order], (N - 1 - ij[:, 0]) * N + ij[:, 1])]
+
+
+def _uzawa_example1(s: Setup, N: int, steps: tuple[float, ...], long_step: float, long_run: int) -> dict:
+    """Uzawa runs of Example 1 for ``steps``, one run of ``long_run`` iterations past the stopping test, spectra.
+
+    Example 1's data are odd about x1 = 1/2, and so are lambda_bar and every Uzawa
+    iterate in exact arithmetic; ``symmetry_breaking`` = ||lambda + lambda(1 - x1, .)|| / 2.
+    """
+    problem, reference = s.problem, s.reference.lam
+    mirror = _mirror_x1(problem, N)
+    runs = {}
+    for gamma in steps:
+        result = uzawa(problem, gamma, reference=reference, tol=1e-4, max_iterations=1000)
+        runs[f"{gamma:g}"] = {"iterations": result.iterations, "status": result.status,
+                              "final_d_lambda": result.history[-1]["d_lambda"]}  # fmt: skip
+    breaking: list[float] = []
+    run = uzawa(
+        problem, long_step, reference=reference, tol=np.finfo(float).tiny, max_iterations=long_run,  # run them all
+        monitor=lambda l, y, lam: breaking.append(0.5 * problem.boundary_norm(lam.array_r + lam.array_r[mirror])),
+    )  # fmt: skip
+    d = [h["d_lambda"] for h in run.history]
+    first = next((i + 1 for i, v in enumerate(d) if v < 1e-4), None)
+    best = int(np.argmin(d))
+    inactive = s.reference.states == 0
+    everywhere = np.ones_like(inactive)
+    top_inactive = neumann_to_dirichlet_eigenvalue(s, inactive)
+    return {
+        "runs": runs,
+        "symmetry_breaking_of_lambda_bar": 0.5 * problem.boundary_norm(reference.array_r + reference.array_r[mirror]),
+        "inactive_nodes": problem.count(inactive),
+        "long_run": {"gamma": long_step, "iterations": long_run, "first_below_1e-4": first,
+                     "min_d_lambda": d[best], "min_at": best + 1, "symmetry_breaking_at_min": breaking[best],
+                     "d_lambda_last": d[-1], "symmetry_breaking_last": breaking[-1]},
+        "lambda_max_C_on_Gamma_f": neumann_to_dirichlet_eigenvalue(s, everywhere),
+        "lambda_max_C_on_inactive_set": top_inactive,
+        "lambda_min_C_on_inactive_set": neumann_to_dirichlet_eigenvalue(s, inactive, shift=top_inactive),
+    }  # fmt: skip
+
+
 def uzawa_observations(cell_type: str, quick: bool) -> tuple[dict, str]:
+    if MPI.COMM_WORLD.size > 1:
+        raise RuntimeError("the Uzawa table runs serially (node mirror map, paper's FD scheme)")
     N1, N2 = (20, 40) if quick else (80, 160)
-    s = Setup.get(1, N1, cell_type)
-    ex1 = {}
-    for gamma in (5.0, 10.0, 15.0, 20.0, 30.0):
-        result = uzawa(s.problem, gamma, reference=s.reference.lam, tol=1e-4, max_iterations=1000)
-        ex1[f"{gamma:g}"] = {"iterations": result.iterations, "status": result.status,
-                             "final_d_lambda": result.history[-1]["d_lambda"]}  # fmt: skip
+    steps = (5.0, 10.0, 15.0, 20.0, 25.0, 30.0)
+    long_step, long_run = 20.0, 60
+    ex1 = {label: _uzawa_example1(Setup.get(1, N1, scheme), N1, steps, long_step, long_run)
+           for label, scheme in (("ours", cell_type), (FD_LABEL, FINITE_DIFFERENCES))}  # fmt: skip
     s2 = Setup.get(2, N2, cell_type)
     ex2 = {}
     for gamma in (0.1, 0.2, 0.3):
         result = uzawa(s2.problem, gamma, reference=s2.reference.lam, tol=1e-4, max_iterations=400)
         ex2[f"{gamma:g}"] = {"iterations": result.iterations, "status": result.status,
                              "final_d_lambda": result.history[-1]["d_lambda"]}  # fmt: skip
-    spectra = {}
-    for label, setup in (("example1", s), ("example2", s2)):
-        everywhere = np.ones(len(setup.problem.boundary_dofs), dtype=bool)
-        inactive = setup.reference.states == 0
-        spectra[label] = {
-            "lambda_max_C_on_Gamma_f": neumann_to_dirichlet_norm(setup, everywhere),
-            "lambda_max_C_on_inactive_set": neumann_to_dirichlet_norm(setup, inactive),
-        }
-    data = {"example1_N": N1, "example1": ex1, "example2_N": N2, "example2": ex2, "paper": PAPER["uzawa"],
-            "spectra": spectra}  # fmt: skip
-    rows = [[f"Example 1, N={N1}", g, PAPER["uzawa"]["example1_N80"].get(g, ""), v["iterations"], v["status"],
-             v["final_d_lambda"]] for g, v in ex1.items()]  # fmt: skip
-    rows += [[f"Example 2, N={N2}", g, "400 its, d=1.03e-2" if g == "0.2" else "", v["iterations"], v["status"],
-              v["final_d_lambda"]] for g, v in ex2.items()]  # fmt: skip
-    md = _md_table(["case", "gamma", "paper", "ours iterations", "ours status", "final d_lambda"], rows)
-    rows = [[label, v["lambda_max_C_on_Gamma_f"], 2 / v["lambda_max_C_on_Gamma_f"], v["lambda_max_C_on_inactive_set"],
-             2 / v["lambda_max_C_on_inactive_set"]] for label, v in spectra.items()]  # fmt: skip
-    spec = _md_table(["", "lambda_max(C_h), Gamma_f", "2/lambda_max", "lambda_max(C_h), final I", "2/lambda_max"], rows)
+    ex2_spectra = {
+        "lambda_max_C_on_Gamma_f": neumann_to_dirichlet_eigenvalue(s2, np.ones(len(s2.problem.boundary_dofs), bool)),
+        "lambda_max_C_on_inactive_set": neumann_to_dirichlet_eigenvalue(s2, s2.reference.states == 0),
+    }
+    data = {"example1_N": N1, "example1": ex1, "example2_N": N2, "example2": ex2, "example2_spectra": ex2_spectra,
+            "paper": PAPER["uzawa"]}  # fmt: skip
+    paper = PAPER["uzawa"]["example1_N80"]
+    rows = []
+    for gamma in (f"{g:g}" for g in steps):
+        ours = [v["runs"][gamma] for v in ex1.values()]
+        rows.append([gamma, paper.get(gamma, ""), *[f"{r['iterations']} ({r['status']})" for r in ours]])
+    md1 = _md_table(["gamma", "paper", *[f"{label} (N = {N1})" for label in ex1]], rows)
+    rows = [[label, v["inactive_nodes"], v["lambda_max_C_on_Gamma_f"], v["lambda_max_C_on_inactive_set"],
+             2 / v["lambda_max_C_on_inactive_set"], v["lambda_min_C_on_inactive_set"],
+             v["symmetry_breaking_of_lambda_bar"]] for label, v in ex1.items()]  # fmt: skip
+    spec = _md_table(["", "|I| (nodes)", "lambda_max(C_h), Gamma_f", "lambda_max(C_h), I", "2/lambda_max(I)",
+                      "lambda_min(C_h), I", "symmetry breaking of lambda_bar"], rows)  # fmt: skip
+    rows = []
+    for label, v in ex1.items():
+        r = v["long_run"]
+        rows.append([label, r["first_below_1e-4"], f"{r['min_d_lambda']:.2e} (l = {r['min_at']})",
+                     r["symmetry_breaking_at_min"], r["d_lambda_last"], r["symmetry_breaking_last"]])  # fmt: skip
+    md_long = _md_table(["", "first l with d < 1e-4", "min d_lambda", "symmetry breaking there",
+                         f"d_lambda at l = {long_run}", f"symmetry breaking at l = {long_run}"], rows)  # fmt: skip
+    rows = [[g, "400 its, d=1.03e-2" if g == "0.2" else "", v["iterations"], v["status"], v["final_d_lambda"]]
+            for g, v in ex2.items()]  # fmt: skip
+    md2 = _md_table(["gamma", "paper", "ours iterations", "ours status", "final d_lambda"], rows)
+    spec2 = _md_table(
+        ["", "lambda_max(C_h), Gamma_f", "2/lambda_max(Gamma_f)", "lambda_max(C_h), I", "2/lambda_max(I)"],
+        [["ours", ex2_spectra["lambda_max_C_on_Gamma_f"], 2 / ex2_spectra["lambda_max_C_on_Gamma_f"],
+          ex2_spectra["lambda_max_C_on_inactive_set"], 2 / ex2_spectra["lambda_max_C_on_inactive_set"]]],
+    )  # fmt: skip
     return data, (
-        f"Uzawa, lambda^0 = 0, stopped when d_lambda < 1e-4 (max 1000 / 400 iterations).\n\n{md}\n\n"
-        "Uzawa with frozen sets is Richardson's iteration for the discrete Neumann-to-Dirichlet map C_h (4.2) on\n"
-        "the inactive set: it converges iff gamma < 2/lambda_max. (Example 1, continuous: lambda_max(C) on\n"
-        "Gamma_f = coth(pi/2)/pi = 0.3471.)\n\n"
-        f"{spec}\n"
+        f"Example 1, N = {N1}: Uzawa iterations, lambda^0 = 0, stopped when d_lambda < 1e-4 (max 1000).\n"
+        "'paper's FD' runs the same Uzawa code on the paper's discretisation (`PaperFiniteDifferences`).\n\n"
+        f"{md1}\n\n"
+        "Discrete Neumann-to-Dirichlet maps C_h (4.2) on Gamma_f and on the inactive set I of lambda_bar\n"
+        "(power iteration). Uzawa with frozen sets is Richardson's iteration for C_h on I: stable iff\n"
+        "gamma < 2/lambda_max(I), contraction 1 - gamma lambda_min(I) for small gamma. (Continuous:\n"
+        "lambda_max(C) on Gamma_f = coth(pi/2)/pi = 0.3471.)\n\n"
+        f"{spec}\n\n"
+        f"gamma = {long_step:g} continued past the stopping test (the data, lambda_bar and the iterates are odd\n"
+        "about x1 = 1/2 in exact arithmetic; 'symmetry breaking' = ||lambda + lambda(1 - x1, .)||/2):\n\n"
+        f"{md_long}\n\n"
+        f"Example 2, N = {N2} (ours), max 400 iterations:\n\n{md2}\n\n"
+        f"Example 2, N = {N2}: C_h on Gamma_f and on the inactive set I of lambda_bar.\n\n"
+        f"{spec2}\n"
     )
 
 

@@ -145,9 +145,14 @@ def test_uzawa_converges_for_small_gamma_to_pdas_solution():
     problem = _problem(1, 17)
     pdas = PrimalDualActiveSet(problem)
     reference = pdas.solve(1e16).lam
-    result = uzawa(problem, 5.0, reference=reference, tol=1e-8, max_iterations=500)
+    seen = []
+    result = uzawa(
+        problem, 5.0, reference=reference, tol=1e-8, max_iterations=500,
+        monitor=lambda l, y, lam: seen.append((l, problem.boundary_norm(reference.array_r - lam.array_r))),
+    )  # fmt: skip
     print("Uzawa iterations:", result.iterations)
     assert result.converged and result.iterations > 5
+    assert seen == [(h["l"], h["d_lambda"]) for h in result.history]
     assert _max(problem, result.lam.array_r) <= problem.g
     stalled = uzawa(problem, 5.0, reference=reference, tol=1e-8, max_iterations=3)
     assert stalled.status == "max_iterations" and stalled.iterations == 3
@@ -180,3 +185,30 @@ def test_ss_converges_superlinearly():
     print("q_lambda^k:", " ".join(f"{v:.2f}" for v in q))
     assert result.status == "converged" and len(q) >= 3
     assert q[-1] == 0.0 and all(b < a for a, b in zip(q[:-1], q[1:])) and q[0] < 1.0
+
+
+def _odd_part_defect(problem, N: int, dofs: np.ndarray, values: np.ndarray) -> float:
+    """max |v(x1, x2) + v(1 - x1, x2)| over the nodes ``dofs`` (owned, local) of the N x N grid, all ranks."""
+    ij = np.rint(problem.V.tabulate_dof_coordinates()[dofs, :2] * (N - 1)).astype(np.int64)
+    ijs, vs = problem.comm.gather(ij, root=0), problem.comm.gather(values.copy(), root=0)
+    defect = None
+    if problem.comm.rank == 0:
+        ij, values = np.vstack(ijs), np.concatenate(vs)
+        code = ij[:, 0] * N + ij[:, 1]
+        order = np.argsort(code)
+        mirror = order[np.searchsorted(code[order], (N - 1 - ij[:, 0]) * N + ij[:, 1])]
+        defect = float(np.abs(values + values[mirror]).max())
+    return problem.comm.bcast(defect, root=0)
+
+
+@pytest.mark.parametrize("N", [20, 40, 80])
+def test_example1_load_and_multiplier_are_odd_about_the_middle(N):
+    """Example 1's f is odd about x1 = 1/2, so are (f, v) and lambda_bar, as on the paper's grids (even N)."""
+    problem = _problem(1, N)
+    n_owned = problem.V.dofmap.index_map.size_local
+    load_defect = _odd_part_defect(problem, N, np.arange(n_owned), problem.F.array_r)
+    lam = PrimalDualActiveSet(problem).solve(1e16).lam.array_r
+    lam_defect = _odd_part_defect(problem, N, problem.boundary_dofs, lam)
+    print(f"N = {N}: odd-part defects of (f, v) {load_defect:.1e}, of lambda_bar {lam_defect:.1e}")
+    scale = problem.F.norm(0)  # NORM_INFINITY on the owned part, global
+    assert load_defect < 1e-13 * scale and lam_defect < 1e-10

@@ -17,14 +17,17 @@ import numpy as np
 
 from dolfinx import fem
 
-from contactqvi.friction.pdas import DEFAULT_KSP_OPTIONS
+from contactqvi.friction.pdas import DEFAULT_KSP_OPTIONS, create_instance_ksp
 from contactqvi.friction.problem import FrictionProblem
-from contactqvi.linalg import create_ksp, ksp_converged_reason
+from contactqvi.linalg import ksp_converged_reason
 from contactqvi.parameters import require, require_positive
 
 __all__ = ["UzawaResult", "uzawa"]
 
 logger = logging.getLogger(__name__)
+
+#: ``monitor(l, y, lam)``: observer of the iterates of :func:`uzawa` (y = y^(l-1), lam = lambda^l).
+Monitor = typing.Callable[[int, fem.Function, PETSc.Vec], None]
 
 
 @dataclasses.dataclass
@@ -60,6 +63,7 @@ def uzawa(
     tol: float = 1e-4,
     max_iterations: int = 1000,
     prefix: str = "uzawa_",
+    monitor: Monitor | None = None,
 ) -> UzawaResult:
     """Uzawa's method for (P*) with step gamma, lambda^0 = 0 by default (Sect. 6).
 
@@ -72,6 +76,8 @@ def uzawa(
         tol: stopping tolerance.
         max_iterations: maximal number of iterations (linear solves).
         prefix: PETSc options prefix of the linear solver (K is factorised once).
+        monitor: called as ``monitor(l, y, lam)`` after every iteration with the
+            state y of lambda^(l-1) and the new lambda^l; must not modify them.
     """
     require_positive("gamma", gamma)
     require_positive("tol", tol)
@@ -80,7 +86,7 @@ def uzawa(
         "max_iterations",
         f"must be an integer >= 1, got {max_iterations!r}",
     )
-    ksp = create_ksp(problem.comm, prefix, DEFAULT_KSP_OPTIONS, problem.K)
+    ksp = create_instance_ksp(problem.comm, prefix, DEFAULT_KSP_OPTIONS, problem.K)
     rhs = problem.K.createVecLeft()
     lam = problem.create_boundary_vector() if lam0 is None else lam0.copy()
     y = fem.Function(problem.V, name="y")
@@ -98,6 +104,8 @@ def uzawa(
         lam.array[:] = new
         d_lambda = problem.boundary_norm(reference.array_r - new) if reference is not None else None
         history.append({"l": iteration, "d_lambda": d_lambda, "lambda_change": change})
+        if monitor is not None:
+            monitor(iteration, y, lam)
         logger.info(
             "  Uzawa l=%4d |lambda^l - lambda^(l-1)|=%.3e%s",
             iteration, change, "" if d_lambda is None else f" d_lambda={d_lambda:.3e}",
