@@ -39,7 +39,6 @@ __all__ = [
     "ActiveSetResult",
     "PrimalDualActiveSet",
     "DEFAULT_KSP_OPTIONS",
-    "create_instance_ksp",
     "semismooth_newton_sigma",
 ]
 
@@ -50,31 +49,6 @@ Monitor = typing.Callable[[int, fem.Function, PETSc.Vec, PETSc.Vec], None]
 
 #: "All linear systems are solved exactly" (Sect. 6): sparse LU by MUMPS.
 DEFAULT_KSP_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
-
-
-def create_instance_ksp(
-    comm: MPI.Comm, prefix: str, options: dict[str, typing.Any], A: PETSc.Mat
-) -> PETSc.KSP:
-    """KSP with options prefix ``prefix`` configured with this instance's ``options`` only.
-
-    :func:`contactqvi.linalg.create_ksp` writes its defaults into the shared PETSc
-    options database, where they stay: a second solver with the same prefix but
-    other options would read the first one's values. Here the instance's values
-    are inserted only for the KSP's ``setFromOptions()`` and removed right after,
-    so they live on the KSP object alone. Values already in the database (the
-    user's, e.g. ``-friction_ksp_type cg`` on the command line) win and are kept.
-    ``None`` values are flags.
-    """
-    opts = PETSc.Options()
-    added = {prefix + name: value for name, value in options.items() if not opts.hasName(prefix + name)}
-    for key, value in added.items():
-        opts[key] = "" if value is None else value
-    try:
-        ksp = create_ksp(comm, prefix, {}, A)
-    finally:
-        for key in added:
-            opts.delValue(key)
-    return ksp
 
 
 def semismooth_newton_sigma(gamma: float) -> float:
@@ -140,7 +114,7 @@ class PrimalDualActiveSet:
     ):
         self.problem = problem
         self.A = problem.K.duplicate(copy=True)
-        self.ksp = create_instance_ksp(problem.comm, prefix, {**DEFAULT_KSP_OPTIONS, **(ksp_options or {})}, self.A)
+        self.ksp = create_ksp(problem.comm, prefix, {**DEFAULT_KSP_OPTIONS, **(ksp_options or {})}, self.A)
         self._robin = problem.K.createVecLeft()
         self._rhs = problem.K.createVecLeft()
         self._work = problem.K.createVecLeft()

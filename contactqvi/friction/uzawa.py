@@ -17,9 +17,9 @@ import numpy as np
 
 from dolfinx import fem
 
-from contactqvi.friction.pdas import DEFAULT_KSP_OPTIONS, create_instance_ksp
+from contactqvi.friction.pdas import DEFAULT_KSP_OPTIONS
 from contactqvi.friction.problem import FrictionProblem
-from contactqvi.linalg import ksp_converged_reason
+from contactqvi.linalg import create_ksp, ksp_converged_reason
 from contactqvi.parameters import require, require_positive
 
 __all__ = ["UzawaResult", "uzawa"]
@@ -86,7 +86,7 @@ def uzawa(
         "max_iterations",
         f"must be an integer >= 1, got {max_iterations!r}",
     )
-    ksp = create_instance_ksp(problem.comm, prefix, DEFAULT_KSP_OPTIONS, problem.K)
+    ksp = create_ksp(problem.comm, prefix, DEFAULT_KSP_OPTIONS, problem.K)
     rhs = problem.K.createVecLeft()
     lam = problem.create_boundary_vector() if lam0 is None else lam0.copy()
     y = fem.Function(problem.V, name="y")
