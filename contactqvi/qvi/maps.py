@@ -66,7 +66,7 @@ def _checked(result: ObstacleResult) -> ObstacleResult:
 class CompositeMap:
     """Shared parts: the obstacle problem, lumped mass, stiffness without BCs, the Newton system.
 
-    Subclasses allocate their blocks once, pass them to :meth:`_create_system`, and
+    Subclasses allocate their blocks once, create :attr:`system` from them, and
     re-assemble the state-dependent ones in place in ``linearize``.
     """
 
@@ -85,9 +85,6 @@ class CompositeMap:
         self.boundary = ~problem.free
         self.system: BlockNewtonSystem | None = None
         self._matrices: list[PETSc.Mat] = [self.stiffness, self.mass, self.negative_mass]
-
-    def _create_system(self, blocks: list[list[PETSc.Mat | None]], prefix: str) -> None:
-        self.system = BlockNewtonSystem(self.comm, blocks, prefix)
 
     def _own(self, A: PETSc.Mat) -> PETSc.Mat:
         """Register a matrix allocated by this map (destroyed with it)."""
@@ -147,7 +144,7 @@ class ObstacleQVIMap(CompositeMap):
             [tm.coupling_matrix, tm.jacobian_matrix, None],
             [None, varphi_stiffness, self.stiffness],
         ]
-        self._create_system(blocks, prefix)
+        self.system = BlockNewtonSystem(self.comm, blocks, prefix)
 
     def evaluate(self, y: fem.Function) -> Evaluation:
         """E1: T and Phi(y); E2: u_B = S(Phi(y))."""
@@ -187,7 +184,7 @@ class SemilinearVIMap(CompositeMap):
         self.coupling_form = fem.form(coupling)
         self.coupling = self._own(dolfinx.fem.petsc.assemble_matrix(self.coupling_form))
         self.coupling.assemble()
-        self._create_system([[self.mass, self.negative_mass], [self.coupling, self.stiffness]], prefix)
+        self.system = BlockNewtonSystem(self.comm, [[self.mass, self.negative_mass], [self.coupling, self.stiffness]], prefix)
 
     def evaluate(self, y: fem.Function) -> Evaluation:
         self.y.x.array[:] = y.x.array
@@ -252,7 +249,7 @@ class RegularisedQVIMap(CompositeMap):
             [tm.coupling_matrix, tm.jacobian_matrix, None],
             [None, self.penalty_varphi, self.w_block],
         ]
-        self._create_system(blocks, prefix)
+        self.system = BlockNewtonSystem(self.comm, blocks, prefix)
         self.state = fem.Function(self.V)
         self.warm = False
 
