@@ -51,6 +51,10 @@ def parse(argv: list[str] | None = None):
     parser.add_argument("--parameter-set", default="I", help="Test 1: parameter set I or II")
     parser.add_argument("--initial", default="zero", help="Test 1: u0 = 0 ('zero') or (-Lap)^{-1} f ('poisson')")
     parser.add_argument("--radius", type=float, default=None, help="projection radius R (Test 2: default 0.01)")
+    parser.add_argument(
+        "--projection-derivative", default="exact",
+        help="G_PB outside the ball: exact (Lemma 2.9) or scaled (R/||u|| Id, as behind the paper's Table 1)",
+    )
     parser.add_argument("--rho", type=float, default=1e-4, help="C2: Moreau-Yosida parameter")
     parser.add_argument("--tol", type=float, default=None, help="outer tolerance (default: the paper's)")
     parser.add_argument("--max-iterations", type=int, default=50, help="outer iterations")
@@ -76,7 +80,10 @@ def run(args, method: str, rho: float | None = None):
     """Build and solve one configuration; returns (setup, result, seconds)."""
     problem = data.make_test(args.test, args.parameter_set, args.initial)
     msh, _ = create_mesh(MPI.COMM_WORLD, problem.dim, args.h)
-    outer = {"tol": args.tol, "max_iterations": args.max_iterations, "radius": args.radius}
+    outer = {
+        "tol": args.tol, "max_iterations": args.max_iterations, "radius": args.radius,
+        "projection_derivative": args.projection_derivative,
+    }
     s_params = {"method": args.s_solver, "rho0": args.rho0, "rho_min": args.rho_min}
     setup = build(problem, msh, method, outer, s_params, rho=rho if rho is not None else args.rho)
     start = time.perf_counter()

@@ -44,7 +44,7 @@ def test_demo_reports_non_convergence(mpi_tmp_path, load_demo):
 @pytest.mark.parametrize(
     "argv, name",
     [(["--test", "5"], "test"), (["--h", "-1"], "h"), (["--method", "newton"], "method"), (["--rho-min", "2"], "rho_min"),
-     (["--s-solver", "bogus"], "method")],
+     (["--s-solver", "bogus"], "method"), (["--test", "2", "--projection-derivative", "radial"], "projection_derivative")],
 )
 def test_demo_bad_input_exits_with_a_message(argv, name, capsys, load_demo):
     code = load_demo("thermoforming").main(argv + ["--no-plots", "--no-compare", "--output", "/nonexistent-never-written"])

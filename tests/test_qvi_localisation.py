@@ -14,6 +14,7 @@ import dolfinx.fem.petsc
 from dolfinx import fem
 
 from contactqvi.meshes import create_unit_interval
+from contactqvi.parameters import ParameterError
 from contactqvi.problems import thermoforming
 from contactqvi.qvi import BallProjection, build, create_mesh
 
@@ -43,10 +44,11 @@ def test_ball_projection_and_its_newton_derivative():
     A.destroy()
 
 
-def _test2(R: float, method: str, n: int = 500):
+def _test2(R: float, method: str, n: int = 500, projection_derivative: str = "exact"):
     data = thermoforming.test2()
     msh, _ = create_mesh(MPI.COMM_WORLD, 1, 1 / n)
-    setup = build(data, msh, method, {"tol": 1e-13, "max_iterations": 15, "radius": R})
+    params = {"tol": 1e-13, "max_iterations": 15, "radius": R, "projection_derivative": projection_derivative}
+    setup = build(data, msh, method, params)
     return setup.solver.solve(setup.initial)
 
 
@@ -64,6 +66,45 @@ def test_newton_converges_in_three_steps_for_larger_radius():
     assert result.converged and result.iterations == 3 and result.errors[-1] <= 1e-13
     fixed = _test2(2.477, "c1")
     assert fixed.converged and fixed.iterations > result.iterations
+
+
+@pytest.mark.parametrize("R", [4.944, 9.879])
+@pytest.mark.parametrize("method", ["alg1", "c3"])
+def test_scaled_projection_derivative_reproduces_table1(R, method):
+    # Table 1: Algorithm 1 and C3 reach u1 = 0 in 3 iterations for R up to 14.8 with G_PB = (R/||x||) Id.
+    # The first Newton step lands on x1 <= 0, where H(x1) = 0 and G_H(x1) = 0, so x2 = 0 up to round-off;
+    # whether a third step is needed for ||R|| <= 1e-13 depends on that round-off (paper: 3).
+    result = _test2(R, method, projection_derivative="scaled")
+    assert result.converged and 2 <= result.iterations <= 3, result.errors
+    assert result.errors[2] <= 1e-12 and result.errors[-1] <= 1e-13
+    assert result.eocs[0] > 5
+
+
+def test_scaled_projection_derivative_changes_only_steps_outside_the_ball():
+    # G_PB = Id inside B for both variants; outside, the scaled one drops the rank-one term of (16).
+    data = thermoforming.test2()
+    solvers = {}
+    for variant in ("exact", "scaled"):
+        msh, _ = create_mesh(MPI.COMM_WORLD, 1, 1 / 100)
+        setup = build(data, msh, "alg1", {"radius": 1.0, "projection_derivative": variant})
+        solvers[variant] = (setup.solver, setup.initial.x.array[: setup.fmap.n_owned].copy())
+    iterates = {}
+    for where, factor in (("inside", 0.01), ("outside", 1.0)):  # ||u0||_{H^1_0} = 57.7
+        for variant, (solver, u0) in solvers.items():
+            x = factor * u0
+            ev, _ = solver.evaluate(x)
+            iterates[where, variant] = x + solver.newton_direction(x, ev)
+    solver = solvers["exact"][0]
+    inside = solver.norm(iterates["inside", "exact"] - iterates["inside", "scaled"])
+    outside = solver.norm(iterates["outside", "exact"] - iterates["outside", "scaled"])
+    assert inside <= 1e-12 * solver.norm(iterates["inside", "exact"])
+    assert outside >= 0.5 * solver.norm(iterates["outside", "exact"])
+
+
+def test_unknown_projection_derivative_is_rejected():
+    with pytest.raises(ParameterError) as info:
+        _test2(1.0, "alg1", n=10, projection_derivative="radial")
+    assert info.value.name == "projection_derivative"
 
 
 def test_without_projection_both_find_the_inactive_solution_u2():

@@ -102,3 +102,43 @@ def test_unknown_test_and_bad_obstacle_parameters():
     with pytest.raises(ParameterError) as info:
         build(data, msh, "alg2", obstacle_parameters={"rho0": 1e-6, "rho_min": 1e-6})
     assert info.value.name == "rho_min"
+
+
+def _linearisation_defect(setup, steps: int, eps: float) -> float:
+    """||R(x + eps d) - R(x) + eps R(x)|| / (eps ||R(x)||) for the Newton direction d at the iterate after ``steps`` steps."""
+    solver, n = setup.solver, setup.fmap.n_owned
+    x = setup.initial.x.array[:n].copy()
+    for _ in range(steps):
+        ev, _ = solver.evaluate(x)
+        x = x + solver.newton_direction(x, ev)
+    ev, _ = solver.evaluate(x)
+    d = solver.newton_direction(x, ev)
+    r = x - ev.value.x.array[:n]
+    ev_t, _ = solver.evaluate(x + eps * d)
+    r_t = x + eps * d - ev_t.value.x.array[:n]
+    return solver.norm(r_t - r + eps * r) / (eps * solver.norm(r))
+
+
+@pytest.mark.parametrize("test, method, h", [(3, "alg1", 0.1), (3, "c2", 0.1), (4, "alg1", 0.05)])
+def test_newton_system_is_the_linearisation_after_reassembly(test, method, h):
+    # G_R(x) d = -R(x) checked by finite differences of R at the second iterate, i.e. with the block
+    # matrices of (62)-(64), (65)-(67) or Test 4 re-assembled in place once. R is piecewise linear
+    # along d there (active set and kinks of g unchanged), so the defect is round-off.
+    data = thermoforming.make_test(test)
+    msh, _ = create_mesh(MPI.COMM_WORLD, data.dim, h)
+    setup = build(data, msh, method, {"tol": 1e-10})
+    assert _linearisation_defect(setup, steps=1, eps=1e-4) < 1e-6
+
+
+def test_projection_derivative_by_finite_differences():
+    # Test 2 at u0 (outside B_R(0)): with the exact G_PB of Lemma 2.9 the defect is a first-order Taylor
+    # remainder; the scaled variant R/||x|| Id is not a derivative of P_B (O(1) defect, radial direction).
+    data = thermoforming.test2()
+    defects = {}
+    for variant in ("exact", "scaled"):
+        msh, _ = create_mesh(MPI.COMM_WORLD, 1, 0.02)
+        setup = build(data, msh, "alg1", {"tol": 1e-10, "radius": 4.944, "projection_derivative": variant})
+        defects[variant] = [_linearisation_defect(setup, 0, eps) for eps in (1e-3, 1e-4)]
+    exact, scaled = defects["exact"], defects["scaled"]
+    assert exact[1] < 1e-6 and exact[1] < 0.2 * exact[0], exact
+    assert min(scaled) > 1e-2, scaled

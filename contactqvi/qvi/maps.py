@@ -28,7 +28,7 @@ import ufl
 import dolfinx.fem.petsc
 from dolfinx import fem
 
-from contactqvi.qvi.newton_system import BlockNewtonSystem, diagonal_matrix
+from contactqvi.qvi.newton_system import BlockNewtonSystem, diagonal_matrix, reassemble_matrix
 from contactqvi.qvi.temperature import TemperatureMap
 from contactqvi.vi.moreau_yosida import PathFollowingMoreauYosida, huber_derivative
 from contactqvi.vi.problem import ObstacleProblem
@@ -64,9 +64,13 @@ def _checked(result: ObstacleResult) -> ObstacleResult:
 
 
 class CompositeMap:
-    """Shared parts: the obstacle problem, lumped mass, stiffness without BCs, Newton system."""
+    """Shared parts: the obstacle problem, lumped mass, stiffness without BCs, the Newton system.
 
-    def __init__(self, problem: ObstacleProblem, prefix: str):
+    Subclasses allocate their blocks once, create :attr:`system` from them, and
+    re-assemble the state-dependent ones in place in ``linearize``.
+    """
+
+    def __init__(self, problem: ObstacleProblem):
         self.problem = problem
         self.V, self.comm, self.n_owned = problem.V, problem.comm, problem.n_owned
         V = self.V
@@ -75,8 +79,17 @@ class CompositeMap:
         self.lumped_mass.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         self.stiffness = dolfinx.fem.petsc.assemble_matrix(fem.form(ufl.inner(ufl.grad(w), ufl.grad(v)) * ufl.dx))
         self.stiffness.assemble()
-        self.system = BlockNewtonSystem(self.comm, prefix)
+        m = self.lumped_mass.array
+        #: lumped mass M_L and -M_L: the identity terms of (62)/(65) in the basis of (68)
+        self.mass, self.negative_mass = self._diag(m), self._diag(-m)
         self.boundary = ~problem.free
+        self.system: BlockNewtonSystem | None = None
+        self._matrices: list[PETSc.Mat] = [self.stiffness, self.mass, self.negative_mass]
+
+    def _own(self, A: PETSc.Mat) -> PETSc.Mat:
+        """Register a matrix allocated by this map (destroyed with it)."""
+        self._matrices.append(A)
+        return A
 
     def _diag(self, values: np.ndarray) -> PETSc.Mat:
         vec = self.lumped_mass.duplicate()
@@ -103,7 +116,8 @@ class CompositeMap:
     def destroy(self) -> None:
         self.system.destroy()
         self.lumped_mass.destroy()
-        self.stiffness.destroy()
+        for A in self._matrices:
+            A.destroy()
 
 
 class ObstacleQVIMap(CompositeMap):
@@ -117,8 +131,20 @@ class ObstacleQVIMap(CompositeMap):
     """
 
     def __init__(self, temperature: TemperatureMap, solver: ObstacleSolver, Phi0: fem.Function, prefix: str = "qvi_newton_"):
-        super().__init__(solver.problem, prefix)
+        super().__init__(solver.problem)
         self.temperature, self.solver, self.Phi0 = temperature, solver, Phi0
+        tm = temperature
+        phi = tm.varphi.x.array[: self.n_owned]
+        # constant blocks of (68): -M_L diag(varphi) in (62), A diag(varphi) = (grad I_h(varphi .), grad q) in (64)
+        varphi_mass = self._own(self._diag(-self.lumped_mass.array * phi))
+        varphi_stiffness = self._own(self.stiffness.duplicate(copy=True))
+        varphi_stiffness.diagonalScale(R=tm.varphi.x.petsc_vec)
+        blocks = [
+            [self.mass, varphi_mass, self.negative_mass],
+            [tm.coupling_matrix, tm.jacobian_matrix, None],
+            [None, varphi_stiffness, self.stiffness],
+        ]
+        self.system = BlockNewtonSystem(self.comm, blocks, prefix)
 
     def evaluate(self, y: fem.Function) -> Evaluation:
         """E1: T and Phi(y); E2: u_B = S(Phi(y))."""
@@ -133,21 +159,13 @@ class ObstacleQVIMap(CompositeMap):
         )
 
     def linearize(self, ev: Evaluation, scale: float = 1.0) -> None:
-        """Block system (68) for (delta u, xi, mu) with mu = 0 on A_i and the boundary."""
+        """Block system (68) for (delta u, xi, mu) with mu = 0 on A_i and the boundary; (63) at (y, T(y))."""
         tm = self.temperature
         tm.u.x.array[:] = ev.y.x.array
         tm.T.x.array[:] = ev.temperature.x.array
-        m, phi = self.lumped_mass.array, tm.varphi.x.array[: self.n_owned]
-        K11, K12, K13 = self._diag(m), self._diag(-m * phi), self._diag(-m)
-        K21 = tm.assemble_coupling()
-        K21.scale(scale)
-        K22 = tm.assemble_jacobian()
-        K32 = self.stiffness.duplicate(copy=True)
-        K32.diagonalScale(R=tm.varphi.x.petsc_vec)
-        fixed = [self.boundary, np.zeros(self.n_owned, bool), self.boundary | ev.active]
-        self.system.set_operator([[K11, K12, K13], [K21, K22, None], [None, K32, self.stiffness]], fixed)
-        for M in (K11, K12, K13, K21, K22, K32):
-            M.destroy()
+        tm.assemble_coupling().scale(scale)
+        tm.assemble_jacobian()
+        self.system.update([self.boundary, np.zeros(self.n_owned, bool), self.boundary | ev.active])
 
 
 class SemilinearVIMap(CompositeMap):
@@ -161,9 +179,12 @@ class SemilinearVIMap(CompositeMap):
     """
 
     def __init__(self, solver: ObstacleSolver, y: fem.Function, coupling: ufl.Form, prefix: str = "qvi_newton_"):
-        super().__init__(solver.problem, prefix)
+        super().__init__(solver.problem)
         self.solver, self.y = solver, y
         self.coupling_form = fem.form(coupling)
+        self.coupling = self._own(dolfinx.fem.petsc.assemble_matrix(self.coupling_form))
+        self.coupling.assemble()
+        self.system = BlockNewtonSystem(self.comm, [[self.mass, self.negative_mass], [self.coupling, self.stiffness]], prefix)
 
     def evaluate(self, y: fem.Function) -> Evaluation:
         self.y.x.array[:] = y.x.array
@@ -177,15 +198,8 @@ class SemilinearVIMap(CompositeMap):
     def linearize(self, ev: Evaluation, scale: float = 1.0) -> None:
         """(delta u, z): delta u - z = b, (grad z, grad q) = s (G_Phi delta u, q) on I_i, z = 0 on A_i."""
         self.y.x.array[:] = ev.y.x.array
-        m = self.lumped_mass.array
-        K11, K12 = self._diag(m), self._diag(-m)
-        K21 = dolfinx.fem.petsc.assemble_matrix(self.coupling_form)
-        K21.assemble()
-        K21.scale(-scale)
-        fixed = [self.boundary, self.boundary | ev.active]
-        self.system.set_operator([[K11, K12], [K21, self.stiffness]], fixed)
-        for M in (K11, K12, K21):
-            M.destroy()
+        reassemble_matrix(self.coupling, self.coupling_form).scale(-scale)
+        self.system.update([self.boundary, self.boundary | ev.active])
 
 
 class RegularisedQVIMap(CompositeMap):
@@ -214,14 +228,28 @@ class RegularisedQVIMap(CompositeMap):
         rho0: float = 1.0,
         prefix: str = "qvi_newton_",
     ):
-        super().__init__(pfmy.problem, prefix)
+        super().__init__(pfmy.problem)
         self.temperature, self.pfmy, self.Phi0, self.rho = temperature, pfmy, Phi0, rho
         self.path = rho_path(rho0, rho, 10.0) if rho < rho0 else [rho]
         p = self.problem
-        t = p.u - p.obstacle
-        self.penalty_form = fem.form(
-            huber_derivative(t, pfmy.rho) / pfmy.rho * ufl.TrialFunction(self.V) * ufl.TestFunction(self.V) * p.dx
-        )
+        w, q = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
+        penalty = huber_derivative(p.u - p.obstacle, pfmy.rho) / pfmy.rho * w * q * p.dx
+        #: rho^-1 (G_sigma w, q) of (67) and the whole (w, q) block (grad w, grad q) + rho^-1 (G_sigma w, q)
+        self.penalty_form = fem.form(penalty)
+        self.w_block_form = fem.form(ufl.inner(ufl.grad(w), ufl.grad(q)) * ufl.dx + penalty)
+        self.penalty = self._own(dolfinx.fem.petsc.assemble_matrix(self.penalty_form))
+        self.penalty.assemble()
+        self.w_block = self._own(dolfinx.fem.petsc.assemble_matrix(self.w_block_form))
+        self.w_block.assemble()
+        #: -rho^-1 (G_sigma I_h(varphi xi), q) of (67): the penalty times diag(varphi), negated
+        self.penalty_varphi = self._own(self.penalty.duplicate(copy=True))
+        tm = temperature
+        blocks = [
+            [self.mass, None, self.negative_mass],
+            [tm.coupling_matrix, tm.jacobian_matrix, None],
+            [None, self.penalty_varphi, self.w_block],
+        ]
+        self.system = BlockNewtonSystem(self.comm, blocks, prefix)
         self.state = fem.Function(self.V)
         self.warm = False
 
@@ -244,24 +272,17 @@ class RegularisedQVIMap(CompositeMap):
         tm, p = self.temperature, self.problem
         tm.u.x.array[:] = ev.y.x.array
         tm.T.x.array[:] = ev.temperature.x.array
+        tm.assemble_coupling().scale(scale)
+        tm.assemble_jacobian()
+        # the penalty blocks at u_B = S_rho(Phi(y)) and the obstacle of that evaluation
         self.state.x.array[:] = p.u.x.array
         p.u.x.array[:] = ev.value.x.array
         p.obstacle.x.array[:] = ev.obstacle.x.array
         self.pfmy.rho.value = self.rho
-        P = dolfinx.fem.petsc.assemble_matrix(self.penalty_form)
-        P.assemble()
+        reassemble_matrix(self.penalty, self.penalty_form)
+        reassemble_matrix(self.w_block, self.w_block_form)
         p.u.x.array[:] = self.state.x.array
-        m = self.lumped_mass.array
-        K11, K13 = self._diag(m), self._diag(-m)
-        K21 = tm.assemble_coupling()
-        K21.scale(scale)
-        K22 = tm.assemble_jacobian()
-        K32 = P.duplicate(copy=True)
-        K32.diagonalScale(R=tm.varphi.x.petsc_vec)
-        K32.scale(-1.0)
-        K33 = self.stiffness.duplicate(copy=True)
-        K33.axpy(1.0, P)
-        fixed = [self.boundary, np.zeros(self.n_owned, bool), self.boundary]
-        self.system.set_operator([[K11, None, K13], [K21, K22, None], [None, K32, K33]], fixed)
-        for M in (P, K11, K13, K21, K22, K32, K33):
-            M.destroy()
+        self.penalty.copy(self.penalty_varphi, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        self.penalty_varphi.diagonalScale(R=tm.varphi.x.petsc_vec)
+        self.penalty_varphi.scale(-1.0)
+        self.system.update([self.boundary, np.zeros(self.n_owned, bool), self.boundary])

@@ -5,6 +5,12 @@ nest, converted to one AIJ matrix and solved with a direct solver (MUMPS by
 default, options prefix ``qvi_newton_``). Constraints such as mu = 0 on the
 active set A_i are imposed exactly as identity rows of that block (the rows of
 (68) "deleted" in Sect. 4.1), never by penalties.
+
+The block matrices are given once and their owners re-assemble the values in
+place between Newton steps; :meth:`BlockNewtonSystem.update` then converts the
+nest to a new AIJ matrix. (Converting into the previous AIJ matrix with
+MAT_REUSE_MATRIX gave the same entries, but MUMPS' numerical refactorisation of
+it was wrong under MPI with PETSc 3.22, so the monolithic matrix is rebuilt.)
 """
 
 from __future__ import annotations
@@ -14,9 +20,12 @@ from petsc4py import PETSc
 
 import numpy as np
 
+import dolfinx.fem.petsc
+from dolfinx import fem
+
 from contactqvi.linalg import create_ksp, ksp_converged_reason
 
-__all__ = ["BlockNewtonSystem", "diagonal_matrix", "DEFAULT_NEWTON_KSP_OPTIONS"]
+__all__ = ["BlockNewtonSystem", "diagonal_matrix", "reassemble_matrix", "DEFAULT_NEWTON_KSP_OPTIONS"]
 
 DEFAULT_NEWTON_KSP_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
 
@@ -30,35 +39,41 @@ def diagonal_matrix(diagonal: PETSc.Vec) -> PETSc.Mat:
     return D
 
 
+def reassemble_matrix(A: PETSc.Mat, form: fem.Form) -> PETSc.Mat:
+    """Assemble the bilinear ``form`` into ``A`` in place (``A`` from an earlier assembly of ``form``)."""
+    A.zeroEntries()
+    dolfinx.fem.petsc.assemble_matrix(A, form)
+    A.assemble()
+    return A
+
+
 class BlockNewtonSystem:
     """One block linear system with identity rows on chosen (owned) dofs of each block.
 
     Args:
         comm: communicator.
+        blocks: the block matrices (None: zero block), kept by reference; their owners
+            re-assemble them in place before each :meth:`update`.
         prefix: PETSc options prefix of the KSP.
     """
 
-    def __init__(self, comm: MPI.Comm, prefix: str = "qvi_newton_"):
+    def __init__(self, comm: MPI.Comm, blocks: list[list[PETSc.Mat | None]], prefix: str = "qvi_newton_"):
         self.comm = comm
-        self.ksp = create_ksp(comm, prefix, DEFAULT_NEWTON_KSP_OPTIONS)
+        self.nest = PETSc.Mat().createNest(blocks, comm=comm)
         self.K: PETSc.Mat | None = None
-        self.nest: PETSc.Mat | None = None
-        self.positions: list[np.ndarray] = []
-        self.fixed: list[np.ndarray] = []
+        start = self.nest.getOwnershipRange()[0]
+        self.indices = [is_.getIndices().copy() for is_ in self.nest.getNestISs()[0]]
+        self.positions = [idx - start for idx in self.indices]
+        self.fixed = [np.zeros(idx.size, bool) for idx in self.indices]
+        self.ksp = create_ksp(comm, prefix, DEFAULT_NEWTON_KSP_OPTIONS)
 
-    def set_operator(self, blocks: list[list[PETSc.Mat | None]], fixed: list[np.ndarray]) -> None:
-        """Assemble the monolithic matrix; row i of block j becomes an identity row if fixed[j][i]."""
-        self._release()
-        # The converted matrix shares data with the nest (petsc4py 3.22): keep both alive together.
-        self.nest = nest = PETSc.Mat().createNest(blocks, comm=self.comm)
-        isrows, _ = nest.getNestISs()
-        self.K = nest.convert("aij")
-        self.K.assemble()
-        start = self.K.getOwnershipRange()[0]
-        indices = [is_.getIndices().copy() for is_ in isrows]
-        self.positions = [idx - start for idx in indices]
+    def update(self, fixed: list[np.ndarray]) -> None:
+        """Build the matrix from the blocks' current values; row i of block j becomes an identity row if fixed[j][i]."""
+        if self.K is not None:
+            self.K.destroy()
+        self.K = self.nest.convert("aij", out=PETSc.Mat())
         self.fixed = fixed
-        rows = np.concatenate([idx[mask] for idx, mask in zip(indices, fixed)])
+        rows = np.concatenate([idx[mask] for idx, mask in zip(self.indices, fixed)])
         self.K.zeroRows(rows.astype(PETSc.IntType), 1.0)
         self.ksp.setOperators(self.K)
 
@@ -77,12 +92,9 @@ class BlockNewtonSystem:
         x.destroy()
         return out
 
-    def _release(self) -> None:
+    def destroy(self) -> None:
         for M in (self.K, self.nest):
             if M is not None:
                 M.destroy()
         self.K = self.nest = None
-
-    def destroy(self) -> None:
-        self._release()
         self.ksp.destroy()

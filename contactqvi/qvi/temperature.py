@@ -23,6 +23,7 @@ from dolfinx import fem
 
 from contactqvi.linalg import create_snes
 from contactqvi.parameters import require_positive
+from contactqvi.qvi.newton_system import reassemble_matrix
 from contactqvi.vi.nonlinear import NonlinearFormProblem, snes_converged_reason
 
 __all__ = ["ScalarNonlinearity", "TemperatureMap", "DEFAULT_PHI_OPTIONS"]
@@ -88,6 +89,11 @@ class TemperatureMap:
         self.jacobian_form = fem.form(J)
         #: (G_g(s) h, zeta): the u-derivative of the residual, the coupling block of (63).
         self.coupling_form = fem.form(g.derivative(s) * ufl.TrialFunction(V) * v * dx)
+        #: the matrices of (33)/(63), allocated here and re-assembled in place
+        self.jacobian_matrix = dolfinx.fem.petsc.assemble_matrix(self.jacobian_form)
+        self.jacobian_matrix.assemble()
+        self.coupling_matrix = dolfinx.fem.petsc.assemble_matrix(self.coupling_form)
+        self.coupling_matrix.assemble()
         self.nonlinear = NonlinearFormProblem(fem.form(F), self.jacobian_form, T, [])
         self.snes = create_snes(V.mesh.comm, prefix, DEFAULT_PHI_OPTIONS)
         self.snes.setConvergenceHistory(reset=True)
@@ -125,16 +131,18 @@ class TemperatureMap:
         out.x.array[:] = self.varphi.x.array * self.T.x.array
 
     def assemble_jacobian(self) -> PETSc.Mat:
-        """Newton derivative of (30) in T at the current (u, T): the matrix of (33)/(63)."""
-        A = dolfinx.fem.petsc.assemble_matrix(self.jacobian_form)
-        A.assemble()
-        return A
+        """Newton derivative of (30) in T at the current (u, T): the matrix of (33)/(63).
+
+        Re-assembled in place into :attr:`jacobian_matrix` (owned by this map: do not destroy).
+        """
+        return reassemble_matrix(self.jacobian_matrix, self.jacobian_form)
 
     def assemble_coupling(self) -> PETSc.Mat:
-        """Matrix of (G_g(Psi0 + psi T - u) h, zeta), the h-term of (63)."""
-        C = dolfinx.fem.petsc.assemble_matrix(self.coupling_form)
-        C.assemble()
-        return C
+        """Matrix of (G_g(Psi0 + psi T - u) h, zeta), the h-term of (63).
+
+        Re-assembled in place into :attr:`coupling_matrix` (owned by this map: do not destroy).
+        """
+        return reassemble_matrix(self.coupling_matrix, self.coupling_form)
 
     def derivative(self, h: fem.Function, out: fem.Function) -> None:
         """out = G_Phi(u) h = I_h(varphi xi_h), xi_h from (33) at the current (u, T)."""
@@ -150,10 +158,9 @@ class TemperatureMap:
         ksp.solve(rhs, out.x.petsc_vec)
         out.x.scatter_forward()
         out.x.array[:] *= self.varphi.x.array
-        for obj in (A, C, rhs, ksp):
-            obj.destroy()
+        rhs.destroy()
+        ksp.destroy()
 
     def destroy(self) -> None:
-        self.snes.destroy()
-        self.nonlinear.destroy()
-        self.x.destroy()
+        for obj in (self.snes, self.nonlinear, self.x, self.jacobian_matrix, self.coupling_matrix):
+            obj.destroy()
