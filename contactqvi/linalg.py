@@ -1,4 +1,4 @@
-"""PETSc helpers: prefixed KSP/SNES factories, power iteration, KSP diagnostics.
+"""PETSc helpers: prefixed KSP/SNES factories, in-place re-assembly, power iteration, KSP diagnostics.
 
 Every solver object gets an options prefix and per-object default options: they
 are put into the PETSc options database under that prefix *unless the user
@@ -16,10 +16,14 @@ import typing
 from mpi4py import MPI
 from petsc4py import PETSc
 
+import dolfinx.fem.petsc
+from dolfinx import fem
+
 __all__ = [
     "default_options",
     "create_ksp",
     "create_snes",
+    "reassemble_matrix",
     "power_iteration",
     "ksp_converged_reason",
 ]
@@ -71,6 +75,18 @@ def create_snes(comm: MPI.Comm, prefix: str, options: OptionsDict) -> PETSc.SNES
     with default_options(prefix, options):
         snes.setFromOptions()
     return snes
+
+
+def reassemble_matrix(A: PETSc.Mat, form: fem.Form, bcs: list[fem.DirichletBC] | None = None) -> PETSc.Mat:
+    """Assemble the bilinear ``form`` into ``A`` in place and return ``A``.
+
+    ``A`` comes from an earlier assembly of ``form`` (its sparsity is reused);
+    rows and columns of ``bcs`` get the identity as in ``assemble_matrix``.
+    """
+    A.zeroEntries()
+    dolfinx.fem.petsc.assemble_matrix(A, form, bcs=bcs or [])
+    A.assemble()
+    return A
 
 
 def power_iteration(A: PETSc.Mat, x0: PETSc.Vec, iterations: int) -> float:

@@ -28,7 +28,8 @@ import ufl
 import dolfinx.fem.petsc
 from dolfinx import fem
 
-from contactqvi.qvi.newton_system import BlockNewtonSystem, diagonal_matrix, reassemble_matrix
+from contactqvi.linalg import reassemble_matrix
+from contactqvi.qvi.newton_system import BlockNewtonSystem, diagonal_matrix
 from contactqvi.qvi.temperature import TemperatureMap
 from contactqvi.vi.moreau_yosida import PathFollowingMoreauYosida, huber_derivative
 from contactqvi.vi.problem import ObstacleProblem

@@ -20,12 +20,9 @@ from petsc4py import PETSc
 
 import numpy as np
 
-import dolfinx.fem.petsc
-from dolfinx import fem
-
 from contactqvi.linalg import create_ksp, ksp_converged_reason
 
-__all__ = ["BlockNewtonSystem", "diagonal_matrix", "reassemble_matrix", "DEFAULT_NEWTON_KSP_OPTIONS"]
+__all__ = ["BlockNewtonSystem", "diagonal_matrix", "DEFAULT_NEWTON_KSP_OPTIONS"]
 
 DEFAULT_NEWTON_KSP_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
 
@@ -37,14 +34,6 @@ def diagonal_matrix(diagonal: PETSc.Vec) -> PETSc.Mat:
     D.setDiagonal(diagonal)
     D.assemble()
     return D
-
-
-def reassemble_matrix(A: PETSc.Mat, form: fem.Form) -> PETSc.Mat:
-    """Assemble the bilinear ``form`` into ``A`` in place (``A`` from an earlier assembly of ``form``)."""
-    A.zeroEntries()
-    dolfinx.fem.petsc.assemble_matrix(A, form)
-    A.assemble()
-    return A
 
 
 class BlockNewtonSystem:

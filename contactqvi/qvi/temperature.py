@@ -21,9 +21,8 @@ import ufl
 import dolfinx.fem.petsc
 from dolfinx import fem
 
-from contactqvi.linalg import create_snes
+from contactqvi.linalg import create_snes, reassemble_matrix
 from contactqvi.parameters import require_positive
-from contactqvi.qvi.newton_system import reassemble_matrix
 from contactqvi.vi.nonlinear import NonlinearFormProblem, snes_converged_reason
 
 __all__ = ["ScalarNonlinearity", "TemperatureMap", "DEFAULT_PHI_OPTIONS"]

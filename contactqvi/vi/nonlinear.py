@@ -12,6 +12,8 @@ from petsc4py import PETSc
 import dolfinx.fem.petsc
 from dolfinx import fem
 
+from contactqvi.linalg import reassemble_matrix
+
 __all__ = ["NonlinearFormProblem", "snes_converged_reason"]
 
 class NonlinearFormProblem:
@@ -47,9 +49,7 @@ class NonlinearFormProblem:
 
     def J(self, snes: PETSc.SNES, x: PETSc.Vec, A: PETSc.Mat, P: PETSc.Mat) -> None:
         """Generalised Jacobian at ``x`` (identity rows on Dirichlet dofs)."""
-        A.zeroEntries()
-        dolfinx.fem.petsc.assemble_matrix(A, self.J_form, bcs=self.bcs)
-        A.assemble()
+        reassemble_matrix(A, self.J_form, self.bcs)
 
     def attach(self, snes: PETSc.SNES) -> None:
         """Register the callbacks and work objects with ``snes``."""
