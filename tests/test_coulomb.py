@@ -115,14 +115,22 @@ def test_discrete_coulomb_conditions(geometry, load):
     assert np.allclose(result.normal_force, lam, atol=tol_f)
 
 
-def test_serial_and_parallel_agree():
-    """Same Newton iterations (+-1) and displacements (1e-8) on COMM_WORLD and on one rank."""
+@pytest.mark.parametrize("pc", ["lu", "gamg"])
+def test_serial_and_parallel_agree(pc):
+    """Same displacements (1e-8) on COMM_WORLD and on one rank; same Newton iterations (+-1)
+    with exact inner solves.
+
+    With the inexact default the Newton path depends on the partition through GAMG's
+    aggregates (measured, d2/L2 lev 3 on 2 ranks vs 1: 19 vs 22 steps), so only the
+    solution is compared there.
+    """
     world = _problem(MPI.COMM_WORLD, 3, "d2", "L2")
-    _, u_world, res_world = _solve(world, "world_")
+    _, u_world, res_world = _solve(world, f"world_{pc}_", pc=pc)
     single = _problem(MPI.COMM_SELF, 3, "d2", "L2")
-    _, u_single, res_single = _solve(single, "single_")
+    _, u_single, res_single = _solve(single, f"single_{pc}_", pc=pc)
     assert res_world.converged and res_single.converged
-    assert abs(res_world.iterations - res_single.iterations) <= 1
+    if pc == "lu":
+        assert abs(res_world.iterations - res_single.iterations) <= 1
     fw, fs = (_displacement(p, u) for p, u in ((world, u_world), (single, u_single)))
     _, values_world = io.gather_vertex_values(fw)
     if MPI.COMM_WORLD.rank == 0:
