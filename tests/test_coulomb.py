@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 from mpi4py import MPI
@@ -11,8 +12,18 @@ import numpy as np
 import pytest
 
 from contactqvi import io, meshes
-from contactqvi.contact import State, SCDNewtonSolver, build_contact_problem, classify, resolvent, scd_adjoint_blocks
-from contactqvi.linalg import create_snes
+from contactqvi.contact import (
+    FrictionLaw,
+    SCDNewtonSolver,
+    State,
+    build_contact_problem,
+    classify,
+    contact_states,
+    resolvent,
+    scd_adjoint_blocks,
+)
+from contactqvi.contact.fixed_point import solve_tresca_fixed_point
+from contactqvi.contact.signorini_vi import solve_signorini_vi
 from contactqvi.problems import coulomb as data
 
 def _problem(comm, lev, geometry="d1", load="L1", friction=data.FRICTION):
@@ -27,18 +38,21 @@ def _solve(problem, prefix, **parameters):
 
 
 @pytest.mark.serial
-def test_newton_matrix_regular():
+@pytest.mark.parametrize("law", ["coulomb", "tresca"])
+def test_newton_matrix_regular(law):
     """W*^T A + U*^T is nonsingular for states of every kind (Prop. 5.2 (c)) on a tiny mesh."""
     problem = _problem(MPI.COMM_WORLD, 0)
+    if law == "tresca":
+        problem = dataclasses.replace(problem, law=FrictionLaw(slip_bound=0.5))
     solver = SCDNewtonSolver(problem)
     rng = np.random.default_rng(1)
     m = len(problem.contact_blk)
     for _ in range(5):
         w = rng.normal(size=(m, 3)) * np.array([1.0, 1.0, 10.0])
-        v, z = resolvent(w, solver.gamma, problem.friction)
-        states = classify(v, z, solver.gamma, problem.friction, 0.0)
-        assert len(np.unique(states)) >= 3
-        J = solver.newton_matrix(*scd_adjoint_blocks(v, z, states, solver.gamma, problem.friction))
+        v, z = resolvent(w, solver.gamma, problem.law)
+        kinds = classify(v, z, solver.gamma, problem.law, 0.0)
+        assert len(np.unique(contact_states(*kinds))) >= 3
+        J = solver.newton_matrix(*scd_adjoint_blocks(v, z, *kinds, solver.gamma, problem.law))
         dense_J = J.convert("dense").getDenseArray()
         contact_rows = (3 * problem.contact_blk[:, None] + np.arange(3)).ravel()
         other = np.setdiff1d(np.arange(J.getSize()[0]), contact_rows)  # serial: local = global
@@ -49,32 +63,14 @@ def test_newton_matrix_regular():
         assert singular.min() > 1e-10 * singular.max()
 
 
-def _signorini_snes_vi(problem):
-    """Frictionless oracle: min 1/2 u^T A u - l^T u s.t. u3 >= 0 at contact nodes, by SNES VI."""
-    A, load = problem.A, problem.load
-    snes = create_snes(problem.comm, "signorini_vi_", {
-        "snes_type": "vinewtonrsls", "snes_linesearch_type": "basic", "snes_rtol": 1e-14, "snes_atol": 1e-6,
-        "snes_stol": 0, "snes_max_it": 100, "ksp_type": "preonly", "pc_type": "lu"})
-    residual = A.createVecRight()
-    snes.setFunction(lambda snes, x, f: (A.mult(x, f), f.axpy(-1.0, load)), residual)
-    snes.setJacobian(lambda snes, x, J, P: None, A)
-    lower, upper = A.createVecRight(), A.createVecRight()
-    lower.set(-PETSc.INFINITY)
-    upper.set(PETSc.INFINITY)
-    lower.array.reshape(-1, 3)[problem.contact_blk, 2] = 0.0
-    snes.setVariableBounds(lower, upper)
-    u = A.createVecRight()
-    snes.solve(None, u)
-    assert snes.getConvergedReason() > 0
-    return u
-
-
 def test_frictionless_equals_snes_vi():
     """With F = 0 the GE is the Signorini problem: same solution as PETSc's SNES VI to 1e-8."""
     problem = _problem(MPI.COMM_WORLD, 2, "d3", "L2", friction=0.0)
     _, u, result = _solve(problem, "frictionless_", pc="lu")
     assert result.converged
-    reference = _signorini_snes_vi(problem)
+    reference = problem.A.createVecRight()
+    vi = solve_signorini_vi(problem, reference, {"ksp_type": "preonly", "pc_type": "lu", "snes_rtol": 1e-14})
+    assert vi.converged
     difference = u.copy()
     difference.axpy(-1.0, reference)
     print(f"F = 0: |u_scd - u_vi| / |u_vi| = {difference.norm() / reference.norm():.2e}")
@@ -87,7 +83,7 @@ def test_discrete_coulomb_conditions(geometry, load):
     problem = _problem(MPI.COMM_WORLD, 3, geometry, load)
     _, u, result = _solve(problem, f"conditions_{geometry}_", rtol=1e-12)
     assert result.converged
-    comm, F = problem.comm, problem.friction
+    comm, F = problem.comm, problem.law.friction
     # Nodal contact forces from the equilibrium A u - l + z = 0, z = (g, theta) in Q~(u):
     # the foundation pushes the body with (-g, -theta) = A u - l.
     r = problem.A.createVecRight()
@@ -153,6 +149,9 @@ def _displacement(problem, u):
         (["--lev", "-1"], "lev"),
         (["--tol", "1.0"], "tol"),
         (["--rtol", "0"], "rtol"),
+        (["--law", "tresca"], "slip-bound"),
+        (["--law", "tresca", "--slip-bound", "-1e6"], "slip-bound"),
+        (["--slip-bound", "1e6"], "slip-bound"),
     ],
 )
 def test_demo_rejects_bad_input(args, name, capsys, load_demo):
@@ -184,3 +183,39 @@ def test_exact_newton_counts_match_paper_table2(geometry, load):
     assert result.converged
     paper_iterations = data.PAPER_TABLE2[3][f"{geometry}/{load}"][0]
     assert abs(result.iterations - paper_iterations) <= 3, (result.iterations, paper_iterations)
+
+
+def _relative_difference(u: PETSc.Vec, reference: PETSc.Vec) -> float:
+    difference = u.copy()
+    difference.axpy(-1.0, reference)
+    return difference.norm() / reference.norm()
+
+
+def test_tresca_with_coulomb_bound_is_coulomb():
+    """The Coulomb solution solves the Tresca problem with slip bound s = F lambda of that solution."""
+    coulomb = _problem(MPI.COMM_WORLD, 3, "d3", "L2")
+    _, u_coulomb, result = _solve(coulomb, "coulomb_reference_", pc="lu")
+    assert result.converged
+    tresca = dataclasses.replace(coulomb, law=FrictionLaw(slip_bound=data.FRICTION * result.normal_force))
+    _, u_tresca, tresca_result = _solve(tresca, "tresca_", pc="lu")
+    assert tresca_result.converged
+    assert tresca_result.history[-1]["states"] == result.history[-1]["states"]
+    error = _relative_difference(u_tresca, u_coulomb)
+    print(f"Tresca(F lambda*) vs Coulomb: relative difference {error:.2e}")
+    assert error < 1e-8
+
+
+def test_tresca_fixed_point_reaches_coulomb_solution():
+    """The classical fixed point of Tresca problems converges to the SCD Newton solution of Coulomb."""
+    problem = _problem(MPI.COMM_WORLD, 3, "d1", "L2")
+    _, u_newton, result = _solve(problem, "coulomb_reference_", pc="lu")
+    u = problem.A.createVecRight()
+    fixed_point = solve_tresca_fixed_point(problem, u, {"pc": "lu"})
+    assert fixed_point.converged and result.converged
+    assert fixed_point.iterations >= 2  # the bound really is updated
+    residuals = [h["residual"] for h in fixed_point.history]
+    assert residuals[-1] <= 1e-12 * residuals[0]
+    error = _relative_difference(u, u_newton)
+    print(f"fixed point: {fixed_point.iterations} Tresca solves, {fixed_point.newton_iterations} Newton steps;"
+          f" vs SCD Newton {result.iterations}; relative difference {error:.2e}")
+    assert error < 1e-8

@@ -69,7 +69,7 @@ def test_contact_surface_file(solution, mpi_tmp_path):
     stick = np.isin(state, (State.STICKING, State.WEAK_STICKING))
     assert np.any(stick) and np.all(np.linalg.norm(slip[stick], axis=1) <= 1e-10 * np.abs(slip).max())
     assert np.all(traction[:, 2] == 0.0) and np.all(slip[:, 2] == 0.0)  # tangential vectors
-    cone = np.linalg.norm(traction, axis=1) - problem.friction * pressure
+    cone = np.linalg.norm(traction, axis=1) - problem.law.friction * pressure
     assert np.all(cone <= 1e-8 * np.abs(pressure).max())
 
     # Node by node: the owned contact nodes of every rank, found by coordinates.

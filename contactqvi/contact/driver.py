@@ -43,6 +43,7 @@ def solve_level(
     young: float,
     poisson: float,
     friction: float,
+    slip_bound: float = 0.0,
     parameters: dict[str, typing.Any] | None = None,
     initial: fem.Function | None = None,
     prefix: str = "coulomb_",
@@ -56,7 +57,7 @@ def solve_level(
     """
     t0 = time.perf_counter()
     msh, facet_tags = create_contact_body(comm, lev, gap)
-    problem = build_contact_problem(msh, facet_tags, young, poisson, tractions, friction)
+    problem = build_contact_problem(msh, facet_tags, young, poisson, tractions, friction, slip_bound)
     u = problem.A.createVecRight()
     if initial is not None:
         # Bottom nodes of a curved d lie up to O(h^2) outside the coarse mesh: nearest cell within 5 cm.

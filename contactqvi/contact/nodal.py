@@ -1,22 +1,62 @@
-"""Nodal Coulomb law of seed 000: resolvent, contact states and SCD subspace bases.
+"""Nodal friction laws of seed 000: resolvent, contact states and SCD subspace bases.
 
 All functions act on arrays of shape (m, 3) holding one 3-vector per contact node
 (components: two tangential, then normal = e3), vectorised over the nodes.
 
-Notation (seed 000, Sect. 6): the nodal multifunction is
+Notation (seed 000, Sect. 6): the nodal multifunction of Coulomb friction is
     Q~(v) = {(-F theta dd||v12||, theta) : theta in N_{R+}(v3)},
 and a point of its graph is written (v, z) with z = (g, theta), theta <= 0 the
-negative normal force and g the friction force. The contact states are those
-of Table 1.
+negative normal force and g the friction force. :class:`FrictionLaw` generalises
+the slip bound F lambda (lambda = -theta) to b = s + F lambda: s = 0 is Coulomb,
+F = 0 with a given s > 0 is Tresca friction (the VI of the second kind of the
+seed's refs. [15, 16]), s = F = 0 is the frictionless Signorini problem. The
+resolvent and the SCD bases below hold for every such b.
+
+A node is classified by a normal and a tangential kind (:class:`Normal`,
+:class:`Tangential`); the pair selects the SCD subspace and maps to the contact
+states of Table 1 (:class:`State`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 
 import numpy as np
 
-__all__ = ["State", "resolvent", "classify", "scd_adjoint_blocks", "lipschitz_constant"]
+__all__ = [
+    "FrictionLaw",
+    "Normal",
+    "State",
+    "Tangential",
+    "classify",
+    "contact_states",
+    "lipschitz_constant",
+    "resolvent",
+    "scd_adjoint_blocks",
+]
+
+
+@dataclasses.dataclass(frozen=True)
+class FrictionLaw:
+    """Slip bound b = s + F lambda of each contact node (lambda = -theta >= 0, N).
+
+    Attributes:
+        friction: Coulomb coefficient F >= 0 (seed 000, Sect. 6).
+        slip_bound: given part s >= 0 of the bound (N), a scalar or one value per
+            owned contact node (Tresca friction).
+    """
+
+    friction: float = 0.0
+    slip_bound: float | np.ndarray = 0.0
+
+    def bound(self, theta: np.ndarray) -> np.ndarray:
+        """b = s - F theta at nodes with normal graph component theta <= 0."""
+        return self.slip_bound - self.friction * theta
+
+    @property
+    def is_tresca(self) -> bool:
+        return self.friction == 0.0 and bool(np.any(np.asarray(self.slip_bound) > 0.0))
 
 
 class State(enum.IntEnum):
@@ -24,19 +64,37 @@ class State(enum.IntEnum):
 
     NO_CONTACT = 0  # L:   v3 > 0, theta = 0
     SLIDING = 1  # M1:  v3 = 0, theta < 0, v12 != 0
-    STICKING = 2  # M3+: v3 = 0, theta < 0, v12 = 0, ||g|| < -F theta
+    STICKING = 2  # M3+: v3 = 0, theta < 0, v12 = 0, ||g|| < b
     WEAK_CONTACT_SLIDING = 3  # M2: v3 = 0, theta = 0, v12 != 0
-    WEAK_STICKING = 4  # M3-: v3 = 0, theta < 0, v12 = 0, ||g|| = -F theta
+    WEAK_STICKING = 4  # M3-: v3 = 0, theta < 0, v12 = 0, ||g|| = b
     WEAK_CONTACT_STICKING = 5  # M4: v = 0, z = 0
+    SEPARATED_STICKING = 6  # Tresca only: theta = 0, v12 = 0, 0 < ||g|| <= s
 
 
-def resolvent(w: np.ndarray, gamma: float, friction: float) -> tuple[np.ndarray, np.ndarray]:
+class Normal(enum.IntEnum):
+    """Normal kind of a graph point: which of v3, theta vanishes."""
+
+    OPEN = 0  # v3 > 0, theta = 0: rge(I, 0) in the normal component
+    WEAK = 1  # v3 = 0, theta = 0: rge(I, 0) chosen
+    CONTACT = 2  # v3 = 0, theta < 0: rge(0, I)
+
+
+class Tangential(enum.IntEnum):
+    """Tangential kind of a graph point."""
+
+    SLIDING = 0  # v12 != 0, g = -b v12/||v12||: the sliding basis (Cor. 6.7; rge(I, 0) when b = 0)
+    STICKING = 1  # v12 = 0, ||g|| < b: rge(0, I)
+    WEAK_STICKING = 2  # v12 = 0, ||g|| = b > 0: rge(0, I) chosen
+    WEAK_FREE = 3  # v12 = 0, g = 0, b = 0: rge(I, 0) (the graph of 0 * dd||.|| is R^2 x {0})
+
+
+def resolvent(w: np.ndarray, gamma: float, law: FrictionLaw) -> tuple[np.ndarray, np.ndarray]:
     """(gamma I + Q~)^{-1}(w) in closed form (Prop. 6.4, (6.6)-(6.8)).
 
     Args:
         w: (m, 3) arguments.
         gamma: gamma > 0.
-        friction: friction coefficient F >= 0.
+        law: the slip bound.
 
     Returns:
         ``(v, z)``: v = (gamma I + Q~)^{-1}(w) and z = w - gamma v in Q~(v), so
@@ -47,7 +105,7 @@ def resolvent(w: np.ndarray, gamma: float, friction: float) -> tuple[np.ndarray,
     v[:, 2] = np.maximum(w[:, 2], 0.0) / gamma
     w12 = w[:, :2]
     norm_w12 = np.linalg.norm(w12, axis=1)
-    bound = -friction * theta  # slip bound F lambda, lambda = -theta
+    bound = np.broadcast_to(law.bound(theta), norm_w12.shape)
     slides = norm_w12 > bound
     shrink = np.zeros_like(norm_w12)
     shrink[slides] = (1.0 - bound[slides] / norm_w12[slides]) / gamma
@@ -57,59 +115,82 @@ def resolvent(w: np.ndarray, gamma: float, friction: float) -> tuple[np.ndarray,
     return v, z
 
 
-def lipschitz_constant(gamma: float, friction: float) -> float:
-    """Lipschitz modulus sqrt(2 (1 + F^2)) / gamma of the resolvent (proof of Prop. 6.4)."""
-    return float(np.sqrt(2.0 * (1.0 + friction**2)) / gamma)
+def lipschitz_constant(gamma: float, law: FrictionLaw) -> float:
+    """Lipschitz modulus sqrt(2 (1 + F^2)) / gamma of the resolvent (proof of Prop. 6.4).
+
+    The given part s of the slip bound does not change it.
+    """
+    return float(np.sqrt(2.0 * (1.0 + law.friction**2)) / gamma)
 
 
-def classify(v: np.ndarray, z: np.ndarray, gamma: float, friction: float, tol: float) -> np.ndarray:
-    """Contact state (Table 1) of each graph point (v, z) of Q~.
+def classify(v: np.ndarray, z: np.ndarray, gamma: float, law: FrictionLaw, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Normal and tangential kind of each graph point (v, z) of Q~.
 
     A quantity counts as zero when its magnitude is <= ``tol``. ``tol`` is a force:
-    it is compared with z = (g, theta) and with gamma v (gamma v and z both have
-    the units of force, see (6.6)-(6.7)); the solver sets it relative to the size
-    of the current resolvent arguments. The weak states are the boundary cases
-    of the strong ones within that tolerance.
+    it is compared with z = (g, theta), with the slip bound b and with gamma v
+    (gamma v and z both have the units of force, see (6.6)-(6.7)); the solver sets
+    it relative to the size of the current resolvent arguments. Weak kinds are the
+    boundary cases of the strong ones within that tolerance.
 
     Returns:
-        (m,) int8 array of :class:`State` values.
+        ``(normal, tangential)``: (m,) int8 arrays of :class:`Normal` and
+        :class:`Tangential` values.
     """
     theta = z[:, 2]
-    contact = theta < -tol  # strong contact: lambda = -theta > 0
-    gap_open = gamma * v[:, 2] > tol
+    normal = np.full(len(v), Normal.WEAK, dtype=np.int8)
+    normal[gamma * v[:, 2] > tol] = Normal.OPEN
+    normal[theta < -tol] = Normal.CONTACT
+    bound = np.broadcast_to(law.bound(theta), theta.shape)
     slip = gamma * np.linalg.norm(v[:, :2], axis=1) > tol
-    inside_cone = -friction * theta - np.linalg.norm(z[:, :2], axis=1) > tol  # ||g|| < F lambda
-    states = np.empty(len(v), dtype=np.int8)
-    states[~contact] = np.where(slip[~contact], State.WEAK_CONTACT_SLIDING, State.WEAK_CONTACT_STICKING)
-    states[gap_open & ~contact] = State.NO_CONTACT
-    states[contact & slip] = State.SLIDING
-    states[contact & ~slip] = np.where(inside_cone[contact & ~slip], State.STICKING, State.WEAK_STICKING)
+    inside = bound - np.linalg.norm(z[:, :2], axis=1) > tol  # ||g|| < b
+    tangential = np.full(len(v), Tangential.WEAK_FREE, dtype=np.int8)
+    tangential[bound > tol] = Tangential.WEAK_STICKING
+    tangential[inside] = Tangential.STICKING
+    tangential[slip] = Tangential.SLIDING
+    return normal, tangential
+
+
+def contact_states(normal: np.ndarray, tangential: np.ndarray) -> np.ndarray:
+    """Table 1 state of each node from its kinds (frictionless contact counts as sliding)."""
+    stick = np.isin(tangential, (Tangential.STICKING, Tangential.WEAK_STICKING))
+    states = np.full(len(normal), State.NO_CONTACT, dtype=np.int8)
+    states[(normal == Normal.WEAK) & ~stick] = State.WEAK_CONTACT_STICKING
+    states[(normal == Normal.WEAK) & (tangential == Tangential.SLIDING)] = State.WEAK_CONTACT_SLIDING
+    states[(normal != Normal.CONTACT) & stick] = State.SEPARATED_STICKING
+    contact = normal == Normal.CONTACT
+    states[contact] = State.SLIDING
+    states[contact & (tangential == Tangential.STICKING)] = State.STICKING
+    states[contact & (tangential == Tangential.WEAK_STICKING)] = State.WEAK_STICKING
     return states
 
 
 def scd_adjoint_blocks(
-    v: np.ndarray, z: np.ndarray, states: np.ndarray, gamma: float, friction: float
+    v: np.ndarray, z: np.ndarray, normal: np.ndarray, tangential: np.ndarray, gamma: float, law: FrictionLaw
 ) -> tuple[np.ndarray, np.ndarray]:
     """Transposed bases (W*^T, U*^T) of an element rge(W*, U*) of S*Q~(v, z).
 
     The Newton matrix rows of a contact node are W*^T A + U*^T and its right-hand
-    side -(W*^T y1 + U*^T y2) ((5.4) with Cor. 6.8). Subspaces per state:
-      * L, M2, M4: rge(I, 0) ((6.10), (6.16));
-      * M3+, M3-: rge(0, I) ((6.11), (6.16));
-      * M1: the well-conditioned basis of Cor. 6.7.
+    side -(W*^T y1 + U*^T y2) ((5.4) with Cor. 6.8). The subspace is the product of
+    a normal and a tangential part ((6.10), (6.11), (6.16)), coupled only at
+    sliding nodes in contact through the slip bound b = s + F lambda (Cor. 6.7):
+      * normal OPEN, WEAK: rge(I, 0); CONTACT: rge(0, I);
+      * tangential STICKING, WEAK_STICKING: rge(0, I); WEAK_FREE: rge(I, 0);
+        SLIDING: the well-conditioned basis of Cor. 6.7.
 
     Difference from the paper, documented: the bases are scaled so that every
     Newton row has the units of A (force/length). The subspaces, hence the exact
     Newton step, are unchanged; only the balance of rows seen by an inexact
     Krylov solver changes. Concretely rge(0, I) is represented as rge(0, gamma I),
-    and the M1 basis uses the scaling matrix C of Cor. 6.7 with the unit
+    and the sliding basis uses the scaling matrix C of Cor. 6.7 with the unit
     (dimensionless) identity replaced by gamma:
-        C = diag(gamma (gamma I2 - F theta/||v12|| (I2 - P))^{-1}, gamma),  P = t t^T,
-    t = v12/||v12||, which gives with beta = -F theta / (gamma ||v12|| - F theta) in (0, 1)
+        C = diag(gamma (gamma I2 + b/||v12|| (I2 - P))^{-1}, gamma),  P = t t^T,
+    t = v12/||v12||, which gives with beta = b / (gamma ||v12|| + b) in [0, 1)
         W* = [[(1 - beta) I2 + beta P, 0], [F t^T, 0]],
-        U* = [[gamma beta (I2 - P), 0], [0, gamma]].
-    (With gamma = 1 this is (6.15) derived from (6.13) and C: the seed's printed
-    second matrix of (6.15) lacks the factor 1/(||v12|| - F theta); see the tests.)
+        U* = [[gamma beta (I2 - P), 0], [0, gamma]]
+    (the row F t^T only in contact; with b = 0, beta = 0 and the tangential part
+    is rge(I, 0)). With gamma = 1 and b = F lambda this is (6.15) derived from
+    (6.13) and C: the seed's printed second matrix of (6.15) lacks the factor
+    1/(||v12|| - F theta); see the tests.
 
     Returns:
         ``(Wt, Ut)``, each (m, 3, 3): the blocks W*^T and U*^T.
@@ -117,20 +198,20 @@ def scd_adjoint_blocks(
     m = len(v)
     Wt = np.zeros((m, 3, 3))
     Ut = np.zeros((m, 3, 3))
-    free = np.isin(states, (State.NO_CONTACT, State.WEAK_CONTACT_SLIDING, State.WEAK_CONTACT_STICKING))
-    Wt[free] = np.eye(3)
-    stick = np.isin(states, (State.STICKING, State.WEAK_STICKING))
-    Ut[stick] = gamma * np.eye(3)
-    slide = states == State.SLIDING
+    contact = normal == Normal.CONTACT
+    Wt[~contact, 2, 2] = 1.0
+    Ut[contact, 2, 2] = gamma
+    Wt[tangential == Tangential.WEAK_FREE, :2, :2] = np.eye(2)
+    Ut[np.isin(tangential, (Tangential.STICKING, Tangential.WEAK_STICKING)), :2, :2] = gamma * np.eye(2)
+    slide = tangential == Tangential.SLIDING
     v12 = v[slide, :2]
     norm_v12 = np.linalg.norm(v12, axis=1)
     t = v12 / norm_v12[:, None]
     P = t[:, :, None] * t[:, None, :]
-    bound = -friction * z[slide, 2]
+    bound = np.broadcast_to(law.bound(z[:, 2]), (m,))[slide]
     beta = bound / (gamma * norm_v12 + bound)
     I2 = np.eye(2)
     Wt[slide, :2, :2] = (1.0 - beta)[:, None, None] * I2 + beta[:, None, None] * P
-    Wt[slide, :2, 2] = friction * t  # (W*^T)_{12,3} = F t
     Ut[slide, :2, :2] = (gamma * beta)[:, None, None] * (I2 - P)
-    Ut[slide, 2, 2] = gamma
+    Wt[slide & contact, :2, 2] = law.friction * t[contact[slide]]  # (W*^T)_{12,3} = F t
     return Wt, Ut

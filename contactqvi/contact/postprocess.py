@@ -171,7 +171,7 @@ def plot_contact_states(path: str, fields: ContactSurfaceFields) -> bool:
             plotter.add_mesh(grid, scalars="contact_state", cmap="viridis", n_colors=len(State),
                              clim=(-0.5, len(State) - 0.5), show_edges=True)
         plotter.view_xy()
-        plotter.add_text("contact state: 0 no contact, 1 sliding, 2 sticking, 3-5 weak", font_size=10)
+        plotter.add_text("contact state: 0 no contact, 1 sliding, 2 sticking, 3-5 weak, 6 separated sticking (Tresca)", font_size=10)
         plotter.screenshot(path)
         plotter.close()
     return bool(comm.bcast(ok, root=0))

@@ -24,6 +24,7 @@ import dolfinx.fem.petsc
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 
+from contactqvi.contact.nodal import FrictionLaw
 from contactqvi.elasticity import elasticity_forms
 from contactqvi.meshes import boundary_facets
 from contactqvi.parameters import require
@@ -44,7 +45,7 @@ class ContactProblem:
         contact_blk: owned local node (block) indices of the contact nodes.
         contact_facets: local facet indices of the contact boundary (for output on it).
         contact_area: lumped contact-surface area of each owned contact node (m^2).
-        friction: friction coefficient F (Coulomb) used by the nodal law.
+        law: slip bound of the nodal friction law (Coulomb, Tresca or none).
         dirichlet_dofs_loc: local unrolled indices of Dirichlet dofs (incl. ghosts).
         n_contact: global number p of contact nodes.
         n_free: global number n of free dofs.
@@ -57,7 +58,7 @@ class ContactProblem:
     contact_blk: np.ndarray
     contact_facets: np.ndarray
     contact_area: np.ndarray
-    friction: float
+    law: FrictionLaw
     dirichlet_dofs_loc: np.ndarray
     n_contact: int
     n_free: int
@@ -79,7 +80,8 @@ def build_contact_problem(
     young: float,
     poisson: float,
     tractions: dict[str, tuple[float, float, float]],
-    friction: float,
+    friction: float = 0.0,
+    slip_bound: float = 0.0,
     dirichlet: str = "dirichlet",
     contact: str = "contact",
 ) -> ContactProblem:
@@ -94,9 +96,12 @@ def build_contact_problem(
         young, poisson: E (Pa) and nu.
         tractions: surface traction (Pa) per boundary name.
         friction: Coulomb friction coefficient F >= 0.
+        slip_bound: Tresca slip bound (Pa) >= 0: a friction traction bound, lumped
+            to the nodal bound s_i = slip_bound * (area of node i) (N).
         dirichlet, contact: boundary names of Gamma_u and Gamma_c.
     """
     require(np.isfinite(friction) and friction >= 0, "friction", f"must be >= 0, got {friction!r}")
+    require(np.isfinite(slip_bound) and slip_bound >= 0, "slip_bound", f"must be >= 0, got {slip_bound!r}")
     require(msh.geometry.dim == 3, "mesh", "the contact problem is three-dimensional")
     V = fem.functionspace(msh, ("Lagrange", 1, (3,)))
     a, L = elasticity_forms(V, young, poisson, facet_tags, tractions)
@@ -143,7 +148,7 @@ def build_contact_problem(
         contact_blk=contact_blk,
         contact_facets=contact_facets,
         contact_area=contact_area,
-        friction=float(friction),
+        law=FrictionLaw(float(friction), float(slip_bound) * contact_area),
         dirichlet_dofs_loc=(3 * dirichlet_blk[:, None] + np.arange(3)).ravel().astype(np.int32),
         n_contact=comm.allreduce(len(contact_blk), op=MPI.SUM),
         n_free=comm.allreduce(3 * n_owned - n_dirichlet_owned, op=MPI.SUM),

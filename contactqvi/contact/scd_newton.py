@@ -30,7 +30,7 @@ from petsc4py import PETSc
 
 import numpy as np
 
-from contactqvi.contact.nodal import State, classify, resolvent, scd_adjoint_blocks
+from contactqvi.contact.nodal import State, classify, contact_states, resolvent, scd_adjoint_blocks
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.elasticity import rigid_motions_nullspace
 from contactqvi.linalg import create_ksp, ksp_converged_reason, power_iteration
@@ -191,13 +191,24 @@ class SCDNewtonSolver:
         gamma, blk = self.gamma, self.problem.contact_blk
         dhat.waxpy(-1.0 / gamma, r, u)  # non-contact dofs: (gamma I)^{-1}(gamma u - r)
         w = gamma * u.array.reshape(-1, 3)[blk] - r.array.reshape(-1, 3)[blk]
-        v, z = resolvent(w, gamma, self.problem.friction)
+        v, z = resolvent(w, gamma, self.problem.law)
         dhat.array.reshape(-1, 3)[blk] = v
         diff = u.copy()
         diff.axpy(-1.0, dhat)
         norm = np.sqrt(gamma**2 + 1.0) * diff.norm()
         diff.destroy()
         return norm, v, z
+
+    def approximation_step(self, u: PETSc.Vec) -> tuple[float, np.ndarray, np.ndarray]:
+        """``(||y^||, v, z)`` of (6.17) at u alone (see :meth:`residual`); ||y^|| is the
+        accuracy measure shared by every contact solver here."""
+        r, dhat = self.problem.A.createVecRight(), self.problem.A.createVecRight()
+        self.problem.A.mult(u, r)
+        r.axpy(-1.0, self.problem.load)
+        step = self.residual(r, u, dhat)
+        r.destroy()
+        dhat.destroy()
+        return step
 
     def newton_matrix(self, Wt: np.ndarray, Ut: np.ndarray) -> PETSc.Mat:
         """J = D A + U with D = W*^T, U = U*^T on contact nodes, (I, 0) elsewhere."""
@@ -237,7 +248,8 @@ class SCDNewtonSolver:
         for k in range(int(p["max_iterations"]) + 1):
             w_scale = comm.allreduce(float(np.abs(gamma * v + z).max(initial=0.0)), op=MPI.MAX)
             state_tol = p["state_tol"] * w_scale
-            states = classify(v, z, gamma, problem.friction, state_tol)
+            normal, tangential = classify(v, z, gamma, problem.law, state_tol)
+            states = contact_states(normal, tangential)
             counts = _state_counts(comm, states)
             entry = {"k": k, "residual": norm, "relative_residual": norm / norm0, "states": counts}
             history.append(entry)
@@ -251,7 +263,7 @@ class SCDNewtonSolver:
 
             # Newton step (5.4): (W*^T A + U*^T) du = -(W*^T y1^ + U*^T y2^), y1^ = gamma y2^ = gamma (u - d^)
             t0 = time.perf_counter()
-            Wt, Ut = scd_adjoint_blocks(v, z, states, gamma, problem.friction)
+            Wt, Ut = scd_adjoint_blocks(v, z, normal, tangential, gamma, problem.law)
             J = self.newton_matrix(Wt, Ut)
             y2.waxpy(-1.0, dhat, u)
             self._D.mult(y2, rhs)
@@ -369,6 +381,7 @@ def _state_counts(comm: MPI.Comm, states: np.ndarray) -> dict[str, int]:
 def _log_iteration(entry: dict, alpha: float | None, krylov: int | None) -> None:
     c = entry["states"]
     weak = c["weak_contact_sliding"] + c["weak_sticking"] + c["weak_contact_sticking"]
+    stick = c["sticking"] + c["separated_sticking"]
     logger.info(
         "  %3d  |y^| %.3e  rel %.2e  alpha %-9s  krylov %-5s  free %5d  slide %5d  stick %5d  weak %d",
         entry["k"],
@@ -378,6 +391,6 @@ def _log_iteration(entry: dict, alpha: float | None, krylov: int | None) -> None
         "-" if krylov is None else krylov,
         c["no_contact"],
         c["sliding"],
-        c["sticking"],
+        stick,
         weak,
     )
