@@ -150,7 +150,7 @@ def _displacement(problem, u):
         (["--tol", "1.0"], "tol"),
         (["--rtol", "0"], "rtol"),
         (["--law", "tresca"], "slip-bound"),
-        (["--law", "tresca", "--slip-bound", "-1e6"], "slip-bound"),
+        (["--law", "tresca", "--slip-bound=-1e6"], "slip-bound"),
         (["--slip-bound", "1e6"], "slip-bound"),
     ],
 )
