@@ -1,0 +1,46 @@
+"""Shared pieces of the Coulomb benchmark scripts: machine record, memory, result files."""
+
+from __future__ import annotations
+
+import json
+import os
+import pathlib
+import platform
+import resource
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from contactqvi import io
+
+
+def machine(comm: MPI.Comm) -> dict:
+    """Where a table was measured."""
+    cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if line.startswith("model name")), "")
+    memory_gib = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30
+    return {"mpi_size": comm.size, "cpu": cpu, "cores": os.cpu_count(), "memory_gib": round(memory_gib, 1),
+            "machine": platform.machine(), "petsc": ".".join(map(str, PETSc.Sys.getVersion()))}
+
+
+def peak_rss_mib(comm: MPI.Comm) -> float:
+    """Largest peak resident memory of any rank so far (MiB, from the OS)."""
+    return comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, op=MPI.MAX)
+
+
+def merge_rows(path: pathlib.Path, rows: list[dict], key: tuple[str, ...]) -> list[dict]:
+    """``rows`` plus the rows already in the JSON file ``path`` that they do not replace (same ``key``)."""
+    if not path.exists():
+        return rows
+    new = {tuple(r[k] for k in key) for r in rows}
+    old = [r for r in json.loads(path.read_text())["rows"] if tuple(r.get(k) for k in key) not in new]
+    return old + rows
+
+
+def emit(comm: MPI.Comm, out: pathlib.Path, name: str, rows: list[dict], markdown: str) -> None:
+    """Write ``name.json`` (machine + rows) and ``name.md`` atomically on rank 0 and print the table."""
+    io.write_summary(comm, out / f"{name}.json", {"machine": machine(comm), "rows": rows})
+    with io.atomic_path(comm, out / f"{name}.md") as tmp:
+        if comm.rank == 0:
+            tmp.write_text(markdown)
+    if comm.rank == 0:
+        print(markdown, flush=True)
