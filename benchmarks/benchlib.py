@@ -7,11 +7,18 @@ import os
 import pathlib
 import platform
 import resource
+import time
+import typing
 
 from mpi4py import MPI
 from petsc4py import PETSc
 
 from contactqvi import io
+from contactqvi.contact.driver import solve_level, solve_nested
+from contactqvi.problems import coulomb as data
+
+#: The six cases of Tables 2 and 3 of seed 000.
+CASES = [f"{g}/{l}" for g in ("d1", "d2", "d3") for l in ("L1", "L2")]
 
 
 def machine(comm: MPI.Comm) -> dict:
@@ -44,3 +51,29 @@ def emit(comm: MPI.Comm, out: pathlib.Path, name: str, rows: list[dict], markdow
             tmp.write_text(markdown)
     if comm.rank == 0:
         print(markdown, flush=True)
+
+
+def run_coulomb_case(
+    comm: MPI.Comm,
+    lev: int,
+    case: str,
+    parameters: dict[str, typing.Any],
+    prefix: str,
+    initial_levels: typing.Iterable[int] | None = None,
+) -> dict:
+    """Solve one case ``"d3/L2"`` of seed 000 at ``lev`` (nested from ``initial_levels``) and record it."""
+    geometry, load = case.split("/")
+    kwargs = dict(gap=data.gap_function(geometry), tractions=data.tractions(load), young=data.YOUNG,
+                  poisson=data.POISSON, friction=data.FRICTION, parameters=parameters, prefix=prefix)
+    t0 = time.perf_counter()
+    if initial_levels:
+        solution = solve_nested(comm, [*initial_levels, lev], **kwargs)[-1]
+    else:
+        solution = solve_level(comm, lev, **kwargs)
+    result = solution.result
+    timings = result.timings
+    return {"lev": solution.lev, "case": case, "tol": parameters.get("tol", 0.1), "mpi_size": comm.size,
+            "status": result.status, "it": result.iterations, "krylov": result.krylov_iterations,
+            "seconds": time.perf_counter() - t0, "solve_seconds": sum(v for k, v in timings.items() if k != "assembly"),
+            "timings": timings, "p": solution.problem.n_contact, "n": solution.problem.n_free,
+            "peak_rss_mib": peak_rss_mib(comm)}

@@ -11,41 +11,20 @@ to ``--output``. Runs serially or under ``mpirun``. Examples:
 from __future__ import annotations
 
 import argparse
-import json
 import pathlib
-import platform
-import resource
-import time
 
 from mpi4py import MPI
-from petsc4py import PETSc
 
+import benchlib
+from benchlib import CASES, run_coulomb_case
 from contactqvi.cli import setup_logging
-from contactqvi.contact.driver import solve_level, solve_nested
-from contactqvi.meshes import contact_body_sizes
 from contactqvi.contact.scd_newton import KSP_PRESETS, PARAMETERS
+from contactqvi.meshes import contact_body_sizes
 from contactqvi.problems import coulomb as data
-
-CASES = [(g, l) for g in ("d1", "d2", "d3") for l in ("L1", "L2")]
-
-
-def _run(lev, geometry, load, parameters, prefix, initial_levels=None):
-    kwargs = dict(gap=data.gap_function(geometry), tractions=data.tractions(load), young=data.YOUNG,
-                  poisson=data.POISSON, friction=data.FRICTION, parameters=parameters, prefix=prefix)
-    t0 = time.perf_counter()
-    if initial_levels:
-        solution = solve_nested(MPI.COMM_WORLD, [*initial_levels, lev], **kwargs)[-1]
-    else:
-        solution = solve_level(MPI.COMM_WORLD, lev, **kwargs)
-    result = solution.result
-    return {"lev": solution.lev, "case": f"{geometry}/{load}", "status": result.status, "it": result.iterations,
-            "krylov": result.krylov_iterations, "seconds": time.perf_counter() - t0, "timings": result.timings,
-            "p": solution.problem.n_contact, "n": solution.problem.n_free,
-            "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
 
 
 def _markdown_table(title, rows, paper, note):
-    cases = [f"{g}/{l}" for g, l in CASES]
+    cases = CASES
     lines = [f"## {title}", "", note, "",
              "| lev | p | n | " + " | ".join(cases) + " |", "|---|---|---|" + "---|" * len(cases)]
     for lev in sorted({r["lev"] for r in rows}):
@@ -72,12 +51,9 @@ def main() -> None:
     setup_logging("WARNING")
     comm = MPI.COMM_WORLD
     out = pathlib.Path(args.output)
-    if comm.rank == 0:
-        out.mkdir(parents=True, exist_ok=True)
+    out.mkdir(parents=True, exist_ok=True)
     prefix = "bench_"
     tag = "" if args.pc == PARAMETERS["pc"][0] else f"_{args.pc}"
-    machine = {"mpi_size": comm.size, "machine": platform.machine(), "processor": platform.processor(),
-               "petsc": ".".join(map(str, PETSc.Sys.getVersion()))}
     solver_note = {
         "lu": "exact inner solves (LU)",
         "paper": "GMRES + ILU, tol = 0.1 on the left-preconditioned relative residual",
@@ -85,47 +61,43 @@ def main() -> None:
         "hypre": "GMRES + BoomerAMG, tol = 0.1 on the unpreconditioned relative residual",
     }[args.pc]
     note = (f"Ours: Newton it / Krylov its, ({solver_note}, u0 = 0 unless nested), "
-            f"stop at ||y^|| <= 1e-12 ||y^0||; paper's it / gmres in parentheses. {comm.size} MPI rank(s).")
+            "stop at ||y^|| <= 1e-12 ||y^0||; paper's it / gmres in parentheses. MPI ranks per row in the JSON.")
 
-    def emit(name, rows, md):
-        if comm.rank == 0:
-            (out / f"{name}.json").write_text(json.dumps({"machine": machine, "rows": rows}, indent=1) + "\n")
-            (out / f"{name}.md").write_text(md)
-            print(md, flush=True)
+    def emit(name, rows, title, paper):
+        """Rows of earlier runs (other levels) are kept."""
+        rows = benchlib.merge_rows(out / f"{name}.json", rows, ("lev", "case", "tol"))
+        benchlib.emit(comm, out, name, rows, _markdown_table(title, rows, paper, note))
 
     if 2 in args.tables:
         rows = []
         for lev in args.levels:
-            for geometry, load in CASES:
-                rows.append(_run(lev, geometry, load, {"tol": 0.1, "pc": args.pc}, prefix))
+            for case in CASES:
+                rows.append(run_coulomb_case(comm, lev, case, {"tol": 0.1, "pc": args.pc}, prefix))
                 if comm.rank == 0:
                     r = rows[-1]
                     print(f"table 2{tag}: lev {lev} {r['case']}: {r['status']} {r['it']} / {r['krylov']} "
                           f"in {r['seconds']:.1f} s", flush=True)
-            emit(f"coulomb_table2{tag}", rows, _markdown_table(f"Table 2{tag.replace('_', ' ')}", rows,
-                                                                data.PAPER_TABLE2, note))
+            emit(f"coulomb_table2{tag}", rows, f"Table 2{tag.replace('_', ' ')}", data.PAPER_TABLE2)
     if 3 in args.tables:
         rows = []
         coarsest = min(args.levels)
         for lev in [lev for lev in args.levels if lev > coarsest]:
-            for geometry, load in CASES:
-                rows.append(_run(lev, geometry, load, {"tol": 0.1, "pc": args.pc}, prefix, range(coarsest, lev)))
+            for case in CASES:
+                rows.append(run_coulomb_case(comm, lev, case, {"tol": 0.1, "pc": args.pc}, prefix, range(coarsest, lev)))
                 if comm.rank == 0:
                     r = rows[-1]
                     print(f"table 3{tag}: lev {lev} {r['case']}: {r['status']} {r['it']} / {r['krylov']}", flush=True)
-            emit(f"coulomb_table3{tag}", rows, _markdown_table(
-                f"Table 3{tag.replace('_', ' ')} (nested start from lev {coarsest})", rows, data.PAPER_TABLE3, note))
+            emit(f"coulomb_table3{tag}", rows, f"Table 3{tag.replace('_', ' ')} (nested start from lev {coarsest})",
+                 data.PAPER_TABLE3)
     if 4 in args.tables:
         rows = []
         for tol in sorted(data.PAPER_TABLE4, reverse=True):
-            r = _run(args.table4_lev, "d3", "L2", {"tol": tol, "pc": args.pc}, prefix)
-            r["tol"] = tol
-            rows.append(r)
+            rows.append(run_coulomb_case(comm, args.table4_lev, "d3/L2", {"tol": tol, "pc": args.pc}, prefix))
         lines = [f"## Table 4{tag.replace('_', ' ')}: d3/L2, u0 = 0, lev {args.table4_lev} (paper: lev 10)", "",
                  "| tol | ours it / Krylov | paper it / gmres (lev 10) |", "|---|---|---|"]
         lines += [f"| {r['tol']:g} | {r['it']} / {r['krylov']} | {data.PAPER_TABLE4[r['tol']][0]} / "
                   f"{data.PAPER_TABLE4[r['tol']][1]} |" for r in rows]
-        emit(f"coulomb_table4{tag}", rows, "\n".join(lines) + "\n")
+        benchlib.emit(comm, out, f"coulomb_table4{tag}", rows, "\n".join(lines) + "\n")
 
 
 if __name__ == "__main__":

@@ -1,0 +1,58 @@
+"""MPI scaling of the Coulomb solve (seed 000): one case at one level, per number of ranks.
+
+Run once per rank count; rows of other rank counts are kept and the speed-up is
+taken against the 1-rank row of the same level and case:
+
+    python benchmarks/coulomb_scaling.py --lev 8
+    mpirun -n 2 python benchmarks/coulomb_scaling.py --lev 8
+
+Writes ``coulomb_scaling.json`` / ``.md`` to ``--output``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+
+from mpi4py import MPI
+
+import benchlib
+from contactqvi.cli import setup_logging
+from contactqvi.contact.scd_newton import KSP_PRESETS, PARAMETERS
+
+
+def markdown(rows: list[dict]) -> str:
+    lines = ["## MPI scaling of the Coulomb solve (u0 = 0, tol = 0.1, stop at 1e-12)", "",
+             "Solve = everything after assembly (gamma, approximation steps, Newton matrices, Krylov solves, "
+             "line search). Speed-up against 1 rank, same level and case.", "",
+             "| lev | n | case | pc | ranks | it / Krylov | assembly s | solve s | speed-up | peak RSS / rank MiB |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in sorted(rows, key=lambda r: (r["lev"], r["case"], r["pc"], r["mpi_size"])):
+        serial = next((s for s in rows if (s["lev"], s["case"], s["pc"], s["mpi_size"]) == (r["lev"], r["case"], r["pc"], 1)),
+                      None)
+        speedup = f"{serial['solve_seconds'] / r['solve_seconds']:.2f}" if serial else "—"
+        lines.append(f"| {r['lev']} | {r['n']} | {r['case']} | {r['pc']} | {r['mpi_size']} | {r['it']} / {r['krylov']} "
+                     f"| {r['timings']['assembly']:.1f} | {r['solve_seconds']:.1f} | {speedup} | {r['peak_rss_mib']:.0f} |")
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser.add_argument("--lev", type=int, default=8)
+    parser.add_argument("--case", default="d3/L2", choices=benchlib.CASES)
+    parser.add_argument("--pc", default=PARAMETERS["pc"][0], choices=sorted(KSP_PRESETS), help=PARAMETERS["pc"][1])
+    parser.add_argument("--output", default=str(pathlib.Path(__file__).parent / "results"))
+    args = parser.parse_args()
+    setup_logging("WARNING")
+    comm = MPI.COMM_WORLD
+    out = pathlib.Path(args.output)
+    out.mkdir(parents=True, exist_ok=True)
+    row = benchlib.run_coulomb_case(comm, args.lev, args.case, {"pc": args.pc}, "scaling_")
+    row["pc"] = args.pc
+    rows = benchlib.merge_rows(out / "coulomb_scaling.json", [row], ("lev", "case", "pc", "mpi_size"))
+    benchlib.emit(comm, out, "coulomb_scaling", rows, markdown(rows))
+
+
+if __name__ == "__main__":
+    main()
