@@ -1,5 +1,8 @@
 """SCD semismooth* Newton method for the Coulomb GE 0 in A u - l + Q(u) (seed 000).
 
+Q is the nodal law of the problem's :class:`~contactqvi.contact.nodal.FrictionLaw`
+(Coulomb as in the paper; Tresca and frictionless with the same machinery).
+
 One iteration k (Algorithm 1 of Sect. 4 in the form of Sect. 5):
   1. approximation step (6.17): d^ = (gamma I + Q)^{-1}(gamma u - (A u - l)),
      residual y^ = (gamma (u - d^), u - d^);
@@ -230,7 +233,7 @@ class SCDNewtonSolver:
         preconditioner built for an earlier J stays good while GMRES still solves
         the current system to ``tol``. Direct solves (``preonly``) always refactor.
         """
-        same = self._pc_kinds is not None and len(self._pc_kinds) == len(kinds) and np.array_equal(self._pc_kinds, kinds)
+        same = self._pc_kinds is not None and np.array_equal(self._pc_kinds, kinds)
         reuse = self.problem.comm.allreduce(same, op=MPI.LAND)
         reuse = reuse and bool(self.parameters["reuse_pc"]) and self.ksp.getType() != "preonly"
         if not reuse:
