@@ -18,7 +18,7 @@ from mpi4py import MPI
 import benchlib
 from benchlib import CASES, run_coulomb_case
 from contactqvi.cli import setup_logging
-from contactqvi.contact.scd_newton import KSP_PRESETS, PARAMETERS
+from contactqvi.contact.scd_newton import GAMMA_RULES, KSP_PRESETS, PARAMETERS
 from contactqvi.meshes import contact_body_sizes
 from contactqvi.problems import coulomb as data
 
@@ -46,6 +46,8 @@ def main() -> None:
     parser.add_argument("--tables", type=int, nargs="+", default=[2, 3, 4], choices=[2, 3, 4])
     parser.add_argument("--table4-lev", type=int, default=6, help="level of the tol sweep (paper: 10)")
     parser.add_argument("--pc", default=PARAMETERS["pc"][0], choices=sorted(KSP_PRESETS), help=PARAMETERS["pc"][1])
+    parser.add_argument("--gamma-rule", default=PARAMETERS["gamma_rule"][0], choices=GAMMA_RULES,
+                        help=PARAMETERS["gamma_rule"][1])
     parser.add_argument("--output", default=str(pathlib.Path(__file__).parent / "results"))
     args = parser.parse_args()
     setup_logging("WARNING")
@@ -54,6 +56,7 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     prefix = "bench_"
     tag = "" if args.pc == PARAMETERS["pc"][0] else f"_{args.pc}"
+    tag += "" if args.gamma_rule == PARAMETERS["gamma_rule"][0] else f"_{args.gamma_rule}"
     solver_note = {
         "lu": "exact inner solves (LU)",
         "paper": "GMRES + ILU, tol = 0.1 on the left-preconditioned relative residual",
@@ -72,7 +75,7 @@ def main() -> None:
         rows = []
         for lev in args.levels:
             for case in CASES:
-                rows.append(run_coulomb_case(comm, lev, case, {"tol": 0.1, "pc": args.pc}, prefix))
+                rows.append(run_coulomb_case(comm, lev, case, {"tol": 0.1, "pc": args.pc, "gamma_rule": args.gamma_rule}, prefix))
                 if comm.rank == 0:
                     r = rows[-1]
                     print(f"table 2{tag}: lev {lev} {r['case']}: {r['status']} {r['it']} / {r['krylov']} "
@@ -83,7 +86,7 @@ def main() -> None:
         coarsest = min(args.levels)
         for lev in [lev for lev in args.levels if lev > coarsest]:
             for case in CASES:
-                rows.append(run_coulomb_case(comm, lev, case, {"tol": 0.1, "pc": args.pc}, prefix, range(coarsest, lev)))
+                rows.append(run_coulomb_case(comm, lev, case, {"tol": 0.1, "pc": args.pc, "gamma_rule": args.gamma_rule}, prefix, range(coarsest, lev)))
                 if comm.rank == 0:
                     r = rows[-1]
                     print(f"table 3{tag}: lev {lev} {r['case']}: {r['status']} {r['it']} / {r['krylov']}", flush=True)
@@ -92,7 +95,7 @@ def main() -> None:
     if 4 in args.tables:
         rows = []
         for tol in sorted(data.PAPER_TABLE4, reverse=True):
-            rows.append(run_coulomb_case(comm, args.table4_lev, "d3/L2", {"tol": tol, "pc": args.pc}, prefix))
+            rows.append(run_coulomb_case(comm, args.table4_lev, "d3/L2", {"tol": tol, "pc": args.pc, "gamma_rule": args.gamma_rule}, prefix))
         lines = [f"## Table 4{tag.replace('_', ' ')}: d3/L2, u0 = 0, lev {args.table4_lev} (paper: lev 10)", "",
                  "| tol | ours it / Krylov | paper it / gmres (lev 10) |", "|---|---|---|"]
         lines += [f"| {r['tol']:g} | {r['it']} / {r['krylov']} | {data.PAPER_TABLE4[r['tol']][0]} / "

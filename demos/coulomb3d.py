@@ -25,7 +25,7 @@ from petsc4py import PETSc
 from contactqvi import cli, io
 from contactqvi.contact.driver import solve_nested
 from contactqvi.contact.postprocess import contact_fields, plot_contact_states
-from contactqvi.contact.scd_newton import KSP_PRESETS, PARAMETERS, check_parameters
+from contactqvi.contact.scd_newton import GAMMA_RULES, KSP_PRESETS, PARAMETERS, check_parameters
 from contactqvi.elasticity import lame_parameters
 from contactqvi.parameters import ParameterError, require
 from contactqvi.problems import coulomb as data
@@ -51,6 +51,10 @@ def parse(argv: list[str] | None = None):
     parser.add_argument(
         "--max-iterations", type=int, default=PARAMETERS["max_iterations"][0], help=PARAMETERS["max_iterations"][1]
     )
+    parser.add_argument(
+        "--gamma-rule", default=PARAMETERS["gamma_rule"][0], choices=GAMMA_RULES,
+        help=PARAMETERS["gamma_rule"][1],
+    )
     parser.add_argument("--state-tol", type=float, default=PARAMETERS["state_tol"][0], help=PARAMETERS["state_tol"][1])
     parser.add_argument(
         "--no-elimination", action="store_true", help="keep the identity rows in the Krylov solve (paper's variant)"
@@ -72,6 +76,7 @@ def parse(argv: list[str] | None = None):
         "rtol": args.rtol,
         "max_iterations": args.max_iterations,
         "state_tol": args.state_tol,
+        "gamma_rule": args.gamma_rule,
         "eliminate_fixed_rows": not args.no_elimination,
     })
     return args
