@@ -54,10 +54,6 @@ class FrictionLaw:
         """b = s - F theta at nodes with normal graph component theta <= 0."""
         return self.slip_bound - self.friction * theta
 
-    @property
-    def is_tresca(self) -> bool:
-        return self.friction == 0.0 and bool(np.any(np.asarray(self.slip_bound) > 0.0))
-
 
 class State(enum.IntEnum):
     """Contact states of seed 000, Table 1 (values are written to the output)."""
