@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import pathlib
@@ -14,11 +15,31 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from contactqvi import io
+from contactqvi.cli import setup_logging
 from contactqvi.contact.driver import solve_level, solve_nested
+from contactqvi.contact.scd_newton import KSP_PRESETS, PARAMETERS
 from contactqvi.problems import coulomb as data
 
 #: The six cases of Tables 2 and 3 of seed 000.
 CASES = [f"{g}/{l}" for g in ("d1", "d2", "d3") for l in ("L1", "L2")]
+
+
+def make_parser(doc: str) -> argparse.ArgumentParser:
+    """Parser of a benchmark script with the shared options ``--pc`` and ``--output``."""
+    parser = argparse.ArgumentParser(description=doc.split("\n")[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser.add_argument("--pc", default=PARAMETERS["pc"][0], choices=sorted(KSP_PRESETS), help=PARAMETERS["pc"][1])
+    parser.add_argument("--output", default=str(pathlib.Path(__file__).parent / "results"))
+    return parser
+
+
+def parse(parser: argparse.ArgumentParser) -> tuple[argparse.Namespace, MPI.Comm, pathlib.Path]:
+    """Parsed arguments, the communicator and the (created) output directory; quiet logging."""
+    args = parser.parse_args()
+    setup_logging("WARNING")
+    out = pathlib.Path(args.output)
+    out.mkdir(parents=True, exist_ok=True)
+    return args, MPI.COMM_WORLD, out
 
 
 def machine(comm: MPI.Comm) -> dict:

@@ -15,16 +15,13 @@ other levels or cases are kept). Wall times exclude mesh generation and assembly
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
-import pathlib
 import time
 
 from mpi4py import MPI
 from petsc4py import PETSc
 
 import benchlib
-from contactqvi.cli import setup_logging
 from contactqvi.contact import FrictionLaw, SCDNewtonSolver, build_contact_problem
 from contactqvi.contact.fixed_point import solve_tresca_fixed_point
 from contactqvi.contact.signorini_vi import solve_signorini_vi
@@ -32,8 +29,6 @@ from contactqvi.elasticity import rigid_motions_nullspace
 from contactqvi.linalg import create_ksp
 from contactqvi.meshes import create_contact_body
 from contactqvi.problems import coulomb as data
-
-CASES = [f"{g}/{l}" for g in ("d1", "d2", "d3") for l in ("L1", "L2")]
 
 
 def _timed_newton(problem, parameters, prefix):
@@ -110,18 +105,11 @@ def markdown(rows: list[dict], comm: MPI.Comm) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0],
-                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser = benchlib.make_parser(__doc__)
     parser.add_argument("--levels", type=int, nargs="+", default=[7])
-    parser.add_argument("--cases", nargs="+", default=CASES, choices=CASES)
-    parser.add_argument("--pc", default="gamg", help="Newton-step solver of the SCD solves")
+    parser.add_argument("--cases", nargs="+", default=benchlib.CASES, choices=benchlib.CASES)
     parser.add_argument("--forcing", type=float, default=1e-2, help="inner tolerance factor of the fixed point")
-    parser.add_argument("--output", default=str(pathlib.Path(__file__).parent / "results"))
-    args = parser.parse_args()
-    setup_logging("WARNING")
-    comm = MPI.COMM_WORLD
-    out = pathlib.Path(args.output)
-    out.mkdir(parents=True, exist_ok=True)
+    args, comm, out = benchlib.parse(parser)
     name = f"coulomb_peers_np{comm.size}"
     rows = []
     for lev in args.levels:

@@ -11,14 +11,7 @@ Writes ``coulomb_scaling.json`` / ``.md`` to ``--output``.
 
 from __future__ import annotations
 
-import argparse
-import pathlib
-
-from mpi4py import MPI
-
 import benchlib
-from contactqvi.cli import setup_logging
-from contactqvi.contact.scd_newton import KSP_PRESETS, PARAMETERS
 
 
 def markdown(rows: list[dict]) -> str:
@@ -37,17 +30,10 @@ def markdown(rows: list[dict]) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0],
-                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser = benchlib.make_parser(__doc__)
     parser.add_argument("--lev", type=int, default=8)
     parser.add_argument("--case", default="d3/L2", choices=benchlib.CASES)
-    parser.add_argument("--pc", default=PARAMETERS["pc"][0], choices=sorted(KSP_PRESETS), help=PARAMETERS["pc"][1])
-    parser.add_argument("--output", default=str(pathlib.Path(__file__).parent / "results"))
-    args = parser.parse_args()
-    setup_logging("WARNING")
-    comm = MPI.COMM_WORLD
-    out = pathlib.Path(args.output)
-    out.mkdir(parents=True, exist_ok=True)
+    args, comm, out = benchlib.parse(parser)
     row = benchlib.run_coulomb_case(comm, args.lev, args.case, {"pc": args.pc}, "scaling_")
     row["pc"] = args.pc
     rows = benchlib.merge_rows(out / "coulomb_scaling.json", [row], ("lev", "case", "pc", "mpi_size"))

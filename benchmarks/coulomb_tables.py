@@ -10,15 +10,9 @@ to ``--output``. Runs serially or under ``mpirun``. Examples:
 
 from __future__ import annotations
 
-import argparse
-import pathlib
-
-from mpi4py import MPI
-
 import benchlib
 from benchlib import CASES, run_coulomb_case
-from contactqvi.cli import setup_logging
-from contactqvi.contact.scd_newton import GAMMA_RULES, KSP_PRESETS, PARAMETERS
+from contactqvi.contact.scd_newton import GAMMA_RULES, PARAMETERS
 from contactqvi.meshes import contact_body_sizes
 from contactqvi.problems import coulomb as data
 
@@ -40,20 +34,13 @@ def _markdown_table(title, rows, paper, note):
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0],
-                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser = benchlib.make_parser(__doc__)
     parser.add_argument("--levels", type=int, nargs="+", default=[3, 4, 5, 6, 7])
     parser.add_argument("--tables", type=int, nargs="+", default=[2, 3, 4], choices=[2, 3, 4])
     parser.add_argument("--table4-lev", type=int, default=6, help="level of the tol sweep (paper: 10)")
-    parser.add_argument("--pc", default=PARAMETERS["pc"][0], choices=sorted(KSP_PRESETS), help=PARAMETERS["pc"][1])
     parser.add_argument("--gamma-rule", default=PARAMETERS["gamma_rule"][0], choices=GAMMA_RULES,
                         help=PARAMETERS["gamma_rule"][1])
-    parser.add_argument("--output", default=str(pathlib.Path(__file__).parent / "results"))
-    args = parser.parse_args()
-    setup_logging("WARNING")
-    comm = MPI.COMM_WORLD
-    out = pathlib.Path(args.output)
-    out.mkdir(parents=True, exist_ok=True)
+    args, comm, out = benchlib.parse(parser)
     prefix = "bench_"
     tag = "" if args.pc == PARAMETERS["pc"][0] else f"_{args.pc}"
     tag += "" if args.gamma_rule == PARAMETERS["gamma_rule"][0] else f"_{args.gamma_rule}"
