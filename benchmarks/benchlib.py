@@ -87,14 +87,26 @@ def run_coulomb_case(
     kwargs = dict(gap=data.gap_function(geometry), tractions=data.tractions(load), young=data.YOUNG,
                   poisson=data.POISSON, friction=data.FRICTION, parameters=parameters, prefix=prefix)
     t0 = time.perf_counter()
-    if initial_levels:
-        solution = solve_nested(comm, [*initial_levels, lev], **kwargs)[-1]
-    else:
-        solution = solve_level(comm, lev, **kwargs)
+    solutions = solve_nested(comm, [*initial_levels, lev], **kwargs) if initial_levels else [solve_level(comm, lev, **kwargs)]
+    solution = solutions[-1]
     result = solution.result
     timings = result.timings
-    return {"lev": solution.lev, "case": case, "tol": parameters.get("tol", 0.1), "mpi_size": comm.size,
-            "status": result.status, "it": result.iterations, "krylov": result.krylov_iterations,
-            "seconds": time.perf_counter() - t0, "solve_seconds": sum(v for k, v in timings.items() if k != "assembly"),
-            "timings": timings, "p": solution.problem.n_contact, "n": solution.problem.n_free,
-            "peak_rss_mib": peak_rss_mib(comm)}
+    row = {"lev": solution.lev, "case": case, "tol": parameters.get("tol", 0.1), "mpi_size": comm.size,
+           "status": result.status, "it": result.iterations, "krylov": result.krylov_iterations,
+           "seconds": time.perf_counter() - t0, "solve_seconds": sum(v for k, v in timings.items() if k != "assembly"),
+           "timings": timings, "p": solution.problem.n_contact, "n": solution.problem.n_free,
+           "peak_rss_mib": peak_rss_mib(comm)}
+    release(comm, *solutions)
+    return row
+
+
+def release(comm: MPI.Comm, *objects) -> None:
+    """Destroy ``objects`` and the PETSc objects Python dropped meanwhile (collective).
+
+    In parallel, petsc4py defers the destruction of garbage-collected objects to
+    ``PETSc.garbage_cleanup``; a script that solves many problems in one process
+    must call it, or the memory of every earlier problem stays allocated.
+    """
+    for obj in objects:
+        obj.destroy()
+    PETSc.garbage_cleanup(comm)

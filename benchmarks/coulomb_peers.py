@@ -34,8 +34,11 @@ from contactqvi.problems import coulomb as data
 def _timed_newton(problem, parameters, prefix):
     u = problem.A.createVecRight()
     t0 = time.perf_counter()
-    result = SCDNewtonSolver(problem, parameters, prefix=prefix).solve(u)
-    return u, result, time.perf_counter() - t0
+    solver = SCDNewtonSolver(problem, parameters, prefix=prefix)
+    result = solver.solve(u)
+    seconds = time.perf_counter() - t0
+    solver.destroy()
+    return u, result, seconds
 
 
 def _relative_difference(u: PETSc.Vec, reference: PETSc.Vec) -> float:
@@ -65,7 +68,8 @@ def run_case(comm: MPI.Comm, lev: int, case: str, pc: str, forcing: float) -> di
                                "seconds": seconds0}
     u_vi = problem.A.createVecRight()
     vi = solve_signorini_vi(frictionless, u_vi, prefix="peer_vi_")
-    accuracy = SCDNewtonSolver(frictionless, {"gamma": scd0.gamma}).approximation_step(u_vi)[0]
+    measure = SCDNewtonSolver(frictionless, {"gamma": scd0.gamma})
+    accuracy = measure.approximation_step(u_vi)[0]
     row["snes_vi"] = {"converged": vi.converged, "reason": vi.reason, "it": vi.iterations, "krylov": vi.krylov_iterations,
                       "seconds": vi.solve_time, "relative_residual": accuracy / scd0.history[0]["residual"],
                       "difference_to_scd": _relative_difference(u_vi, u0)}
@@ -78,6 +82,7 @@ def run_case(comm: MPI.Comm, lev: int, case: str, pc: str, forcing: float) -> di
     ksp.solve(problem.load, x)
     row["elastic"] = {"krylov": ksp.getIterationNumber(), "seconds": time.perf_counter() - t0}
     row["peak_rss_mib"] = benchlib.peak_rss_mib(comm)
+    benchlib.release(comm, measure, ksp, x, u, u_fp, u0, u_vi, problem)
     return row
 
 

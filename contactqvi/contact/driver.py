@@ -34,6 +34,11 @@ class LevelSolution:
     def physical_displacement(self) -> fem.Function:
         return self.problem.physical_displacement(self.u, fem.Function(self.problem.V, name="displacement"))
 
+    def destroy(self) -> None:
+        """Free the PETSc objects of the problem and of u (collective)."""
+        self.problem.destroy()
+        self.u.destroy()
+
 
 def solve_level(
     comm: MPI.Comm,
@@ -66,7 +71,11 @@ def solve_level(
         u.axpy(1.0, start.x.petsc_vec)
     assembly = time.perf_counter() - t0
     logger.info("lev %d: p = %d contact nodes, n = %d free dofs, %d ranks", lev, problem.n_contact, problem.n_free, comm.size)
-    result = SCDNewtonSolver(problem, parameters, prefix=prefix).solve(u)
+    solver = SCDNewtonSolver(problem, parameters, prefix=prefix)
+    try:
+        result = solver.solve(u)
+    finally:
+        solver.destroy()
     result.timings["assembly"] = assembly
     logger.info(
         "lev %d: %s after %d Newton steps, %d Krylov iterations, gamma = %.4e",

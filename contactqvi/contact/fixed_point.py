@@ -90,7 +90,9 @@ def solve_tresca_fixed_point(
             break
         # s = F lambda, lambda = -theta of the current iterate's graph point (6.17).
         tresca = dataclasses.replace(problem, law=FrictionLaw(slip_bound=-problem.law.friction * z[:, 2]))
-        inner = SCDNewtonSolver(tresca, {**p, "atol": max(forcing * norm, target)}, prefix=prefix).solve(u)
+        solver = SCDNewtonSolver(tresca, {**p, "atol": max(forcing * norm, target)}, prefix=prefix)
+        inner = solver.solve(u)
+        solver.destroy()
         newton += inner.iterations
         krylov += inner.krylov_iterations
         entry.update(tresca_status=inner.status, newton_iterations=inner.iterations, krylov_iterations=inner.krylov_iterations)
@@ -100,5 +102,6 @@ def solve_tresca_fixed_point(
             status = f"tresca_{inner.status}"
             break
         norm, _, z = coulomb.approximation_step(u)
+    coulomb.destroy()
     return FixedPointResult(status, len(history) - 1, newton, krylov, history, time.perf_counter() - t0)
 

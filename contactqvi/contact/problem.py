@@ -67,6 +67,11 @@ class ContactProblem:
     def comm(self) -> MPI.Comm:
         return self.V.mesh.comm
 
+    def destroy(self) -> None:
+        """Free A, load and shift (collective); copies by ``dataclasses.replace`` share them."""
+        for obj in (self.A, self.load, self.shift):
+            obj.destroy()
+
     def physical_displacement(self, u: PETSc.Vec, out: fem.Function) -> fem.Function:
         """u~ = u - d written into the Function ``out`` (ghosts updated)."""
         out.x.petsc_vec.waxpy(-1.0, self.shift, u)
