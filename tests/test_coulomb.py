@@ -225,3 +225,17 @@ def test_tresca_fixed_point_reaches_coulomb_solution():
     print(f"fixed point: {fixed_point.iterations} Tresca solves, {fixed_point.newton_iterations} Newton steps;"
           f" vs SCD Newton {result.iterations}; relative difference {error:.2e}")
     assert error < 1e-8
+
+
+@pytest.mark.serial
+def test_gamg_preset_reaches_the_multigrid_levels(tmp_path):
+    """The preset's W-cycle is in effect after a solve (GAMG reads its MG options when it builds its levels)."""
+    solver, u, result = _solve(_problem(MPI.COMM_WORLD, 3), "cycle_")
+    assert result.converged
+    path = tmp_path / "ksp.txt"
+    viewer = PETSc.Viewer().createASCII(str(path))
+    solver.ksp.view(viewer)
+    viewer.destroy()
+    assert "cycles=w" in path.read_text()
+    solver.destroy()
+    assert solver.ksp.handle == 0
