@@ -37,8 +37,14 @@ test-serial: $(PY)
 test-mpi: $(PY)
 	$(MPIRUN) $(PY) -m mpi4py -m pytest -q --color=no -p no:cacheprovider tests
 
+# Paper tables at the levels that fit a laptop; README lists the larger runs (lev 9-10, scaling).
 benchmarks: $(PY)
-	$(PY) benchmarks/run_all.py
+	$(PY) benchmarks/coulomb_tables.py --levels 3 4 5 6 7 --tables 2 3
+	$(MPIRUN) $(PY) benchmarks/coulomb_tables.py --levels 8 --tables 2
+	$(MPIRUN) $(PY) benchmarks/coulomb_tables.py --tables 4 --table4-lev 8
+	$(PY) benchmarks/coulomb_peers.py --levels 7
+	$(PY) benchmarks/stadler_tables.py
+	$(PY) benchmarks/thermoforming_tables.py --table all
 
 clean:
 	rm -rf $(OUT) .pytest_cache build *.egg-info
