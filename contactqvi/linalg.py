@@ -56,6 +56,10 @@ def create_ksp(
     """KSP with options prefix ``prefix`` (ends with ``_``) and the given defaults.
 
     ``rtol`` is set on this KSP only; a ``-{prefix}ksp_rtol`` given by the user still wins.
+    The defaults are in the options database only during ``setFromOptions``. Options a
+    preconditioner reads when it is set up (PCGAMG's multigrid options, e.g.
+    ``pc_mg_cycle_type``, are read when it builds its levels inside the solve) need
+    ``with default_options(prefix, options)`` around the solve as well.
     """
     ksp = PETSc.KSP().create(comm)
     ksp.setOptionsPrefix(prefix)
