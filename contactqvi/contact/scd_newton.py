@@ -204,7 +204,6 @@ class SCDNewtonSolver:
         self._J: PETSc.Mat | None = None
         self._near_nullspace = rigid_motions_nullspace(problem.V)  # for AMG; the rows of J off the contact are A's
         self.ksp = create_ksp(comm, prefix, KSP_PRESETS[p["pc"]], rtol=p["tol"])
-        self._prefix = prefix
         self._steps = line_search_steps(int(p["max_line_search"]))
         self._gamma = None if p["gamma"] is None else float(p["gamma"])
         self._pc_kinds: np.ndarray | None = None  # node kinds when the preconditioner was last built
@@ -346,7 +345,8 @@ class SCDNewtonSolver:
             self.ksp.getPC().setReusePreconditioner(self._reuse_preconditioner(np.concatenate([normal, tangential])))
             # The eliminated rows carry their exact values in the initial guess (direct solvers need none).
             self.ksp.setInitialGuessNonzero(bool(p["eliminate_fixed_rows"]) and self.ksp.getType() != "preonly")
-            with default_options(self._prefix, KSP_PRESETS[p["pc"]]):  # read again by GAMG's level setup
+            # GAMG reads its multigrid options again when it builds its levels, inside the solve.
+            with default_options(self.ksp.getOptionsPrefix(), KSP_PRESETS[p["pc"]]):
                 self.ksp.solve(rhs, du)
             timings["linear_solve"] += time.perf_counter() - t0
             krylov = self.ksp.getIterationNumber()
