@@ -6,13 +6,14 @@ to ``--output``. Runs serially or under ``mpirun``. Examples:
     python benchmarks/coulomb_tables.py --levels 3 4 5 6 7              # default solver (GMRES + GAMG)
     python benchmarks/coulomb_tables.py --tables 2 --levels 3 4 5 --pc lu   # exact inner solves
     python benchmarks/coulomb_tables.py --pc paper                        # GMRES + ILU as in Sect. 7
+    python benchmarks/coulomb_tables.py --approximation forward_backward  # the approximation step (6.17) alone
 """
 
 from __future__ import annotations
 
 import benchlib
 from benchlib import CASES, run_coulomb_case
-from contactqvi.contact.scd_newton import GAMMA_RULES, PARAMETERS
+from contactqvi.contact.scd_newton import APPROXIMATION_STEPS, GAMMA_RULES, PARAMETERS
 from contactqvi.meshes import contact_body_sizes
 from contactqvi.problems import coulomb as data
 
@@ -40,10 +41,14 @@ def main() -> None:
     parser.add_argument("--table4-lev", type=int, default=6, help="level of the tol sweep (paper: 10)")
     parser.add_argument("--gamma-rule", default=PARAMETERS["gamma_rule"][0], choices=GAMMA_RULES,
                         help=PARAMETERS["gamma_rule"][1])
+    parser.add_argument("--approximation", default=PARAMETERS["approximation"][0], choices=APPROXIMATION_STEPS,
+                        help=PARAMETERS["approximation"][1])
     args, comm, out = benchlib.parse(parser)
     prefix = "bench_"
     tag = "" if args.pc == PARAMETERS["pc"][0] else f"_{args.pc}"
     tag += "" if args.gamma_rule == PARAMETERS["gamma_rule"][0] else f"_{args.gamma_rule}"
+    tag += "" if args.approximation == PARAMETERS["approximation"][0] else f"_{args.approximation}"
+    solver = {"tol": 0.1, "pc": args.pc, "gamma_rule": args.gamma_rule, "approximation": args.approximation}
     solver_note = {
         "lu": "exact inner solves (LU)",
         "paper": "GMRES + ILU, tol = 0.1 on the left-preconditioned relative residual",
@@ -62,7 +67,7 @@ def main() -> None:
         rows = []
         for lev in args.levels:
             for case in CASES:
-                rows.append(run_coulomb_case(comm, lev, case, {"tol": 0.1, "pc": args.pc, "gamma_rule": args.gamma_rule}, prefix))
+                rows.append(run_coulomb_case(comm, lev, case, solver, prefix))
                 if comm.rank == 0:
                     r = rows[-1]
                     print(f"table 2{tag}: lev {lev} {r['case']}: {r['status']} {r['it']} / {r['krylov']} "
@@ -73,7 +78,7 @@ def main() -> None:
         coarsest = min(args.levels)
         for lev in [lev for lev in args.levels if lev > coarsest]:
             for case in CASES:
-                rows.append(run_coulomb_case(comm, lev, case, {"tol": 0.1, "pc": args.pc, "gamma_rule": args.gamma_rule}, prefix, range(coarsest, lev)))
+                rows.append(run_coulomb_case(comm, lev, case, solver, prefix, range(coarsest, lev)))
                 if comm.rank == 0:
                     r = rows[-1]
                     print(f"table 3{tag}: lev {lev} {r['case']}: {r['status']} {r['it']} / {r['krylov']}", flush=True)
@@ -82,7 +87,7 @@ def main() -> None:
     if 4 in args.tables:
         rows = []
         for tol in sorted(data.PAPER_TABLE4, reverse=True):
-            rows.append(run_coulomb_case(comm, args.table4_lev, "d3/L2", {"tol": tol, "pc": args.pc, "gamma_rule": args.gamma_rule}, prefix))
+            rows.append(run_coulomb_case(comm, args.table4_lev, "d3/L2", {**solver, "tol": tol}, prefix))
         lines = [f"## Table 4{tag.replace('_', ' ')}: d3/L2, u0 = 0, lev {args.table4_lev} (paper: lev 10)", "",
                  "| tol | ours it / Krylov | paper it / gmres (lev 10) |", "|---|---|---|"]
         lines += [f"| {r['tol']:g} | {r['it']} / {r['krylov']} | {data.PAPER_TABLE4[r['tol']][0]} / "

@@ -25,7 +25,7 @@ from petsc4py import PETSc
 from contactqvi import cli, io
 from contactqvi.contact.driver import solve_nested
 from contactqvi.contact.postprocess import contact_fields, plot_contact_states
-from contactqvi.contact.scd_newton import GAMMA_RULES, KSP_PRESETS, PARAMETERS, check_parameters
+from contactqvi.contact.scd_newton import APPROXIMATION_STEPS, GAMMA_RULES, KSP_PRESETS, PARAMETERS, check_parameters
 from contactqvi.elasticity import lame_parameters
 from contactqvi.parameters import ParameterError, require
 from contactqvi.problems import coulomb as data
@@ -55,6 +55,10 @@ def parse(argv: list[str] | None = None):
         "--gamma-rule", default=PARAMETERS["gamma_rule"][0], choices=GAMMA_RULES,
         help=PARAMETERS["gamma_rule"][1],
     )
+    parser.add_argument(
+        "--approximation", default=PARAMETERS["approximation"][0], choices=APPROXIMATION_STEPS,
+        help=PARAMETERS["approximation"][1],
+    )
     parser.add_argument("--state-tol", type=float, default=PARAMETERS["state_tol"][0], help=PARAMETERS["state_tol"][1])
     parser.add_argument(
         "--no-elimination", action="store_true", help="keep the identity rows in the Krylov solve (paper's variant)"
@@ -77,6 +81,7 @@ def parse(argv: list[str] | None = None):
         "max_iterations": args.max_iterations,
         "state_tol": args.state_tol,
         "gamma_rule": args.gamma_rule,
+        "approximation": args.approximation,
         "eliminate_fixed_rows": not args.no_elimination,
     })
     return args

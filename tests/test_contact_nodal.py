@@ -16,6 +16,7 @@ from contactqvi.contact.nodal import (
     lipschitz_constant,
     resolvent,
     scd_adjoint_blocks,
+    stick_reversed_slip,
 )
 from contactqvi.contact.scd_newton import line_search_steps
 
@@ -150,3 +151,34 @@ def test_line_search_steps_of_section_7():
     expected = [1, 1 / 2, 1 / 4, 1 / 8, 1 / 32, 1 / 128, 0.1 / 128, 0.01 / 128, 0.001 / 128]
     np.testing.assert_allclose(line_search_steps(9), expected, rtol=1e-15)
     assert len(line_search_steps(3)) == 3
+
+
+@pytest.mark.parametrize("law", LAWS.values(), ids=LAWS.keys())
+def test_stick_reversed_slip_moves_reversed_nodes_onto_the_sticking_branch(law):
+    """Sliding nodes whose slip turned against the previous one get (v12 = 0, same z), a point
+    of gph Q~ in state M3- (||g|| = b); every other node is left as it is."""
+    w = np.concatenate([_points("sliding", 30, law), _points("sticking", 10, law), _points("no_contact", 10, law)])
+    v, z = resolvent(w, GAMMA, law)
+    normal, tangential = classify(v, z, GAMMA, law, 1e-12)
+    v_previous = rng.normal(size=v.shape)
+    v_new, tangential_new, reversed_ = stick_reversed_slip(v, z, tangential, v_previous, law, 1e-12)
+    bound = np.broadcast_to(law.bound(z[:, 2]), (len(v),))
+    expected = (tangential == Tangential.SLIDING) & (bound > 0) & (np.sum(v[:, :2] * v_previous[:, :2], axis=1) < 0)
+    assert np.array_equal(reversed_, expected) and 0 < expected.sum() < 30
+    np.testing.assert_array_equal(v_new[reversed_, :2], 0.0)
+    np.testing.assert_array_equal(v_new[~reversed_], v[~reversed_])
+    np.testing.assert_array_equal(v_new[:, 2], v[:, 2])
+    # On the graph: ||g|| = b at the moved nodes, so classify finds them weakly sticking.
+    np.testing.assert_allclose(np.linalg.norm(z[reversed_, :2], axis=1), bound[reversed_], rtol=1e-12)
+    assert np.array_equal(classify(v_new, z, GAMMA, law, 1e-9)[1], tangential_new)
+    assert np.all(tangential_new[reversed_] == Tangential.WEAK_STICKING)
+    assert np.array_equal(tangential_new[~reversed_], tangential[~reversed_])
+
+
+def test_stick_reversed_slip_leaves_frictionless_nodes_free():
+    """Without a slip bound there is no sticking branch: no node is moved."""
+    law = FrictionLaw()
+    v, z = resolvent(_points("sliding", 20, law), GAMMA, law)
+    _, tangential = classify(v, z, GAMMA, law, 1e-12)
+    _, _, reversed_ = stick_reversed_slip(v, z, tangential, -v, law, 1e-12)
+    assert not reversed_.any()

@@ -34,6 +34,7 @@ __all__ = [
     "lipschitz_constant",
     "resolvent",
     "scd_adjoint_blocks",
+    "stick_reversed_slip",
 ]
 
 
@@ -144,6 +145,37 @@ def classify(v: np.ndarray, z: np.ndarray, gamma: float, law: FrictionLaw, tol: 
     tangential[inside] = Tangential.STICKING
     tangential[slip] = Tangential.SLIDING
     return normal, tangential
+
+
+def stick_reversed_slip(
+    v: np.ndarray, z: np.ndarray, tangential: np.ndarray, v_previous: np.ndarray, law: FrictionLaw, tol: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Move sliding nodes whose slip reversed onto the sticking branch of gph Q~.
+
+    A node counts as reversed when it is SLIDING with slip bound b > ``tol`` and its
+    slip points against the previous iterate's, v12 . v12_prev < 0: the slip went
+    through zero, where the node most likely sticks. Such a node gets the graph
+    point (v', z) with v'12 = 0 and v'3 = v3, z unchanged. z12 = g of a sliding
+    point has ||g|| = b, so (v', z) lies on gph Q~ (state M3-, Table 1) and its
+    tangential kind becomes WEAK_STICKING (subspace rge(0, I)).
+
+    Used by the approximation step of :class:`~contactqvi.contact.scd_newton.SCDNewtonSolver`
+    (Algorithm 1 admits any point of the graph close to the iterate, (4.2)): the
+    point moves by ||v12||, which is O(||u - u_bar||) at nodes that stick in the
+    solution, and nodes that slide in the solution do not reverse near it.
+
+    Returns:
+        ``(v', tangential', reversed)``: copies with the reversed nodes changed and
+        the (m,) boolean mask of those nodes.
+    """
+    bound = np.broadcast_to(law.bound(z[:, 2]), (len(v),))
+    reversed_ = (
+        (tangential == Tangential.SLIDING) & (bound > tol) & (np.einsum("ij,ij->i", v[:, :2], v_previous[:, :2]) < 0.0)
+    )
+    v, tangential = v.copy(), tangential.copy()
+    v[reversed_, :2] = 0.0
+    tangential[reversed_] = Tangential.WEAK_STICKING
+    return v, tangential, reversed_
 
 
 def contact_states(normal: np.ndarray, tangential: np.ndarray) -> np.ndarray:
