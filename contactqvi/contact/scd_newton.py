@@ -39,7 +39,16 @@ from contactqvi.elasticity import rigid_motions_nullspace
 from contactqvi.linalg import create_ksp, default_options, ksp_converged_reason, power_iteration
 from contactqvi.parameters import ParameterTable, merge_parameters, require, require_positive
 
-__all__ = ["PARAMETERS", "KSP_PRESETS", "GAMMA_RULES", "APPROXIMATION_STEPS", "SCDNewtonResult", "SCDNewtonSolver", "check_parameters", "line_search_steps"]
+__all__ = [
+    "APPROXIMATION_STEPS",
+    "GAMMA_RULES",
+    "KSP_PRESETS",
+    "PARAMETERS",
+    "SCDNewtonResult",
+    "SCDNewtonSolver",
+    "check_parameters",
+    "line_search_steps",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -149,8 +158,8 @@ GAMMA_RULES = ("contact_diagonal", "power")
 #: Approximation steps (step 3 of Algorithm 1).
 #:
 #: * ``forward_backward``: the point (6.17) of the paper, d^ = (gamma I + Q)^{-1}(gamma u - (A u - l)).
-#: * ``stick_reversed`` (default): (6.17), then every sliding contact node whose slip
-#:   v12 points against the previous iterate's is moved to the point of gph Q~ with
+#: * ``stick_reversed`` (default): (6.17), then every sliding node with a slip bound
+#:   b > 0 whose slip v12 points against the previous iterate's is moved to the point of gph Q~ with
 #:   v12 = 0 and the same force (:func:`~contactqvi.contact.nodal.stick_reversed_slip`),
 #:   so its Newton rows are the sticking ones. Algorithm 1 admits any graph point that
 #:   satisfies (4.2), and this one does near the solution, so the local convergence
@@ -347,14 +356,18 @@ class SCDNewtonSolver:
             if p["approximation"] == "stick_reversed" and v_previous is not None:
                 v_fb = v
                 v, tangential, reversed_ = stick_reversed_slip(v, z, tangential, v_previous, problem.law, state_tol)
-                dhat.array.reshape(-1, 3)[blk] = v  # y2^ = u - d^ below; y1^ only enters through W*^T, 0 there
+                # y2^ = u - d^ changes at the moved nodes; the right-hand side below takes y1^ = gamma y2^, which
+                # is then wrong only in their tangential components, where the rows of W*^T vanish.
+                dhat.array.reshape(-1, 3)[blk] = v
                 n_reversed = comm.allreduce(int(reversed_.sum()), op=MPI.SUM)
                 v_previous = v_fb
             else:
                 v_previous = v
             states = contact_states(normal, tangential)
             counts = _state_counts(comm, states)
-            entry = {"k": k, "residual": norm, "relative_residual": norm / norm0, "states": counts, "reversed": n_reversed}
+            entry = {
+                "k": k, "residual": norm, "relative_residual": norm / norm0, "states": counts, "reversed": n_reversed
+            }
             history.append(entry)
             if norm <= p["rtol"] * norm0 or norm <= p["atol"]:
                 status = "converged"
