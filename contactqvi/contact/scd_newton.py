@@ -357,7 +357,7 @@ class SCDNewtonSolver:
                 v_fb = v
                 v, tangential, reversed_ = stick_reversed_slip(v, z, tangential, v_previous, problem.law, state_tol)
                 # y2^ = u - d^ changes at the moved nodes; the right-hand side below takes y1^ = gamma y2^, which
-                # is then wrong only in their tangential components, where the rows of W*^T vanish.
+                # is then wrong only in their tangential components, where the columns of W*^T vanish.
                 dhat.array.reshape(-1, 3)[blk] = v
                 n_reversed = comm.allreduce(int(reversed_.sum()), op=MPI.SUM)
                 v_previous = v_fb
