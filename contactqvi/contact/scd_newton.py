@@ -347,22 +347,19 @@ class SCDNewtonSolver:
         history: list[dict] = []
         krylov_total = 0
         status = "diverged"
-        v_previous = None  # v of (6.17) at the previous iterate
+        v_previous = v  # v of (6.17) at the previous iterate
         for k in range(int(p["max_iterations"]) + 1):
             w_scale = comm.allreduce(float(np.abs(gamma * v + z).max(initial=0.0)), op=MPI.MAX)
             state_tol = p["state_tol"] * w_scale
             normal, tangential = classify(v, z, gamma, problem.law, state_tol)
-            n_reversed = 0
-            if p["approximation"] == "stick_reversed" and v_previous is not None:
-                v_fb = v
+            v_forward_backward, n_reversed = v, 0
+            if p["approximation"] == "stick_reversed" and k > 0:
                 v, tangential, reversed_ = stick_reversed_slip(v, z, tangential, v_previous, problem.law, state_tol)
                 # y2^ = u - d^ changes at the moved nodes; the right-hand side below takes y1^ = gamma y2^, which
                 # is then wrong only in their tangential components, where the columns of W*^T vanish.
                 dhat.array.reshape(-1, 3)[blk] = v
                 n_reversed = comm.allreduce(int(reversed_.sum()), op=MPI.SUM)
-                v_previous = v_fb
-            else:
-                v_previous = v
+            v_previous = v_forward_backward
             states = contact_states(normal, tangential)
             counts = _state_counts(comm, states)
             entry = {
