@@ -91,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--example", type=int, default=1, help="example of Sect. 6: 1, 2 or 3")
     parser.add_argument("--method", default="pdas", help="pdas | ss | alm | uzawa")
     parser.add_argument("--gamma", type=float, default=1e4, help="regularisation/penalty parameter gamma")
-    parser.add_argument("--sigma", type=float, default=1.0, help="sigma of (PDAS) (ignored by ss: 1/gamma)")
+    parser.add_argument("--sigma", type=float, default=1.0, help="sigma of (PDAS) and of ALM's inner PDAS (ss: 1/gamma)")
     parser.add_argument("--N", type=int, default=80, help="grid points per direction (N - 1 cells)")
     parser.add_argument("--g", type=float, default=None, help="override the example's friction bound g")
     parser.add_argument("--mu", type=float, default=None, help="override the example's mu in a(y, z)")
@@ -100,11 +100,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--alm-inner", default="exact", help="ALM inner solve: exact | inexact")
     parser.add_argument("--alm-schedule", default="constant", help="ALM gamma: constant | power10 (gamma_l = 10^l)")
     parser.add_argument("--alm-steps", type=int, default=7, help="maximal number of ALM steps")
-    parser.add_argument("--tol", type=float, default=None, help="ALM/Uzawa tolerance on d_lambda (Uzawa: 1e-4)")
+    parser.add_argument(
+        "--tol", type=float, default=None,
+        help="ALM/Uzawa tolerance on d_lambda, or on ||lambda^l - lambda^(l-1)|| with --no-reference (Uzawa: 1e-4)",
+    )  # fmt: skip
     parser.add_argument("--example2-reading", default="x1x2", help="reading of f in Example 2: x1x2 | x1x1")
     parser.add_argument(
         "--reference", action=argparse.BooleanOptionalAction, default=True,
-        help="compute lambda_bar = lambda_{1e16} for d_lambda (needed for Uzawa's stopping test)",
+        help="compute lambda_bar = lambda_{1e16} for d_lambda and the paper's stopping test of ALM/Uzawa",
     )  # fmt: skip
     parser.add_argument(
         "--png", action=argparse.BooleanOptionalAction, default=True, help="plot y to y.png if a display is available"
@@ -117,10 +120,17 @@ def main(argv: list[str] | None = None) -> int:
         require(
             args.alm_schedule in SCHEDULES, "alm-schedule", f"must be one of {SCHEDULES}, got {args.alm_schedule!r}"
         )
-        require(args.example2_reading in EXAMPLE2_READINGS, "example2-reading", f"must be one of {EXAMPLE2_READINGS}")
+        require(
+            args.example2_reading in EXAMPLE2_READINGS,
+            "example2-reading",
+            f"must be one of {EXAMPLE2_READINGS}, got {args.example2_reading!r}",
+        )
         require_positive("gamma", args.gamma)
         require_positive("sigma", args.sigma)
-        require(args.method != "uzawa" or args.reference, "reference", "Uzawa's stopping test needs --reference")
+        require(args.max_iterations >= 1, "max-iterations", f"must be >= 1, got {args.max_iterations!r}")
+        require(args.alm_steps >= 1, "alm-steps", f"must be >= 1, got {args.alm_steps!r}")
+        if args.tol is not None:
+            require_positive("tol", args.tol)
         example = stadler_example(args.example, args.example2_reading)
         problem = create_stadler_problem(comm, example, args.N, args.cell_type, g=args.g, mu=args.mu)
     except ParameterError as exc:
@@ -128,10 +138,12 @@ def main(argv: list[str] | None = None) -> int:
             print(f"error: {exc}", file=sys.stderr)
         return 2
     out = io.prepare_output_dir(comm, args.output)
+    power10 = args.method == "alm" and args.alm_schedule == "power10"
+    gamma_label = "10^l" if power10 else f"{args.gamma:g}"
     logger.info(
-        "Example %d (%s), g=%g, mu=%g, N=%d (%d cells/direction, %s), %d friction nodes; method %s, gamma=%g",
+        "Example %d (%s), g=%g, mu=%g, N=%d (%d cells/direction, %s), %d friction nodes; method %s, gamma=%s",
         example.number, example.description, problem.g, problem.mu, args.N, args.N - 1, args.cell_type,
-        problem.n_boundary, args.method, args.gamma,
+        problem.n_boundary, args.method, gamma_label,
     )  # fmt: skip
 
     pdas = PrimalDualActiveSet(problem)
@@ -152,7 +164,7 @@ def main(argv: list[str] | None = None) -> int:
         "cell_type": args.cell_type,
         "g": problem.g,
         "mu": problem.mu,
-        "gamma": args.gamma,
+        "gamma": gamma_label if power10 else args.gamma,
         "friction_nodes": problem.n_boundary,
         "mpi_ranks": comm.size,
     }
@@ -163,13 +175,13 @@ def main(argv: list[str] | None = None) -> int:
         summary.update(sigma=sigma, iterations=result.iterations, history=result.history)
         y, lam, states = result.y, result.lam, result.states
     elif args.method == "alm":
-        gamma = (lambda step: 10.0**step) if args.alm_schedule == "power10" else args.gamma
+        gamma = (lambda step: 10.0**step) if power10 else args.gamma
         result = augmented_lagrangian(
-            pdas, gamma, inner=args.alm_inner, reference=reference, tol=args.tol,
+            pdas, gamma, inner=args.alm_inner, sigma=args.sigma, reference=reference, tol=args.tol,
             max_outer=args.alm_steps, max_inner=args.max_iterations,
         )  # fmt: skip
         summary.update(
-            alm_inner=args.alm_inner, alm_schedule=args.alm_schedule, outer_iterations=result.outer_iterations,
+            sigma=args.sigma, alm_inner=args.alm_inner, alm_schedule=args.alm_schedule, outer_iterations=result.outer_iterations,
             inner_iterations=[h["inner_iterations"] for h in result.history], linear_solves=result.linear_solves,
             history=result.history,
         )  # fmt: skip
@@ -214,9 +226,10 @@ def main(argv: list[str] | None = None) -> int:
         order = np.lexsort((xb[:, 0], xb[:, 1]))
         extra = {"boundary_x": xb[order], "lam": lb[order], "active_set": sb[order]}
     io.write_solution_npz(out / "solution.npz", y, **extra)
-    title = f"Example {example.number}, {args.method}, gamma = {args.gamma:g}, N = {args.N}"
+    title = f"Example {example.number}, {args.method}, gamma = {gamma_label}, N = {args.N}"
     summary["png"] = "y.png" if args.png and write_png(out / "y.png", comm, y, title) else None
     io.write_summary(comm, out / "summary.json", summary)
+    pdas.destroy()
 
     if comm.rank == 0:
         print(f"status {result.status}; |||y||| = {y_norm:.12e}; ||lambda||_L2(Gamma_f) = {lam_norm:.12e}")

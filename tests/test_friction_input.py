@@ -77,6 +77,10 @@ def test_examples_reject_bad_input():
         (["--example", "2", "--g", "-0.4"], "g"),
         (["--example", "3", "--mu", "-0.5"], "mu"),
         (["--example", "3", "--mu", "0"], "mu"),
+        (["--max-iterations", "0"], "max-iterations"),
+        (["--method", "alm", "--alm-steps", "0"], "alm-steps"),
+        (["--method", "uzawa", "--tol=-1e-4"], "tol"),
+        (["--example2-reading", "x2x2"], "example2-reading"),
     ],
 )
 def test_demo_reports_bad_input(argv, name, capsys, mpi_tmp_path, load_demo):
@@ -95,6 +99,30 @@ def test_demo_alm_end_to_end(mpi_tmp_path, load_demo):
     assert summary["status"] == "converged" and summary["d_lambda"] < 1e-8
     assert summary["max_abs_lambda"] <= 0.4 * (1 + 1e-14)
     assert (out / "solution.npz").is_file() and (out / "solution.bp").is_dir()
+    assert summary["gamma"] == "10^l" and [h["gamma"] for h in summary["history"]] == [10.0**k for k in range(1, 6)]
+
+
+def test_demo_alm_passes_sigma_to_the_inner_pdas(mpi_tmp_path, load_demo):
+    """sigma reaches ALM's inner PDAS: on Example 2, sigma = 1 converges and sigma = 1e-3 makes its sets cycle."""
+    statuses = {}
+    for sigma in ("1", "1e-3"):
+        out = mpi_tmp_path / f"alm_sigma_{sigma}"
+        argv = ["--example", "2", "--method", "alm", "--alm-inner", "inexact", "--gamma", "1e2", "--sigma", sigma,
+                "--alm-steps", "3", "--N", "17", "--output", str(out), "--no-png"]  # fmt: skip
+        rc = load_demo("simplified_friction").main(argv)
+        summary = json.loads((out / "summary.json").read_text())
+        assert summary["sigma"] == float(sigma)
+        statuses[sigma] = (rc, summary["status"], summary["converged"])
+    assert statuses == {"1": (0, "completed", True), "1e-3": (1, "inner_cycling", False)}
+
+
+def test_demo_uzawa_without_reference_stops_on_the_multiplier_change(mpi_tmp_path, load_demo):
+    out = mpi_tmp_path / "uzawa_noref"
+    argv = ["--method", "uzawa", "--gamma", "10", "--N", "9", "--no-reference", "--output", str(out), "--no-png"]
+    assert load_demo("simplified_friction").main(argv) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["d_lambda"] is None
+    assert summary["history"][-1]["lambda_change"] < 1e-4 <= summary["history"][-2]["lambda_change"]
 
 
 def test_demo_uzawa_nonconvergence_exit_code(mpi_tmp_path, load_demo):

@@ -38,8 +38,10 @@ class ALMResult:
     Attributes:
         y: the last primal iterate y^l.
         lam: the last multiplier lambda^l (nodal boundary PETSc Vec).
-        status: ``converged`` (tolerance met), ``max_outer`` (tolerance not met)
-            or ``completed`` (no tolerance: the requested number of steps was run).
+        status: ``converged`` (tolerance met), ``max_outer`` (tolerance not met),
+            ``completed`` (no tolerance: the requested number of steps was run) or
+            ``inner_<status>`` (an inner (PDAS) solve failed, e.g. ``inner_cycling``;
+            y and lam are then the last accepted iterate, or step 1's iterate).
         outer_iterations: number of (ALM) steps l.
         linear_solves: all linear solves, including the initialisation of step 1.
         history: per step l: gamma_l, inner (PDAS) iterations and status,
@@ -55,8 +57,8 @@ class ALMResult:
 
     @property
     def converged(self) -> bool:
-        """True unless a tolerance was given and not met."""
-        return self.status != "max_outer"
+        """True if the tolerance was met, or if no tolerance was given and every step succeeded."""
+        return self.status in ("converged", "completed")
 
 
 def augmented_lagrangian(
@@ -137,7 +139,11 @@ def augmented_lagrangian(
             "" if d_lambda is None else f" d_lambda={d_lambda:.3e}",
         )  # fmt: skip
         if not result.converged:
-            raise RuntimeError(f"ALM step {step}: inner PDAS ended with status {result.status!r}")
+            status = f"inner_{result.status}"
+            if y is None:
+                y = result.y
+                result.lam.copy(lam)
+            break
         result.lam.copy(lam)
         y = result.y
         state = (result.y.x.petsc_vec, result.lam)

@@ -120,6 +120,10 @@ class PrimalDualActiveSet:
         self._work = problem.K.createVecLeft()
         self.linear_solves = 0
 
+    def destroy(self) -> None:
+        for obj in (self.ksp, self.A, self._robin, self._rhs, self._work):
+            obj.destroy()
+
     def solve_linear(self, gamma: float, states: np.ndarray, lam_hat: np.ndarray, y: PETSc.Vec) -> None:
         """Solve (4.1) for the sets ``states``: (K + gamma M_I) y = F - M lambda_known.
 

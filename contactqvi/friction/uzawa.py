@@ -92,27 +92,29 @@ def uzawa(
     y = fem.Function(problem.V, name="y")
     history: list[dict[str, typing.Any]] = []
     status = "max_iterations"
-    for iteration in range(1, max_iterations + 1):
-        problem.F.copy(rhs)
-        rhs.array[problem.boundary_dofs] -= problem.boundary_mass * lam.array_r
-        ksp.solve(rhs, y.x.petsc_vec)
-        if ksp.getConvergedReason() <= 0:
-            raise RuntimeError(f"linear solve failed: {ksp_converged_reason(ksp)}")
-        y.x.scatter_forward()
-        new = np.clip(lam.array_r + gamma * problem.trace(y.x.petsc_vec), -problem.g, problem.g)
-        change = problem.boundary_norm(new - lam.array_r)
-        lam.array[:] = new
-        d_lambda = problem.boundary_norm(reference.array_r - new) if reference is not None else None
-        history.append({"l": iteration, "d_lambda": d_lambda, "lambda_change": change})
-        if monitor is not None:
-            monitor(iteration, y, lam)
-        logger.info(
-            "  Uzawa l=%4d |lambda^l - lambda^(l-1)|=%.3e%s",
-            iteration, change, "" if d_lambda is None else f" d_lambda={d_lambda:.3e}",
-        )  # fmt: skip
-        if (d_lambda if d_lambda is not None else change) < tol:
-            status = "converged"
-            break
-    ksp.destroy()
-    rhs.destroy()
+    try:
+        for iteration in range(1, max_iterations + 1):
+            problem.F.copy(rhs)
+            rhs.array[problem.boundary_dofs] -= problem.boundary_mass * lam.array_r
+            ksp.solve(rhs, y.x.petsc_vec)
+            if ksp.getConvergedReason() <= 0:
+                raise RuntimeError(f"linear solve failed: {ksp_converged_reason(ksp)}")
+            y.x.scatter_forward()
+            new = np.clip(lam.array_r + gamma * problem.trace(y.x.petsc_vec), -problem.g, problem.g)
+            change = problem.boundary_norm(new - lam.array_r)
+            lam.array[:] = new
+            d_lambda = problem.boundary_norm(reference.array_r - new) if reference is not None else None
+            history.append({"l": iteration, "d_lambda": d_lambda, "lambda_change": change})
+            if monitor is not None:
+                monitor(iteration, y, lam)
+            logger.info(
+                "  Uzawa l=%4d |lambda^l - lambda^(l-1)|=%.3e%s",
+                iteration, change, "" if d_lambda is None else f" d_lambda={d_lambda:.3e}",
+            )  # fmt: skip
+            if (d_lambda if d_lambda is not None else change) < tol:
+                status = "converged"
+                break
+    finally:
+        ksp.destroy()
+        rhs.destroy()
     return UzawaResult(y=y, lam=lam, status=status, iterations=len(history), history=history)

@@ -14,19 +14,18 @@ one-coordinate reading 10(sin 4 pi x1 + cos 4 pi x1) is available as ``"x1x1"``.
 from __future__ import annotations
 
 import dataclasses
-import typing
 
 from mpi4py import MPI
 
+import numpy as np
 import ufl
 
-from contactqvi.friction.problem import FrictionProblem
+from contactqvi.friction.problem import FrictionProblem, LoadFunction
 from contactqvi.meshes import create_unit_square
 from contactqvi.parameters import require
 
 __all__ = ["StadlerExample", "stadler_example", "create_stadler_problem", "EXAMPLE_NUMBERS", "EXAMPLE2_READINGS"]
 
-LoadFunction = typing.Callable[[ufl.SpatialCoordinate], ufl.core.expr.Expr]
 
 EXAMPLE_NUMBERS = (1, 2, 3)
 EXAMPLE2_READINGS = ("x1x2", "x1x1")
@@ -139,7 +138,8 @@ def create_stadler_problem(
         cell_type: ``quadrilateral`` (Q1, default) or ``triangle`` (P1).
         g, mu: override the example's g and mu (for parameter studies).
     """
-    require(isinstance(N, int) and N >= 3, "N", f"must be an integer >= 3 (grid points per direction), got {N!r}")
+    valid = isinstance(N, (int, np.integer)) and N >= 3
+    require(valid, "N", f"must be an integer >= 3 (grid points per direction), got {N!r}")
     msh, facet_tags = create_unit_square(comm, N - 1, cell_type)
     return FrictionProblem(
         msh,
