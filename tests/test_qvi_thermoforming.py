@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 from mpi4py import MPI
 
 import numpy as np
@@ -127,6 +129,17 @@ def test_newton_system_is_the_linearisation_after_reassembly(test, method, h):
     data = thermoforming.make_test(test)
     msh, _ = create_mesh(MPI.COMM_WORLD, data.dim, h)
     setup = build(data, msh, method, {"tol": 1e-10})
+    assert _linearisation_defect(setup, steps=1, eps=1e-4) < 1e-6
+
+
+def test_newton_system_with_varphi_nonzero_on_the_boundary():
+    # Test 1 with varphi + 1/2, which violates the paper's varphi = 0 on the boundary: the Newton system
+    # must still be the linearisation (delta u = 0 there, whatever eta = varphi xi is).
+    data = thermoforming.make_test(1)
+    varphi = data.varphi
+    shifted = dataclasses.replace(data, varphi=lambda x: varphi(x) + 0.5)
+    msh, _ = create_mesh(MPI.COMM_WORLD, 1, 0.02)
+    setup = build(shifted, msh, "alg1", {"tol": 1e-10})
     assert _linearisation_defect(setup, steps=1, eps=1e-4) < 1e-6
 
 

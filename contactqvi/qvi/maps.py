@@ -136,10 +136,16 @@ class ObstacleQVIMap(CompositeMap):
         self.temperature, self.solver, self.Phi0 = temperature, solver, Phi0
         tm = temperature
         phi = tm.varphi.x.array[: self.n_owned]
-        # constant blocks of (68): -M_L diag(varphi) in (62), A diag(varphi) = (grad I_h(varphi .), grad q) in (64)
+        # constant blocks of (68): -M_L diag(varphi) in (62), A diag(varphi) = (grad I_h(varphi .), grad q) in (64).
+        # The columns of boundary nodes are zero: delta u = mu + eta vanishes there, so the harmonic extension
+        # (64) sees eta = 0 on the boundary. This matters only if varphi != 0 on the boundary, which the paper
+        # excludes (Sect. 3.2 ii)).
         varphi_mass = self._own(self._diag(-self.lumped_mass.array * phi))
         varphi_stiffness = self._own(self.stiffness.duplicate(copy=True))
-        varphi_stiffness.diagonalScale(R=tm.varphi.x.petsc_vec)
+        interior_varphi = tm.varphi.x.petsc_vec.copy()
+        interior_varphi.array[self.boundary] = 0.0
+        varphi_stiffness.diagonalScale(R=interior_varphi)
+        interior_varphi.destroy()
         blocks = [
             [self.mass, varphi_mass, self.negative_mass],
             [tm.coupling_matrix, tm.jacobian_matrix, None],
