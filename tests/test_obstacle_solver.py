@@ -15,7 +15,7 @@ from dolfinx import fem
 from contactqvi.meshes import create_unit_square
 from contactqvi.parameters import ParameterError
 from contactqvi.problems.obstacle import radial_obstacle
-from contactqvi.vi import ObstacleProblem, ObstacleSolver
+from contactqvi.vi import ObstacleProblem, ObstacleSolver, rho_path
 
 DATA = radial_obstacle()
 
@@ -74,6 +74,12 @@ def test_pfmy_pdas_agrees_with_snes_vi_and_is_exactly_feasible():
     assert vi.converged and vi.vi_iterations > 0
     diff = msh.comm.allreduce(float(np.max(np.abs(problem.u.x.array[:n] - u_pdas[:n]))), op=MPI.MAX)
     assert diff < 1e-8
+
+
+def test_rho_path_ends_at_rho_min():
+    assert rho_path(1.0, 1e-6, 10.0) == pytest.approx([10.0**-k for k in range(7)], rel=1e-12)
+    assert rho_path(1.0, 5e-4, 10.0) == pytest.approx([1.0, 0.1, 0.01, 1e-3, 5e-4], rel=1e-12)
+    assert rho_path(1e-2, 1e-2, 10.0) == [1e-2]
 
 
 def test_warm_start_uses_the_shorter_path():

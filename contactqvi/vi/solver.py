@@ -27,10 +27,12 @@ METHODS = ("pfmy-pdas", "vinewtonrsls")
 
 
 def rho_path(rho0: float, rho_min: float, factor: float) -> list[float]:
-    """rho0, rho0/factor, ... down to rho_min (included, up to rounding)."""
+    """rho0, rho0/factor, ... while above rho_min, then rho_min itself (the path always ends there)."""
     rhos = [rho0]
     while rhos[-1] / factor >= rho_min * (1 - 1e-12):
         rhos.append(rhos[-1] / factor)
+    if rhos[-1] > rho_min * (1 + 1e-12):
+        rhos.append(rho_min)
     return rhos
 
 
