@@ -25,7 +25,7 @@ from contactqvi.qvi.outer import FixedPointSolver
 from contactqvi.qvi.temperature import TemperatureMap
 from contactqvi.vi.moreau_yosida import PathFollowingMoreauYosida
 from contactqvi.vi.problem import ObstacleProblem
-from contactqvi.vi.solver import ObstacleSolver
+from contactqvi.vi.solver import ObstacleSolver, check_obstacle_parameters
 
 __all__ = ["OUTER_METHODS", "QVISetup", "create_mesh", "build"]
 
@@ -124,8 +124,14 @@ def build(
         )
         problem = ObstacleProblem(V, data.f(x), obstacle, bcs, quadrature_degree)
         if method == "c2":
-            prm = obstacle_parameters or {}
-            fmap = RegularisedQVIMap(temperature, PathFollowingMoreauYosida(problem), Phi0, rho, prm.get("rho0", 1.0))
+            prm = check_obstacle_parameters(obstacle_parameters)
+            require(
+                prm["method"] == "pfmy-pdas",
+                "method",
+                f"C2 replaces S by the Moreau-Yosida map S_rho of (65)-(67); S-solver {prm['method']!r} does not apply",
+            )
+            pfmy = PathFollowingMoreauYosida(problem)
+            fmap = RegularisedQVIMap(temperature, pfmy, Phi0, rho, prm["rho0"], prm["rho_factor"])
         else:
             fmap = ObstacleQVIMap(temperature, ObstacleSolver(problem, obstacle_parameters), Phi0)
 

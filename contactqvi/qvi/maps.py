@@ -213,7 +213,7 @@ class RegularisedQVIMap(CompositeMap):
     """C2: H_rho(u) = S_rho(Phi(u)) with S_rho the smoothed Moreau-Yosida map (60), fixed rho.
 
     S_rho is evaluated by Newton's method (warm-started; on the first call along
-    the path rho0, rho0/10, ..., rho). The Newton system (65)-(67) is assembled
+    the path rho0, rho0/rho_factor, ..., rho). The Newton system (65)-(67) is assembled
     consistently at the computed u_B = S_rho(Phi(u)), i.e. with
     G_sigma(u_B - Phi0 - Phi(u)).
 
@@ -223,6 +223,7 @@ class RegularisedQVIMap(CompositeMap):
         Phi0: nodal Phi0.
         rho: the fixed regularisation parameter.
         rho0: start of the path on the first evaluation.
+        rho_factor: rho is divided by this factor along that path.
         prefix: options prefix of the Newton system's KSP.
     """
 
@@ -233,11 +234,12 @@ class RegularisedQVIMap(CompositeMap):
         Phi0: fem.Function,
         rho: float,
         rho0: float = 1.0,
+        rho_factor: float = 10.0,
         prefix: str = "qvi_newton_",
     ):
         super().__init__(pfmy.problem)
         self.temperature, self.pfmy, self.Phi0, self.rho = temperature, pfmy, Phi0, rho
-        self.path = rho_path(rho0, rho, 10.0) if rho < rho0 else [rho]
+        self.path = rho_path(rho0, rho, rho_factor) if rho < rho0 else [rho]
         p = self.problem
         w, q = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
         penalty = huber_derivative(p.u - p.obstacle, pfmy.rho) / pfmy.rho * w * q * p.dx

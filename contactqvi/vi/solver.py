@@ -11,7 +11,7 @@ from contactqvi.vi.pdas import PrimalDualActiveSet
 from contactqvi.vi.problem import ObstacleProblem
 from contactqvi.vi.snes_vi import SNESVariationalInequality
 
-__all__ = ["OBSTACLE_PARAMETERS", "ObstacleResult", "ObstacleSolver", "rho_path"]
+__all__ = ["OBSTACLE_PARAMETERS", "ObstacleResult", "ObstacleSolver", "check_obstacle_parameters", "rho_path"]
 
 OBSTACLE_PARAMETERS: ParameterTable = {
     "method": ("pfmy-pdas", "S-solver: 'pfmy-pdas' (PFMY path + PDAS restoration) or 'vinewtonrsls' (PETSc SNES VI)"),
@@ -61,6 +61,13 @@ def _check(params: dict[str, typing.Any]) -> None:
     require(params["pdas_max_iterations"] >= 1, "pdas_max_iterations", "must be >= 1")
 
 
+def check_obstacle_parameters(overrides: dict | None) -> dict[str, typing.Any]:
+    """:data:`OBSTACLE_PARAMETERS` with ``overrides``, checked; a ParameterError names a bad one."""
+    params = merge_parameters(OBSTACLE_PARAMETERS, overrides)
+    _check(params)
+    return params
+
+
 class ObstacleSolver:
     """Evaluate S: solve the obstacle problem for the current obstacle/source of ``problem``.
 
@@ -71,8 +78,7 @@ class ObstacleSolver:
     """
 
     def __init__(self, problem: ObstacleProblem, parameters: dict | None = None, prefix: str = "obstacle_"):
-        self.params = merge_parameters(OBSTACLE_PARAMETERS, parameters)
-        _check(self.params)
+        self.params = check_obstacle_parameters(parameters)
         self.problem = problem
         self.warm = False
         if self.params["method"] == "pfmy-pdas":
