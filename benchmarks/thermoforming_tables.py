@@ -59,7 +59,9 @@ def solve(test: int, h: float, method: str, obstacle: dict | None = None, **oute
     setup = build(problem, msh, method, params, obstacle)
     start = time.perf_counter()
     result = setup.solver.solve(setup.initial)
-    return result, time.perf_counter() - start
+    seconds = time.perf_counter() - start
+    setup.destroy()
+    return result, seconds
 
 
 def _fmt(ours, paper) -> str:

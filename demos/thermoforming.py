@@ -18,7 +18,6 @@ with '-' go to PETSc, e.g. ``-qvi_newton_pc_factor_mat_solver_type superlu_dist`
 
 from __future__ import annotations
 
-import logging
 import sys
 import time
 
@@ -35,7 +34,6 @@ from contactqvi.problems import thermoforming as data
 from contactqvi.qvi import OUTER_METHODS, build, create_mesh
 from contactqvi.qvi import postprocess
 
-logger = logging.getLogger("thermoforming")
 
 #: mesh sizes of the paper's figures: Fig. 1/Table 1 (h = 5e-4), Fig. 3 (h = 0.02), Table 3 (h = 0.01 row)
 DEFAULT_H = {1: 5e-4, 2: 5e-4, 3: 0.02, 4: 0.01}
@@ -64,7 +62,7 @@ def parse(argv: list[str] | None = None):
     parser.add_argument("--no-compare", action="store_true", help="skip the Alg. 2 / C1 / C2 comparison (Fig. 3(d))")
     parser.add_argument("--no-plots", action="store_true", help="skip the PNGs")
     args = cli.parse_args(parser, argv)
-    require(args.test in data.TESTS, "test", f"unknown test {args.test!r}; known: 1, 2, 3, 4")
+    require(args.test in data.TESTS, "test", f"unknown test {args.test!r}; known: {', '.join(map(str, data.TESTS))}")
     require(args.method in OUTER_METHODS, "method", f"unknown method {args.method!r}; known: {', '.join(OUTER_METHODS)}")
     if args.h is None:
         args.h = DEFAULT_H[args.test]
@@ -147,7 +145,8 @@ def main(argv: list[str] | None = None) -> int:
             label = method if rho is None else f"c2 (rho={rho:g})"
             if label in histories:
                 continue
-            _, other, secs = run(args, method, rho)
+            other_setup, other, secs = run(args, method, rho)
+            other_setup.destroy()
             histories[label] = other.residuals
             comparisons[label] = {"status": other.status, "iterations": other.iterations, "seconds": secs}
     write_output(args, setup, result, histories)
@@ -176,6 +175,7 @@ def main(argv: list[str] | None = None) -> int:
     io.write_summary(comm, io.prepare_output_dir(comm, args.output) / "summary.json", summary)
     if comm.rank == 0:
         print(f"||u||_L2 = {l2:.12e}  ({result.status}, {result.iterations} outer iterations, totals {result.totals})")
+    setup.destroy()
     return 0 if result.converged else 1
 
 

@@ -107,6 +107,29 @@ def test_unknown_projection_derivative_is_rejected():
     assert info.value.name == "projection_derivative"
 
 
+@pytest.mark.parametrize(
+    "params, name",
+    [({"max_backtracks": -1}, "max_backtracks"), ({"max_iterations": 2.5}, "max_iterations"),
+     ({"armijo_c": 1.0}, "armijo_c"), ({"divergence_limit": 0.0}, "divergence_limit")],
+)  # fmt: skip
+def test_bad_outer_parameters_are_rejected(params, name):
+    msh, _ = create_mesh(MPI.COMM_WORLD, 1, 0.1)
+    with pytest.raises(ParameterError) as info:
+        build(thermoforming.test2(), msh, "c3", params)
+    assert info.value.name == name
+
+
+def test_c3_reports_a_failed_line_search():
+    # R = 4.944 with the exact G_PB (Table 1): without step reductions, every second full step
+    # increases the residual; C3 takes it, and says so.
+    data = thermoforming.test2()
+    msh, _ = create_mesh(MPI.COMM_WORLD, 1, 0.02)
+    setup = build(data, msh, "c3", {"tol": 1e-10, "radius": 4.944, "max_iterations": 4, "max_backtracks": 0})
+    result = setup.solver.solve(setup.initial)
+    assert result.taken[1:] == ["linesearch(1)", "linesearch-failed(1)"] * 2
+    assert result.residuals[2] > result.residuals[1]
+
+
 def test_without_projection_both_find_the_inactive_solution_u2():
     # Without localisation the iteration from u0 = 100 x (1 - x) reaches u2 = alpha1 sin(pi x) (Sect. 4.3).
     data = thermoforming.test2()

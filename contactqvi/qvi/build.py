@@ -50,6 +50,12 @@ class QVISetup:
     initial: fem.Function
     Phi0: fem.Function
 
+    def destroy(self) -> None:
+        """Free the PETSc objects of the whole stack (collective)."""
+        self.solver.destroy()
+        self.fmap.destroy()
+        PETSc.garbage_cleanup(self.V.mesh.comm)
+
 
 def _interpolate(V: fem.FunctionSpace, expr: ufl.core.expr.Expr, name: str) -> fem.Function:
     f = fem.Function(V, name=name)

@@ -19,6 +19,7 @@ projection P_B of Sect. 2.3 is active, see :mod:`contactqvi.qvi.outer`).
 from __future__ import annotations
 
 import dataclasses
+import typing
 
 from petsc4py import PETSc
 
@@ -68,7 +69,8 @@ class CompositeMap:
     """Shared parts: the obstacle problem, lumped mass, stiffness without BCs, the Newton system.
 
     Subclasses allocate their blocks once, create :attr:`system` from them, and
-    re-assemble the state-dependent ones in place in ``linearize``.
+    re-assemble the state-dependent ones in place in ``linearize``. A map owns the
+    problem and the solvers it is given: :meth:`destroy` frees them too.
     """
 
     def __init__(self, problem: ObstacleProblem):
@@ -86,6 +88,7 @@ class CompositeMap:
         self.boundary = ~problem.free
         self.system: BlockNewtonSystem | None = None
         self._matrices: list[PETSc.Mat] = [self.stiffness, self.mass, self.negative_mass]
+        self._parts: list[typing.Any] = []
 
     def _own(self, A: PETSc.Mat) -> PETSc.Mat:
         """Register a matrix allocated by this map (destroyed with it)."""
@@ -117,8 +120,8 @@ class CompositeMap:
     def destroy(self) -> None:
         self.system.destroy()
         self.lumped_mass.destroy()
-        for A in self._matrices:
-            A.destroy()
+        for obj in self._matrices + self._parts + [self.problem]:
+            obj.destroy()
 
 
 class ObstacleQVIMap(CompositeMap):
@@ -134,6 +137,7 @@ class ObstacleQVIMap(CompositeMap):
     def __init__(self, temperature: TemperatureMap, solver: ObstacleSolver, Phi0: fem.Function, prefix: str = "qvi_newton_"):
         super().__init__(solver.problem)
         self.temperature, self.solver, self.Phi0 = temperature, solver, Phi0
+        self._parts += [temperature, solver]
         tm = temperature
         phi = tm.varphi.x.array[: self.n_owned]
         # constant blocks of (68): -M_L diag(varphi) in (62), A diag(varphi) = (grad I_h(varphi .), grad q) in (64).
@@ -188,6 +192,7 @@ class SemilinearVIMap(CompositeMap):
     def __init__(self, solver: ObstacleSolver, y: fem.Function, coupling: ufl.Form, prefix: str = "qvi_newton_"):
         super().__init__(solver.problem)
         self.solver, self.y = solver, y
+        self._parts.append(solver)
         self.coupling_form = fem.form(coupling)
         self.coupling = self._own(dolfinx.fem.petsc.assemble_matrix(self.coupling_form))
         self.coupling.assemble()
@@ -239,6 +244,7 @@ class RegularisedQVIMap(CompositeMap):
     ):
         super().__init__(pfmy.problem)
         self.temperature, self.pfmy, self.Phi0, self.rho = temperature, pfmy, Phi0, rho
+        self._parts += [temperature, pfmy]
         self.path = rho_path(rho0, rho, rho_factor) if rho < rho0 else [rho]
         p = self.problem
         w, q = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)

@@ -74,7 +74,8 @@ class FixedPointResult:
         method: outer method name.
         status: ``converged``, ``max_iterations``, ``diverged`` or ``inner_failure``.
         residuals: ||R(u_i)||_H1 for i = 0, 1, ...
-        taken: per iteration the candidate taken (``newton``, ``fixed-point``, ``linesearch(alpha)``).
+        taken: per iteration the candidate taken (``newton``, ``fixed-point``, ``linesearch(alpha)``,
+            ``linesearch-failed(alpha)``: no sufficient decrease within ``max_backtracks``).
         counts: per iteration the inner counts (iteration 0 is the initial evaluation).
         errors: ||u_i - u_exact||_{H^1_0} when an exact solution was given.
         solution: the last iterate u_i.
@@ -125,7 +126,11 @@ def _eocs(e: list[float]) -> list[float]:
 def _check(params: dict[str, typing.Any]) -> None:
     require(params["method"] in METHODS, "method", f"unknown outer method {params['method']!r}; known: {', '.join(METHODS)}")
     require_positive("tol", params["tol"], allow_zero=True)
-    require(int(params["max_iterations"]) >= 0, "max_iterations", "must be >= 0")
+    for name in ("max_iterations", "max_backtracks"):
+        value = params[name]
+        require(isinstance(value, (int, np.integer)) and value >= 0, name, f"must be an integer >= 0, got {value!r}")
+    require(0 < params["armijo_c"] < 1, "armijo_c", f"must lie in (0, 1), got {params['armijo_c']!r}")
+    require_positive("divergence_limit", params["divergence_limit"])
     if params["radius"] is not None:
         require_positive("radius", params["radius"])
     require(
@@ -272,18 +277,19 @@ class FixedPointSolver:
     def _linesearch(self, x: np.ndarray, d: np.ndarray, res: float, step_counts: dict[str, int]):
         """Backtracking Armijo on f = ||R||^2/2 along the Newton direction (f'(0) = -||R||^2)."""
         f0, slope = 0.5 * res**2, -(res**2)
-        alpha, accepted = 1.0, 1.0
+        alpha = 1.0
         for _ in range(self.params["max_backtracks"] + 1):
             x_t = x + alpha * d
             ev_t, res_t = self.evaluate(x_t)
             _add(step_counts, ev_t.counts)
-            f_t, accepted = 0.5 * res_t**2, alpha
+            f_t = 0.5 * res_t**2
             if f_t <= f0 + self.params["armijo_c"] * alpha * slope:
-                break
+                return x_t, ev_t, res_t, f"linesearch({alpha:.3g})"
             denominator = 2.0 * (f_t - f0 - slope * alpha)
             trial = -slope * alpha**2 / denominator if denominator > 0 else 0.5 * alpha
-            alpha = min(max(trial, 0.1 * alpha), 0.5 * alpha)
-        return x_t, ev_t, res_t, f"linesearch({accepted:.3g})"
+            last, alpha = alpha, min(max(trial, 0.1 * alpha), 0.5 * alpha)
+        # No sufficient decrease after max_backtracks reductions: the smallest step is taken, and says so.
+        return x_t, ev_t, res_t, f"linesearch-failed({last:.3g})"
 
     def destroy(self) -> None:
         for obj in (self.h1, self.work, self.image):
