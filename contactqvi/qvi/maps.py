@@ -143,7 +143,7 @@ class ObstacleQVIMap(CompositeMap):
         # constant blocks of (68): -M_L diag(varphi) in (62), A diag(varphi) = (grad I_h(varphi .), grad q) in (64).
         # The columns of boundary nodes are zero: delta u = mu + eta vanishes there, so the harmonic extension
         # (64) sees eta = 0 on the boundary. This matters only if varphi != 0 on the boundary, which the paper
-        # excludes (Sect. 3.2 ii)).
+        # excludes (Assumption 3.8 ii)).
         varphi_mass = self._own(self._diag(-self.lumped_mass.array * phi))
         varphi_stiffness = self._own(self.stiffness.duplicate(copy=True))
         interior_varphi = tm.varphi.x.petsc_vec.copy()
