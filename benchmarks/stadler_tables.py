@@ -102,13 +102,14 @@ DISCRETISATION_NOTE = """# Seed 002 (Stadler 2004): paper vs contactqvi
 
 * Paper: five-point finite differences on an N x N grid, one-sided differences for the normal
   derivative, multiplier and sets at the boundary grid points.
-* Here: continuous Q1 finite elements on the unit square with N grid points per direction
-  (N - 1 cells, so the vertices are the paper's grid points), load integrated with a degree-4
-  rule (3 x 3 Gauss points; 2 x 2 for Example 1, see below), and the multiplier lambda (and xi) as *nodal* values on Gamma_f with the lumped boundary
-  mass m_i = int_{Gamma_f} phi_i ds. Then (3.2a) reads K y + M lambda = F with M diagonal, the
-  complementarity (3.2c)/(3.3) and the sets A-, A+, I are nodewise, and
-  ||v||_{L2(Gamma_f)} = (sum_i m_i v_i^2)^(1/2) is exact for nodal vectors. Nodes on Gamma_f that
-  are Dirichlet nodes (the corners of Example 1) carry no multiplier.
+* Here: continuous Q1 finite elements on the unit square with N grid points per direction (N - 1
+  cells, so the vertices are the paper's grid points), load integrated with a degree-4 rule (3 x
+  3 Gauss points; 2 x 2 for Example 1, see below), and the multiplier lambda (and xi) as *nodal*
+  values on Gamma_f with the lumped boundary mass m_i = int_{Gamma_f} phi_i ds. Then (3.2a)
+  reads K y + M lambda = F with M diagonal, the complementarity (3.2c)/(3.3) and the sets A-,
+  A+, I are nodewise, and ||v||_{L2(Gamma_f)} = (sum_i m_i v_i^2)^(1/2) is exact for nodal
+  vectors. Nodes on Gamma_f that are Dirichlet nodes (the corners of Example 1) carry no
+  multiplier.
 * Both schemes approximate the same continuous problem, but the discrete Neumann-to-Dirichlet
   maps C_h differ (the FE boundary row contains half a cell of tangential stiffness and load;
   the FD row is a one-sided difference). On smooth boundary functions they agree (largest

@@ -181,8 +181,8 @@ def main(argv: list[str] | None = None) -> int:
             max_outer=args.alm_steps, max_inner=args.max_iterations,
         )  # fmt: skip
         summary.update(
-            sigma=args.sigma, alm_inner=args.alm_inner, alm_schedule=args.alm_schedule, outer_iterations=result.outer_iterations,
-            inner_iterations=[h["inner_iterations"] for h in result.history], linear_solves=result.linear_solves,
+            sigma=args.sigma, alm_inner=args.alm_inner, alm_schedule=args.alm_schedule,
+            outer_iterations=result.outer_iterations, inner_iterations=[h["inner_iterations"] for h in result.history], linear_solves=result.linear_solves,
             history=result.history,
         )  # fmt: skip
         y, lam = result.y, result.lam
