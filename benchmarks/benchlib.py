@@ -66,12 +66,7 @@ def merge_rows(path: pathlib.Path, rows: list[dict], key: tuple[str, ...]) -> li
 
 def emit(comm: MPI.Comm, out: pathlib.Path, name: str, rows: list[dict], markdown: str) -> None:
     """Write ``name.json`` (machine + rows) and ``name.md`` atomically on rank 0 and print the table."""
-    io.write_summary(comm, out / f"{name}.json", {"machine": machine(comm), "rows": rows})
-    with io.atomic_path(comm, out / f"{name}.md") as tmp:
-        if comm.rank == 0:
-            tmp.write_text(markdown)
-    if comm.rank == 0:
-        print(markdown, flush=True)
+    io.write_table(comm, out / name, {"machine": machine(comm), "rows": rows}, markdown)
 
 
 def run_coulomb_case(

@@ -26,6 +26,8 @@ __all__ = [
     "prepare_output_dir",
     "atomic_path",
     "write_summary",
+    "markdown_table",
+    "write_table",
     "write_vtx",
     "write_xdmf",
     "read_xdmf_point_data",
@@ -97,6 +99,37 @@ def write_summary(comm: MPI.Comm, path: str | os.PathLike, summary: dict[str, ty
     with atomic_path(comm, path) as tmp:
         if comm.rank == 0:
             tmp.write_text(json.dumps(_to_builtin(summary), indent=2, sort_keys=False) + "\n")
+
+
+def markdown_table(header: typing.Sequence[str], rows: typing.Iterable[typing.Sequence[typing.Any]]) -> str:
+    """A GitHub markdown table; floats in ``%.3g``, None as an en dash."""
+
+    def cell(value: typing.Any) -> str:
+        if value is None:
+            return "\u2013"
+        if isinstance(value, float):
+            return f"{value:.3g}"
+        return str(value)
+
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in rows]
+    return "\n".join(lines) + "\n"
+
+
+def write_table(
+    comm: MPI.Comm, stem: str | os.PathLike, data: dict[str, typing.Any], markdown: str, echo: bool = True
+) -> None:
+    """Write ``stem.json`` (``data``) and ``stem.md`` (``markdown``) atomically on rank 0.
+
+    The one writer of every benchmark table; ``echo`` also prints the markdown.
+    """
+    stem = pathlib.Path(stem)
+    write_summary(comm, stem.with_suffix(".json"), data)
+    with atomic_path(comm, stem.with_suffix(".md")) as tmp:
+        if comm.rank == 0:
+            tmp.write_text(markdown)
+    if echo and comm.rank == 0:
+        print(markdown, flush=True)
 
 
 def write_vtx(path: str | os.PathLike, functions: list[fem.Function]) -> None:

@@ -19,7 +19,12 @@ from petsc4py import PETSc
 import dolfinx.fem.petsc
 from dolfinx import fem
 
+from contactqvi.parameters import require_choice
+
 __all__ = [
+    "KSP_PRESETS",
+    "OptionsDict",
+    "preset",
     "default_options",
     "create_ksp",
     "create_snes",
@@ -29,6 +34,65 @@ __all__ = [
 ]
 
 OptionsDict = dict[str, typing.Any]
+
+_GMRES_RIGHT = {"ksp_type": "gmres", "ksp_pc_side": "right", "ksp_norm_type": "unpreconditioned", "ksp_gmres_restart": 200}
+
+#: Named linear-solver presets, each a set of PETSc options applied under the
+#: caller's prefix (anything given on the command line under that prefix wins).
+#: Measured choices are in docs/coulomb.md and benchmarks/results/.
+#:
+#: * ``lu``: exact solves by MUMPS (``preonly``).
+#: * ``cg_gamg``: CG + smoothed-aggregation AMG (SPD elasticity/Poisson systems;
+#:   give the matrix the rigid-body near-nullspace, :func:`contactqvi.elasticity.rigid_motions_nullspace`).
+#: * ``gmres_gamg``: GMRES stopped at the *unpreconditioned* relative residual
+#:   ||b - J x|| <= rtol ||b||, right-preconditioned by one W-cycle of GAMG. The
+#:   Newton-step solver of the Coulomb problem: AMG reduces all error components
+#:   alike, so a residual reduced by tol is a direction accurate to about tol, and
+#:   the W-cycle lowers the residual a step actually reaches against the V-cycle
+#:   (lev 6 d3/L2, geometric mean 0.046 vs 0.055; lev 5-8, 369 instead of 416
+#:   Newton steps). GAMG reads the cycle type when it builds its levels.
+#: * ``gmres_ilu``: GMRES + block-Jacobi/ILU(0) as in seed 000, Sect. 7, stopped at
+#:   the left-preconditioned residual (MATLAB's gmres test with a preconditioner).
+#:   A 10 % reduction of that residual is met by directions that miss the smooth
+#:   part of the solution, which costs Newton steps from lev 6 on.
+#: * ``gmres_hypre``: as ``gmres_gamg`` with BoomerAMG (scalar coarsening; its
+#:   nodal/vector interpolation variants broke down on eliminated rows here).
+#: * ``cg_jacobi``: CG + point Jacobi (cheap, for well-conditioned mass-like systems).
+KSP_PRESETS: dict[str, OptionsDict] = {
+    "lu": {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"},
+    "cg_gamg": {"ksp_type": "cg", "ksp_norm_type": "unpreconditioned", "pc_type": "gamg"},
+    "gmres_gamg": {
+        **_GMRES_RIGHT,
+        "ksp_max_it": 2000,
+        "pc_type": "gamg",
+        "pc_gamg_type": "agg",
+        "pc_mg_cycle_type": "w",
+        "pc_gamg_reuse_interpolation": True,
+    },
+    "gmres_ilu": {
+        "ksp_type": "gmres",
+        "ksp_pc_side": "left",
+        "ksp_norm_type": "preconditioned",
+        "ksp_gmres_restart": 200,
+        "ksp_max_it": 5000,
+        "pc_type": "bjacobi",
+        "sub_pc_type": "ilu",
+    },
+    "gmres_hypre": {
+        **_GMRES_RIGHT,
+        "ksp_max_it": 2000,
+        "pc_type": "hypre",
+        "pc_hypre_type": "boomeramg",
+        "pc_hypre_boomeramg_strong_threshold": 0.5,
+    },
+    "cg_jacobi": {"ksp_type": "cg", "pc_type": "jacobi"},
+}
+
+
+def preset(name: str, **overrides: typing.Any) -> OptionsDict:
+    """A copy of the options of preset ``name`` (:data:`KSP_PRESETS`), with ``overrides``."""
+    require_choice("pc", name, KSP_PRESETS)
+    return {**KSP_PRESETS[name], **overrides}
 
 
 @contextlib.contextmanager

@@ -1,0 +1,104 @@
+"""One status and one result for every solver of contactqvi.
+
+:class:`Status` follows PETSc's ``KSPConvergedReason``/``SNESConvergedReason``: a
+positive value converged, a negative one did not, zero is still iterating, and
+every value is named. :class:`Result` holds what every iterative solver reports
+(status, iteration counts, timings, history); each family derives its result from
+it and adds its own fields, never re-declaring these.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import enum
+import time
+import typing
+
+__all__ = ["Result", "Status", "Timings"]
+
+
+class Status(enum.IntEnum):
+    """Why a solver stopped. ``status > 0``: converged; ``status < 0``: not converged."""
+
+    ITERATING = 0
+    #: residual <= rtol * initial residual
+    CONVERGED_RTOL = 2
+    #: residual <= atol
+    CONVERGED_ATOL = 3
+    #: the active set (or contact state) repeated: an exact solution of the discrete problem
+    CONVERGED_ACTIVE_SET = 4
+    #: the change of the iterate (or of the multiplier) fell below its tolerance
+    CONVERGED_STEP = 5
+    #: an inexact inner solve reached the residual reduction asked of it
+    CONVERGED_INEXACT = 6
+    #: a fixed number of steps was asked for, with no stopping test, and done
+    CONVERGED_ITERATIONS = 7
+    #: the iteration limit was reached before the stopping test held
+    DIVERGED_MAX_IT = -3
+    #: a linear (Krylov or direct) solve failed
+    DIVERGED_LINEAR_SOLVE = -4
+    #: an inner solver (nested method) did not converge
+    DIVERGED_INNER = -5
+    #: the line search found no acceptable step
+    DIVERGED_LINE_SEARCH = -6
+    #: the active sets returned to an earlier configuration
+    DIVERGED_CYCLING = -7
+    #: the residual exceeded the divergence limit or is not finite
+    DIVERGED_DTOL = -8
+
+    @property
+    def converged(self) -> bool:
+        """True for every positive (converged) status."""
+        return self > 0
+
+    def __str__(self) -> str:
+        return self.name.lower()
+
+
+class Timings(dict):
+    """Wall-clock seconds per named phase, accumulated over calls of :meth:`phase`."""
+
+    @contextlib.contextmanager
+    def phase(self, name: str) -> typing.Iterator[None]:
+        """Add the time spent in the ``with`` block to the phase ``name``."""
+        start = time.perf_counter()
+        try:
+            yield
+        finally:
+            self[name] = self.get(name, 0.0) + time.perf_counter() - start
+
+
+@dataclasses.dataclass(kw_only=True)
+class Result:
+    """What every iterative solver reports.
+
+    Attributes:
+        status: why the solver stopped (:class:`Status`).
+        iterations: outer iterations (Newton steps, active-set solves, ...).
+        inner_iterations: iterations of the inner solver summed over the run
+            (Krylov iterations, inner Newton steps; 0 when there is none).
+        timings: seconds per phase.
+        history: one dict per iteration, written to ``summary.json``.
+    """
+
+    status: Status
+    iterations: int
+    inner_iterations: int = 0
+    timings: Timings = dataclasses.field(default_factory=Timings)
+    history: list[dict[str, typing.Any]] = dataclasses.field(default_factory=list)
+
+    @property
+    def converged(self) -> bool:
+        return self.status.converged
+
+    def summary(self) -> dict[str, typing.Any]:
+        """The common fields as plain data for ``summary.json``."""
+        return {
+            "status": str(self.status),
+            "converged": self.converged,
+            "iterations": self.iterations,
+            "inner_iterations": self.inner_iterations,
+            "timings": dict(self.timings),
+            "history": self.history,
+        }
