@@ -46,6 +46,10 @@ class ContactProblem:
         contact_facets: local facet indices of the contact boundary (for output on it).
         contact_area: lumped contact-surface area of each owned contact node (m^2).
         law: slip bound of the nodal friction law (Coulomb, Tresca or none).
+        frames: (m, 3, 3) orthonormal frame of each owned contact node; rows t1, t2, n
+            in global coordinates, n the obstacle's normal pointing into the body. The
+            nodal components (two tangential, then normal) of u, the forces and the
+            law are taken in this frame.
         dirichlet_dofs_loc: local unrolled indices of Dirichlet dofs (incl. ghosts).
         n_contact: global number p of contact nodes.
         n_free: global number n of free dofs.
@@ -59,6 +63,7 @@ class ContactProblem:
     contact_facets: np.ndarray
     contact_area: np.ndarray
     law: FrictionLaw
+    frames: np.ndarray
     dirichlet_dofs_loc: np.ndarray
     n_contact: int
     n_free: int
@@ -154,6 +159,7 @@ def build_contact_problem(
         contact_facets=contact_facets,
         contact_area=contact_area,
         law=FrictionLaw(float(friction), float(slip_bound) * contact_area),
+        frames=np.broadcast_to(np.eye(3), (len(contact_blk), 3, 3)).copy(),
         dirichlet_dofs_loc=(3 * dirichlet_blk[:, None] + np.arange(3)).ravel().astype(np.int32),
         n_contact=comm.allreduce(len(contact_blk), op=MPI.SUM),
         n_free=comm.allreduce(3 * n_owned - n_dirichlet_owned, op=MPI.SUM),
