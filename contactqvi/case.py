@@ -1,0 +1,556 @@
+"""Contact cases: a user's contact problem as a TOML file or as Python dataclasses.
+
+A case file is data, not code (stdlib :mod:`tomllib`); it maps one-to-one onto
+:class:`ContactCase`, whose sections tests and notebooks may also build directly.
+SI units throughout (m, Pa, N/m^3). Example::
+
+    [mesh]
+    file = "../meshes/arch_block.geo"   # gmsh .geo/.msh, relative to this file
+    # box = {lev = 5, geometry = "d3"}  # ... or the body Omega(d) of seed 000, Sect. 7
+
+    [material]
+    young = 70e9                        # Young's modulus E (Pa)
+    poisson = 0.334                     # Poisson's ratio nu, in (-1, 0.5)
+
+    [boundary]
+    clamped = ["dirichlet"]             # physical groups with u = 0
+    body_force = [0.0, 0.0, -26500.0]   # optional (N/m^3)
+    [boundary.displacement.symmetry_y]  # optional: prescribed components (m) of u
+    y = 0.0
+    [boundary.traction]                 # surface tractions (Pa) per physical group
+    top = [0.0, 0.0, -1e9]
+
+    [contact]
+    surface = "contact"                 # physical group that may touch the obstacle
+    law = "coulomb"                     # or "tresca"
+    friction = 0.23                     # Coulomb coefficient F >= 0 (law = "coulomb")
+    # slip_bound = 1e8                  # Tresca bound (Pa, law = "tresca")
+
+    [obstacle]                          # rigid; the body lies on the side of `normal`,
+    type = "plane"                      # outside a sphere or cylinder
+    point = [0.0, 0.0, 0.0]             # plane: point, normal (normalised here)
+    normal = [0.0, 0.0, 1.0]            # sphere: center, radius; cylinder: point, axis, radius
+
+    [[steps]]                           # load path; none = one step, load 1, no translation
+    load = 0.5                          # factor on tractions and body force
+    translation = [0.0, 0.0, 0.0]       # obstacle translation (m) from its initial position
+    [[steps]]
+    load = 1.0
+
+    [solver]                            # SCD Newton parameters, names as in demos/coulomb3d.py
+    pc = "gamg"
+    tol = 0.1
+
+    [petsc]                             # PETSc options under the solver's prefix
+    ksp_monitor = true                  # true: a flag without value
+
+:func:`load_case` validates everything that needs no mesh before any expensive
+work; errors are :class:`~contactqvi.parameters.ParameterError` named by the key
+path (``obstacle.normal``, ``steps[2].translation``), unknown keys name the
+closest valid one. Checks that need the mesh belong to the problem builder;
+:func:`check_groups` does the physical-group part of them.
+"""
+
+from __future__ import annotations
+
+import collections.abc
+import dataclasses
+import difflib
+import math
+import pathlib
+import tomllib
+import typing
+
+from contactqvi.parameters import ParameterError, require, require_choice, require_positive
+
+__all__ = [
+    "LAWS",
+    "OBSTACLE_KEYS",
+    "Boundary",
+    "Contact",
+    "ContactCase",
+    "Displacement",
+    "Material",
+    "MeshSource",
+    "Obstacle",
+    "PaperBody",
+    "Step",
+    "check_groups",
+    "load_case",
+    "parse_case",
+]
+
+#: Friction laws of ``contact.law``.
+LAWS = ("coulomb", "tresca")
+#: Keys of ``[obstacle]`` besides ``type``, per obstacle type.
+OBSTACLE_KEYS: dict[str, tuple[str, ...]] = {
+    "plane": ("point", "normal"),
+    "sphere": ("center", "radius"),
+    "cylinder": ("point", "axis", "radius"),
+}
+
+Vector = tuple[float, float, float]
+
+
+@dataclasses.dataclass(frozen=True)
+class PaperBody:
+    """``mesh.box``: the body Omega(d) of seed 000, Sect. 7 (hexahedra, named facets
+    ``dirichlet``, ``right``, ``top``, ``contact``, ``front``, ``back``).
+
+    Attributes:
+        lev: discretisation level (Table 2), an integer >= 0.
+        geometry: bottom surface d, one of ``d1``, ``d2``, ``d3``
+            (:data:`contactqvi.problems.coulomb.GEOMETRIES`).
+    """
+
+    lev: int = 5
+    geometry: str = "d1"
+
+
+@dataclasses.dataclass(frozen=True)
+class MeshSource:
+    """``[mesh]``: where the body comes from; exactly one of ``file`` and ``box``.
+
+    Attributes:
+        file: a gmsh ``.geo`` or ``.msh`` file whose physical groups name the
+            boundaries (in a case file: relative to the case file).
+        box: the paper's body instead of a file.
+    """
+
+    file: pathlib.Path | None = None
+    box: PaperBody | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class Material:
+    """``[material]``: isotropic linear elasticity.
+
+    Attributes:
+        young: Young's modulus E (Pa), > 0.
+        poisson: Poisson's ratio nu, in (-1, 0.5).
+    """
+
+    young: float
+    poisson: float
+
+
+@dataclasses.dataclass(frozen=True)
+class Displacement:
+    """``[boundary.displacement.NAME]``: prescribed components of u (m) on a group;
+    ``None`` leaves a component free (e.g. ``Displacement(y=0.0)``: a roller on y = const).
+    """
+
+    x: float | None = None
+    y: float | None = None
+    z: float | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class Boundary:
+    """``[boundary]``: conditions on physical groups of the mesh.
+
+    Attributes:
+        clamped: groups with u = 0.
+        displacement: group -> prescribed components of u (m).
+        traction: group -> surface traction [tx, ty, tz] (Pa), scaled by the step's load.
+        body_force: [fx, fy, fz] (N/m^3), scaled by the step's load; ``None``: none.
+    """
+
+    clamped: tuple[str, ...] = ()
+    displacement: dict[str, Displacement] = dataclasses.field(default_factory=dict)
+    traction: dict[str, Vector] = dataclasses.field(default_factory=dict)
+    body_force: Vector | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class Contact:
+    """``[contact]``: the surface that may touch the obstacle, and its friction law.
+
+    Attributes:
+        surface: physical group of the contact surface.
+        law: ``coulomb`` (slip bound F x normal force) or ``tresca`` (given bound).
+        friction: Coulomb coefficient F >= 0 (law ``coulomb`` only; 0 = frictionless).
+        slip_bound: Tresca bound on the friction traction (Pa) > 0 (law ``tresca`` only).
+    """
+
+    surface: str
+    law: str = "coulomb"
+    friction: float | None = None
+    slip_bound: float | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class Obstacle:
+    """``[obstacle]``: a rigid obstacle in its initial position.
+
+    ``type = "plane"``: ``point``, unit ``normal`` pointing into the body's side;
+    ``"sphere"``: ``center``, ``radius``; ``"cylinder"``: ``point`` on the axis,
+    ``axis``, ``radius``. The body lies outside a sphere or cylinder. Directions
+    are normalised when the case is checked; lengths in m.
+    """
+
+    type: str
+    point: Vector | None = None
+    normal: Vector | None = None
+    center: Vector | None = None
+    axis: Vector | None = None
+    radius: float | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class Step:
+    """``[[steps]]``: one load step of the quasi-static path.
+
+    Attributes:
+        load: factor on the tractions and the body force.
+        translation: rigid translation of the obstacle (m), total at this step,
+            relative to its initial position.
+    """
+
+    load: float = 1.0
+    translation: Vector = (0.0, 0.0, 0.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class ContactCase:
+    """A contact problem: body, material, boundary conditions, obstacle, load path, solver.
+
+    Every value is checked and normalised on construction (vectors become tuples of
+    floats, the plane normal and cylinder axis unit vectors; no steps become one
+    step with load 1 and no translation); :class:`ParameterError` names the key path.
+
+    Attributes:
+        mesh, material, boundary, contact, obstacle: the sections of the same names.
+        steps: the load path, at least one step.
+        solver: SCD Newton parameters (names of ``contactqvi.contact.scd_newton.PARAMETERS``).
+        petsc: PETSc options (without ``-`` and prefix) set under the solver's prefix;
+            ``True`` is a flag without value.
+    """
+
+    mesh: MeshSource
+    material: Material
+    boundary: Boundary
+    contact: Contact
+    obstacle: Obstacle
+    steps: tuple[Step, ...] = ()
+    solver: dict[str, typing.Any] = dataclasses.field(default_factory=dict)
+    petsc: dict[str, typing.Any] = dataclasses.field(default_factory=dict)
+
+    def __post_init__(self):
+        checked = {
+            "mesh": _check_mesh(self.mesh),
+            "material": _check_material(self.material),
+            "boundary": _check_boundary(self.boundary),
+            "contact": _check_contact(self.contact),
+            "obstacle": _check_obstacle(self.obstacle),
+            "steps": _check_steps(self.steps),
+            "solver": _check_solver(self.solver),
+            "petsc": _check_petsc(self.petsc),
+        }
+        for name, value in checked.items():
+            object.__setattr__(self, name, value)
+        _check_consistency(self)
+
+    @property
+    def groups(self) -> list[str]:
+        """The physical groups the case names, each once, in file order."""
+        names = [*self.boundary.clamped, *self.boundary.displacement, *self.boundary.traction, self.contact.surface]
+        return list(dict.fromkeys(names))
+
+    def to_dict(self) -> dict[str, typing.Any]:
+        """The case as the tables of a case file (JSON-ready: lists, strings; unset keys left out)."""
+        return _plain(self)
+
+
+# -- reading -----------------------------------------------------------------------
+
+
+def load_case(path: str | pathlib.Path) -> ContactCase:
+    """Read and check the case file ``path`` (``mesh.file`` is relative to it)."""
+    path = pathlib.Path(path)
+    require(path.is_file(), "case", f"case file {str(path)!r} not found")
+    try:
+        with path.open("rb") as f:
+            data = tomllib.load(f)
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError("case", f"{path}: invalid TOML: {exc}") from None
+    return parse_case(data, path.parent)
+
+
+def parse_case(data: collections.abc.Mapping, base_dir: str | pathlib.Path = ".") -> ContactCase:
+    """The :class:`ContactCase` of the tables ``data`` of a case file.
+
+    Args:
+        data: the parsed TOML document.
+        base_dir: directory a relative ``mesh.file`` is taken from.
+    """
+    top = _table(data, "", ContactCase, required=False)
+    mesh = _section(top, "mesh", MeshSource)
+    if mesh.get("box") is not None:
+        mesh["box"] = PaperBody(**_table(mesh["box"], "mesh.box", PaperBody))
+    if mesh.get("file") is not None:
+        require(isinstance(mesh["file"], str), "mesh.file", f"must be a file name, got {mesh['file']!r}")
+        mesh["file"] = pathlib.Path(base_dir) / mesh["file"]
+    boundary = _section(top, "boundary", Boundary)
+    if "displacement" in boundary:
+        groups = _table(boundary["displacement"], "boundary.displacement")
+        boundary["displacement"] = {
+            name: Displacement(**_table(value, f"boundary.displacement.{name}", Displacement))
+            for name, value in groups.items()
+        }
+    if "traction" in boundary:
+        boundary["traction"] = _table(boundary["traction"], "boundary.traction")
+    steps = top.get("steps", [])
+    require(_is_list(steps), "steps", f"must be an array of tables [[steps]], got {steps!r}")
+    return ContactCase(
+        mesh=MeshSource(**mesh),
+        material=Material(**_section(top, "material", Material)),
+        boundary=Boundary(**boundary),
+        contact=Contact(**_section(top, "contact", Contact)),
+        obstacle=Obstacle(**_section(top, "obstacle", Obstacle)),
+        steps=tuple(Step(**_table(step, f"steps[{i}]", Step)) for i, step in enumerate(steps)),
+        solver=_table(top.get("solver", {}), "solver"),
+        petsc=_table(top.get("petsc", {}), "petsc"),
+    )
+
+
+def _join(path: str, key: str) -> str:
+    return f"{path}.{key}" if path else key
+
+
+def _table(value: typing.Any, path: str, cls: type | None = None, required: bool = True) -> dict[str, typing.Any]:
+    """``value`` as a dict; with ``cls``, its keys checked against the fields of ``cls``
+    (and, if ``required``, the fields without default present)."""
+    require(isinstance(value, collections.abc.Mapping), path or "case", f"must be a table, got {value!r}")
+    value = dict(value)
+    if cls is None:
+        return value
+    fields = [f.name for f in dataclasses.fields(cls)]
+    for key in value:
+        if key not in fields:
+            close = difflib.get_close_matches(key, fields, n=1)
+            hint = f"did you mean {close[0]!r}?" if close else f"valid keys: {', '.join(fields)}"
+            raise ParameterError(_join(path, key), f"unknown key; {hint}")
+    for f in dataclasses.fields(cls) if required else ():
+        if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            require(f.name in value, _join(path, f.name), "required key missing")
+    return value
+
+
+def _section(top: dict[str, typing.Any], name: str, cls: type) -> dict[str, typing.Any]:
+    require(name in top, name, f"required table [{name}] missing")
+    return _table(top[name], name, cls)
+
+
+# -- checks (shared by files and Python-built cases) -------------------------------
+
+
+def _is_list(value: typing.Any) -> bool:
+    return isinstance(value, collections.abc.Sequence) and not isinstance(value, str)
+
+
+def _number(value: typing.Any, name: str) -> float:
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+    require(ok and math.isfinite(value), name, f"must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _vector(value: typing.Any, name: str) -> Vector:
+    ok = _is_list(value) and len(value) == 3
+    ok = ok and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value)
+    require(ok, name, f"must be a list of 3 finite numbers [x, y, z], got {value!r}")
+    return tuple(float(v) for v in value)
+
+
+def _direction(value: typing.Any, name: str) -> Vector:
+    vector = _vector(value, name)
+    length = math.sqrt(sum(v * v for v in vector))
+    require(length > 0.0, name, f"must have nonzero length, got {list(value)!r}")
+    return tuple(v / length for v in vector)
+
+
+def _name(value: typing.Any, name: str) -> str:
+    require(isinstance(value, str) and value != "", name, f"must be a physical group name, got {value!r}")
+    return value
+
+
+def _instance(value: typing.Any, cls: type, name: str) -> None:
+    require(isinstance(value, cls), name, f"must be a {cls.__name__}, got {value!r}")
+
+
+def _check_mesh(mesh: MeshSource) -> MeshSource:
+    _instance(mesh, MeshSource, "mesh")
+    require((mesh.file is None) != (mesh.box is None), "mesh", "give exactly one of 'file' and 'box'")
+    if mesh.box is not None:
+        _instance(mesh.box, PaperBody, "mesh.box")
+        lev = mesh.box.lev
+        ok = isinstance(lev, int) and not isinstance(lev, bool) and lev >= 0
+        require(ok, "mesh.box.lev", f"must be an integer >= 0, got {lev!r}")
+        from contactqvi.problems.coulomb import GEOMETRIES
+
+        require_choice("mesh.box.geometry", mesh.box.geometry, GEOMETRIES)
+        return mesh
+    require(isinstance(mesh.file, (str, pathlib.Path)), "mesh.file", f"must be a file name, got {mesh.file!r}")
+    path = pathlib.Path(mesh.file)
+    require(path.suffix in (".geo", ".msh"), "mesh.file", f"must be a gmsh .geo or .msh file, got {str(path)!r}")
+    require(path.is_file(), "mesh.file", f"file {str(path)!r} not found")
+    return dataclasses.replace(mesh, file=path)
+
+
+def _check_material(material: Material) -> Material:
+    _instance(material, Material, "material")
+    young = _number(material.young, "material.young")
+    require_positive("material.young", young)
+    poisson = _number(material.poisson, "material.poisson")
+    require(-1.0 < poisson < 0.5, "material.poisson", f"must lie in (-1, 0.5), got {material.poisson!r}")
+    return Material(young, poisson)
+
+
+def _check_boundary(boundary: Boundary) -> Boundary:
+    _instance(boundary, Boundary, "boundary")
+    clamped = boundary.clamped
+    require(_is_list(clamped), "boundary.clamped", f"must be a list of group names, got {clamped!r}")
+    clamped = tuple(_name(name, f"boundary.clamped[{i}]") for i, name in enumerate(clamped))
+    for i, name in enumerate(clamped):
+        require(name not in clamped[:i], f"boundary.clamped[{i}]", f"{name!r} listed twice")
+    _instance(boundary.displacement, dict, "boundary.displacement")
+    displacement = {}
+    for name, given in boundary.displacement.items():
+        path = f"boundary.displacement.{name}"
+        _instance(given, Displacement, path)
+        components = {
+            axis: None if value is None else _number(value, f"{path}.{axis}")
+            for axis, value in dataclasses.asdict(given).items()
+        }
+        require(any(v is not None for v in components.values()), path, "give at least one of x, y, z")
+        require(name not in clamped, path, f"group {name!r} is already clamped")
+        displacement[_name(name, path)] = Displacement(**components)
+    _instance(boundary.traction, dict, "boundary.traction")
+    traction = {_name(name, f"boundary.traction.{name}"): _vector(value, f"boundary.traction.{name}")
+                for name, value in boundary.traction.items()}
+    body_force = None if boundary.body_force is None else _vector(boundary.body_force, "boundary.body_force")
+    require(clamped or displacement, "boundary",
+            "needs a clamped group or a prescribed displacement (rigid motions must be fixed)")
+    return Boundary(clamped, displacement, traction, body_force)
+
+
+def _check_contact(contact: Contact) -> Contact:
+    _instance(contact, Contact, "contact")
+    surface = _name(contact.surface, "contact.surface")
+    require_choice("contact.law", contact.law, LAWS)
+    friction, slip_bound = contact.friction, contact.slip_bound
+    if contact.law == "coulomb":
+        require(slip_bound is None, "contact.slip_bound", "only used with law = 'tresca'")
+        require(friction is not None, "contact.friction", "law = 'coulomb' needs a friction coefficient >= 0")
+        friction = _number(friction, "contact.friction")
+        require_positive("contact.friction", friction, allow_zero=True)
+    else:
+        require(friction is None, "contact.friction", "only used with law = 'coulomb'")
+        require(slip_bound is not None, "contact.slip_bound", "law = 'tresca' needs a slip bound > 0 (Pa)")
+        slip_bound = _number(slip_bound, "contact.slip_bound")
+        require_positive("contact.slip_bound", slip_bound)
+    return Contact(surface, contact.law, friction, slip_bound)
+
+
+def _check_obstacle(obstacle: Obstacle) -> Obstacle:
+    _instance(obstacle, Obstacle, "obstacle")
+    require_choice("obstacle.type", obstacle.type, OBSTACLE_KEYS)
+    keys = OBSTACLE_KEYS[obstacle.type]
+    given = {k: v for k, v in dataclasses.asdict(obstacle).items() if k != "type" and v is not None}
+    for key in given:
+        require(key in keys, f"obstacle.{key}",
+                f"not a key of a {obstacle.type} obstacle (keys: type, {', '.join(keys)})")
+    for key in keys:
+        require(key in given, f"obstacle.{key}", f"required for a {obstacle.type} obstacle")
+    checked = {}
+    for key, value in given.items():
+        name = f"obstacle.{key}"
+        if key in ("normal", "axis"):
+            checked[key] = _direction(value, name)
+        elif key == "radius":
+            checked[key] = _number(value, name)
+            require_positive(name, checked[key])
+        else:
+            checked[key] = _vector(value, name)
+    return Obstacle(obstacle.type, **checked)
+
+
+def _check_steps(steps: typing.Sequence[Step]) -> tuple[Step, ...]:
+    require(_is_list(steps), "steps", f"must be a list of steps, got {steps!r}")
+    checked = []
+    for i, step in enumerate(steps):
+        _instance(step, Step, f"steps[{i}]")
+        checked.append(Step(_number(step.load, f"steps[{i}].load"), _vector(step.translation, f"steps[{i}].translation")))
+    return tuple(checked) or (Step(),)
+
+
+def _check_solver(solver: dict[str, typing.Any]) -> dict[str, typing.Any]:
+    """The given SCD Newton parameters, names checked; values checked by the solver's table."""
+    from contactqvi.contact import scd_newton
+
+    _instance(solver, dict, "solver")
+    table = scd_newton.PARAMETERS  # a Parameters table with .check, or (old style) name -> (default, help)
+    for name in solver:
+        if name not in table:
+            close = difflib.get_close_matches(name, list(table), n=1)
+            hint = f"did you mean {close[0]!r}?" if close else f"known: {', '.join(sorted(table))}"
+            raise ParameterError(f"solver.{name}", f"unknown parameter; {hint}")
+    check = getattr(table, "check", None) or getattr(scd_newton, "check_parameters", None)
+    if check is None:
+        return dict(solver)
+    try:
+        merged = check(solver)
+    except ParameterError as exc:
+        message = str(exc).removeprefix(f"{exc.name}: ")
+        raise ParameterError(f"solver.{exc.name}", message) from None
+    return {name: merged[name] for name in solver}
+
+
+def _check_petsc(petsc: dict[str, typing.Any]) -> dict[str, typing.Any]:
+    _instance(petsc, dict, "petsc")
+    for name, value in petsc.items():
+        require(isinstance(name, str) and name and not name.startswith("-") and " " not in name, f"petsc.{name}",
+                "write an option name without '-' and without the solver's prefix, e.g. ksp_monitor")
+        ok = isinstance(value, (bool, int, float, str))
+        require(ok, f"petsc.{name}", f"must be a string, number or boolean, got {value!r}")
+    return dict(petsc)
+
+
+def _check_consistency(case: ContactCase) -> None:
+    surface = case.contact.surface
+    require(surface not in case.boundary.clamped, "contact.surface",
+            f"group {surface!r} is clamped (u = 0) and cannot come into contact")
+
+
+def check_groups(case: ContactCase, names_in_mesh: typing.Iterable[str]) -> None:
+    """Check that every physical group the case names exists in the mesh.
+
+    Call it right after reading the mesh (e.g. with ``facet_tags.names``).
+
+    Raises:
+        ParameterError: named by the key path (``boundary.traction.topp``), naming the
+            closest group and listing the groups the mesh has.
+    """
+    known = sorted(names_in_mesh)
+    uses = [(f"boundary.clamped[{i}]", name) for i, name in enumerate(case.boundary.clamped)]
+    uses += [(f"boundary.displacement.{name}", name) for name in case.boundary.displacement]
+    uses += [(f"boundary.traction.{name}", name) for name in case.boundary.traction]
+    uses += [("contact.surface", case.contact.surface)]
+    for path, name in uses:
+        if name not in known:
+            close = difflib.get_close_matches(name, known, n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise ParameterError(path, f"unknown physical group {name!r}{hint}; the mesh has: {', '.join(known)}")
+
+
+def _plain(value: typing.Any) -> typing.Any:
+    if dataclasses.is_dataclass(value):
+        return {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)
+                if getattr(value, f.name) is not None}
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (tuple, list)):
+        return [_plain(v) for v in value]
+    if isinstance(value, pathlib.Path):
+        return str(value)
+    return value
