@@ -1,6 +1,7 @@
-"""Contact of an elastic body with a rigid foundation: Coulomb friction by the SCD
-semismooth* Newton method (seed 000), and its Tresca variant."""
+"""Contact of an elastic body with a rigid obstacle: Coulomb friction by the SCD
+semismooth* Newton method (seed 000), its Tresca variant, and quasi-static load paths."""
 
+from contactqvi.contact.load_path import LoadStep, contact_resultants, solve_load_path
 from contactqvi.contact.nodal import (
     FrictionLaw,
     Normal,
@@ -13,13 +14,14 @@ from contactqvi.contact.nodal import (
     scd_adjoint_blocks,
 )
 from contactqvi.contact.problem import ContactProblem, build_contact_problem
-from contactqvi.contact.scd_newton import KSP_PRESETS, PARAMETERS, SCDNewtonResult, SCDNewtonSolver
+from contactqvi.contact.scd_newton import NEWTON_STEP_SOLVERS, PARAMETERS, SCDNewtonResult, SCDNewtonSolver
 
 __all__ = [
-    "KSP_PRESETS",
+    "NEWTON_STEP_SOLVERS",
     "PARAMETERS",
     "ContactProblem",
     "FrictionLaw",
+    "LoadStep",
     "Normal",
     "SCDNewtonResult",
     "SCDNewtonSolver",
@@ -27,8 +29,10 @@ __all__ = [
     "Tangential",
     "build_contact_problem",
     "classify",
+    "contact_resultants",
     "contact_states",
     "lipschitz_constant",
     "resolvent",
     "scd_adjoint_blocks",
+    "solve_load_path",
 ]

@@ -12,8 +12,9 @@ from petsc4py import PETSc
 
 from dolfinx import fem
 
+from contactqvi.contact.load_path import LoadStep, solve_load_path
 from contactqvi.contact.problem import ContactProblem, build_contact_problem
-from contactqvi.contact.scd_newton import SCDNewtonResult, SCDNewtonSolver
+from contactqvi.contact.scd_newton import SCDNewtonResult
 from contactqvi.meshes import GapFunction, create_contact_body
 from contactqvi.transfer import interpolate_nonmatching
 
@@ -71,15 +72,11 @@ def solve_level(
         u.axpy(1.0, start.x.petsc_vec)
     assembly = time.perf_counter() - t0
     logger.info("lev %d: p = %d contact nodes, n = %d free dofs, %d ranks", lev, problem.n_contact, problem.n_free, comm.size)
-    solver = SCDNewtonSolver(problem, parameters, prefix=prefix)
-    try:
-        result = solver.solve(u)
-    finally:
-        solver.destroy()
+    (result,) = solve_load_path(problem, [LoadStep()], u, parameters, prefix=prefix)
     result.timings["assembly"] = assembly
     logger.info(
         "lev %d: %s after %d Newton steps, %d Krylov iterations, gamma = %.4e",
-        lev, result.status, result.iterations, result.krylov_iterations, result.gamma,
+        lev, result.status, result.iterations, result.inner_iterations, result.gamma,
     )
     return LevelSolution(lev, problem, u, result)
 

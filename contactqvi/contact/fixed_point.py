@@ -18,34 +18,30 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import time
 
 from petsc4py import PETSc
 
 from contactqvi.contact.nodal import FrictionLaw
 from contactqvi.contact.problem import ContactProblem
-from contactqvi.contact.scd_newton import SCDNewtonSolver, check_parameters
+from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonSolver
 from contactqvi.parameters import require
+from contactqvi.result import Result, Status
 
-__all__ = ["FixedPointResult", "solve_tresca_fixed_point"]
+__all__ = ["TrescaFixedPointResult", "solve_tresca_fixed_point"]
 
 logger = logging.getLogger(__name__)
 
 
-@dataclasses.dataclass
-class FixedPointResult:
-    """Outcome of :func:`solve_tresca_fixed_point`."""
+@dataclasses.dataclass(kw_only=True)
+class TrescaFixedPointResult(Result):
+    """Outcome of :func:`solve_tresca_fixed_point`: ``iterations`` counts Tresca problems,
+    ``inner_iterations`` Krylov iterations over all of them.
 
-    status: str  # "converged", "diverged" or the failing Tresca solve's status
-    iterations: int  # Tresca problems solved
-    newton_iterations: int  # SCD Newton steps over all Tresca solves
-    krylov_iterations: int
-    history: list[dict]
-    solve_time: float  # s, wall time of the loop (after assembly)
+    Attributes:
+        newton_iterations: SCD Newton steps over all Tresca solves.
+    """
 
-    @property
-    def converged(self) -> bool:
-        return self.status == "converged"
+    newton_iterations: int = 0
 
 
 def solve_tresca_fixed_point(
@@ -55,7 +51,7 @@ def solve_tresca_fixed_point(
     max_iterations: int = 50,
     forcing: float = 1e-2,
     prefix: str = "tresca_",
-) -> FixedPointResult:
+) -> TrescaFixedPointResult:
     """Solve the Coulomb problem ``problem`` by fixed-point iteration on the slip bound, in place.
 
     Args:
@@ -63,45 +59,42 @@ def solve_tresca_fixed_point(
         u: initial guess (shifted displacements), overwritten by the solution.
         parameters: SCD Newton parameters of the Tresca solves; ``rtol`` and ``atol``
             are the final accuracy of the Coulomb residual.
-        max_iterations: Tresca problems before giving up (status "diverged").
+        max_iterations: Tresca problems before giving up (status ``DIVERGED_MAX_IT``).
         forcing: each Tresca solve stops at ``forcing`` times the Coulomb residual
             at its start (and never below the final target).
         prefix: PETSc options prefix of the Newton-step KSPs of the Tresca solves.
     """
-    p = check_parameters(parameters)
+    p = PARAMETERS.check(parameters)
     require(problem.law.friction > 0.0, "friction", "the fixed-point method needs a Coulomb problem with F > 0")
     require(0.0 < forcing < 1.0, "forcing", f"must lie in (0, 1), got {forcing!r}")
     require(max_iterations >= 1, "max_iterations", f"must be >= 1, got {max_iterations!r}")
-    t0 = time.perf_counter()
-    coulomb = SCDNewtonSolver(problem, p)  # for the residual (6.17) and gamma only
-    p["gamma"] = coulomb.gamma
-    norm0, _, z = coulomb.approximation_step(u)
-    norm = norm0
-    target = max(p["rtol"] * norm0, p["atol"])
-    history: list[dict] = []
-    status, newton, krylov = "diverged", 0, 0
-    for j in range(max_iterations + 1):
-        entry = {"j": j, "residual": norm, "relative_residual": norm / norm0}
-        history.append(entry)
-        if norm <= target:
-            status = "converged"
-            break
-        if j == max_iterations:
-            break
-        # s = F lambda, lambda = -theta of the current iterate's graph point (6.17).
-        tresca = dataclasses.replace(problem, law=FrictionLaw(slip_bound=-problem.law.friction * z[:, 2]))
-        solver = SCDNewtonSolver(tresca, {**p, "atol": max(forcing * norm, target)}, prefix=prefix)
-        inner = solver.solve(u)
-        solver.destroy()
-        newton += inner.iterations
-        krylov += inner.krylov_iterations
-        entry.update(tresca_status=inner.status, newton_iterations=inner.iterations, krylov_iterations=inner.krylov_iterations)
-        logger.info("  fixed point %3d  |y^| %.3e  rel %.2e  Tresca: %s after %d Newton steps",
-                    j, norm, norm / norm0, inner.status, inner.iterations)
-        if not inner.converged:
-            status = f"tresca_{inner.status}"
-            break
-        norm, _, z = coulomb.approximation_step(u)
-    coulomb.destroy()
-    return FixedPointResult(status, len(history) - 1, newton, krylov, history, time.perf_counter() - t0)
-
+    result = TrescaFixedPointResult(status=Status.DIVERGED_MAX_IT, iterations=0)
+    with result.timings.phase("solve"), SCDNewtonSolver(problem, p) as coulomb:  # residual (6.17) and gamma only
+        p["gamma"] = coulomb.gamma
+        point = coulomb.residual(u)
+        norm0 = point.norm
+        target = max(p["rtol"] * norm0, p["atol"])
+        for j in range(max_iterations + 1):
+            entry = {"j": j, "residual": point.norm, "relative_residual": point.norm / norm0}
+            result.history.append(entry)
+            if point.norm <= target:
+                result.status = Status.CONVERGED_ATOL if point.norm <= p["atol"] else Status.CONVERGED_RTOL
+                break
+            if j == max_iterations:
+                break
+            # s = F lambda, lambda = -theta of the current iterate's graph point (6.17).
+            tresca = dataclasses.replace(problem, law=FrictionLaw(slip_bound=-problem.law.friction * point.z[:, 2]))
+            with SCDNewtonSolver(tresca, {**p, "atol": max(forcing * point.norm, target)}, prefix=prefix) as solver:
+                inner = solver.solve(u)
+            result.newton_iterations += inner.iterations
+            result.inner_iterations += inner.inner_iterations
+            entry.update(tresca_status=str(inner.status), newton_iterations=inner.iterations,
+                         krylov_iterations=inner.inner_iterations)
+            logger.info("  fixed point %3d  |y^| %.3e  rel %.2e  Tresca: %s after %d Newton steps",
+                        j, point.norm, point.norm / norm0, inner.status, inner.iterations)
+            if not inner.converged:
+                result.status = Status.DIVERGED_INNER
+                break
+            point = coulomb.residual(u)
+    result.iterations = len(result.history) - 1
+    return result

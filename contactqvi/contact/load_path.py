@@ -1,0 +1,118 @@
+"""Quasi-static load paths: a sequence of static contact problems of the seed-000 type.
+
+Seed 000, Sect. 1, treats the static problem as one step of the quasi-static one.
+Step k scales tractions and body force by its load factor and moves the obstacle
+rigidly to its translation c_k; friction acts on the slip increment since step
+k - 1 relative to the obstacle's tangential motion c_k - c_{k-1}
+(:meth:`~contactqvi.contact.problem.ContactProblem.set_step`). Each step is solved
+by the SCD semismooth* Newton method from the previous step's solution; the first
+starts from u = 0 in the shifted variables (every contact node on the obstacle),
+the initial guess of seed 000, Sect. 7.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import typing
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import numpy as np
+
+from contactqvi.contact.nodal import State
+from contactqvi.contact.problem import ContactProblem
+from contactqvi.contact.scd_newton import SCDNewtonResult, SCDNewtonSolver
+from contactqvi.parameters import require, require_positive
+
+__all__ = ["LoadStep", "contact_resultants", "solve_load_path"]
+
+logger = logging.getLogger(__name__)
+
+StepCallback = typing.Callable[[int, "LoadStep", PETSc.Vec, SCDNewtonResult], None]
+
+
+@dataclasses.dataclass(frozen=True)
+class LoadStep:
+    """One step of a load path.
+
+    Attributes:
+        load: factor on tractions, body force and prescribed displacements.
+        translation: total rigid translation of the obstacle from its initial position (m).
+    """
+
+    load: float = 1.0
+    translation: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        require_positive("steps.load", self.load, allow_zero=True)
+        array = np.asarray(self.translation, dtype=float)
+        require(array.shape == (3,) and bool(np.all(np.isfinite(array))), "steps.translation",
+                f"must be 3 finite numbers (m), got {self.translation!r}")
+
+
+def solve_load_path(
+    problem: ContactProblem,
+    steps: typing.Sequence[LoadStep],
+    u: PETSc.Vec,
+    parameters: dict[str, typing.Any] | None = None,
+    prefix: str = "coulomb_",
+    on_step: StepCallback | None = None,
+) -> list[SCDNewtonResult]:
+    """Solve the steps in turn with one SCD Newton solver; stop at the first that fails.
+
+    Args:
+        problem: the contact problem (its step is set here).
+        steps: the load path.
+        u: initial guess of the first step (shifted displacements); holds the last
+            step's solution on return.
+        parameters: SCD Newton parameters.
+        prefix: PETSc options prefix of the Newton-step KSP.
+        on_step: called after each step with (index, step, u, result), e.g. to write output.
+
+    Returns:
+        The results of the steps solved; the last one failed if it is not converged.
+    """
+    results: list[SCDNewtonResult] = []
+    previous = u.duplicate()
+    with SCDNewtonSolver(problem, parameters, prefix=prefix) as solver:
+        for index, step in enumerate(steps):
+            if index > 0:
+                previous.waxpy(-1.0, problem.shift, u)  # u~ of the last step, nodal frames
+                problem.set_step(step.load, step.translation, previous)
+                u.waxpy(1.0, problem.shift, previous)
+            else:
+                problem.set_step(step.load, step.translation)
+            logger.info("step %d: load factor %g, obstacle translation %s m", index + 1, step.load,
+                        np.array2string(np.asarray(step.translation), precision=4))
+            result = solver.solve(u)
+            results.append(result)
+            if on_step is not None:
+                on_step(index, step, u, result)
+            if not result.converged:
+                break
+    previous.destroy()
+    return results
+
+
+def contact_resultants(problem: ContactProblem, result: SCDNewtonResult) -> dict[str, typing.Any]:
+    """Total contact force of the obstacle on the body (N, global components), contact,
+    sticking and sliding areas (m^2, lumped nodal areas by state) of a solved step."""
+    forces = np.column_stack([result.friction_force, result.normal_force])  # nodal frames
+    total = np.einsum("ij,ijk->k", forces, problem.frames) if len(forces) else np.zeros(3)
+    area = problem.contact_area
+    sticking = np.isin(result.states, (State.STICKING, State.WEAK_STICKING))
+    sliding = result.states == State.SLIDING
+    comm = problem.comm
+
+    def total_area(mask: np.ndarray) -> float:
+        return comm.allreduce(float(area[mask].sum()), op=MPI.SUM)
+
+    return {
+        "contact_force": comm.allreduce(total, op=MPI.SUM).tolist(),
+        "contact_area": total_area(sticking | sliding),
+        "sticking_area": total_area(sticking),
+        "sliding_area": total_area(sliding),
+        "units": {"contact_force": "N", "contact_area": "m^2", "sticking_area": "m^2", "sliding_area": "m^2"},
+    }
