@@ -17,7 +17,7 @@ from petsc4py import PETSc
 from contactqvi import io
 from contactqvi.cli import setup_logging
 from contactqvi.contact.driver import solve_level, solve_nested
-from contactqvi.contact.scd_newton import KSP_PRESETS, PARAMETERS
+from contactqvi.contact.scd_newton import PARAMETERS
 from contactqvi.problems import coulomb as data
 
 #: The six cases of Tables 2 and 3 of seed 000.
@@ -28,7 +28,7 @@ def make_parser(doc: str) -> argparse.ArgumentParser:
     """Parser of a benchmark script with the shared options ``--pc`` and ``--output``."""
     parser = argparse.ArgumentParser(description=doc.split("\n")[0],
                                      formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    parser.add_argument("--pc", default=PARAMETERS["pc"][0], choices=sorted(KSP_PRESETS), help=PARAMETERS["pc"][1])
+    PARAMETERS.add_arguments(parser, ["pc"])
     parser.add_argument("--output", default=str(pathlib.Path(__file__).parent / "results"))
     return parser
 
@@ -87,7 +87,7 @@ def run_coulomb_case(
     result = solution.result
     timings = result.timings
     row = {"lev": solution.lev, "case": case, "tol": parameters.get("tol", 0.1), "mpi_size": comm.size,
-           "status": result.status, "it": result.iterations, "krylov": result.krylov_iterations,
+           "status": str(result.status), "it": result.iterations, "krylov": result.inner_iterations,
            "seconds": time.perf_counter() - t0, "solve_seconds": sum(v for k, v in timings.items() if k != "assembly"),
            "timings": timings, "p": solution.problem.n_contact, "n": solution.problem.n_free,
            "peak_rss_mib": peak_rss_mib(comm)}

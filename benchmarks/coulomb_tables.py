@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import benchlib
 from benchlib import CASES, run_coulomb_case
-from contactqvi.contact.scd_newton import APPROXIMATION_STEPS, GAMMA_RULES, PARAMETERS
+from contactqvi.contact.scd_newton import PARAMETERS
 from contactqvi.meshes import contact_body_sizes
 from contactqvi.problems import coulomb as data
 
@@ -26,7 +26,7 @@ def _markdown_table(title, rows, paper, note):
         cells = []
         for case in cases:
             r = next((r for r in rows if r["lev"] == lev and r["case"] == case), None)
-            ours = "—" if r is None else (f"{r['it']} / {r['krylov']}" if r["status"] == "converged" else r["status"])
+            ours = "—" if r is None else (f"{r['it']} / {r['krylov']}" if r["status"].startswith("converged") else r["status"])
             ref = paper.get(lev, {}).get(case)
             cells.append(f"{ours} ({ref[0]} / {ref[1]})" if ref else ours)
         sizes = contact_body_sizes(lev)
@@ -39,15 +39,11 @@ def main() -> None:
     parser.add_argument("--levels", type=int, nargs="+", default=[3, 4, 5, 6, 7])
     parser.add_argument("--tables", type=int, nargs="+", default=[2, 3, 4], choices=[2, 3, 4])
     parser.add_argument("--table4-lev", type=int, default=6, help="level of the tol sweep (paper: 10)")
-    parser.add_argument("--gamma-rule", default=PARAMETERS["gamma_rule"][0], choices=GAMMA_RULES,
-                        help=PARAMETERS["gamma_rule"][1])
-    parser.add_argument("--approximation", default=PARAMETERS["approximation"][0], choices=APPROXIMATION_STEPS,
-                        help=PARAMETERS["approximation"][1])
+    PARAMETERS.add_arguments(parser, ["gamma_rule", "approximation"])
     args, comm, out = benchlib.parse(parser)
     prefix = "bench_"
-    tag = "" if args.pc == PARAMETERS["pc"][0] else f"_{args.pc}"
-    tag += "" if args.gamma_rule == PARAMETERS["gamma_rule"][0] else f"_{args.gamma_rule}"
-    tag += "" if args.approximation == PARAMETERS["approximation"][0] else f"_{args.approximation}"
+    tag = "".join(f"_{getattr(args, name)}" for name in ("pc", "gamma_rule", "approximation")
+                  if getattr(args, name) != PARAMETERS[name].default)
     solver = {"tol": 0.1, "pc": args.pc, "gamma_rule": args.gamma_rule, "approximation": args.approximation}
     solver_note = {
         "lu": "exact inner solves (LU)",

@@ -1,8 +1,11 @@
-"""``python -m contactqvi <problem> [options]``: run one of the demos.
+"""``python -m contactqvi``: run a contact case file or one of the demos.
 
-``python -m contactqvi --help`` lists the problems; ``python -m contactqvi
-<problem> --help`` shows that problem's options. The demos live in ``demos/``
-of the source tree (this package is installed in editable mode).
+    python -m contactqvi run CASE.toml --output DIR     your own contact problem (see contactqvi.case)
+    python -m contactqvi <demo> [options]               a paper's demo (coulomb3d, simplified_friction, thermoforming)
+
+Both work under ``mpirun -n N``. The demos are the scripts of the source tree's
+``demos/``; an installed package carries them in ``<prefix>/share/contactqvi/demos``.
+Unknown options starting with ``-`` go to PETSc.
 """
 
 from __future__ import annotations
@@ -11,31 +14,64 @@ import pathlib
 import runpy
 import sys
 
-DEMOS = pathlib.Path(__file__).resolve().parent.parent / "demos"
+__all__ = ["DEMOS", "main"]
 
-PROBLEMS = {
+#: Demos by name, with what they solve.
+DEMOS = {
     "coulomb3d": "3D contact with Coulomb friction, SCD semismooth* Newton (seed 000)",
     "simplified_friction": "Stadler's simplified (scalar Tresca) friction: PDAS, SS, ALM, Uzawa (seed 002)",
     "thermoforming": "obstacle problems and the thermoforming QVI, semismooth Newton (seed 003)",
-    "elasticity": "plain linear elasticity on the contact body (no contact)",
 }
+
+
+def demo_directory() -> pathlib.Path | None:
+    """``demos/`` of the source tree, else the installed copy, else None."""
+    for path in (pathlib.Path(__file__).resolve().parent.parent / "demos",
+                 pathlib.Path(sys.prefix) / "share" / "contactqvi" / "demos"):
+        if path.is_dir():
+            return path
+    return None
+
+
+def run(argv: list[str]) -> int:
+    """``run CASE.toml --output DIR [--no-plot] [--log-level L] [-petsc_options]``."""
+    from mpi4py import MPI
+
+    from contactqvi import cli
+    from contactqvi.case import load_case
+    from contactqvi.parameters import ParameterError
+    from contactqvi.runner import PREFIX, run_case
+
+    parser = cli.make_parser("Solve a contact case file (TOML) along its load path.", "results/case",
+                             f"-{PREFIX}ksp_monitor")
+    parser.prog = "python -m contactqvi run"
+    parser.add_argument("case", help="the case file (.toml)")
+    parser.add_argument("--no-plot", action="store_true", help="skip the PNG of the contact states")
+    try:
+        args = cli.parse_args(parser, argv)
+        case = load_case(args.case)
+        _, code = run_case(case, args.output, MPI.COMM_WORLD, plot=not args.no_plot)
+    except ParameterError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    return code
 
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
+    demos = demo_directory()
     if not argv or argv[0] in ("-h", "--help"):
-        print("usage: python -m contactqvi <problem> [options]   (mpirun -n N python -m contactqvi ...)\n")
-        print("problems:")
-        for name, text in PROBLEMS.items():
-            available = "" if (DEMOS / f"{name}.py").is_file() else "  [not available]"
-            print(f"  {name:<20} {text}{available}")
-        print("\n'python -m contactqvi <problem> --help' lists a problem's options.")
+        print(__doc__)
+        for name, text in DEMOS.items():
+            print(f"  {name:<20} {text}{'' if demos else '  [demos not installed]'}")
         return 0
     name = argv[0]
-    script = DEMOS / f"{name}.py"
-    if name not in PROBLEMS or not script.is_file():
-        print(f"problem: unknown problem {name!r}; known: {', '.join(PROBLEMS)}", file=sys.stderr)
+    if name == "run":
+        return run(argv[1:])
+    if name not in DEMOS or demos is None:
+        print(f"contactqvi: unknown command {name!r}; known: run, {', '.join(DEMOS)}", file=sys.stderr)
         return 2
+    script = demos / f"{name}.py"
     sys.argv = [str(script), *argv[1:]]
     runpy.run_path(str(script), run_name="__main__")
     return 0

@@ -13,15 +13,20 @@ import sys
 from mpi4py import MPI
 from petsc4py import PETSc
 
-__all__ = ["make_parser", "parse_args", "setup_logging"]
+__all__ = ["make_parser", "parse_args", "pass_to_petsc", "setup_logging"]
 
 
-def make_parser(description: str, default_output: str) -> argparse.ArgumentParser:
-    """Argument parser with the options every demo has."""
+def make_parser(description: str, default_output: str, petsc_example: str | None = None) -> argparse.ArgumentParser:
+    """Argument parser with the options every demo has.
+
+    ``petsc_example`` is a PETSc option under the program's own prefix, shown in
+    ``--help`` (e.g. ``-coulomb_ksp_monitor``).
+    """
+    example = f" (e.g. {petsc_example}; -log_view prints PETSc's profile at exit)" if petsc_example else ""
     parser = argparse.ArgumentParser(
         description=description,
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
-        epilog="Unknown options starting with '-' are passed to PETSc (e.g. -coulomb_ksp_monitor).",
+        epilog=f"Unknown options starting with '-' are passed to PETSc{example}.",
         allow_abbrev=False,
     )
     parser.add_argument("--output", default=default_output, help="directory for results")
@@ -37,9 +42,22 @@ def parse_args(parser: argparse.ArgumentParser, argv: list[str] | None = None) -
     if unknown and not unknown[0].startswith("-"):
         parser.error(f"unrecognized arguments: {' '.join(unknown)}")
     if unknown:
-        PETSc.Options().insertString(" ".join(unknown))
+        pass_to_petsc(unknown)
     setup_logging(args.log_level)
     return args
+
+
+def pass_to_petsc(options: list[str]) -> None:
+    """Insert command-line ``options`` into the PETSc options database.
+
+    PETSc reads a few options only in ``PetscInitialize`` (which ran when petsc4py
+    was imported); of those, ``-log_view`` and its variants need the default log
+    handler started, which is done here, so the profile prints at exit.
+    """
+    opts = PETSc.Options()
+    opts.insertString(" ".join(options))
+    if any(opts.hasName(name) for name in ("log_view", "log_summary", "log_all")):
+        PETSc.Log.begin()
 
 
 def setup_logging(level: str = "INFO") -> None:

@@ -15,6 +15,8 @@ import enum
 import time
 import typing
 
+from petsc4py import PETSc
+
 __all__ = ["Result", "Status", "Timings"]
 
 
@@ -57,16 +59,27 @@ class Status(enum.IntEnum):
 
 
 class Timings(dict):
-    """Wall-clock seconds per named phase, accumulated over calls of :meth:`phase`."""
+    """Wall-clock seconds per named phase, accumulated over calls of :meth:`phase`.
+
+    Each phase is also a PETSc log stage of the same name, so ``-log_view`` splits
+    PETSc's events by phase.
+    """
+
+    _stages: typing.ClassVar[dict[str, PETSc.Log.Stage]] = {}
 
     @contextlib.contextmanager
     def phase(self, name: str) -> typing.Iterator[None]:
         """Add the time spent in the ``with`` block to the phase ``name``."""
+        stage = self._stages.get(name)
+        if stage is None:
+            stage = self._stages[name] = PETSc.Log.Stage(name)
+        stage.push()
         start = time.perf_counter()
         try:
             yield
         finally:
             self[name] = self.get(name, 0.0) + time.perf_counter() - start
+            stage.pop()
 
 
 @dataclasses.dataclass(kw_only=True)

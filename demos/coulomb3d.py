@@ -9,9 +9,10 @@ This demo illustrates how to:
   * or solve the Tresca variant with a given slip bound (``--law tresca --slip-bound S``);
   * write ParaView files, ``summary.json`` and ``solution.npz`` to ``--output``.
 
-Units are SI (m, Pa). ``--pc`` picks the Newton-step solver (``gamg`` default,
+Units are SI (m, Pa, N). ``--pc`` picks the Newton-step solver (``gamg`` default,
 ``paper`` = GMRES + ILU of Sect. 7, ``hypre``, ``lu`` = exact); unknown options
 starting with '-' go to PETSc and override it, e.g. ``-coulomb_ksp_monitor``.
+Your own body, obstacle and load path: ``python -m contactqvi run CASE.toml``.
 """
 
 from __future__ import annotations
@@ -24,8 +25,8 @@ from petsc4py import PETSc
 
 from contactqvi import cli, io
 from contactqvi.contact.driver import solve_nested
-from contactqvi.contact.postprocess import contact_fields, plot_contact_states
-from contactqvi.contact.scd_newton import APPROXIMATION_STEPS, GAMMA_RULES, KSP_PRESETS, PARAMETERS, check_parameters
+from contactqvi.contact.output import write_contact_results
+from contactqvi.contact.scd_newton import PARAMETERS
 from contactqvi.elasticity import lame_parameters
 from contactqvi.parameters import ParameterError, require
 from contactqvi.problems import coulomb as data
@@ -34,7 +35,7 @@ logger = logging.getLogger("coulomb3d")
 
 
 def parse(argv: list[str] | None = None):
-    parser = cli.make_parser(__doc__.split("\n")[0], "results/coulomb3d")
+    parser = cli.make_parser(__doc__.split("\n")[0], "results/coulomb3d", "-coulomb_ksp_monitor")
     parser.add_argument("--lev", type=int, default=5, help="discretisation level (Table 2)")
     parser.add_argument("--geometry", default="d1", choices=sorted(data.GEOMETRIES), help="bottom surface d")
     parser.add_argument("--load", default="L1", choices=sorted(data.LOADS), help="load case")
@@ -45,24 +46,7 @@ def parse(argv: list[str] | None = None):
                         help="Tresca slip bound: friction traction limit (Pa), required with --law tresca")
     parser.add_argument("--young", type=float, default=data.YOUNG, help="Young's modulus E (Pa)")
     parser.add_argument("--poisson", type=float, default=data.POISSON, help="Poisson's ratio nu")
-    parser.add_argument("--pc", default=PARAMETERS["pc"][0], choices=sorted(KSP_PRESETS), help=PARAMETERS["pc"][1])
-    parser.add_argument("--tol", type=float, default=PARAMETERS["tol"][0], help=PARAMETERS["tol"][1])
-    parser.add_argument("--rtol", type=float, default=PARAMETERS["rtol"][0], help=PARAMETERS["rtol"][1])
-    parser.add_argument(
-        "--max-iterations", type=int, default=PARAMETERS["max_iterations"][0], help=PARAMETERS["max_iterations"][1]
-    )
-    parser.add_argument(
-        "--gamma-rule", default=PARAMETERS["gamma_rule"][0], choices=GAMMA_RULES,
-        help=PARAMETERS["gamma_rule"][1],
-    )
-    parser.add_argument(
-        "--approximation", default=PARAMETERS["approximation"][0], choices=APPROXIMATION_STEPS,
-        help=PARAMETERS["approximation"][1],
-    )
-    parser.add_argument("--state-tol", type=float, default=PARAMETERS["state_tol"][0], help=PARAMETERS["state_tol"][1])
-    parser.add_argument(
-        "--no-elimination", action="store_true", help="keep the identity rows in the Krylov solve (paper's variant)"
-    )
+    PARAMETERS.add_arguments(parser.add_argument_group("SCD Newton solver"))
     parser.add_argument("--initial", default="zero", choices=["zero", "nested"], help="u0 = 0 or nested (Table 3)")
     parser.add_argument("--nested-from", type=int, default=3, help="coarsest level of a nested start (solved from 0)")
     parser.add_argument("--no-plot", action="store_true", help="skip the PNG of the contact states")
@@ -74,16 +58,7 @@ def parse(argv: list[str] | None = None):
     else:
         require(args.slip_bound is None, "slip-bound", "only used with --law tresca")
     require(0 <= args.nested_from < args.lev or args.initial == "zero", "nested-from", "must lie in [0, lev)")
-    args.solver_parameters = check_parameters({
-        "pc": args.pc,
-        "tol": args.tol,
-        "rtol": args.rtol,
-        "max_iterations": args.max_iterations,
-        "state_tol": args.state_tol,
-        "gamma_rule": args.gamma_rule,
-        "approximation": args.approximation,
-        "eliminate_fixed_rows": not args.no_elimination,
-    })
+    args.solver_parameters = PARAMETERS.from_namespace(args)
     return args
 
 
@@ -102,41 +77,27 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     out = io.prepare_output_dir(comm, args.output)
     problem, u, result = solutions[-1].problem, solutions[-1].u, solutions[-1].result
-    runs = [{"lev": s.lev, "status": s.result.status, "iterations": s.result.iterations,
-             "krylov_iterations": s.result.krylov_iterations} for s in solutions]
-
     case = f"{args.geometry}/{args.load}"
     paper_data = args.law == "coulomb" and (args.friction, args.young, args.poisson) == (data.FRICTION, data.YOUNG, data.POISSON)
-    paper = (data.PAPER_TABLE3 if args.initial == "nested" else data.PAPER_TABLE2).get(args.lev, {}).get(case) if paper_data else None
+    paper = (data.PAPER_TABLE3 if args.initial == "nested" else data.PAPER_TABLE2).get(args.lev, {}).get(case)
     summary = {
         "problem": "coulomb3d",
-        "status": result.status,
-        "parameters": vars(args),
+        **result.summary(),
+        "parameters": {k: v for k, v in vars(args).items() if k != "solver_parameters"},
+        "solver_parameters": args.solver_parameters,
         "petsc_options": PETSc.Options().getAll(),
         "mpi_size": comm.size,
         "p": problem.n_contact,
         "n": problem.n_free,
-        "iterations": result.iterations,
-        "krylov_iterations": result.krylov_iterations,
         "gamma": result.gamma,
-        "residual_history": [h["residual"] for h in result.history],
-        "history": result.history,
-        "timings": result.timings,
-        "levels": runs,
-        "paper": None if paper is None else {"iterations": paper[0], "gmres": paper[1]},
+        "levels": [{"lev": s.lev, **s.result.summary()} for s in solutions],
+        "paper": {"iterations": paper[0], "gmres": paper[1]} if paper and paper_data else None,
     }
     if result.converged:
-        displacement = solutions[-1].physical_displacement()
-        io.write_vtx(out / "displacement.bp", [displacement])
-        io.write_xdmf(out / "contact.xdmf", problem.V.mesh, [displacement])
-        surface = contact_fields(problem, u, result)
-        io.write_xdmf(out / "contact_surface.xdmf", surface.mesh, surface.functions)
-        io.write_solution_npz(out / "solution.npz", displacement)
-        if not args.no_plot:
-            summary["plot"] = plot_contact_states(str(out / "contact_states.png"), surface)
-        norm = displacement.x.petsc_vec.norm()
+        summary.update(write_contact_results(out, problem, u, result, plot=not args.no_plot))
+        norm = summary["displacement_norm"]
         if comm.rank == 0:
-            print(f"||u~||_2 = {norm:.10e}  ({result.iterations} Newton steps, {result.krylov_iterations} Krylov)")
+            print(f"||u~||_2 = {norm:.10e}  ({result.iterations} Newton steps, {result.inner_iterations} Krylov)")
     io.write_summary(comm, out / "summary.json", summary)
     if not result.converged:
         logger.error("not converged: status %s (see %s)", result.status, out / "summary.json")

@@ -1,0 +1,120 @@
+"""Run a contact case: mesh, problem, load path, results (``python -m contactqvi run CASE.toml``).
+
+:func:`build_problem` turns a :class:`~contactqvi.case.ContactCase` into a
+:class:`~contactqvi.contact.problem.ContactProblem`; :func:`run_case` solves its
+load path with the SCD semismooth* Newton method and writes, per step, the result
+files of :func:`~contactqvi.contact.output.write_contact_results` to
+``OUTPUT/step_NNN/`` and an updated ``OUTPUT/summary.json`` (status, Newton and
+Krylov counts, contact force, contact/sticking/sliding areas per step), so
+everything up to the last converged step stays readable if a later step fails.
+``OUTPUT/solution.npz`` holds ``x`` and ``u`` of the last converged step.
+"""
+
+from __future__ import annotations
+
+import logging
+import pathlib
+import shutil
+import typing
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from dolfinx import mesh as dmesh
+
+from contactqvi import io
+from contactqvi.case import ContactCase, check_groups
+from contactqvi.contact.load_path import LoadStep, solve_load_path
+from contactqvi.contact.output import write_contact_results
+from contactqvi.contact.problem import ContactProblem, build_contact_problem
+from contactqvi.contact.scd_newton import SCDNewtonResult
+from contactqvi.meshes import create_contact_body, read_gmsh
+from contactqvi.obstacles import Cylinder, Obstacle, Plane, Sphere
+from contactqvi.problems.coulomb import gap_function
+
+__all__ = ["PREFIX", "build_problem", "obstacle_of", "run_case"]
+
+logger = logging.getLogger(__name__)
+
+#: PETSc options prefix of the case's Newton-step solver (``[petsc]`` options go under it).
+PREFIX = "case_"
+
+
+def read_mesh(case: ContactCase, comm: MPI.Comm) -> tuple[dmesh.Mesh, dmesh.MeshTags]:
+    """The case's mesh with named facet tags; its physical groups checked against the case."""
+    if case.mesh.box is not None:
+        msh, tags = create_contact_body(comm, case.mesh.box.lev, gap_function(case.mesh.box.geometry))
+    else:
+        msh, tags = read_gmsh(case.mesh.file, comm)
+    check_groups(case, tags.names)
+    return msh, tags
+
+
+def obstacle_of(case: ContactCase) -> Obstacle:
+    """The rigid obstacle of ``[obstacle]``."""
+    o = case.obstacle
+    if o.type == "plane":
+        return Plane(o.point, o.normal)
+    if o.type == "sphere":
+        return Sphere(o.center, o.radius)
+    return Cylinder(o.point, o.axis, o.radius)
+
+
+def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
+    """Mesh and assembled contact problem of ``case`` (load factor 1, obstacle at rest)."""
+    msh, tags = read_mesh(case, comm)
+    b, c = case.boundary, case.contact
+    displacements = {name: {i: value for i, value in enumerate((d.x, d.y, d.z)) if value is not None}
+                     for name, d in b.displacement.items()}
+    return build_contact_problem(
+        msh, tags, case.material.young, case.material.poisson, dict(b.traction),
+        friction=c.friction or 0.0, slip_bound=c.slip_bound or 0.0, clamped=b.clamped, contact=c.surface,
+        obstacle=obstacle_of(case), body_force=b.body_force, displacements=displacements,
+    )
+
+
+def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
+             plot: bool = True) -> tuple[list[SCDNewtonResult], int]:
+    """Solve the case's load path and write the results to ``output``.
+
+    Returns the step results and the exit code (0 all steps converged, 1 a step did not).
+    """
+    opts = PETSc.Options()
+    for name, value in case.petsc.items():
+        if not opts.hasName(PREFIX + name):
+            opts[PREFIX + name] = "" if value is True else value
+    problem = build_problem(case, comm)
+    out = io.prepare_output_dir(comm, output)
+    logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks",
+                problem.n_contact, problem.n_free, len(case.steps), comm.size)
+    summary: dict[str, typing.Any] = {
+        "problem": "contact case", "case": case.to_dict(), "mpi_size": comm.size,
+        "p": problem.n_contact, "n": problem.n_free, "steps": [],
+    }
+
+    def record(index: int, step: LoadStep, u: PETSc.Vec, result: SCDNewtonResult) -> None:
+        entry = {"step": index + 1, "load": step.load, "translation": list(step.translation), **result.summary()}
+        if result.converged:
+            entry.update(write_contact_results(out / f"step_{index + 1:03d}", problem, u, result, plot=plot))
+            if comm.rank == 0:
+                shutil.copyfile(out / f"step_{index + 1:03d}" / "solution.npz", out / ".solution.npz.partial")
+                (out / ".solution.npz.partial").replace(out / "solution.npz")
+        summary["steps"].append(entry)
+        summary["status"] = str(result.status)
+        io.write_summary(comm, out / "summary.json", summary)
+        logger.info("step %d: %s, %d Newton steps, %d Krylov; contact force %s N, contact area %.4g m^2",
+                    index + 1, result.status, result.iterations, result.inner_iterations,
+                    _vector_text(entry.get("contact_force")), entry.get("contact_area", float("nan")))
+
+    steps = [LoadStep(s.load, s.translation) for s in case.steps]
+    u = problem.A.createVecRight()
+    try:
+        results = solve_load_path(problem, steps, u, case.solver, prefix=PREFIX, on_step=record)
+    finally:
+        u.destroy()
+        problem.destroy()
+    return results, 0 if results and results[-1].converged and len(results) == len(steps) else 1
+
+
+def _vector_text(vector: typing.Sequence[float] | None) -> str:
+    return "-" if vector is None else "(" + ", ".join(f"{v:.4g}" for v in vector) + ")"
