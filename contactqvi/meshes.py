@@ -3,11 +3,16 @@
 Every constructor returns ``(mesh, facet_tags)``; the integer tag of a named
 boundary is ``tag_of(facet_tags, name)``, and the names are stored on the tags
 object as ``facet_tags.names`` (``dict[str, int]``).
+
+In parallel every mesh is distributed by :func:`cell_partitioner`: the same
+partition on every run, and no ghost cells unless asked for.
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
+import os
 import pathlib
 import typing
 
@@ -15,6 +20,7 @@ from mpi4py import MPI
 
 import numpy as np
 
+from dolfinx import graph
 from dolfinx import mesh as dmesh
 
 from contactqvi.parameters import require
@@ -30,6 +36,7 @@ __all__ = [
     "read_gmsh",
     "tag_of",
     "boundary_facets",
+    "cell_partitioner",
 ]
 
 #: Boundary names of the contact body Omega(d) of seed 000, Sect. 7.
@@ -40,6 +47,51 @@ SQUARE_BOUNDARIES = {"left": 1, "right": 2, "bottom": 3, "top": 4}
 INTERVAL_BOUNDARIES = {"left": 1, "right": 2}
 
 GapFunction = typing.Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+
+@contextlib.contextmanager
+def _environment(**variables: str) -> typing.Iterator[None]:
+    """Set environment variables for the duration of a ``with`` block."""
+    saved = {name: os.environ.get(name) for name in variables}
+    os.environ.update(variables)
+    try:
+        yield
+    finally:
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+
+
+def cell_partitioner(
+    comm: MPI.Comm, ghost_mode: dmesh.GhostMode = dmesh.GhostMode.none
+) -> typing.Callable | None:
+    """A cell partitioner that gives the same partition on every run; None in serial.
+
+    DOLFINx partitions with PT-SCOTCH, and SCOTCH 7 runs several threads per
+    process whose races change the result: the same 2-rank command got one of two
+    partitions at random, and through the GAMG aggregates different Newton and
+    Krylov counts. Run with one thread (``SCOTCH_PTHREAD_NUMBER=1``, set only
+    while partitioning) and a fixed seed, the partition depends on nothing but the
+    mesh and the number of ranks.
+
+    Args:
+        comm: communicator the mesh is distributed over.
+        ghost_mode: ``GhostMode.none`` (default; nothing in contactqvi integrates
+            over interior facets) or ``GhostMode.shared_facet``. Without ghost cells
+            each cell lives on one rank only, and files written by the ranks
+            together hold every cell once.
+    """
+    if comm.size == 1:
+        return None
+    scotch = graph.partitioner_scotch(imbalance=0.025, seed=0)
+
+    def partition(comm, n_parts, local_graph, ghosting):
+        with _environment(SCOTCH_PTHREAD_NUMBER="1"):
+            return scotch(comm, n_parts, local_graph, ghosting)
+
+    return dmesh.create_cell_partitioner(partition, ghost_mode)
 
 
 def _tag_facets(msh: dmesh.Mesh, markers: dict[str, typing.Callable], names: dict[str, int]) -> dmesh.MeshTags:
@@ -107,6 +159,7 @@ def create_contact_body(
         [np.zeros(3), np.array([length, width, height])],
         [sizes["nx1"], sizes["nx2"], sizes["nx3"]],
         dmesh.CellType.hexahedron,
+        partitioner=cell_partitioner(comm),
     )
     x = msh.geometry.x
     d = np.asarray(gap(x[:, 0], x[:, 1]), dtype=float)
@@ -139,7 +192,7 @@ def create_unit_square(
     require(isinstance(n, (int, np.integer)) and n >= 1, "n", f"must be an integer >= 1, got {n!r}")
     kinds = {"quadrilateral": dmesh.CellType.quadrilateral, "triangle": dmesh.CellType.triangle}
     require(cell_type in kinds, "cell_type", f"must be one of {sorted(kinds)}, got {cell_type!r}")
-    msh = dmesh.create_unit_square(comm, n, n, kinds[cell_type])
+    msh = dmesh.create_unit_square(comm, n, n, kinds[cell_type], partitioner=cell_partitioner(comm))
     markers = {
         "left": lambda p: np.isclose(p[0], 0.0),
         "right": lambda p: np.isclose(p[0], 1.0),
@@ -152,7 +205,7 @@ def create_unit_square(
 def create_unit_interval(comm: MPI.Comm, n: int) -> tuple[dmesh.Mesh, dmesh.MeshTags]:
     """Unit interval with n cells; facet tags ``left`` and ``right``."""
     require(isinstance(n, (int, np.integer)) and n >= 1, "n", f"must be an integer >= 1, got {n!r}")
-    msh = dmesh.create_unit_interval(comm, n)
+    msh = dmesh.create_unit_interval(comm, n, partitioner=cell_partitioner(comm))
     markers = {"left": lambda p: np.isclose(p[0], 0.0), "right": lambda p: np.isclose(p[0], 1.0)}
     return msh, _tag_facets(msh, markers, INTERVAL_BOUNDARIES)
 
@@ -184,7 +237,7 @@ def read_gmsh(source: str | pathlib.Path, comm: MPI.Comm, gdim: int = 3) -> tupl
             for dim, tag in gmsh.model.getPhysicalGroups(gdim - 1):
                 names[gmsh.model.getPhysicalName(dim, tag) or str(tag)] = tag
         names = comm.bcast(names, root=0)
-        msh, _, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=gdim)
+        msh, _, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=gdim, partitioner=cell_partitioner(comm))
     finally:
         if not initialised:
             gmsh.finalize()
