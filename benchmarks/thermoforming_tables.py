@@ -10,12 +10,12 @@ paper's numbers beside ours. Usage::
 from __future__ import annotations
 
 import argparse
-import json
 import pathlib
 import time
 
 from mpi4py import MPI
 
+from contactqvi import io
 from contactqvi.problems import thermoforming as data
 from contactqvi.qvi import build, create_mesh
 
@@ -56,12 +56,10 @@ def solve(test: int, h: float, method: str, obstacle: dict | None = None, **oute
     problem = data.make_test(test)
     msh, _ = create_mesh(MPI.COMM_WORLD, problem.dim, h)
     params = {"tol": data.paper_tolerance(test), "max_iterations": 30, **outer}
-    setup = build(problem, msh, method, params, obstacle)
-    start = time.perf_counter()
-    result = setup.solver.solve(setup.initial)
-    seconds = time.perf_counter() - start
-    setup.destroy()
-    return result, seconds
+    with build(problem, msh, method, params, obstacle) as setup:
+        start = time.perf_counter()
+        result = setup.solver.solve(setup.initial)
+        return result, time.perf_counter() - start
 
 
 def _fmt(ours, paper) -> str:
@@ -89,7 +87,7 @@ def mesh_table(
             ours = (result.iterations,) + tuple(result.totals[c] for c in counts)
             paper = paper_table[h_paper][k]
             rows.append({
-                "h": h, "h_paper": h_paper, "method": method, "status": result.status, "obstacle": obstacle or {},
+                "h": h, "h_paper": h_paper, "method": method, "status": str(result.status), "obstacle": obstacle or {},
                 **dict(zip(("outer",) + counts, ours)), "seconds": secs,
                 "residuals": result.residuals, "taken": result.taken,
                 "paper": dict(zip(("outer",) + counts, paper)),
@@ -167,7 +165,7 @@ def table1(h: float = 5e-4) -> tuple[list[dict], str]:
             eoc = max(result.eocs) if result.eocs else float("nan")
             paper = PAPER_TABLE1[method][j]
             rows.append({
-                "method": method, "projection_derivative": variant, "R": R, "status": result.status,
+                "method": method, "projection_derivative": variant, "R": R, "status": str(result.status),
                 "iterations": result.iterations, "final_norm": result.errors[-1], "to_u1": to_zero,
                 "max_eoc": eoc, "seconds": secs, "errors": result.errors, "paper": paper,
             })
@@ -184,11 +182,8 @@ def _log(text: str) -> None:
 
 
 def _write(name: str, rows: list[dict], markdown: str) -> None:
-    if MPI.COMM_WORLD.rank == 0:
-        RESULTS.mkdir(parents=True, exist_ok=True)
-        meta = {"mpi_size": MPI.COMM_WORLD.size, "rows": rows}
-        (RESULTS / f"thermoforming_{name}.json").write_text(json.dumps(meta, indent=1, default=float) + "\n")
-        (RESULTS / f"thermoforming_{name}.md").write_text(markdown)
+    comm = MPI.COMM_WORLD
+    io.write_table(comm, RESULTS / f"thermoforming_{name}", {"mpi_size": comm.size, "rows": rows}, markdown, echo=False)
 
 
 def main() -> None:

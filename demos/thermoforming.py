@@ -11,168 +11,118 @@ This demo illustrates how to:
     files of the membrane u, the temperature T and the mould Phi0 + varphi T, and PNGs
     like Fig. 3 (surfaces, slice at x2 = 1/2, convergence of Alg. 2 vs C1 vs C2).
 
-Run in parallel as ``mpirun -n 2 python demos/thermoforming.py``. Unknown options starting
-with '-' go to PETSc, e.g. ``-qvi_newton_pc_factor_mat_solver_type superlu_dist`` or
-``-obstacle_pfmy_snes_monitor``.
+Run in parallel as ``mpirun -n 2 python demos/thermoforming.py``.
 """
 
 from __future__ import annotations
 
 import sys
-import time
 
 from mpi4py import MPI
 
-import numpy as np
 import ufl
 
 from dolfinx import fem
 
 from contactqvi import cli, io
-from contactqvi.parameters import ParameterError, require
+from contactqvi.parameters import Parameter, ParameterError, Parameters
 from contactqvi.problems import thermoforming as data
-from contactqvi.qvi import OUTER_METHODS, build, create_mesh
-from contactqvi.qvi import postprocess
-
+from contactqvi.qvi import BUILD_PARAMETERS, FIXED_POINT_PARAMETERS, build, create_mesh, postprocess
+from contactqvi.vi.solver import OBSTACLE_PARAMETERS, check_obstacle_parameters
 
 #: mesh sizes of the paper's figures: Fig. 1/Table 1 (h = 5e-4), Fig. 3 (h = 0.02), Table 3 (h = 0.01 row)
 DEFAULT_H = {1: 5e-4, 2: 5e-4, 3: 0.02, 4: 0.01}
 #: C2 regularisation parameters in the convergence comparison (Fig. 3(d))
 C2_RHOS = (1e-2, 1e-3, 1e-4)
 
+DEMO_PARAMETERS = Parameters(
+    h=Parameter(None, f"mesh size (none: per test, {DEFAULT_H})", minimum=0.0, exclusive=True, optional=True),
+    compare=Parameter(True, "Test 3: also run Alg. 2, C1 and C2 for Fig. 3(d)", type=bool),
+    plots=Parameter(True, "write the PNGs", type=bool),
+)
+#: the parameter tables on the command line: group -> (table, names; None: all)
+TABLES = {
+    "problem": (data.TEST_PARAMETERS, None),
+    "build": (BUILD_PARAMETERS, None),
+    "outer": (FIXED_POINT_PARAMETERS, [n for n in FIXED_POINT_PARAMETERS if n not in ("method", "label")]),
+    "obstacle": (OBSTACLE_PARAMETERS, None),
+    "demo": (DEMO_PARAMETERS, None),
+}
 
-def parse(argv: list[str] | None = None):
-    parser = cli.make_parser(__doc__.split("\n")[0], "results/thermoforming")
-    parser.add_argument("--test", type=int, default=3, help="paper test 1-4 (Sects. 4.2-4.5)")
-    parser.add_argument("--method", default="alg2", help=f"outer method: {', '.join(OUTER_METHODS)}")
-    parser.add_argument("--h", type=float, default=None, help=f"mesh size (default per test: {DEFAULT_H})")
-    parser.add_argument("--parameter-set", default="I", help="Test 1: parameter set I or II")
-    parser.add_argument("--initial", default="zero", help="Test 1: u0 = 0 ('zero') or (-Lap)^{-1} f ('poisson')")
-    parser.add_argument("--radius", type=float, default=None, help="projection radius R (Test 2: default 0.01)")
-    parser.add_argument(
-        "--projection-derivative", default="exact",
-        help="G_PB outside the ball: exact (Lemma 2.9) or scaled (R/||u|| Id, as behind the paper's Table 1)",
-    )
-    parser.add_argument("--rho", type=float, default=1e-4, help="C2: Moreau-Yosida parameter")
-    parser.add_argument("--tol", type=float, default=None, help="outer tolerance (default: the paper's)")
-    parser.add_argument("--max-iterations", type=int, default=50, help="outer iterations")
-    parser.add_argument("--s-solver", default="pfmy-pdas", help="S-solver: pfmy-pdas or vinewtonrsls")
-    parser.add_argument("--rho0", type=float, default=1.0, help="PFMY: first rho on a cold start")
-    parser.add_argument("--rho-min", type=float, default=1e-6, help="PFMY: last rho")
-    parser.add_argument("--no-compare", action="store_true", help="skip the Alg. 2 / C1 / C2 comparison (Fig. 3(d))")
-    parser.add_argument("--no-plots", action="store_true", help="skip the PNGs")
+
+def parse(argv: list[str] | None = None) -> tuple[dict[str, dict], str]:
+    """Checked parameters by group, and the output directory."""
+    parser = cli.make_parser(__doc__.split("\n")[0], "results/thermoforming", petsc_example="-obstacle_pfmy_snes_monitor")
+    for table, names in TABLES.values():
+        table.add_arguments(parser, names)
+    parser.set_defaults(tol=None)
+    parser.description += " Defaults per test: --tol none is the paper's tolerance, --radius none is 0.01 for Test 2."
     args = cli.parse_args(parser, argv)
-    require(args.test in data.TESTS, "test", f"unknown test {args.test!r}; known: {', '.join(map(str, data.TESTS))}")
-    require(args.method in OUTER_METHODS, "method", f"unknown method {args.method!r}; known: {', '.join(OUTER_METHODS)}")
-    if args.h is None:
-        args.h = DEFAULT_H[args.test]
-    require(args.h > 0, "h", f"must be > 0, got {args.h!r}")
-    if args.radius is None and args.test == 2:
-        args.radius = 0.01
-    if args.tol is None:
-        args.tol = data.paper_tolerance(args.test)
-    return args
+    given = {group: {n: getattr(args, n) for n in (names or table)} for group, (table, names) in TABLES.items()}
+    test = data.TEST_PARAMETERS.check(given["problem"])["test"]
+    if given["outer"]["tol"] is None:
+        given["outer"]["tol"] = data.paper_tolerance(test)
+    if given["outer"]["radius"] is None and test == 2:
+        given["outer"]["radius"] = 0.01
+    if given["demo"]["h"] is None:
+        given["demo"]["h"] = DEFAULT_H[test]
+    prm = {group: table.check(given[group]) for group, (table, _) in TABLES.items()}
+    check_obstacle_parameters(prm["obstacle"])
+    return prm, args.output
 
 
-def run(args, method: str, rho: float | None = None):
-    """Build and solve one configuration; returns (setup, result, seconds)."""
-    problem = data.make_test(args.test, args.parameter_set, args.initial)
-    msh, _ = create_mesh(MPI.COMM_WORLD, problem.dim, args.h)
-    outer = {
-        "tol": args.tol, "max_iterations": args.max_iterations, "radius": args.radius,
-        "projection_derivative": args.projection_derivative,
-    }
-    s_params = {"method": args.s_solver, "rho0": args.rho0, "rho_min": args.rho_min}
-    setup = build(problem, msh, method, outer, s_params, rho=rho if rho is not None else args.rho)
-    start = time.perf_counter()
-    result = setup.solver.solve(setup.initial)
-    return setup, result, time.perf_counter() - start
+def run(prm: dict[str, dict], method: str, rho: float | None = None):
+    """Build and solve one configuration; returns (setup, result)."""
+    problem = data.make_test(**prm["problem"])
+    msh, _ = create_mesh(MPI.COMM_WORLD, problem.dim, prm["demo"]["h"])
+    build_prm = {**prm["build"], "method": method, "rho": rho or prm["build"]["rho"]}
+    setup = build(problem, msh, outer_parameters=prm["outer"], obstacle_parameters=prm["obstacle"], **build_prm)
+    return setup, setup.solver.solve(setup.initial)
 
 
-def write_output(args, setup, result, histories) -> None:
-    comm = MPI.COMM_WORLD
-    out = io.prepare_output_dir(comm, args.output)
-    V = setup.V
-    ev = result.evaluation
-    u = result.solution
-    mould = fem.Function(V, name="mould")
-    mould.x.array[:] = ev.obstacle.x.array
-    fields = [u, mould]
-    if ev.temperature is not None:
-        T = fem.Function(V, name="temperature")
-        T.x.array[:] = ev.temperature.x.array
-        fields.append(T)
-    io.write_vtx(out / "thermoforming.bp", fields)
-    gathered = {f.name: io.gather_vertex_values(f) for f in fields + [setup.Phi0]}
-    x = gathered["membrane"][0]
-    values = {name: (vals[:, 0] if vals is not None else None) for name, (_, vals) in gathered.items()}
-    with io.atomic_path(comm, out / "solution.npz") as tmp:
-        if comm.rank == 0:
-            with open(tmp, "wb") as fh:
-                np.savez(fh, x=x, **values)
-    if args.no_plots or comm.rank != 0:
-        comm.Barrier()
-        return
-    deformation = values["mould"] - values["Phi0"]
-    if V.mesh.topology.dim == 2:
-        postprocess.plot_surface(out / "membrane.png", x, values["membrane"], "membrane $u$")
-        postprocess.plot_surface(out / "mould.png", x, values["mould"], r"mould $\Phi_0 + \varphi T$")
-        curves = {"membrane $u$": values["membrane"], r"mould $\Phi_0 + \varphi T$": values["mould"]}
-        if "temperature" in values:
-            curves["temperature $T$"] = values["temperature"]
-            curves[r"deformation $\varphi T$"] = deformation
-        postprocess.plot_slice(out / "slice.png", x, curves, 0.5)
-    else:
-        curves = {"u": values["membrane"], "obstacle": values["mould"]}
-        if "temperature" in values:
-            curves["T"] = values["temperature"]
-        postprocess.plot_profile(out / "solution.png", x[:, 0], curves, f"Test {args.test}", "x")
-    postprocess.plot_convergence(out / "convergence.png", histories, f"Test {args.test}, h = {args.h:g}")
-    comm.Barrier()
+def compare(prm: dict[str, dict], histories: dict[str, list[float]]) -> dict[str, dict]:
+    """Fig. 3(d): Algorithm 2, C1 and C2 for several rho beside the main run (added to ``histories``)."""
+    comparisons = {}
+    for method, rho in [("alg2", None), ("c1", None)] + [("c2", r) for r in C2_RHOS]:
+        label = method if rho is None else f"c2 (rho={rho:g})"
+        if label not in histories:
+            setup, other = run(prm, method, rho)
+            setup.destroy()
+            histories[label] = other.residuals
+            comparisons[label] = {key: other.summary()[key] for key in ("status", "iterations", "timings")}
+    return comparisons
 
 
 def main(argv: list[str] | None = None) -> int:
     try:
-        args = parse(argv)
-        setup, result, seconds = run(args, args.method)
+        prm, output = parse(argv)
+        setup, result = run(prm, prm["build"]["method"])
     except ParameterError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    histories = {args.method: result.residuals}
-    comparisons = {}
-    if args.test == 3 and not args.no_compare:
-        for method, rho in [("alg2", None), ("c1", None)] + [("c2", r) for r in C2_RHOS]:
-            label = method if rho is None else f"c2 (rho={rho:g})"
-            if label in histories:
-                continue
-            other_setup, other, secs = run(args, method, rho)
-            other_setup.destroy()
-            histories[label] = other.residuals
-            comparisons[label] = {"status": other.status, "iterations": other.iterations, "seconds": secs}
-    write_output(args, setup, result, histories)
     comm = MPI.COMM_WORLD
+    test, h = prm["problem"]["test"], prm["demo"]["h"]
+    histories = {prm["build"]["method"]: result.residuals}
+    comparisons = compare(prm, histories) if test == 3 and prm["demo"]["compare"] else {}
+    out = io.prepare_output_dir(comm, output)
+    postprocess.write_results(out, result, setup.Phi0, histories, f"Test {test}, h = {h:g}", prm["demo"]["plots"])
     u = result.solution
     l2 = comm.allreduce(fem.assemble_scalar(fem.form(u * u * ufl.dx)), op=MPI.SUM) ** 0.5
     summary = {
-        "test": args.test,
-        "method": args.method,
-        "h": args.h,
+        "test": test,
+        "method": prm["build"]["method"],
+        "h": h,
         "mpi_size": comm.size,
-        "status": result.status,
-        "outer_iterations": result.iterations,
-        "residuals": result.residuals,
-        "taken": result.taken,
-        "inner_counts": result.counts,
+        **result.summary(),
         "inner_totals": result.totals,
         "errors_h10": result.errors,
         "eoc": result.eocs,
         "residual_eoc": result.residual_eocs,
-        "seconds": seconds,
         "u_l2_norm": l2,
         "comparison": comparisons,
-        "parameters": {k: v for k, v in vars(args).items() if k != "log_level"},
+        "parameters": prm,
     }
-    io.write_summary(comm, io.prepare_output_dir(comm, args.output) / "summary.json", summary)
+    io.write_summary(comm, out / "summary.json", summary)
     if comm.rank == 0:
         print(f"||u||_L2 = {l2:.12e}  ({result.status}, {result.iterations} outer iterations, totals {result.totals})")
     setup.destroy()

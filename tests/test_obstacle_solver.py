@@ -54,7 +54,7 @@ def test_radial_exact_solution_converges_at_first_order(cell_type):
 
 def test_pfmy_pdas_agrees_with_snes_vi_and_is_exactly_feasible():
     msh, problem = _radial(24)
-    ObstacleSolver(problem, {"method": "pfmy-pdas"}, prefix="t_pfmy_").solve()
+    ObstacleSolver(problem, {"s_solver": "pfmy-pdas"}, prefix="t_pfmy_").solve()
     u_pdas = problem.u.x.array.copy()
     lam = problem.multiplier.array.copy()
     n = problem.n_owned
@@ -70,7 +70,7 @@ def test_pfmy_pdas_agrees_with_snes_vi_and_is_exactly_feasible():
     assert msh.comm.allreduce(float(np.max(np.abs(lam[~active]))), op=MPI.MAX) == 0.0
     # The independent oracle: PETSc's reduced-space VI Newton.
     problem.u.x.array[:] = 0.0
-    vi = ObstacleSolver(problem, {"method": "vinewtonrsls"}, prefix="t_vi_").solve()
+    vi = ObstacleSolver(problem, {"s_solver": "vinewtonrsls"}, prefix="t_vi_").solve()
     assert vi.converged and vi.vi_iterations > 0
     diff = msh.comm.allreduce(float(np.max(np.abs(problem.u.x.array[:n] - u_pdas[:n]))), op=MPI.MAX)
     assert diff < 1e-8
@@ -93,7 +93,7 @@ def test_warm_start_uses_the_shorter_path():
 
 @pytest.mark.parametrize(
     "params, name",
-    [({"rho_min": 1.0, "rho0": 1.0}, "rho_min"), ({"method": "bogus"}, "method"), ({"rho0": -1.0}, "rho0"), ({"nope": 1}, "nope")],
+    [({"rho_min": 1.0, "rho0": 1.0}, "rho_min"), ({"s_solver": "bogus"}, "s_solver"), ({"rho0": -1.0}, "rho0"), ({"nope": 1}, "nope")],
 )
 def test_bad_parameters_name_the_parameter(params, name):
     _, problem = _radial(4)

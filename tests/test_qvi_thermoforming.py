@@ -105,7 +105,7 @@ def test_unknown_test_and_bad_obstacle_parameters():
         build(data, msh, "alg2", obstacle_parameters={"rho0": 1e-6, "rho_min": 1e-6})
     assert info.value.name == "rho_min"
     # C2 checks the same parameters, and has no S-solver to choose.
-    for params, name in (({"bogus": 1}, "bogus"), ({"method": "vinewtonrsls"}, "method"), ({"rho_factor": 1}, "rho_factor")):
+    for params, name in (({"bogus": 1}, "bogus"), ({"s_solver": "vinewtonrsls"}, "s_solver"), ({"rho_factor": 1}, "rho_factor")):
         with pytest.raises(ParameterError) as info:
             build(data, msh, "c2", obstacle_parameters=params)
         assert info.value.name == name

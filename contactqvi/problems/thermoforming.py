@@ -9,12 +9,13 @@ import math
 
 import ufl
 
-from contactqvi.parameters import require
+from contactqvi.parameters import Parameter, Parameters, require
 from contactqvi.qvi.data import ObstacleQVIData, SemilinearVIData
 from contactqvi.qvi.temperature import ScalarNonlinearity
 
 __all__ = [
     "TESTS",
+    "TEST_PARAMETERS",
     "PARAMETER_SETS",
     "test1",
     "test2",
@@ -29,6 +30,13 @@ __all__ = [
 PARAMETER_SETS = {"I": (1 + 1 / math.pi, 101 / 100), "II": (1e-2, 1e-2)}
 TESTS = (1, 2, 3, 4)
 
+#: The choice of a paper test (:func:`make_test`).
+TEST_PARAMETERS = Parameters(
+    test=Parameter(3, "paper test: 1-3 QVIs (58), 4 the semilinear VI (48) (Sects. 4.2-4.5)", type=int, minimum=1, maximum=4),
+    parameter_set=Parameter("I", "Test 1: parameter set (alpha1, alpha2)", type=str, choices=tuple(PARAMETER_SETS)),
+    initial=Parameter("zero", "Test 1: u0 = 0 (zero) or (-Lap)^{-1} f (poisson)", type=str, choices=("zero", "poisson")),
+)
+
 
 def test1(alpha1: float, alpha2: float, initial: str = "zero") -> ObstacleQVIData:
     """(69): 1D QVI with exact solution u = sin(pi x), T = alpha1 (Lemma 4.2).
@@ -39,7 +47,7 @@ def test1(alpha1: float, alpha2: float, initial: str = "zero") -> ObstacleQVIDat
     """
     require(alpha1 > 0, "alpha1", f"must be > 0, got {alpha1!r}")
     require(alpha2 > 0, "alpha2", f"must be > 0, got {alpha2!r}")
-    require(initial in ("zero", "poisson"), "initial", f"must be 'zero' or 'poisson', got {initial!r}")
+    TEST_PARAMETERS.check({"initial": initial})
 
     def g(s):
         return alpha1 + ufl.atan(ufl.min_value((1 - s) / 2, 1 - s) / alpha2)
@@ -130,12 +138,11 @@ def test4() -> SemilinearVIData:
 
 
 def make_test(test: int, parameter_set: str = "I", initial: str = "zero") -> ObstacleQVIData | SemilinearVIData:
-    """Data of Test ``test`` (1-4); ``parameter_set`` and ``initial`` apply to Test 1."""
-    require(test in TESTS, "test", f"unknown test {test!r}; known: {', '.join(map(str, TESTS))}")
-    if test == 1:
-        require(parameter_set in PARAMETER_SETS, "parameter_set", f"must be one of {sorted(PARAMETER_SETS)}, got {parameter_set!r}")
-        return test1(*PARAMETER_SETS[parameter_set], initial=initial)
-    return {2: test2, 3: test3, 4: test4}[test]()
+    """Data of Test ``test`` (1-4); ``parameter_set`` and ``initial`` apply to Test 1 (:data:`TEST_PARAMETERS`)."""
+    prm = TEST_PARAMETERS.check({"test": test, "parameter_set": parameter_set, "initial": initial})
+    if prm["test"] == 1:
+        return test1(*PARAMETER_SETS[prm["parameter_set"]], initial=prm["initial"])
+    return {2: test2, 3: test3, 4: test4}[prm["test"]]()
 
 
 def paper_tolerance(test: int) -> float:

@@ -17,19 +17,27 @@ import dolfinx.fem.petsc
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 
+from contactqvi.linalg import create_ksp, preset
 from contactqvi.meshes import create_unit_interval, create_unit_square
-from contactqvi.parameters import require, require_positive
+from contactqvi.parameters import Parameter, Parameters, require
 from contactqvi.qvi.data import ObstacleQVIData, SemilinearVIData
 from contactqvi.qvi.maps import CompositeMap, ObstacleQVIMap, RegularisedQVIMap, SemilinearVIMap
-from contactqvi.qvi.outer import FixedPointSolver
+from contactqvi.qvi.outer import FIXED_POINT_PARAMETERS, FixedPointSolver
 from contactqvi.qvi.temperature import TemperatureMap
+from contactqvi.vi.lifetime import PETScOwner
 from contactqvi.vi.moreau_yosida import PathFollowingMoreauYosida
 from contactqvi.vi.problem import ObstacleProblem
 from contactqvi.vi.solver import ObstacleSolver, check_obstacle_parameters
 
-__all__ = ["OUTER_METHODS", "QVISetup", "create_mesh", "build"]
+__all__ = ["BUILD_PARAMETERS", "OUTER_METHODS", "QVISetup", "create_mesh", "build"]
 
 OUTER_METHODS = ("alg1", "alg2", "c1", "c2", "c3")
+
+BUILD_PARAMETERS = Parameters(
+    method=Parameter("alg2", "outer method: Algorithms 1, 2, or C1, C2, C3 (Sect. 4.1)", type=str, choices=OUTER_METHODS),
+    rho=Parameter(1e-4, "C2: Moreau-Yosida parameter of S_rho", minimum=0.0, exclusive=True),
+    quadrature_degree=Parameter(2, "quadrature degree of the nonsmooth terms", type=int, minimum=1),
+)
 
 
 def create_mesh(comm: MPI.Comm, dim: int, h: float, cell_type: str = "quadrilateral") -> tuple[dmesh.Mesh, dmesh.MeshTags]:
@@ -41,8 +49,8 @@ def create_mesh(comm: MPI.Comm, dim: int, h: float, cell_type: str = "quadrilate
 
 
 @dataclasses.dataclass
-class QVISetup:
-    """Everything a run needs: the space, the composite map, the outer solver and u0."""
+class QVISetup(PETScOwner):
+    """Everything a run needs: the space, the composite map, the outer solver and u0; owns the map and solver."""
 
     V: fem.FunctionSpace
     fmap: CompositeMap
@@ -50,11 +58,9 @@ class QVISetup:
     initial: fem.Function
     Phi0: fem.Function
 
-    def destroy(self) -> None:
-        """Free the PETSc objects of the whole stack (collective)."""
-        self.solver.destroy()
-        self.fmap.destroy()
-        PETSc.garbage_cleanup(self.V.mesh.comm)
+    def __post_init__(self) -> None:
+        self._own(self.fmap)
+        self._own(self.solver)
 
 
 def _interpolate(V: fem.FunctionSpace, expr: ufl.core.expr.Expr, name: str) -> fem.Function:
@@ -64,17 +70,51 @@ def _interpolate(V: fem.FunctionSpace, expr: ufl.core.expr.Expr, name: str) -> f
 
 
 def _poisson(V: fem.FunctionSpace, f: ufl.core.expr.Expr, bcs: list[fem.DirichletBC]) -> fem.Function:
-    """(-Lap)^{-1} f with homogeneous Dirichlet data."""
+    """(-Lap)^{-1} f with homogeneous Dirichlet data (options prefix ``qvi_initial_``)."""
     u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
-    problem = dolfinx.fem.petsc.LinearProblem(
-        ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx,
-        f * v * ufl.dx(metadata={"quadrature_degree": 4}),
-        bcs=bcs,
-        petsc_options={"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"},
-    )
-    w = problem.solve()
-    w.name = "initial"
+    a = fem.form(ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx)
+    L = fem.form(f * v * ufl.dx(metadata={"quadrature_degree": 4}))
+    A = dolfinx.fem.petsc.assemble_matrix(a, bcs=bcs)
+    A.assemble()
+    b = dolfinx.fem.petsc.assemble_vector(L)
+    dolfinx.fem.petsc.apply_lifting(b, [a], bcs=[bcs])
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    dolfinx.fem.petsc.set_bc(b, bcs)
+    w = fem.Function(V, name="initial")
+    ksp = create_ksp(V.mesh.comm, "qvi_initial_", preset("lu"), A=A)
+    ksp.solve(b, w.x.petsc_vec)
+    w.x.scatter_forward()
+    for obj in (ksp, A, b):
+        obj.destroy()
     return w
+
+
+def _semilinear_map(data: SemilinearVIData, problem_args: tuple, obstacle_parameters: dict | None, degree: int):
+    """Test 4: S0 with the source Phi(y) = b1(y) b2(y) + f and the coupling (50)."""
+    V, x, obstacle, bcs = problem_args
+    y = fem.Function(V, name="y")
+    source = data.b1.g(y) * data.b2.g(y) + data.f(x)
+    solver = ObstacleSolver(ObstacleProblem(V, source, obstacle, bcs, degree), obstacle_parameters)
+    du, q = ufl.TrialFunction(V), ufl.TestFunction(V)
+    dx = ufl.Measure("dx", domain=V.mesh, metadata={"quadrature_degree": degree})
+    derivative = data.b1.g(y) * data.b2.derivative(y) + data.b2.g(y) * data.b1.derivative(y)
+    return SemilinearVIMap(solver, y, derivative * du * q * dx)
+
+
+def _qvi_map(data: ObstacleQVIData, problem_args: tuple, obstacle_parameters: dict | None, Phi0, method, rho, degree):
+    """(58): Phi (temperature) then S, or S_rho for C2."""
+    V, x, obstacle, bcs = problem_args
+    temperature = TemperatureMap(V, data.k, data.g, data.Psi0(x), data.psi(x), data.varphi(x), degree)
+    problem = ObstacleProblem(V, data.f(x), obstacle, bcs, degree)
+    if method != "c2":
+        return ObstacleQVIMap(temperature, ObstacleSolver(problem, obstacle_parameters), Phi0)
+    prm = check_obstacle_parameters(obstacle_parameters)
+    require(
+        prm["s_solver"] == "pfmy-pdas",
+        "s_solver",
+        f"C2 replaces S by the Moreau-Yosida map S_rho of (65)-(67); S-solver {prm['s_solver']!r} does not apply",
+    )
+    return RegularisedQVIMap(temperature, PathFollowingMoreauYosida(problem), Phi0, rho, prm["rho0"], prm["rho_factor"])
 
 
 def build(
@@ -91,17 +131,17 @@ def build(
     Args:
         data: QVI (58) or semilinear VI (48) data.
         msh: the mesh; the whole boundary carries u = 0.
-        method: ``alg1``, ``alg2``, ``c1``, ``c2`` or ``c3``.
+        method, rho, quadrature_degree: see :data:`BUILD_PARAMETERS`.
         outer_parameters: overrides of :data:`~contactqvi.qvi.outer.FIXED_POINT_PARAMETERS` (not ``method``).
         obstacle_parameters: overrides of :data:`~contactqvi.vi.solver.OBSTACLE_PARAMETERS`.
-        rho: Moreau-Yosida parameter of C2.
-        quadrature_degree: quadrature of the nonsmooth terms.
     """
-    require(method in OUTER_METHODS, "method", f"unknown method {method!r}; known: {', '.join(OUTER_METHODS)}")
+    prm = BUILD_PARAMETERS.check({"method": method, "rho": rho, "quadrature_degree": quadrature_degree})
     require(msh.topology.dim == data.dim, "mesh", f"Test data are {data.dim}D, the mesh is {msh.topology.dim}D")
-    require_positive("rho", rho)
-    if isinstance(data, ObstacleQVIData):
-        require_positive("k", data.k)
+    params = dict(outer_parameters or {})
+    params["method"] = "alg1" if method == "c2" else method
+    params.setdefault("label", method)
+    FIXED_POINT_PARAMETERS.check(params)
+    check_obstacle_parameters(obstacle_parameters)
     V = fem.functionspace(msh, ("Lagrange", 1))
     x = ufl.SpatialCoordinate(msh)
     fdim = msh.topology.dim - 1
@@ -111,42 +151,13 @@ def build(
     Phi0 = _interpolate(V, data.Phi0(x), "Phi0")
     obstacle = fem.Function(V, name="obstacle")
     obstacle.x.array[:] = Phi0.x.array
-    params = dict(outer_parameters or {})
-    params["method"] = "alg1" if method == "c2" else method
-    params.setdefault("label", method)
-
+    args = (V, x, obstacle, bcs)
     if isinstance(data, SemilinearVIData):
-        y = fem.Function(V, name="y")
-        source = data.b1.g(y) * data.b2.g(y) + data.f(x)
-        problem = ObstacleProblem(V, source, obstacle, bcs, quadrature_degree)
-        solver_s = ObstacleSolver(problem, obstacle_parameters)
-        du, q = ufl.TrialFunction(V), ufl.TestFunction(V)
-        dx = ufl.Measure("dx", domain=msh, metadata={"quadrature_degree": quadrature_degree})
-        derivative = data.b1.g(y) * data.b2.derivative(y) + data.b2.g(y) * data.b1.derivative(y)
-        fmap: CompositeMap = SemilinearVIMap(solver_s, y, derivative * du * q * dx)
+        fmap: CompositeMap = _semilinear_map(data, args, obstacle_parameters, prm["quadrature_degree"])
     else:
-        temperature = TemperatureMap(
-            V, data.k, data.g, data.Psi0(x), data.psi(x), data.varphi(x), quadrature_degree
-        )
-        problem = ObstacleProblem(V, data.f(x), obstacle, bcs, quadrature_degree)
-        if method == "c2":
-            prm = check_obstacle_parameters(obstacle_parameters)
-            require(
-                prm["method"] == "pfmy-pdas",
-                "method",
-                f"C2 replaces S by the Moreau-Yosida map S_rho of (65)-(67); S-solver {prm['method']!r} does not apply",
-            )
-            pfmy = PathFollowingMoreauYosida(problem)
-            fmap = RegularisedQVIMap(temperature, pfmy, Phi0, rho, prm["rho0"], prm["rho_factor"])
-        else:
-            fmap = ObstacleQVIMap(temperature, ObstacleSolver(problem, obstacle_parameters), Phi0)
-
-    if data.initial is None:
-        u0 = _poisson(V, data.f(x), bcs)
-    else:
-        u0 = _interpolate(V, data.initial(x), "initial")
+        fmap = _qvi_map(data, args, obstacle_parameters, Phi0, method, prm["rho"], prm["quadrature_degree"])
+    u0 = _poisson(V, data.f(x), bcs) if data.initial is None else _interpolate(V, data.initial(x), "initial")
     for bc in bcs:
         bc.set(u0.x.array)
     exact = None if getattr(data, "exact", None) is None else data.exact(x)
-    solver = FixedPointSolver(fmap, params, exact=exact)
-    return QVISetup(V, fmap, solver, u0, Phi0)
+    return QVISetup(V, fmap, FixedPointSolver(fmap, params, exact=exact), u0, Phi0)

@@ -20,11 +20,10 @@ from petsc4py import PETSc
 
 import numpy as np
 
-from contactqvi.linalg import create_ksp, ksp_converged_reason
+from contactqvi.linalg import create_ksp, ksp_converged_reason, preset
+from contactqvi.vi.lifetime import PETScOwner
 
-__all__ = ["BlockNewtonSystem", "diagonal_matrix", "DEFAULT_NEWTON_KSP_OPTIONS"]
-
-DEFAULT_NEWTON_KSP_OPTIONS = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+__all__ = ["BlockNewtonSystem", "diagonal_matrix"]
 
 
 def diagonal_matrix(diagonal: PETSc.Vec) -> PETSc.Mat:
@@ -36,7 +35,7 @@ def diagonal_matrix(diagonal: PETSc.Vec) -> PETSc.Mat:
     return D
 
 
-class BlockNewtonSystem:
+class BlockNewtonSystem(PETScOwner):
     """One block linear system with identity rows on chosen (owned) dofs of each block.
 
     Args:
@@ -44,17 +43,23 @@ class BlockNewtonSystem:
         blocks: the block matrices (None: zero block), kept by reference; their owners
             re-assemble them in place before each :meth:`update`.
         prefix: PETSc options prefix of the KSP.
+        ksp: KSP preset of the monolithic system.
     """
 
-    def __init__(self, comm: MPI.Comm, blocks: list[list[PETSc.Mat | None]], prefix: str = "qvi_newton_"):
+    def __init__(
+        self, comm: MPI.Comm, blocks: list[list[PETSc.Mat | None]], prefix: str = "qvi_newton_", ksp: str = "lu"
+    ):
         self.comm = comm
-        self.nest = PETSc.Mat().createNest(blocks, comm=comm)
+        self.nest = self._own(PETSc.Mat().createNest(blocks, comm=comm))
         self.K: PETSc.Mat | None = None
         start = self.nest.getOwnershipRange()[0]
         self.indices = [is_.getIndices().copy() for is_ in self.nest.getNestISs()[0]]
         self.positions = [idx - start for idx in self.indices]
         self.fixed = [np.zeros(idx.size, bool) for idx in self.indices]
-        self.ksp = create_ksp(comm, prefix, DEFAULT_NEWTON_KSP_OPTIONS)
+        self.ksp = self._own(create_ksp(comm, prefix, preset(ksp)))
+        sizes = (self.nest.getLocalSize()[0], self.nest.getSize()[0])
+        #: solution and right-hand side in the layout of the monolithic matrix
+        self.x, self.b = (self._own(PETSc.Vec().createMPI(sizes, comm=comm)) for _ in range(2))
 
     def update(self, fixed: list[np.ndarray]) -> None:
         """Build the matrix from the blocks' current values; row i of block j becomes an identity row if fixed[j][i]."""
@@ -68,22 +73,17 @@ class BlockNewtonSystem:
 
     def solve(self, rhs: list[np.ndarray | None]) -> list[np.ndarray]:
         """Solve with right-hand side blocks (owned values; None = 0); fixed rows get 0."""
-        b, x = self.K.createVecs()
-        b.set(0.0)
+        self.b.set(0.0)
         for pos, values, mask in zip(self.positions, rhs, self.fixed):
             if values is not None:
-                b.array[pos] = np.where(mask, 0.0, values)
-        self.ksp.solve(b, x)
+                self.b.array[pos] = np.where(mask, 0.0, values)
+        self.ksp.solve(self.b, self.x)
         if self.ksp.getConvergedReason() <= 0:
             raise RuntimeError(f"Newton system: linear solve failed ({ksp_converged_reason(self.ksp)})")
-        out = [x.array[pos].copy() for pos in self.positions]
-        b.destroy()
-        x.destroy()
-        return out
+        return [self.x.array[pos].copy() for pos in self.positions]
 
     def destroy(self) -> None:
-        for M in (self.K, self.nest):
-            if M is not None:
-                M.destroy()
-        self.K = self.nest = None
-        self.ksp.destroy()
+        if self.K is not None:
+            self.K.destroy()
+            self.K = None
+        super().destroy()

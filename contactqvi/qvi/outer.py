@@ -29,7 +29,6 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-import typing
 
 from mpi4py import MPI
 
@@ -39,65 +38,76 @@ import ufl
 import dolfinx.fem.petsc
 from dolfinx import fem
 
-from contactqvi.parameters import ParameterTable, merge_parameters, require, require_positive
-from contactqvi.qvi.maps import Evaluation
+from contactqvi.parameters import Parameter, Parameters
+from contactqvi.qvi.maps import CompositeMap, Evaluation
 from contactqvi.qvi.projection import BallProjection
+from contactqvi.result import Result, Status, Timings
+from contactqvi.vi.lifetime import PETScOwner
 
-__all__ = ["FIXED_POINT_PARAMETERS", "METHODS", "PROJECTION_DERIVATIVES", "FixedPointResult", "FixedPointSolver"]
+__all__ = ["FIXED_POINT_PARAMETERS", "QVIResult", "FixedPointSolver"]
 
 logger = logging.getLogger(__name__)
 
-METHODS = ("alg1", "alg2", "c1", "c3")
-PROJECTION_DERIVATIVES = ("exact", "scaled")
-
-FIXED_POINT_PARAMETERS: ParameterTable = {
-    "method": ("alg2", "outer method: alg1 | alg2 | c1 | c3 (C2 = alg1 on the regularised map)"),
-    "label": (None, "name in progress lines and results (default: the method)"),
-    "tol": (1e-12, "stop when ||R(u)||_H1 <= tol"),
-    "max_iterations": (50, "maximum number of outer iterations"),
-    "radius": (None, "radius R of the projection ball B_R(c) of Sect. 2.3 (None: no projection)"),
-    "projection_derivative": (
-        "exact",
-        "G_PB outside B: 'exact' ((16) of Lemma 2.9) or 'scaled' (R/||x - c|| Id, the rank-one term dropped)",
+FIXED_POINT_PARAMETERS = Parameters(
+    method=Parameter(
+        "alg2", "outer method (C2 = alg1 on the regularised map)", type=str, choices=("alg1", "alg2", "c1", "c3")
     ),
-    "armijo_c": (1e-4, "C3: sufficient-decrease constant"),
-    "max_backtracks": (30, "C3: maximum number of step reductions"),
-    "divergence_limit": (1e10, "stop (diverged) when the residual exceeds this"),
-}
+    label=Parameter(None, "name in progress lines and results (default: the method)", type=str, optional=True),
+    tol=Parameter(1e-12, "stop when ||R(u)||_H1 <= tol", minimum=0.0),
+    max_iterations=Parameter(50, "maximum number of outer iterations", type=int, minimum=0),
+    radius=Parameter(
+        None, "radius R of the projection ball B_R(0) of Sect. 2.3 (none: no projection)",
+        minimum=0.0, exclusive=True, optional=True,
+    ),
+    projection_derivative=Parameter(
+        "exact",
+        "G_PB outside the ball: exact ((16) of Lemma 2.9) or scaled (R/||x - c|| Id, the rank-one term dropped)",
+        type=str,
+        choices=("exact", "scaled"),
+    ),
+    armijo_c=Parameter(1e-4, "C3: sufficient-decrease constant", minimum=0.0, maximum=1.0, exclusive=True),
+    max_backtracks=Parameter(30, "C3: maximum number of step reductions", type=int, minimum=0),
+    divergence_limit=Parameter(1e10, "stop (diverged) when the residual exceeds this", minimum=0.0, exclusive=True),
+)  # fmt: skip
 
 
-@dataclasses.dataclass
-class FixedPointResult:
-    """History of an outer solve.
+@dataclasses.dataclass(kw_only=True)
+class QVIResult(Result):
+    """An outer solve. ``history[i]`` holds, for the iterate u_i, ``residual`` ||R(u_i)||_H1,
+    ``taken`` (the candidate: ``newton``, ``fixed-point``, ``linesearch(alpha)``,
+    ``linesearch-failed(alpha)``: no sufficient decrease within ``max_backtracks``; empty for
+    i = 0), ``counts`` (inner counts of the evaluations of that step; i = 0 is the initial
+    evaluation) and, with an exact solution, ``error`` ||u_i - u_exact||_{H^1_0}.
+
+    ``status``: ``CONVERGED_ATOL`` (||R|| <= tol), ``DIVERGED_MAX_IT``, ``DIVERGED_DTOL``
+    (residual above ``divergence_limit`` or not finite) or ``DIVERGED_INNER`` (Phi or S failed).
+    ``inner_iterations``: all inner steps (Phi Newton, PFMY Newton, PDAS, SNES VI).
 
     Attributes:
-        method: outer method name.
-        status: ``converged``, ``max_iterations``, ``diverged`` or ``inner_failure``.
-        residuals: ||R(u_i)||_H1 for i = 0, 1, ...
-        taken: per iteration the candidate taken (``newton``, ``fixed-point``, ``linesearch(alpha)``,
-            ``linesearch-failed(alpha)``: no sufficient decrease within ``max_backtracks``).
-        counts: per iteration the inner counts (iteration 0 is the initial evaluation).
-        errors: ||u_i - u_exact||_{H^1_0} when an exact solution was given.
+        method: outer method name (the label).
         solution: the last iterate u_i.
         evaluation: the evaluation of H at the last iterate (H(u), T, mould, active set).
     """
 
     method: str
-    status: str
-    residuals: list[float]
-    taken: list[str]
-    counts: list[dict[str, int]]
-    errors: list[float]
     solution: fem.Function
     evaluation: Evaluation
 
     @property
-    def iterations(self) -> int:
-        return len(self.residuals) - 1
+    def residuals(self) -> list[float]:
+        return [h["residual"] for h in self.history]
 
     @property
-    def converged(self) -> bool:
-        return self.status == "converged"
+    def taken(self) -> list[str]:
+        return [h["taken"] for h in self.history]
+
+    @property
+    def counts(self) -> list[dict[str, int]]:
+        return [h["counts"] for h in self.history]
+
+    @property
+    def errors(self) -> list[float]:
+        return [h["error"] for h in self.history if "error" in h]
 
     @property
     def totals(self) -> dict[str, int]:
@@ -123,44 +133,32 @@ def _eocs(e: list[float]) -> list[float]:
     return out
 
 
-def _check(params: dict[str, typing.Any]) -> None:
-    require(params["method"] in METHODS, "method", f"unknown outer method {params['method']!r}; known: {', '.join(METHODS)}")
-    require_positive("tol", params["tol"], allow_zero=True)
-    for name in ("max_iterations", "max_backtracks"):
-        value = params[name]
-        require(isinstance(value, (int, np.integer)) and value >= 0, name, f"must be an integer >= 0, got {value!r}")
-    require(0 < params["armijo_c"] < 1, "armijo_c", f"must lie in (0, 1), got {params['armijo_c']!r}")
-    require_positive("divergence_limit", params["divergence_limit"])
-    if params["radius"] is not None:
-        require_positive("radius", params["radius"])
-    require(
-        params["projection_derivative"] in PROJECTION_DERIVATIVES,
-        "projection_derivative",
-        f"must be one of {', '.join(PROJECTION_DERIVATIVES)}, got {params['projection_derivative']!r}",
-    )
-
-
-class FixedPointSolver:
+class FixedPointSolver(PETScOwner):
     """Solve u = H(u) for a composite map (see :mod:`contactqvi.qvi.maps`).
 
     Args:
-        fmap: the map (``evaluate``, ``linearize``, ``solve_linearized``).
+        fmap: the map (``evaluate``, ``linearize``, ``solve_linearized``); stays the caller's.
         parameters: overrides of :data:`FIXED_POINT_PARAMETERS`.
         exact: optional exact solution (UFL expression) for error/EOC histories.
         center: owned values of the ball centre c (default 0).
     """
 
-    def __init__(self, fmap, parameters: dict | None = None, exact: ufl.core.expr.Expr | None = None, center: np.ndarray | None = None):
-        self.params = merge_parameters(FIXED_POINT_PARAMETERS, parameters)
-        _check(self.params)
+    def __init__(
+        self,
+        fmap: CompositeMap,
+        parameters: dict | None = None,
+        exact: ufl.core.expr.Expr | None = None,
+        center: np.ndarray | None = None,
+    ):
+        self.params = FIXED_POINT_PARAMETERS.check(parameters)
         self.map = fmap
         V = fmap.V
         self.comm: MPI.Comm = V.mesh.comm
         self.n = fmap.n_owned
         u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
-        self.h1 = dolfinx.fem.petsc.assemble_matrix(fem.form((ufl.inner(ufl.grad(u), ufl.grad(v)) + u * v) * ufl.dx))
+        self.h1 = self._own(dolfinx.fem.petsc.assemble_matrix(fem.form((ufl.inner(ufl.grad(u), ufl.grad(v)) + u * v) * ufl.dx)))
         self.h1.assemble()
-        self.work, self.image = self.h1.createVecs()
+        self.work, self.image = (self._own(w) for w in self.h1.createVecs())
         self.iterate = fem.Function(V, name="membrane")
         self.point = fem.Function(V, name="projected")
         self.error_form = None
@@ -169,7 +167,7 @@ class FixedPointSolver:
             dx = ufl.dx(metadata={"quadrature_degree": 6})
             self.error_form = fem.form(ufl.inner(ufl.grad(e), ufl.grad(e)) * dx)
         radius = self.params["radius"]
-        self.projection = BallProjection(fmap.stiffness, radius, center) if radius is not None else None
+        self.projection = None if radius is None else self._own(BallProjection(fmap.stiffness, radius, center))
 
     # -- helpers on owned coefficient arrays ------------------------------------------------
     def norm(self, a: np.ndarray) -> float:
@@ -213,43 +211,51 @@ class FixedPointSolver:
         w = self.map.solve_linearized(e) - e
         return z0 - w * self.projection.dot(e, z0) / (1.0 + self.projection.dot(e, w))
 
-    def solve(self, u0: fem.Function) -> FixedPointResult:
-        """Run the outer method from ``u0``."""
+    def _stop(self, res: float, it: int) -> Status:
+        """The status after ``it`` - 1 steps with residual ``res`` (ITERATING: take step ``it``)."""
         prm = self.params
-        method = prm["method"]
-        label = prm["label"] or method
+        if res <= prm["tol"]:
+            return Status.CONVERGED_ATOL
+        if not math.isfinite(res) or res > prm["divergence_limit"]:
+            return Status.DIVERGED_DTOL
+        return Status.DIVERGED_MAX_IT if it > prm["max_iterations"] else Status.ITERATING
+
+    def _record(self, result: QVIResult, x: np.ndarray, res: float, taken: str, counts: dict[str, int]) -> None:
+        entry = {"residual": res, "taken": taken, "counts": counts}
+        if self.error_form is not None:
+            entry["error"] = self._error(x)
+        result.history.append(entry)
+        result.inner_iterations += sum(counts.values())
+        it = len(result.history) - 1
+        logger.info("%s it %2d  ||R||_H1 = %.3e  taken %-16s %s", result.method, it, res, taken, _format_counts(counts))
+
+    def solve(self, u0: fem.Function) -> QVIResult:
+        """Run the outer method from ``u0``."""
+        method = self.params["method"]
         x = u0.x.array[: self.n].copy()
-        ev, res = self.evaluate(x)
-        residuals, taken, counts = [res], [""], [dict(ev.counts)]
-        errors = [self._error(x)] if self.error_form is not None else []
-        status = "max_iterations"
-        logger.info("%s it %2d  ||R||_H1 = %.3e  %s", label, 0, res, _format_counts(ev.counts))
-        for it in range(1, prm["max_iterations"] + 2):
-            if res <= prm["tol"]:
-                status = "converged"
-                break
-            if not math.isfinite(res) or res > prm["divergence_limit"]:
-                status = "diverged"
-                break
-            if it > prm["max_iterations"]:
+        timings = Timings()
+        with timings.phase("evaluate"):
+            ev, res = self.evaluate(x)
+        result = QVIResult(status=Status.ITERATING, iterations=0, method=self.params["label"] or method,
+                           solution=fem.Function(self.map.V, name="membrane"), evaluation=ev, timings=timings)
+        self._record(result, x, res, "", dict(ev.counts))
+        for it in range(1, self.params["max_iterations"] + 2):
+            result.status = self._stop(res, it)
+            if result.status != Status.ITERATING:
                 break
             step_counts: dict[str, int] = {k: 0 for k in ev.counts}
             try:
-                x, ev, res, choice = self._step(method, x, ev, res, step_counts)
+                with result.timings.phase("step"):
+                    x, ev, res, choice = self._step(method, x, ev, res, step_counts)
             except RuntimeError as exc:  # an inner solver failed: report, keep the last iterate
-                logger.warning("%s it %2d: %s", label, it, exc)
-                status = "inner_failure"
+                logger.warning("%s it %2d: %s", result.method, it, exc)
+                result.status = Status.DIVERGED_INNER
                 break
-            residuals.append(res)
-            taken.append(choice)
-            counts.append(step_counts)
-            if self.error_form is not None:
-                errors.append(self._error(x))
-            logger.info("%s it %2d  ||R||_H1 = %.3e  taken %-16s %s", label, it, res, choice, _format_counts(step_counts))
+            self._record(result, x, res, choice, step_counts)
+        result.iterations, result.evaluation = len(result.history) - 1, ev
         self._set(self.iterate, x)
-        solution = fem.Function(self.map.V, name="membrane")
-        solution.x.array[:] = self.iterate.x.array
-        return FixedPointResult(label, status, residuals, taken, counts, errors, solution, ev)
+        result.solution.x.array[:] = self.iterate.x.array
+        return result
 
     def _step(self, method: str, x: np.ndarray, ev: Evaluation, res: float, step_counts: dict[str, int]):
         """One outer iteration; returns (x_{i+1}, H(x_{i+1}), ||R(x_{i+1})||, candidate taken)."""
@@ -290,12 +296,6 @@ class FixedPointSolver:
             last, alpha = alpha, min(max(trial, 0.1 * alpha), 0.5 * alpha)
         # No sufficient decrease after max_backtracks reductions: the smallest step is taken, and says so.
         return x_t, ev_t, res_t, f"linesearch-failed({last:.3g})"
-
-    def destroy(self) -> None:
-        for obj in (self.h1, self.work, self.image):
-            obj.destroy()
-        if self.projection is not None:
-            self.projection.destroy()
 
 
 def _add(total: dict[str, int], counts: dict[str, int]) -> None:

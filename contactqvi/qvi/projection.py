@@ -9,10 +9,11 @@ from petsc4py import PETSc
 import numpy as np
 
 from contactqvi.parameters import require_positive
+from contactqvi.vi.lifetime import PETScOwner
 
 __all__ = ["BallProjection"]
 
-class BallProjection:
+class BallProjection(PETScOwner):
     """P_B for B = B_R(c) in H^1_0 with the inner product (grad v, grad w), (15)-(16).
 
     Args:
@@ -24,7 +25,7 @@ class BallProjection:
     def __init__(self, inner: PETSc.Mat, radius: float, center: np.ndarray | None = None):
         require_positive("radius", radius)
         self.inner, self.radius = inner, radius
-        self.work, self.image = inner.createVecs()
+        self.work, self.image = (self._own(v) for v in inner.createVecs())
         self.center = np.zeros(self.work.getLocalSize()) if center is None else np.asarray(center, dtype=float)
 
     def dot(self, a: np.ndarray, b: np.ndarray) -> float:
@@ -48,7 +49,3 @@ class BallProjection:
             return x.copy(), 1.0, None
         s = self.radius / dist
         return self.center + s * shift, s, shift / dist
-
-    def destroy(self) -> None:
-        self.work.destroy()
-        self.image.destroy()

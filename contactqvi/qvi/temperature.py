@@ -21,8 +21,9 @@ import ufl
 import dolfinx.fem.petsc
 from dolfinx import fem
 
-from contactqvi.linalg import create_snes, reassemble_matrix
+from contactqvi.linalg import create_snes, preset, reassemble_matrix
 from contactqvi.parameters import require_positive
+from contactqvi.vi.lifetime import PETScOwner
 from contactqvi.vi.nonlinear import NonlinearFormProblem, snes_converged_reason
 
 __all__ = ["ScalarNonlinearity", "TemperatureMap", "DEFAULT_PHI_OPTIONS"]
@@ -37,9 +38,7 @@ DEFAULT_PHI_OPTIONS = {
     "snes_atol": 1e-15,
     "snes_stol": 1e-14,
     "snes_max_it": 50,
-    "ksp_type": "preonly",
-    "pc_type": "lu",
-    "pc_factor_mat_solver_type": "mumps",
+    **preset("lu"),
 }
 
 
@@ -51,8 +50,13 @@ class ScalarNonlinearity:
     derivative: UFLMap
 
 
-class TemperatureMap:
-    """Evaluate Phi(u) = I_h(varphi T) and its Newton derivative, (29)-(33).
+class TemperatureMap(PETScOwner):
+    """Evaluate Phi(u) = I_h(varphi T) and assemble its Newton derivative, (29)-(33).
+
+    The SNES iterate :attr:`T` (with the input :attr:`u`) is the state of the last
+    solve and the initial guess of the next; the Newton blocks of (33)/(63) are
+    assembled by :meth:`linearize` at a point given explicitly, on coefficients of
+    their own, so assembling them never disturbs that state.
 
     Args:
         V: scalar P1/Q1 space of u and T.
@@ -79,34 +83,40 @@ class TemperatureMap:
         self.V = V
         self.u = fem.Function(V, name="membrane_input")
         self.T = fem.Function(V, name="temperature")
-        T, u = self.T, self.u
+        #: the point (u, T) of the last :meth:`linearize`
+        self.u_lin, self.T_lin = fem.Function(V), fem.Function(V)
         v, dT = ufl.TestFunction(V), ufl.TrialFunction(V)
         dx = ufl.Measure("dx", domain=V.mesh, metadata={"quadrature_degree": quadrature_degree})
-        s = Psi0 + psi * T - u
-        F = k * T * v * dx + ufl.inner(ufl.grad(T), ufl.grad(v)) * ufl.dx - g.g(s) * v * dx
-        J = k * dT * v * dx + ufl.inner(ufl.grad(dT), ufl.grad(v)) * ufl.dx - g.derivative(s) * psi * dT * v * dx
-        self.jacobian_form = fem.form(J)
-        #: (G_g(s) h, zeta): the u-derivative of the residual, the coupling block of (63).
-        self.coupling_form = fem.form(g.derivative(s) * ufl.TrialFunction(V) * v * dx)
-        #: the matrices of (33)/(63), allocated here and re-assembled in place
-        self.jacobian_matrix = dolfinx.fem.petsc.assemble_matrix(self.jacobian_form)
-        self.jacobian_matrix.assemble()
-        self.coupling_matrix = dolfinx.fem.petsc.assemble_matrix(self.coupling_form)
-        self.coupling_matrix.assemble()
-        self.nonlinear = NonlinearFormProblem(fem.form(F), self.jacobian_form, T, [])
-        self.snes = create_snes(V.mesh.comm, prefix, DEFAULT_PHI_OPTIONS)
+
+        def jacobian(T: fem.Function, u: fem.Function) -> ufl.Form:
+            s = Psi0 + psi * T - u
+            return k * dT * v * dx + ufl.inner(ufl.grad(dT), ufl.grad(v)) * ufl.dx - g.derivative(s) * psi * dT * v * dx
+
+        s = Psi0 + psi * self.T - self.u
+        F = k * self.T * v * dx + ufl.inner(ufl.grad(self.T), ufl.grad(v)) * ufl.dx - g.g(s) * v * dx
+        self.nonlinear = self._own(NonlinearFormProblem(fem.form(F), fem.form(jacobian(self.T, self.u)), self.T, []))
+        self.snes = self._own(create_snes(V.mesh.comm, prefix, DEFAULT_PHI_OPTIONS))
         self.snes.setConvergenceHistory(reset=True)
         self.nonlinear.attach(self.snes)
+        self.x = self._own(self.T.x.petsc_vec.duplicate())
+        #: the matrix of (33)/(63) at (u_lin, T_lin)
+        self.jacobian_form = fem.form(jacobian(self.T_lin, self.u_lin))
+        #: (G_g(s) h, zeta) at (u_lin, T_lin): the u-derivative of the residual, the coupling block of (63)
+        s_lin = Psi0 + psi * self.T_lin - self.u_lin
+        self.coupling_form = fem.form(g.derivative(s_lin) * ufl.TrialFunction(V) * v * dx)
+        self.jacobian_matrix = self._own(dolfinx.fem.petsc.assemble_matrix(self.jacobian_form))
+        self.jacobian_matrix.assemble()
+        self.coupling_matrix = self._own(dolfinx.fem.petsc.assemble_matrix(self.coupling_form))
+        self.coupling_matrix.assemble()
         self.varphi = fem.Function(V, name="varphi")
         self.varphi.interpolate(fem.Expression(varphi, V.element.interpolation_points(), comm=V.mesh.comm))
-        self.x = T.x.petsc_vec.duplicate()
         self.residual_history: list[float] = []
         #: residual of the first (cold) solve: the scale for round-off stagnation
         self.reference_norm: float | None = None
         self.roundoff = 1e-10
 
     def solve(self, u: fem.Function) -> int:
-        """Solve (30) for T at ``u`` (warm start from the current T); returns Newton steps."""
+        """Solve (30) for T at ``u``, starting from the current :attr:`T`; returns Newton steps."""
         u.x.petsc_vec.copy(self.u.x.petsc_vec)
         self.u.x.scatter_forward()
         self.T.x.petsc_vec.copy(self.x)
@@ -125,41 +135,18 @@ class TemperatureMap:
             raise RuntimeError(f"Phi: semismooth Newton for the temperature failed ({snes_converged_reason(self.snes)})")
         return self.snes.getIterationNumber()
 
+    def restart_from(self, T: fem.Function) -> None:
+        """Start the next :meth:`solve` from ``T``."""
+        self.T.x.array[:] = T.x.array
+
     def apply(self, out: fem.Function) -> None:
         """out = I_h(varphi T) for the current T."""
         out.x.array[:] = self.varphi.x.array * self.T.x.array
 
-    def assemble_jacobian(self) -> PETSc.Mat:
-        """Newton derivative of (30) in T at the current (u, T): the matrix of (33)/(63).
-
-        Re-assembled in place into :attr:`jacobian_matrix` (owned by this map: do not destroy).
-        """
-        return reassemble_matrix(self.jacobian_matrix, self.jacobian_form)
-
-    def assemble_coupling(self) -> PETSc.Mat:
-        """Matrix of (G_g(Psi0 + psi T - u) h, zeta), the h-term of (63).
-
-        Re-assembled in place into :attr:`coupling_matrix` (owned by this map: do not destroy).
-        """
-        return reassemble_matrix(self.coupling_matrix, self.coupling_form)
-
-    def derivative(self, h: fem.Function, out: fem.Function) -> None:
-        """out = G_Phi(u) h = I_h(varphi xi_h), xi_h from (33) at the current (u, T)."""
-        A, C = self.assemble_jacobian(), self.assemble_coupling()
-        rhs = A.createVecLeft()
-        C.mult(h.x.petsc_vec, rhs)
-        rhs.scale(-1.0)
-        ksp = PETSc.KSP().create(self.V.mesh.comm)
-        ksp.setOperators(A)
-        ksp.setType("preonly")
-        ksp.getPC().setType("lu")
-        ksp.getPC().setFactorSolverType("mumps")
-        ksp.solve(rhs, out.x.petsc_vec)
-        out.x.scatter_forward()
-        out.x.array[:] *= self.varphi.x.array
-        rhs.destroy()
-        ksp.destroy()
-
-    def destroy(self) -> None:
-        for obj in (self.snes, self.nonlinear, self.x, self.jacobian_matrix, self.coupling_matrix):
-            obj.destroy()
+    def linearize(self, u: fem.Function, T: fem.Function, scale: float = 1.0) -> None:
+        """Re-assemble the blocks of (33)/(63) in place at (u, T): :attr:`jacobian_matrix`
+        and ``scale`` times :attr:`coupling_matrix` (both owned by this map: do not destroy)."""
+        self.u_lin.x.array[:] = u.x.array
+        self.T_lin.x.array[:] = T.x.array
+        reassemble_matrix(self.coupling_matrix, self.coupling_form).scale(scale)
+        reassemble_matrix(self.jacobian_matrix, self.jacobian_form)

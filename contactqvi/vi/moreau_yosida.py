@@ -11,8 +11,10 @@ import ufl
 
 from dolfinx import fem
 
-from contactqvi.linalg import create_snes
-from contactqvi.vi.nonlinear import NonlinearFormProblem, snes_converged_reason
+from contactqvi.linalg import create_snes, preset
+from contactqvi.result import Result, Status
+from contactqvi.vi.lifetime import PETScOwner
+from contactqvi.vi.nonlinear import NonlinearFormProblem, snes_converged_reason, snes_status
 from contactqvi.vi.problem import ObstacleProblem
 
 __all__ = ["huber", "huber_derivative", "PFMYResult", "PathFollowingMoreauYosida", "DEFAULT_NEWTON_OPTIONS"]
@@ -27,9 +29,7 @@ DEFAULT_NEWTON_OPTIONS = {
     "snes_atol": 1e-13,
     "snes_stol": 1e-12,
     "snes_max_it": 100,
-    "ksp_type": "preonly",
-    "pc_type": "lu",
-    "pc_factor_mat_solver_type": "mumps",
+    **preset("lu"),
 }
 
 
@@ -43,20 +43,23 @@ def huber_derivative(t: ufl.core.expr.Expr, rho: ufl.core.expr.Expr) -> ufl.core
     return ufl.conditional(ufl.le(t, 0), 0, ufl.conditional(ufl.lt(t, rho), t / rho, 1))
 
 
-@dataclasses.dataclass
-class PFMYResult:
-    """Outcome of one path-following run: parameters visited, Newton steps per level, all converged?"""
+@dataclasses.dataclass(kw_only=True)
+class PFMYResult(Result):
+    """One path-following run; ``iterations`` are the Newton steps summed over the path.
+
+    The status is the first failure of a subproblem's Newton solve, if any (the path
+    is followed to its end anyway), else that of the last subproblem.
+
+    Attributes:
+        rhos: the parameters visited.
+        level_iterations: Newton steps per parameter.
+    """
 
     rhos: list[float]
-    newton_iterations: list[int]
-    converged: bool
-
-    @property
-    def iterations(self) -> int:
-        return sum(self.newton_iterations)
+    level_iterations: list[int]
 
 
-class PathFollowingMoreauYosida:
+class PathFollowingMoreauYosida(PETScOwner):
     """Solve (60) for rho_0 > rho_1 > ... > rho_J by Newton's method (SNES), warm-started.
 
     The penalty (1/rho) (sigma_rho(u - theta), v) makes the problem smooth (C^1);
@@ -76,29 +79,35 @@ class PathFollowingMoreauYosida:
         dx = problem.dx
         F = ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx + (huber(t, self.rho) / self.rho - problem.source) * v * dx
         J = ufl.inner(ufl.grad(du), ufl.grad(v)) * ufl.dx + huber_derivative(t, self.rho) / self.rho * du * v * dx
-        self.nonlinear = NonlinearFormProblem(fem.form(F), fem.form(J), u, problem.bcs)
-        self.snes = create_snes(problem.comm, prefix, DEFAULT_NEWTON_OPTIONS)
+        self.nonlinear = self._own(NonlinearFormProblem(fem.form(F), fem.form(J), u, problem.bcs))
+        self.snes = self._own(create_snes(problem.comm, prefix, DEFAULT_NEWTON_OPTIONS))
         self.nonlinear.attach(self.snes)
-        self.x = u.x.petsc_vec.duplicate()
+        self.x = self._own(u.x.petsc_vec.duplicate())
 
-    def solve(self, rhos: list[float]) -> PFMYResult:
-        """Run the path from ``problem.u`` (initial guess) through ``rhos``."""
+    def solve(self, rhos: list[float], obstacle: fem.Function | None = None) -> PFMYResult:
+        """Run the path from ``problem.u`` (initial guess) through ``rhos``.
+
+        ``obstacle``: the obstacle of this solve (None: the problem's current one).
+        """
         u = self.problem.u
-        iterations, converged = [], True
+        if obstacle is not None:
+            self.problem.set_obstacle(obstacle)
+        result = PFMYResult(status=Status.ITERATING, iterations=0, rhos=list(rhos), level_iterations=[])
         for rho in rhos:
             self.rho.value = rho
             u.x.petsc_vec.copy(self.x)
-            self.snes.solve(None, self.x)
+            with result.timings.phase("newton"):
+                self.snes.solve(None, self.x)
             self.x.copy(u.x.petsc_vec)
             u.x.scatter_forward()
-            iterations.append(self.snes.getIterationNumber())
-            if self.snes.getConvergedReason() <= 0:
+            result.level_iterations.append(self.snes.getIterationNumber())
+            result.inner_iterations += self.snes.getLinearSolveIterations()
+            status = snes_status(self.snes)
+            if not status.converged:
                 # keep following the path: the next subproblem (and PDAS) start from this iterate
-                converged = False
                 logger.info("PFMY: Newton stopped at rho = %.1e (%s)", rho, snes_converged_reason(self.snes))
-        return PFMYResult(list(rhos), iterations, converged)
-
-    def destroy(self) -> None:
-        self.snes.destroy()
-        self.nonlinear.destroy()
-        self.x.destroy()
+            if result.status.converged or result.status == Status.ITERATING:
+                result.status = status
+            result.history.append({"rho": rho, "newton": result.level_iterations[-1], "status": str(status)})
+        result.iterations = sum(result.level_iterations)
+        return result

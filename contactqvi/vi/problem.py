@@ -18,16 +18,19 @@ import dolfinx.fem.petsc
 from dolfinx import fem
 
 from contactqvi.parameters import require
+from contactqvi.vi.lifetime import PETScOwner
 
 __all__ = ["ObstacleProblem"]
 
-class ObstacleProblem:
+
+class ObstacleProblem(PETScOwner):
     """Forms, boundary conditions and nodal data of an obstacle problem.
 
     Args:
         V: scalar P1 (interval/triangle) or Q1 (quadrilateral) space.
         source: the load f (UFL expression; may depend on Functions).
-        obstacle: nodal upper obstacle theta in V.
+        obstacle: nodal upper obstacle theta in V; the solvers' forms use this
+            Function, and :meth:`set_obstacle` changes its values.
         bcs: Dirichlet conditions of u (homogeneous for H^1_0).
         quadrature_degree: quadrature degree of the load and the (nonsmooth)
             Moreau-Yosida term (60).
@@ -51,10 +54,10 @@ class ObstacleProblem:
         dx = ufl.Measure("dx", domain=V.mesh, metadata={"quadrature_degree": quadrature_degree})
         self.stiffness_form = fem.form(ufl.inner(ufl.grad(u_trial), ufl.grad(v)) * ufl.dx)
         self.load_form = fem.form(source * v * dx)
-        self.A = dolfinx.fem.petsc.assemble_matrix(self.stiffness_form, bcs=bcs)
+        self.A = self._own(dolfinx.fem.petsc.assemble_matrix(self.stiffness_form, bcs=bcs))
         self.A.assemble()
-        self.load = dolfinx.fem.petsc.create_vector(self.load_form)
-        self.multiplier = self.load.duplicate()
+        self.load = self._own(dolfinx.fem.petsc.create_vector(self.load_form))
+        self.multiplier = self._own(self.load.duplicate())
         self.multiplier.set(0.0)
         bc_loc = np.concatenate([bc.dof_indices()[0] for bc in bcs]) if bcs else np.zeros(0, np.int32)
         self.free = np.ones(self.n_owned, dtype=bool)
@@ -63,6 +66,15 @@ class ObstacleProblem:
         for bc in bcs:
             bc.set(self.boundary_values.x.array)
         self.dx = dx
+
+    def set_obstacle(self, theta: fem.Function) -> None:
+        """Copy the nodal values of ``theta`` (same space) into the problem's obstacle."""
+        self.obstacle.x.array[:] = theta.x.array
+
+    def active_set(self, u: fem.Function) -> np.ndarray:
+        """Owned free nodes where ``u`` touches the obstacle, {u = theta} (Sect. 4.1)."""
+        n = self.n_owned
+        return self.free & (u.x.array[:n] >= self.obstacle.x.array[:n])
 
     def assemble_load(self) -> PETSc.Vec:
         """Load vector (f, v) with the Dirichlet values lifted and set (current f)."""
@@ -94,7 +106,3 @@ class ObstacleProblem:
         out.aypx(-1.0, b)
         out.array[~self.free] = 0.0
         return out
-
-    def destroy(self) -> None:
-        for obj in (self.A, self.load, self.multiplier):
-            obj.destroy()

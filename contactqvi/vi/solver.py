@@ -5,25 +5,45 @@ from __future__ import annotations
 import dataclasses
 import typing
 
-from contactqvi.parameters import ParameterTable, merge_parameters, require, require_positive
+import numpy as np
+
+from dolfinx import fem
+
+from contactqvi.parameters import Parameter, Parameters, require
+from contactqvi.result import Result, Status
+from contactqvi.vi.lifetime import PETScOwner
 from contactqvi.vi.moreau_yosida import PathFollowingMoreauYosida
-from contactqvi.vi.pdas import PrimalDualActiveSet
+from contactqvi.vi.pdas import ObstacleActiveSetSolver
 from contactqvi.vi.problem import ObstacleProblem
-from contactqvi.vi.snes_vi import SNESVariationalInequality
+from contactqvi.vi.snes_vi import ObstacleSNESVI
 
 __all__ = ["OBSTACLE_PARAMETERS", "ObstacleResult", "ObstacleSolver", "check_obstacle_parameters", "rho_path"]
 
-OBSTACLE_PARAMETERS: ParameterTable = {
-    "method": ("pfmy-pdas", "S-solver: 'pfmy-pdas' (PFMY path + PDAS restoration) or 'vinewtonrsls' (PETSc SNES VI)"),
-    "rho0": (1.0, "first Moreau-Yosida parameter on a cold start"),
-    "rho0_warm": (1e-2, "first Moreau-Yosida parameter on a warm start"),
-    "rho_min": (1e-6, "last Moreau-Yosida parameter"),
-    "rho_factor": (10.0, "rho is divided by this factor along the path"),
-    "pdas_max_iterations": (100, "maximum number of PDAS iterations"),
-    "pdas_c": (1.0, "PDAS constant, in units of the stiffness diagonal"),
-}
+_POSITIVE = {"minimum": 0.0, "exclusive": True}
 
-METHODS = ("pfmy-pdas", "vinewtonrsls")
+OBSTACLE_PARAMETERS = Parameters(
+    s_solver=Parameter(
+        "pfmy-pdas",
+        "S-solver: PFMY path + PDAS restoration, or PETSc's SNES VI",
+        type=str,
+        choices=("pfmy-pdas", "vinewtonrsls"),
+    ),
+    rho0=Parameter(1.0, "PFMY: first Moreau-Yosida parameter on a cold start", **_POSITIVE),
+    rho0_warm=Parameter(1e-2, "PFMY: first Moreau-Yosida parameter on a warm start", **_POSITIVE),
+    rho_min=Parameter(1e-6, "PFMY: last Moreau-Yosida parameter", **_POSITIVE),
+    rho_factor=Parameter(10.0, "PFMY: rho is divided by this factor along the path", minimum=1.0, exclusive=True),
+    pdas_max_iterations=Parameter(100, "PDAS: maximum number of iterations", type=int, minimum=1),
+    pdas_c=Parameter(1.0, "PDAS: constant c, in units of the stiffness diagonal", **_POSITIVE),
+)
+
+
+def check_obstacle_parameters(overrides: dict | None) -> dict[str, typing.Any]:
+    """:data:`OBSTACLE_PARAMETERS` with ``overrides``, checked; a ParameterError names a bad one."""
+    params = OBSTACLE_PARAMETERS.check(overrides)
+    rho0, rho0_warm, rho_min = params["rho0"], params["rho0_warm"], params["rho_min"]
+    require(rho_min < rho0, "rho_min", f"must be < rho0 = {rho0!r}, got {rho_min!r}")
+    require(rho_min <= rho0_warm, "rho_min", f"must be <= rho0_warm = {rho0_warm!r}, got {rho_min!r}")
+    return params
 
 
 def rho_path(rho0: float, rho_min: float, factor: float) -> list[float]:
@@ -36,40 +56,28 @@ def rho_path(rho0: float, rho_min: float, factor: float) -> list[float]:
     return rhos
 
 
-@dataclasses.dataclass
-class ObstacleResult:
-    """Iteration counts of one evaluation of S, by stage."""
+@dataclasses.dataclass(kw_only=True)
+class ObstacleResult(Result):
+    """One evaluation of S; ``iterations`` counts its linear solves (Newton steps plus PDAS solves).
+
+    The status is that of the stage that decides: PDAS (a PFMY path that stopped
+    early only costs PDAS iterations) or SNES VI.
+
+    Attributes:
+        pfmy_iterations, pdas_iterations, vi_iterations: the counts by stage.
+        active: owned nodes of the active set {u = theta}.
+        active_nodes: its global size.
+    """
 
     pfmy_iterations: int = 0
     pdas_iterations: int = 0
     vi_iterations: int = 0
+    active: np.ndarray | None = None
     active_nodes: int = 0
-    converged: bool = True
 
 
-def _check(params: dict[str, typing.Any]) -> None:
-    require(params["method"] in METHODS, "method", f"unknown S-solver {params['method']!r}; known: {', '.join(METHODS)}")
-    for name in ("rho0", "rho0_warm", "rho_min"):
-        require_positive(name, params[name])
-    require(params["rho_factor"] > 1, "rho_factor", f"must be > 1, got {params['rho_factor']!r}")
-    require(params["rho_min"] < params["rho0"], "rho_min", f"must be < rho0 = {params['rho0']!r}, got {params['rho_min']!r}")
-    require(
-        params["rho_min"] <= params["rho0_warm"],
-        "rho_min",
-        f"must be <= rho0_warm = {params['rho0_warm']!r}, got {params['rho_min']!r}",
-    )
-    require(params["pdas_max_iterations"] >= 1, "pdas_max_iterations", "must be >= 1")
-
-
-def check_obstacle_parameters(overrides: dict | None) -> dict[str, typing.Any]:
-    """:data:`OBSTACLE_PARAMETERS` with ``overrides``, checked; a ParameterError names a bad one."""
-    params = merge_parameters(OBSTACLE_PARAMETERS, overrides)
-    _check(params)
-    return params
-
-
-class ObstacleSolver:
-    """Evaluate S: solve the obstacle problem for the current obstacle/source of ``problem``.
+class ObstacleSolver(PETScOwner):
+    """Evaluate S: solve the obstacle problem for a given obstacle and the problem's source.
 
     Args:
         problem: the obstacle problem (its ``u`` is initial guess and result).
@@ -81,37 +89,37 @@ class ObstacleSolver:
         self.params = check_obstacle_parameters(parameters)
         self.problem = problem
         self.warm = False
-        if self.params["method"] == "pfmy-pdas":
-            self.pfmy = PathFollowingMoreauYosida(problem, prefix + "pfmy_")
-            self.pdas = PrimalDualActiveSet(problem, self.params["pdas_max_iterations"], self.params["pdas_c"], prefix + "pdas_")
+        if self.params["s_solver"] == "pfmy-pdas":
+            self.pfmy = self._own(PathFollowingMoreauYosida(problem, prefix + "pfmy_"))
+            max_it, c = self.params["pdas_max_iterations"], self.params["pdas_c"]
+            self.pdas = self._own(ObstacleActiveSetSolver(problem, max_it, c, prefix + "pdas_"))
         else:
-            self.vi = SNESVariationalInequality(problem, prefix + "vi_")
+            self.vi = self._own(ObstacleSNESVI(problem, prefix + "vi_"))
 
-    def solve(self, warm_start: bool | None = None) -> ObstacleResult:
-        """Solve from ``problem.u`` (warm start, the default after the first solve) or from 0."""
+    def solve(self, obstacle: fem.Function | None = None, warm_start: bool | None = None) -> ObstacleResult:
+        """Solve for ``obstacle`` (None: the problem's current one) from ``problem.u``.
+
+        ``warm_start`` (the default after the first solve) starts from ``problem.u``, else from
+        the boundary values extended by 0.
+        """
         p, prm = self.problem, self.params
+        if obstacle is not None:
+            p.set_obstacle(obstacle)
         p.check_feasible_set()
         warm = self.warm if warm_start is None else warm_start
         if not warm:
             p.u.x.array[:] = p.boundary_values.x.array
-        result = ObstacleResult()
-        if prm["method"] == "pfmy-pdas":
+        result = ObstacleResult(status=Status.ITERATING, iterations=0)
+        if prm["s_solver"] == "pfmy-pdas":
             rhos = rho_path(prm["rho0_warm"] if warm else prm["rho0"], prm["rho_min"], prm["rho_factor"])
-            pfmy = self.pfmy.solve(rhos)
-            pdas = self.pdas.solve()
-            result.pfmy_iterations, result.pdas_iterations = pfmy.iterations, pdas.iterations
-            # PDAS decides: a PFMY path that stopped early only costs PDAS iterations.
-            result.converged = pdas.converged
+            pfmy, pdas = self.pfmy.solve(rhos), self.pdas.solve()
+            result.pfmy_iterations, result.pdas_iterations, result.status = pfmy.iterations, pdas.iterations, pdas.status
+            result.timings.update({"pfmy": sum(pfmy.timings.values()), "pdas": sum(pdas.timings.values())})
         else:
             vi = self.vi.solve()
-            result.vi_iterations, result.converged = vi.iterations, vi.converged
-        n = p.n_owned
-        active = p.free & (p.u.x.array[:n] >= p.obstacle.x.array[:n])
-        result.active_nodes = p.comm.allreduce(int(active.sum()))
+            result.vi_iterations, result.status, result.timings = vi.iterations, vi.status, vi.timings
+        result.iterations = result.pfmy_iterations + result.pdas_iterations + result.vi_iterations
+        result.active = p.active_set(p.u)
+        result.active_nodes = p.comm.allreduce(int(result.active.sum()))
         self.warm = True
         return result
-
-    def destroy(self) -> None:
-        for stage in ("pfmy", "pdas", "vi"):
-            if hasattr(self, stage):
-                getattr(self, stage).destroy()
