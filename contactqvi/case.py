@@ -57,6 +57,7 @@ import collections.abc
 import dataclasses
 import difflib
 import math
+import os
 import pathlib
 import tomllib
 import typing
@@ -290,7 +291,7 @@ def parse_case(data: collections.abc.Mapping, base_dir: str | pathlib.Path = "."
         mesh["box"] = PaperBody(**_table(mesh["box"], "mesh.box", PaperBody))
     if mesh.get("file") is not None:
         require(isinstance(mesh["file"], str), "mesh.file", f"must be a file name, got {mesh['file']!r}")
-        mesh["file"] = pathlib.Path(base_dir) / mesh["file"]
+        mesh["file"] = pathlib.Path(os.path.normpath(pathlib.Path(base_dir) / mesh["file"]))
     boundary = _section(top, "boundary", Boundary)
     if "displacement" in boundary:
         groups = _table(boundary["displacement"], "boundary.displacement")
@@ -330,11 +331,16 @@ def _table(value: typing.Any, path: str, cls: type | None = None, required: bool
         if key not in fields:
             close = difflib.get_close_matches(key, fields, n=1)
             hint = f"did you mean {close[0]!r}?" if close else f"valid keys: {', '.join(fields)}"
+            if path and key in _SECTIONS:
+                hint = f"a key written after the header [{path}] belongs to that table; move '{key}' above it"
             raise ParameterError(_join(path, key), f"unknown key; {hint}")
     for f in dataclasses.fields(cls) if required else ():
         if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
             require(f.name in value, _join(path, f.name), "required key missing")
     return value
+
+
+_SECTIONS = ("mesh", "material", "boundary", "contact", "obstacle", "steps", "solver", "petsc")
 
 
 def _section(top: dict[str, typing.Any], name: str, cls: type) -> dict[str, typing.Any]:
