@@ -1,6 +1,8 @@
 # contactqvi: two commands do everything on a fresh machine.
 #   make demo   install what is missing, run the flagship under mpirun -n 2
 #   make test   install what is missing, run the test suite serially and with 2 ranks
+#   make container-check   build docker/Dockerfile (docker or podman), run the flagship and the tests inside
+#   make paraview          install ParaView 5.13 from Debian, render the standard views of a fresh result
 VENV    ?= .venv
 PY      := $(VENV)/bin/python
 NP      ?= 2
@@ -13,7 +15,7 @@ endif
 MPIENV  += OMPI_MCA_rmaps_base_oversubscribe=1 OMPI_MCA_btl=self,sm
 MPIRUN  := $(MPIENV) mpirun -n $(NP)
 
-.PHONY: deps venv demo test test-serial test-mpi benchmarks clean
+.PHONY: deps venv demo test test-serial test-mpi benchmarks container-check paraview clean
 
 deps:
 	bash scripts/install-deps.sh
@@ -45,6 +47,16 @@ benchmarks: $(PY)
 	$(PY) benchmarks/coulomb_peers.py --levels 7
 	$(PY) benchmarks/stadler_tables.py
 	$(PY) benchmarks/thermoforming_tables.py --table all
+
+container-check:
+	bash scripts/container-check.sh
+
+# ParaView views (scripts/paraview/pv_views.py) of a fresh lev-4 d3/L2 result, to docs/images.
+PV_OUT ?= $(OUT)/pv
+PV_IMAGES ?= docs/images
+paraview: $(PY)
+	$(MPIRUN) $(PY) demos/coulomb3d.py --lev 4 --geometry d3 --load L2 --output $(PV_OUT)
+	bash scripts/paraview/run.sh $(PV_OUT) $(PV_IMAGES)
 
 clean:
 	rm -rf $(OUT) .pytest_cache build *.egg-info

@@ -1,14 +1,20 @@
 #!/usr/bin/env bash
 # Install the system packages contactqvi needs (DOLFINx 0.9 and friends from Debian).
 #
-# Idempotent: does nothing when every package of scripts/packages.txt is installed.
+#   scripts/install-deps.sh [LIST...]   LIST defaults to scripts/packages.txt; other
+#                                       lists (scripts/paraview/packages.txt) follow
+#                                       the same rules and the same trixie pin.
+#
+# Idempotent: does nothing when every package of the list(s) is installed.
 # On a Debian release older than trixie (13) it adds the trixie suite with a low
 # pin (Pin-Priority 100) so that only the packages we ask for with `-t trixie`
 # come from it; on trixie or newer it installs them from the release itself.
 set -euo pipefail
 
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
-mapfile -t packages < <(grep -v -e '^\s*#' -e '^\s*$' "$here/packages.txt")
+lists=("$@")
+[ ${#lists[@]} -gt 0 ] || lists=("$here/packages.txt")
+mapfile -t packages < <(cat "${lists[@]}" | sed 's/#.*//' | grep -v -e '^\s*$' | tr -d ' \t')
 
 # A package is missing when it is not installed or older than its minimum version.
 missing=()
