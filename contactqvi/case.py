@@ -372,6 +372,8 @@ def _direction(value: typing.Any, name: str) -> Vector:
     vector = _vector(value, name)
     length = math.sqrt(sum(v * v for v in vector))
     require(length > 0.0, name, f"must have nonzero length, got {list(value)!r}")
+    if math.isclose(length, 1.0, rel_tol=1e-15):  # keep a unit vector as given: checking is idempotent
+        return vector
     return tuple(v / length for v in vector)
 
 
