@@ -16,8 +16,9 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 
-from contactqvi.friction import FrictionProblem, PrimalDualActiveSet
+from contactqvi.friction import FrictionActiveSetSolver, FrictionProblem
 from contactqvi.meshes import create_unit_square
+from contactqvi.result import Status
 
 G, C1, C2 = 1.0, 5.0, -6.0
 B = G - C2
@@ -48,13 +49,14 @@ def test_errors_decrease_under_refinement(cell_type):
     for N in (5, 9, 17, 33):
         msh, tags = create_unit_square(comm, N - 1, cell_type)
         problem = FrictionProblem(msh, tags, ("left", "right"), (), lambda x: C1 + C2 * x[0], mu=1.0, g=G)
-        result = PrimalDualActiveSet(problem).solve(1e16)
-        assert result.status == "converged"
-        n_owned = problem.V.dofmap.index_map.size_local
-        x = problem.V.tabulate_dof_coordinates()[:n_owned, 0]
-        y_error = comm.allreduce(float(np.abs(result.y.x.array[:n_owned] - exact_y(x)).max()), op=MPI.MAX)
+        with problem, FrictionActiveSetSolver(problem) as pdas:
+            result = pdas.solve(gamma=1e16)
+            n_owned = problem.V.dofmap.index_map.size_local
+            x = problem.V.tabulate_dof_coordinates()[:n_owned, 0]
+            y_error = problem.max_abs(result.y.x.array[:n_owned] - exact_y(x))
+        assert result.status == Status.CONVERGED_ACTIVE_SET
         xb = problem.V.tabulate_dof_coordinates()[problem.boundary_dofs, 0]
-        lam_error = problem.boundary_norm(result.lam.array_r - exact_lambda(xb))
+        lam_error = problem.boundary_norm(result.lam - exact_lambda(xb))
         slip = problem.count((result.states == 1) & (xb < 0.5))
         stick = problem.count((result.states == 0) & (xb > 0.5))
         assert slip + stick == problem.n_boundary  # left edge in A+, right edge in I, nothing else

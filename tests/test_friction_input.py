@@ -6,9 +6,10 @@ import json
 
 from mpi4py import MPI
 
+import numpy as np
 import pytest
 
-from contactqvi.friction import FrictionProblem, PrimalDualActiveSet, augmented_lagrangian, uzawa
+from contactqvi.friction import FrictionActiveSetSolver, FrictionProblem, UzawaSolver, augmented_lagrangian
 from contactqvi.meshes import create_unit_square
 from contactqvi.parameters import ParameterError
 from contactqvi.problems.stadler import create_stadler_problem, stadler_example
@@ -36,70 +37,105 @@ def test_problem_rejects_bad_data(kwargs, name):
 
 
 def test_solvers_reject_bad_parameters():
-    problem = create_stadler_problem(MPI.COMM_WORLD, stadler_example(2), 5)
-    pdas = PrimalDualActiveSet(problem)
-    for gamma in (0.0, -1.0, float("inf")):
-        with pytest.raises(ParameterError, match="^gamma:"):
-            pdas.solve(gamma)
-        with pytest.raises(ParameterError, match="^gamma:"):
-            uzawa(problem, gamma)
-        with pytest.raises(ParameterError, match="^gamma:"):
-            augmented_lagrangian(pdas, gamma)
-    for sigma in (0.0, -2.0):
-        with pytest.raises(ParameterError, match="^sigma:"):
-            pdas.solve(10.0, sigma)
-    with pytest.raises(ParameterError, match="^gamma:"):
-        augmented_lagrangian(pdas, lambda step: -1.0)
-    with pytest.raises(ParameterError, match="^inner:"):
-        augmented_lagrangian(pdas, 10.0, inner="sloppy")
-    with pytest.raises(ParameterError, match="^max_iterations:"):
-        pdas.solve(10.0, max_iterations=0)
+    """The parameter tables check every value before any work, with the shared error text."""
+    problem = create_stadler_problem(MPI.COMM_WORLD, example=2, N=5)
+    with problem, FrictionActiveSetSolver(problem) as pdas, UzawaSolver(problem) as uzawa:
+        for gamma in (0.0, -1.0, float("inf")):
+            for solve in (pdas.solve, uzawa.solve, lambda **kw: augmented_lagrangian(pdas, **kw)):
+                with pytest.raises(ParameterError, match="^gamma: must be"):
+                    solve(gamma=gamma)
+        for sigma in (0.0, -2.0):
+            with pytest.raises(ParameterError, match="^sigma: must be > 0"):
+                pdas.solve(gamma=10.0, sigma=sigma)
+        with pytest.raises(ParameterError, match="^inner: must be one of exact, inexact, got 'sloppy'"):
+            augmented_lagrangian(pdas, inner="sloppy")
+        with pytest.raises(ParameterError, match="^schedule: must be one of"):
+            augmented_lagrangian(pdas, schedule="power2")
+        with pytest.raises(ParameterError, match="^max_iterations: must be >= 1, got 0"):
+            pdas.solve(gamma=10.0, max_iterations=0)
+        with pytest.raises(ParameterError, match="^max_iterations: must be an integer"):
+            uzawa.solve(max_iterations=2.5)
+        with pytest.raises(ParameterError, match="^residual_reduction: must be in"):
+            pdas.solve(residual_reduction=1.0)
+        with pytest.raises(ParameterError, match="^lam_hat:"):
+            pdas.solve(lam_hat=np.zeros(len(problem.boundary_dofs) + 1))
+        with pytest.raises(ParameterError, match="^gama: unknown parameter; did you mean 'gamma'"):
+            pdas.solve(gama=10.0)
 
 
 def test_examples_reject_bad_input():
     for number in (0, 4):
         with pytest.raises(ParameterError, match="^example:"):
             stadler_example(number)
+        with pytest.raises(ParameterError, match="^example: must be in"):
+            create_stadler_problem(MPI.COMM_WORLD, example=number, N=5)
     for N in (2, 0, 3.5):
         with pytest.raises(ParameterError, match="^N:"):
-            create_stadler_problem(MPI.COMM_WORLD, stadler_example(1), N)
+            create_stadler_problem(MPI.COMM_WORLD, example=1, N=N)
+    with pytest.raises(ParameterError, match="^discretisation: must be one of q1, p1, fd"):
+        create_stadler_problem(MPI.COMM_WORLD, example=1, N=5, discretisation="q2")
 
 
 @pytest.mark.parametrize(
     "argv, name",
     [
         (["--example", "4"], "example"),
-        (["--method", "newton"], "method"),
         (["--gamma", "0"], "gamma"),
         (["--sigma", "-1"], "sigma"),
         (["--N", "2"], "N"),
-        (["--alm-inner", "maybe"], "alm-inner"),
         (["--example", "2", "--g", "-0.4"], "g"),
         (["--example", "3", "--mu", "-0.5"], "mu"),
         (["--example", "3", "--mu", "0"], "mu"),
-        (["--max-iterations", "0"], "max-iterations"),
-        (["--method", "alm", "--alm-steps", "0"], "alm-steps"),
-        (["--method", "uzawa", "--tol=-1e-4"], "tol"),
-        (["--example2-reading", "x2x2"], "example2-reading"),
+        (["--max-iterations", "0"], "max_iterations"),
+        (["--method", "alm", "--alm-max-outer", "0"], "alm_max_outer"),
+        (["--alm-residual-reduction", "2"], "alm_residual_reduction"),
+        (["--method", "uzawa", "--uzawa-tol=-1e-4"], "uzawa_tol"),
     ],
 )
 def test_demo_reports_bad_input(argv, name, capsys, mpi_tmp_path, load_demo):
     rc = load_demo("simplified_friction").main([*argv, "--output", str(mpi_tmp_path / "bad"), "--no-png"])
     assert rc == 2
     if MPI.COMM_WORLD.rank == 0:
-        assert f"error: {name}:" in capsys.readouterr().err
+        assert f"error: {name}: must" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "argv", [["--method", "newton"], ["--alm-inner", "maybe"], ["--example2-reading", "x2x2"], ["--discretisation", "q2"]]
+)
+def test_demo_rejects_bad_choices(argv, capsys, mpi_tmp_path, load_demo):
+    """Choices are checked by argparse (exit code 2, the option and the valid values named)."""
+    with pytest.raises(SystemExit) as info:
+        load_demo("simplified_friction").main([*argv, "--output", str(mpi_tmp_path / "bad"), "--no-png"])
+    assert info.value.code == 2
+    if MPI.COMM_WORLD.rank == 0:
+        assert f"argument {argv[0]}: invalid choice" in capsys.readouterr().err
+
+
+def test_demo_help_names_its_own_petsc_prefix(capsys, load_demo):
+    with pytest.raises(SystemExit):
+        load_demo("simplified_friction").main(["--help"])
+    text = capsys.readouterr().out
+    assert "-friction_ksp_view" in text and "-uzawa_ksp_view" in text and "coulomb" not in text
+    assert "--alm-inner" in text and "--uzawa-gamma" in text and "--discretisation" in text
 
 
 def test_demo_alm_end_to_end(mpi_tmp_path, load_demo):
     out = mpi_tmp_path / "alm"
     argv = ["--example", "2", "--method", "alm", "--alm-inner", "inexact", "--alm-schedule", "power10",
-            "--alm-steps", "5", "--tol", "1e-8", "--N", "9", "--output", str(out), "--no-png"]  # fmt: skip
+            "--alm-max-outer", "5", "--alm-tol", "1e-8", "--N", "9", "--output", str(out)]  # fmt: skip
     assert load_demo("simplified_friction").main(argv) == 0
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["status"] == "converged" and summary["d_lambda"] < 1e-8
+    assert summary["status"] == "converged_atol" and summary["converged"] and summary["d_lambda"] < 1e-8
     assert summary["max_abs_lambda"] <= 0.4 * (1 + 1e-14)
-    assert (out / "solution.npz").is_file() and (out / "solution.bp").is_dir()
-    assert summary["gamma"] == "10^l" and [h["gamma"] for h in summary["history"]] == [10.0**k for k in range(1, 6)]
+    assert (out / "solution.npz").is_file() and (out / "solution.bp").is_dir() and (out / "y.png").is_file()
+    solver = summary["parameters"]["solver"]
+    assert solver["schedule"] == "power10" and solver["max_outer"] == 5 and solver["tol"] == 1e-8
+    assert [h["gamma"] for h in summary["history"]] == [10.0**k for k in range(1, 6)]
+    assert summary["parameters"]["problem"] == {"example": 2, "N": 9, "discretisation": "q1", "g": None, "mu": None,
+                                                "example2_reading": "x1x2"}  # fmt: skip
+    if MPI.COMM_WORLD.rank == 0:
+        npz = np.load(out / "solution.npz")
+        assert len(npz["lam"]) == len(npz["boundary_x"]) == summary["friction_nodes"]
 
 
 def test_demo_alm_passes_sigma_to_the_inner_pdas(mpi_tmp_path, load_demo):
@@ -108,27 +144,29 @@ def test_demo_alm_passes_sigma_to_the_inner_pdas(mpi_tmp_path, load_demo):
     for sigma in ("1", "1e-3"):
         out = mpi_tmp_path / f"alm_sigma_{sigma}"
         argv = ["--example", "2", "--method", "alm", "--alm-inner", "inexact", "--gamma", "1e2", "--sigma", sigma,
-                "--alm-steps", "3", "--N", "17", "--output", str(out), "--no-png"]  # fmt: skip
+                "--alm-max-outer", "3", "--N", "17", "--output", str(out), "--no-png"]  # fmt: skip
         rc = load_demo("simplified_friction").main(argv)
         summary = json.loads((out / "summary.json").read_text())
-        assert summary["sigma"] == float(sigma)
+        assert summary["parameters"]["solver"]["sigma"] == float(sigma)
         statuses[sigma] = (rc, summary["status"], summary["converged"])
-    assert statuses == {"1": (0, "completed", True), "1e-3": (1, "inner_cycling", False)}
+    assert statuses == {"1": (0, "converged_iterations", True), "1e-3": (1, "diverged_inner", False)}
 
 
-def test_demo_uzawa_without_reference_stops_on_the_multiplier_change(mpi_tmp_path, load_demo):
-    out = mpi_tmp_path / "uzawa_noref"
-    argv = ["--method", "uzawa", "--gamma", "10", "--N", "9", "--no-reference", "--output", str(out), "--no-png"]
+@pytest.mark.parametrize("discretisation", ["q1", "fd"])
+def test_demo_uzawa_without_reference_stops_on_the_multiplier_change(discretisation, mpi_tmp_path, load_demo):
+    out = mpi_tmp_path / f"uzawa_noref_{discretisation}"
+    argv = ["--method", "uzawa", "--uzawa-gamma", "5", "--N", "9", "--discretisation", discretisation,
+            "--no-reference", "--output", str(out), "--no-png"]  # fmt: skip
     assert load_demo("simplified_friction").main(argv) == 0
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["d_lambda"] is None
+    assert summary["d_lambda"] is None and summary["status"] == "converged_step"
     assert summary["history"][-1]["lambda_change"] < 1e-4 <= summary["history"][-2]["lambda_change"]
 
 
 def test_demo_uzawa_nonconvergence_exit_code(mpi_tmp_path, load_demo):
     out = mpi_tmp_path / "uzawa"
-    argv = ["--example", "2", "--method", "uzawa", "--gamma", "1000", "--max-iterations", "1",
+    argv = ["--example", "2", "--method", "uzawa", "--uzawa-gamma", "1000", "--uzawa-max-iterations", "20",
             "--N", "9", "--output", str(out), "--no-png"]  # fmt: skip
     assert load_demo("simplified_friction").main(argv) == 1
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["status"] == "max_iterations" and summary["iterations"] == 20 and not summary["converged"]
+    assert summary["status"] == "diverged_max_it" and summary["iterations"] == 20 and not summary["converged"]

@@ -7,10 +7,11 @@ from petsc4py import PETSc
 
 import pytest
 
-from contactqvi.friction import PrimalDualActiveSet
-from contactqvi.problems.stadler import create_stadler_problem, stadler_example
+from contactqvi.friction import FrictionActiveSetSolver
+from contactqvi.linalg import preset
+from contactqvi.problems.stadler import create_stadler_problem
 
-ITERATIVE = {"ksp_type": "cg", "pc_type": "jacobi", "ksp_rtol": 1e-2}
+ITERATIVE = preset("cg_jacobi", ksp_rtol=1e-2)
 
 
 @pytest.fixture
@@ -24,23 +25,22 @@ def prefix():
 
 
 def _state_residual(problem, result) -> float:
-    work = problem.K.createVecLeft()
-    residual = problem.state_residual(result.y.x.petsc_vec, result.lam.array_r, work)
-    work.destroy()
+    residual = problem.state_residual(result.y.x.petsc_vec, result.lam)
     return residual / problem.F.norm(PETSc.NormType.NORM_INFINITY)
 
 
 def test_two_instances_with_one_prefix_keep_their_own_options(prefix):
     """A loose iterative solver first, then the default direct one under the same prefix."""
-    problem = create_stadler_problem(MPI.COMM_WORLD, stadler_example(3), 21)
-    iterative = PrimalDualActiveSet(problem, prefix, ITERATIVE)
-    direct = PrimalDualActiveSet(problem, prefix)
-    assert (iterative.ksp.getType(), iterative.ksp.getPC().getType()) == ("cg", "jacobi")
-    assert iterative.ksp.getTolerances()[0] == pytest.approx(1e-2)
-    assert (direct.ksp.getType(), direct.ksp.getPC().getType()) == ("preonly", "lu")
-    assert not PETSc.Options().hasName(prefix + "ksp_type")
-    # (3.2a) holds to round-off only with the direct solver; rtol 1e-2 leaves a visible residual.
-    exact, loose = _state_residual(problem, direct.solve(50.0)), _state_residual(problem, iterative.solve(50.0))
+    problem = create_stadler_problem(MPI.COMM_WORLD, example=3, N=21)
+    with problem, FrictionActiveSetSolver(problem, prefix, ITERATIVE) as iterative:
+        with FrictionActiveSetSolver(problem, prefix) as direct:
+            assert (iterative.ksp.getType(), iterative.ksp.getPC().getType()) == ("cg", "jacobi")
+            assert iterative.ksp.getTolerances()[0] == pytest.approx(1e-2)
+            assert (direct.ksp.getType(), direct.ksp.getPC().getType()) == ("preonly", "lu")
+            assert not PETSc.Options().hasName(prefix + "ksp_type")
+            # (3.2a) holds to round-off only with the direct solver; rtol 1e-2 leaves a visible residual.
+            exact = _state_residual(problem, direct.solve(gamma=50.0))
+            loose = _state_residual(problem, iterative.solve(gamma=50.0))
     print(f"relative (3.2a) residual: direct {exact:.1e}, cg/jacobi rtol 1e-2 {loose:.1e}")
     assert exact < 1e-10 and loose > 1e-6
 
@@ -49,8 +49,8 @@ def test_user_options_win_and_stay(prefix):
     """A value in the database (e.g. from the command line) overrides ``ksp_options`` and is not removed."""
     opts = PETSc.Options()
     opts[prefix + "ksp_type"] = "gmres"
-    problem = create_stadler_problem(MPI.COMM_WORLD, stadler_example(3), 9)
-    pdas = PrimalDualActiveSet(problem, prefix, ITERATIVE)
-    assert pdas.ksp.getType() == "gmres" and pdas.ksp.getPC().getType() == "jacobi"
+    problem = create_stadler_problem(MPI.COMM_WORLD, example=3, N=9)
+    with problem, FrictionActiveSetSolver(problem, prefix, ITERATIVE) as pdas:
+        assert pdas.ksp.getType() == "gmres" and pdas.ksp.getPC().getType() == "jacobi"
     assert opts.getString(prefix + "ksp_type") == "gmres"
     assert not opts.hasName(prefix + "pc_type")

@@ -43,6 +43,7 @@ __all__ = [
     "ACTIVE_PLUS",
     "INACTIVE",
     "FrictionProblem",
+    "OwnsPETScObjects",
     "boundary_states",
     "complementarity_residual",
 ]
@@ -70,7 +71,26 @@ def complementarity_residual(xi: np.ndarray, lam: np.ndarray, g: float, sigma: f
     return xi - np.maximum(0.0, xi + sigma * (lam - g)) - np.minimum(0.0, xi + sigma * (lam + g))
 
 
-class FrictionProblem:
+class OwnsPETScObjects:
+    """Collective ``destroy()`` of the PETSc objects listed by :meth:`petsc_objects`; ``with`` support."""
+
+    def petsc_objects(self) -> list[typing.Any]:
+        """The PETSc objects this instance owns (each with a collective ``destroy()``)."""
+        raise NotImplementedError
+
+    def destroy(self) -> None:
+        """Free the PETSc objects (collective; a second call does nothing)."""
+        for obj in self.petsc_objects():
+            obj.destroy()
+
+    def __enter__(self) -> typing.Self:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.destroy()
+
+
+class FrictionProblem(OwnsPETScObjects):
     """Forms, matrices and nodal boundary data of the discrete problem (P).
 
     The problem owns the stiffness matrix K of a(., .) (Dirichlet rows and
@@ -102,49 +122,42 @@ class FrictionProblem:
         g: float,
         quadrature_degree: int = 4,
     ):
-        require_positive("g", g)
-        require(isinstance(mu, (int, float)) and np.isfinite(mu), "mu", f"must be a finite number, got {mu!r}")
-        if dirichlet_boundaries:
-            require(mu >= 0, "mu", f"must be >= 0 (coercivity of a), got {mu!r}")
-        else:
-            require(
-                mu > 0, "mu", f"must be > 0 when Gamma_0 is empty, else a(y, y) is not coercive on H^1; got {mu!r}"
-            )
-        require(len(friction_boundaries) > 0, "friction_boundaries", "Gamma_f must not be empty")
-        overlap = set(friction_boundaries) & set(dirichlet_boundaries)
-        require(not overlap, "friction_boundaries", f"boundaries {sorted(overlap)} are both Gamma_f and Gamma_0")
-
+        _check_data(friction_boundaries, dirichlet_boundaries, mu, g)
         self.mesh, self.facet_tags = msh, facet_tags
         self.mu, self.g = float(mu), float(g)
         self.comm: MPI.Comm = msh.comm
         self.V = fem.functionspace(msh, ("Lagrange", 1))
-        V = self.V
-        fdim = msh.topology.dim - 1
-        msh.topology.create_connectivity(fdim, msh.topology.dim)
-
-        u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
-        x = ufl.SpatialCoordinate(msh)
-        self.load_expression = load(x)
-        dx_load = ufl.dx(metadata={"quadrature_degree": quadrature_degree})
+        msh.topology.create_connectivity(msh.topology.dim - 1, msh.topology.dim)
+        self.load_expression = load(ufl.SpatialCoordinate(msh))
         friction_ids = tuple(tag_of(facet_tags, name) for name in friction_boundaries)
-        ds = ufl.Measure("ds", domain=msh, subdomain_data=facet_tags)
-        mu_c = fem.Constant(msh, PETSc.ScalarType(self.mu))
-        self.a_form = fem.form(ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx + mu_c * u * v * ufl.dx)
+        self._compile_forms(friction_ids, quadrature_degree)
+        dirichlet_dofs = self._locate_dofs([tag_of(facet_tags, name) for name in dirichlet_boundaries])
+        self.bcs = [fem.dirichletbc(PETSc.ScalarType(0.0), dirichlet_dofs, self.V)] if dirichlet_boundaries else []
+        n_owned = self.V.dofmap.index_map.size_local
+        self._dirichlet_owned = dirichlet_dofs[dirichlet_dofs < n_owned]
+        self._assemble_system()
+        self._lump_boundary_mass(friction_ids, dirichlet_dofs)
+        self._work = self.K.createVecLeft()
+
+    def _compile_forms(self, friction_ids: tuple[int, ...], quadrature_degree: int) -> None:
+        """a(y, z) = (grad y, grad z) + mu (y, z), (f, z) and the boundary mass int_{Gamma_f} z ds."""
+        msh, V = self.mesh, self.V
+        u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+        dx_load = ufl.dx(metadata={"quadrature_degree": quadrature_degree})
+        ds = ufl.Measure("ds", domain=msh, subdomain_data=self.facet_tags)
+        mu = fem.Constant(msh, PETSc.ScalarType(self.mu))
+        self.a_form = fem.form(ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx + mu * u * v * ufl.dx)
         self.L_form = fem.form(self.load_expression * v * dx_load)
         self.boundary_mass_form = fem.form(v * ds(friction_ids))
 
-        dirichlet_facets = np.unique(
-            np.concatenate(
-                [facet_tags.find(tag_of(facet_tags, name)) for name in dirichlet_boundaries]
-                + [np.zeros(0, dtype=np.int32)]
-            )
-        ).astype(np.int32)
-        dirichlet_dofs = fem.locate_dofs_topological(V, fdim, dirichlet_facets)
-        self.bcs = [fem.dirichletbc(PETSc.ScalarType(0.0), dirichlet_dofs, V)] if dirichlet_boundaries else []
-        n_owned = V.dofmap.index_map.size_local
-        self._dirichlet_owned = dirichlet_dofs[dirichlet_dofs < n_owned]
+    def _locate_dofs(self, tags: list[int]) -> np.ndarray:
+        """Local dofs (owned and ghost) on the facets with the given tags."""
+        facets = [self.facet_tags.find(tag) for tag in tags] + [np.zeros(0, dtype=np.int32)]
+        facets_sorted = np.unique(np.concatenate(facets)).astype(np.int32)
+        return fem.locate_dofs_topological(self.V, self.mesh.topology.dim - 1, facets_sorted)
 
-        # K with identity rows/columns on Gamma_0, F with zero entries there.
+    def _assemble_system(self) -> None:
+        """K with identity rows/columns on Gamma_0, F with zero entries there."""
         self.K = dolfinx.fem.petsc.assemble_matrix(self.a_form, bcs=self.bcs)
         self.K.assemble()
         self.F = dolfinx.fem.petsc.assemble_vector(self.L_form)
@@ -152,14 +165,12 @@ class FrictionProblem:
         self.F.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         dolfinx.fem.petsc.set_bc(self.F, self.bcs)
 
-        # Lumped boundary mass: row sums of the Gamma_f mass matrix, m_i = int phi_i ds.
+    def _lump_boundary_mass(self, friction_ids: tuple[int, ...], dirichlet_dofs: np.ndarray) -> None:
+        """Owned friction nodes and their lumped mass m_i = int_{Gamma_f} phi_i ds (row sums of the mass matrix)."""
         mass = dolfinx.fem.petsc.assemble_vector(self.boundary_mass_form)
         mass.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        friction_facets = np.unique(
-            np.concatenate([facet_tags.find(i) for i in friction_ids] + [np.zeros(0, dtype=np.int32)])
-        ).astype(np.int32)
-        candidates = fem.locate_dofs_topological(V, fdim, friction_facets)
-        candidates = candidates[candidates < n_owned]
+        candidates = self._locate_dofs(list(friction_ids))
+        candidates = candidates[candidates < self.V.dofmap.index_map.size_local]
         candidates = np.setdiff1d(candidates, dirichlet_dofs)
         m = mass.array_r[candidates]
         #: Owned friction nodes (local dof indices, sorted), the node set of Gamma_f.
@@ -170,12 +181,13 @@ class FrictionProblem:
         self.n_boundary = self.comm.allreduce(len(self.boundary_dofs), op=MPI.SUM)
         require(self.n_boundary > 0, "friction_boundaries", "Gamma_f contains no free node")
 
+    def petsc_objects(self) -> list[typing.Any]:
+        return [self.K, self.F, self._work]
+
     # --- nodal boundary vectors -------------------------------------------------
-    def create_boundary_vector(self) -> PETSc.Vec:
-        """A zero PETSc Vec with one entry per owned friction node (lambda, xi, ...)."""
-        vec = PETSc.Vec().createMPI((len(self.boundary_dofs), PETSc.DECIDE), comm=self.comm)
-        vec.set(0.0)
-        return vec
+    def boundary_zeros(self) -> np.ndarray:
+        """A zero nodal boundary vector: one entry per owned friction node (lambda, xi, ...)."""
+        return np.zeros(len(self.boundary_dofs))
 
     def trace(self, y: PETSc.Vec) -> np.ndarray:
         """Nodal trace tau_f y at the owned friction nodes (a copy)."""
@@ -190,19 +202,24 @@ class FrictionProblem:
         """Global number of friction nodes where ``mask`` holds."""
         return int(self.comm.allreduce(int(np.count_nonzero(mask)), op=MPI.SUM))
 
+    def max_abs(self, values: np.ndarray) -> float:
+        """max |v| over all ranks of a nodal (or owned) vector, 0 if empty."""
+        return float(self.comm.allreduce(float(np.abs(values).max(initial=0.0)), op=MPI.MAX))
+
     # --- equations ---------------------------------------------------------------
-    def multiplier_from_state(self, y: PETSc.Vec, work: PETSc.Vec) -> np.ndarray:
+    def multiplier_from_state(self, y: PETSc.Vec) -> np.ndarray:
         """lambda = (F - K y)_i / m_i at the friction nodes, i.e. (3.2a) solved for lambda.
 
         This is the discrete -dy/dn on Gamma_f; it is evaluated from the
         residual instead of lambda_hat + gamma tau y so that it stays accurate
         for gamma up to 1e16 (no cancellation of gamma * O(1/gamma)).
         """
-        self.K.mult(y, work)
-        return (self.F.array_r[self.boundary_dofs] - work.array_r[self.boundary_dofs]) / self.boundary_mass
+        self.K.mult(y, self._work)
+        return (self.F.array_r[self.boundary_dofs] - self._work.array_r[self.boundary_dofs]) / self.boundary_mass
 
-    def state_residual(self, y: PETSc.Vec, lam: np.ndarray, work: PETSc.Vec) -> float:
+    def state_residual(self, y: PETSc.Vec, lam: np.ndarray) -> float:
         """Max-norm of K y + M lambda - F over all free dofs, (3.2a) (global)."""
+        work = self._work
         self.K.mult(y, work)
         work.axpy(-1.0, self.F)
         values = work.array
@@ -210,10 +227,27 @@ class FrictionProblem:
         values[self._dirichlet_owned] = 0.0
         return float(work.norm(PETSc.NormType.NORM_INFINITY))
 
-    def energy_norm(self, y: PETSc.Vec) -> float:
-        """|||y||| = a(y, y)^(1/2) for y vanishing on Gamma_0 (Sect. 6.1)."""
-        work = self.K.createVecLeft()
-        self.K.mult(y, work)
-        value = y.dot(work)
-        work.destroy()
+    def energy_norm(self, y: PETSc.Vec, reference: PETSc.Vec | None = None) -> float:
+        """|||y - reference||| = a(y - reference, y - reference)^(1/2) for y vanishing on Gamma_0 (Sect. 6.1)."""
+        difference = y.copy()
+        if reference is not None:
+            difference.axpy(-1.0, reference)
+        self.K.mult(difference, self._work)
+        value = difference.dot(self._work)
+        difference.destroy()
         return float(np.sqrt(max(value, 0.0)))
+
+
+def _check_data(
+    friction_boundaries: typing.Sequence[str], dirichlet_boundaries: typing.Sequence[str], mu: float, g: float
+) -> None:
+    """The data of (P): g > 0, a(., .) coercive, Gamma_f not empty and disjoint from Gamma_0."""
+    require_positive("g", g)
+    require(isinstance(mu, (int, float)) and np.isfinite(mu), "mu", f"must be a finite number, got {mu!r}")
+    if dirichlet_boundaries:
+        require(mu >= 0, "mu", f"must be >= 0 (coercivity of a), got {mu!r}")
+    else:
+        require(mu > 0, "mu", f"must be > 0 when Gamma_0 is empty, else a(y, y) is not coercive on H^1; got {mu!r}")
+    require(len(friction_boundaries) > 0, "friction_boundaries", "Gamma_f must not be empty")
+    overlap = set(friction_boundaries) & set(dirichlet_boundaries)
+    require(not overlap, "friction_boundaries", f"boundaries {sorted(overlap)} are both Gamma_f and Gamma_0")

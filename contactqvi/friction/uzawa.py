@@ -11,110 +11,124 @@ import dataclasses
 import logging
 import typing
 
-from petsc4py import PETSc
-
 import numpy as np
 
 from dolfinx import fem
 
-from contactqvi.friction.pdas import DEFAULT_KSP_OPTIONS
-from contactqvi.friction.problem import FrictionProblem
-from contactqvi.linalg import create_ksp, ksp_converged_reason
-from contactqvi.parameters import require, require_positive
+from contactqvi.friction.problem import FrictionProblem, OwnsPETScObjects
+from contactqvi.linalg import OptionsDict, create_ksp, preset
+from contactqvi.parameters import Parameter, Parameters
+from contactqvi.result import Result, Status, Timings
 
-__all__ = ["UzawaResult", "uzawa"]
+__all__ = ["PARAMETERS", "UzawaResult", "UzawaSolver"]
 
 logger = logging.getLogger(__name__)
 
-#: ``monitor(l, y, lam)``: observer of the iterates of :func:`uzawa` (y = y^(l-1), lam = lambda^l).
-Monitor = typing.Callable[[int, fem.Function, PETSc.Vec], None]
+#: ``monitor(l, y, lam)``: observer of the iterates of :meth:`UzawaSolver.solve` (y = y^(l-1), lam = lambda^l).
+Monitor = typing.Callable[[int, fem.Function, np.ndarray], None]
+
+#: Parameters of one Uzawa run (:meth:`UzawaSolver.solve`).
+PARAMETERS = Parameters(
+    gamma=Parameter(10.0, "step length gamma of Uzawa's method", minimum=0.0, exclusive=True),
+    tol=Parameter(
+        1e-4, "stop when d_lambda < tol (with a reference; Sect. 6) or ||lambda^l - lambda^(l-1)|| < tol",
+        minimum=0.0, exclusive=True,
+    ),
+    max_iterations=Parameter(1000, "maximal number of Uzawa iterations (linear solves)", int, minimum=1),
+)  # fmt: skip
 
 
-@dataclasses.dataclass
-class UzawaResult:
+@dataclasses.dataclass(kw_only=True)
+class UzawaResult(Result):
     """Outcome of the Uzawa iteration.
 
+    ``status``: CONVERGED_ATOL (d_lambda < tol with a reference), CONVERGED_STEP
+    (||lambda^(l+1) - lambda^l|| < tol without), DIVERGED_MAX_IT or
+    DIVERGED_LINEAR_SOLVE. ``iterations``: linear solves (one per iteration).
+
     Attributes:
-        y: the last primal iterate, the state (2.3) of the last-but-one multiplier.
-        lam: the last multiplier (nodal boundary PETSc Vec).
-        status: ``converged`` or ``max_iterations``.
-        iterations: number of linear solves (one per iteration).
-        history: per iteration d_lambda (6.1) if a reference is given and
-            ||lambda^(l+1) - lambda^l||_{L2(Gamma_f)}.
+        y: the last primal iterate, the state (2.3) of the last-but-one multiplier
+            (the solver's Function: overwritten by its next solve).
+        lam: the last multiplier at the owned friction nodes.
     """
 
     y: fem.Function
-    lam: PETSc.Vec
-    status: str
-    iterations: int
-    history: list[dict[str, typing.Any]]
-
-    @property
-    def converged(self) -> bool:
-        """True if the stopping tolerance was met."""
-        return self.status == "converged"
+    lam: np.ndarray
 
 
-def uzawa(
-    problem: FrictionProblem,
-    gamma: float,
-    lam0: PETSc.Vec | None = None,
-    reference: PETSc.Vec | None = None,
-    tol: float = 1e-4,
-    max_iterations: int = 1000,
-    prefix: str = "uzawa_",
-    monitor: Monitor | None = None,
-) -> UzawaResult:
-    """Uzawa's method for (P*) with step gamma, lambda^0 = 0 by default (Sect. 6).
+class UzawaSolver(OwnsPETScObjects):
+    """Uzawa's method for (P*) on ``problem``; K is factorised once (options prefix ``prefix``).
 
     Args:
         problem: the discrete friction problem.
-        gamma: the step length gamma > 0.
-        lam0: initial multiplier.
-        reference: lambda_bar; if given the iteration stops when d_lambda^l < tol
-            (the paper's criterion), otherwise when ||lambda^(l+1) - lambda^l|| < tol.
-        tol: stopping tolerance.
-        max_iterations: maximal number of iterations (linear solves).
-        prefix: PETSc options prefix of the linear solver (K is factorised once).
-        monitor: called as ``monitor(l, y, lam)`` after every iteration with the
-            state y of lambda^(l-1) and the new lambda^l; must not modify them.
+        prefix: PETSc options prefix of the linear solver.
+        ksp_options: options on top of the ``lu`` preset (this instance only).
     """
-    require_positive("gamma", gamma)
-    require_positive("tol", tol)
-    require(
-        isinstance(max_iterations, (int, np.integer)) and max_iterations >= 1,
-        "max_iterations",
-        f"must be an integer >= 1, got {max_iterations!r}",
-    )
-    ksp = create_ksp(problem.comm, prefix, DEFAULT_KSP_OPTIONS, problem.K)
-    rhs = problem.K.createVecLeft()
-    lam = problem.create_boundary_vector() if lam0 is None else lam0.copy()
-    y = fem.Function(problem.V, name="y")
-    history: list[dict[str, typing.Any]] = []
-    status = "max_iterations"
-    try:
-        for iteration in range(1, max_iterations + 1):
-            problem.F.copy(rhs)
-            rhs.array[problem.boundary_dofs] -= problem.boundary_mass * lam.array_r
-            ksp.solve(rhs, y.x.petsc_vec)
-            if ksp.getConvergedReason() <= 0:
-                raise RuntimeError(f"linear solve failed: {ksp_converged_reason(ksp)}")
-            y.x.scatter_forward()
-            new = np.clip(lam.array_r + gamma * problem.trace(y.x.petsc_vec), -problem.g, problem.g)
-            change = problem.boundary_norm(new - lam.array_r)
-            lam.array[:] = new
-            d_lambda = problem.boundary_norm(reference.array_r - new) if reference is not None else None
+
+    def __init__(self, problem: FrictionProblem, prefix: str = "uzawa_", ksp_options: OptionsDict | None = None):
+        self.problem = problem
+        self.ksp = create_ksp(problem.comm, prefix, {**preset("lu"), **(ksp_options or {})}, problem.K)
+        self._rhs = problem.K.createVecLeft()
+        self.y = fem.Function(problem.V, name="y")
+        #: Krylov iterations of this instance so far (all runs).
+        self.krylov_iterations = 0
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [self.ksp, self._rhs, self.y.x.petsc_vec]
+
+    def _state(self, lam: np.ndarray) -> bool:
+        """y solving (2.3) for the multiplier ``lam``: K y = F - M lam. False if the KSP failed."""
+        p = self.problem
+        p.F.copy(self._rhs)
+        self._rhs.array[p.boundary_dofs] -= p.boundary_mass * lam
+        self.ksp.solve(self._rhs, self.y.x.petsc_vec)
+        self.y.x.scatter_forward()
+        self.krylov_iterations += self.ksp.getIterationNumber()
+        return self.ksp.getConvergedReason() > 0
+
+    def solve(
+        self,
+        *,
+        lam0: np.ndarray | None = None,
+        reference: np.ndarray | None = None,
+        monitor: Monitor | None = None,
+        **parameters: typing.Any,
+    ) -> UzawaResult:
+        """Uzawa's method with step gamma from lambda^0 (default 0, Sect. 6).
+
+        Args:
+            lam0: initial multiplier at the owned friction nodes.
+            reference: lambda_bar; if given the iteration stops when d_lambda^l < tol
+                (the paper's criterion), otherwise when ||lambda^(l+1) - lambda^l|| < tol.
+            monitor: called as ``monitor(l, y, lam)`` after every iteration with the
+                state y of lambda^(l-1) and the new lambda^l; must not modify them.
+            parameters: values of :data:`PARAMETERS` (gamma, tol, max_iterations).
+        """
+        params = PARAMETERS.check(parameters)
+        p = self.problem
+        lam = p.boundary_zeros() if lam0 is None else np.array(lam0, dtype=float)
+        history: list[dict[str, typing.Any]] = []
+        status, timings, krylov = Status.DIVERGED_MAX_IT, Timings(), self.krylov_iterations
+        for iteration in range(1, params["max_iterations"] + 1):
+            with timings.phase("linear solves"):
+                if not self._state(lam):
+                    status = Status.DIVERGED_LINEAR_SOLVE
+                    break
+            new = np.clip(lam + params["gamma"] * p.trace(self.y.x.petsc_vec), -p.g, p.g)
+            change = p.boundary_norm(new - lam)
+            lam = new
+            d_lambda = p.boundary_norm(reference - new) if reference is not None else None
             history.append({"l": iteration, "d_lambda": d_lambda, "lambda_change": change})
             if monitor is not None:
-                monitor(iteration, y, lam)
+                monitor(iteration, self.y, lam)
             logger.info(
                 "  Uzawa l=%4d |lambda^l - lambda^(l-1)|=%.3e%s",
                 iteration, change, "" if d_lambda is None else f" d_lambda={d_lambda:.3e}",
             )  # fmt: skip
-            if (d_lambda if d_lambda is not None else change) < tol:
-                status = "converged"
+            if (d_lambda if d_lambda is not None else change) < params["tol"]:
+                status = Status.CONVERGED_ATOL if d_lambda is not None else Status.CONVERGED_STEP
                 break
-    finally:
-        ksp.destroy()
-        rhs.destroy()
-    return UzawaResult(y=y, lam=lam, status=status, iterations=len(history), history=history)
+        return UzawaResult(
+            status=status, iterations=len(history), inner_iterations=self.krylov_iterations - krylov, timings=timings,
+            history=history, y=self.y, lam=lam,
+        )  # fmt: skip

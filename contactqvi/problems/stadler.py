@@ -1,9 +1,11 @@
-"""Data of Examples 1-3 of seed 002 (Stadler 2004, Sect. 6) on the unit square.
+"""Data of Examples 1-3 of seed 002 (Stadler 2004, Sect. 6) on the unit square, and the paper's results.
 
-Only data lives here: friction and Dirichlet boundaries, g, mu and the load f.
-:func:`create_stadler_problem` turns an example into a
-:class:`~contactqvi.friction.FrictionProblem` on a mesh with N grid points per
-direction (N - 1 cells), the finite-element counterpart of the paper's N x N grid.
+Only data lives here: friction and Dirichlet boundaries, g, mu and the load f
+of each example, the numbers of the paper's tables (:data:`PAPER`) and the gamma
+of its reference solution (:data:`REFERENCE_GAMMA`). :func:`create_stadler_problem`
+turns an example into a :class:`~contactqvi.friction.FrictionProblem` with N grid
+points per direction (N - 1 cells): Q1 or P1 finite elements, or the paper's own
+finite differences (:mod:`contactqvi.problems.stadler_fd`).
 
 Example 2's load is printed as f(x) = 10(sin 4 pi x + cos 4 pi x) with x the
 point (x1, x2); we read it as 10(sin 4 pi x1 + cos 4 pi x2) (``load_reading="x1x2"``),
@@ -14,21 +16,89 @@ one-coordinate reading 10(sin 4 pi x1 + cos 4 pi x1) is available as ``"x1x1"``.
 from __future__ import annotations
 
 import dataclasses
+import typing
 
 from mpi4py import MPI
 
-import numpy as np
 import ufl
 
 from contactqvi.friction.problem import FrictionProblem, LoadFunction
 from contactqvi.meshes import create_unit_square
-from contactqvi.parameters import require
+from contactqvi.parameters import Parameter, Parameters, require_choice
+from contactqvi.problems.stadler_fd import PaperFiniteDifferences
 
-__all__ = ["StadlerExample", "stadler_example", "create_stadler_problem", "EXAMPLE_NUMBERS", "EXAMPLE2_READINGS"]
+__all__ = [
+    "DISCRETISATIONS",
+    "EXAMPLE2_READINGS",
+    "EXAMPLE_NUMBERS",
+    "PAPER",
+    "PARAMETERS",
+    "REFERENCE_GAMMA",
+    "StadlerExample",
+    "create_stadler_problem",
+    "stadler_example",
+]
 
 
 EXAMPLE_NUMBERS = (1, 2, 3)
 EXAMPLE2_READINGS = ("x1x2", "x1x1")
+#: Q1 or P1 finite elements with a lumped boundary mass, or the paper's finite differences.
+DISCRETISATIONS = ("q1", "p1", "fd")
+#: lambda_bar := lambda_gamma with gamma = 1e16, the reference of d_lambda (6.1).
+REFERENCE_GAMMA = 1e16
+
+#: The problem of :func:`create_stadler_problem`: example, grid and discretisation.
+PARAMETERS = Parameters(
+    example=Parameter(1, "example of Sect. 6", int, minimum=1, maximum=3),
+    N=Parameter(80, "grid points per direction (N - 1 cells)", int, minimum=3),
+    discretisation=Parameter("q1", "q1/p1 finite elements or the paper's finite differences", str,
+                             choices=DISCRETISATIONS),
+    g=Parameter(None, "friction bound g (default: the example's)", minimum=0.0, exclusive=True, optional=True),
+    mu=Parameter(None, "coefficient mu of (y, z) in a(y, z) (default: the example's)", minimum=0.0, optional=True),
+    example2_reading=Parameter("x1x2", "reading of f in Example 2 (module docstring)", str,
+                               choices=EXAMPLE2_READINGS),
+)  # fmt: skip
+
+#: The paper's numbers (seed 002, Sect. 6); "div" = (SS) did not find the solution,
+#: ``pdas_used`` marks the entries of Table 6.6 computed by (PDAS) because (SS) chattered.
+PAPER = {
+    "6.1": {"gamma": [1e2, 1e4, 1e6, 1e8], "ss": [2, 3, 3, 3]},
+    "fig6.1": {"gamma": [1, 10, 1e2, 1e3, 1e4, 1e5, 1e6],
+               "error": [4.46e-1, 1.79e-1, 2.30e-2, 2.49e-3, 2.54e-4, 2.54e-5, 2.54e-6]},
+    "6.2": {"gamma": 50, "q": [0.58, 0.45, 0.25, 0.18, 0.00]},
+    "6.3": {"gamma": [3, 5, 10, 50, 100, 150, 160, 1e3, 1e10],
+            "ss": [3, 4, 4, 5, 6, 7, "div", "div", "div"], "pdas": [3, 4, 4, 5, 6, 5, 5, 6, 6]},
+    "6.4": {
+        "1e2": {"iter": [6, 3, 2, 1, 1, 1, 1],
+                "d": [2.55e-2, 8.54e-3, 3.62e-3, 1.62e-3, 7.45e-4, 3.58e-4, 1.77e-4]},
+        "1e4": {"iter": [6, 1, 1, 1, 1], "d": [4.00e-4, 3.06e-6, 2.67e-8, 2.62e-10, 2.84e-12]},
+    },
+    "6.5": {
+        "1e2": {"iter": [1, 2, 2, 2, 1, 1, 1],
+                "d": [2.96e-1, 5.03e-2, 7.60e-3, 1.89e-3, 9.99e-4, 5.36e-4, 2.91e-4]},
+        "1e4": {"iter": [1, 2, 1, 2, 1, 1, 1],
+                "d": [3.81e-1, 1.46e-1, 3.79e-2, 1.87e-4, 2.20e-6, 2.67e-8, 3.28e-10]},
+        "10^l": {"iter": [1, 3, 2, 1, 1, 1], "d": [1.41e-1, 2.30e-2, 2.16e-3, 1.11e-5, 1.04e-8, 1.14e-12]},
+    },
+    "6.6": {
+        "gamma": [5, 10, 30, 50, 1e2, 1e3, 1e5, 1e10],
+        "N": [20, 40, 80, 160, 320],
+        "iter": [[3, 3, 3, 3, 3, 3, 3, 3], [3, 3, 4, 5, 4, 4, 4, 4], [3, 4, 4, 5, 5, 6, 6, 6],
+                 [3, 3, 5, 5, 6, 8, 7, 7], [3, 4, 5, 6, 7, 7, 8, 8]],
+        "pdas_used": [[0, 0, 0, 0, 0, 0, 0, 1], [0, 0, 0, 0, 0, 0, 0, 1], [0, 0, 0, 0, 0, 0, 0, 1],
+                      [0, 0, 0, 0, 0, 0, 1, 1], [0, 0, 0, 0, 0, 0, 1, 1]],
+    },
+    "6.7": {
+        "1e2": {"iter": [1, 2, 1, 1, 1, 1, 2],
+                "d": [1.62e-1, 1.99e-2, 6.94e-3, 1.40e-3, 4.67e-4, 1.91e-4, 9.20e-5]},
+        "1e4": {"iter": [1, 3, 2, 1, 1, 1], "d": [2.14e-1, 1.46e-2, 4.11e-4, 9.06e-7, 8.20e-9, 8.43e-11]},
+        "10^l": {"iter": [1, 2, 2, 1, 1, 1], "d": [8.54e-2, 2.62e-2, 2.40e-3, 4.21e-4, 9.08e-8, 8.23e-12]},
+        "exact_alm_system_solves": "16 for gamma = 50, 10-20 for the other gamma (d_lambda < 1e-4, N = 160)",
+    },
+    "uzawa": {"example1_N80": {"10": 32, "20": 17, "30": "no convergence"},
+              "example2_gamma0.2": "stopped after 400 iterations at d_lambda = 1.03e-2; "
+                                   "no convergence for gamma > 0.2"},
+}  # fmt: skip
 
 
 @dataclasses.dataclass(frozen=True)
@@ -89,10 +159,8 @@ def stadler_example(number: int, load_reading: str = "x1x2") -> StadlerExample:
         load_reading: for Example 2 only, how the second argument of f is read
             (see the module docstring).
     """
-    require(number in EXAMPLE_NUMBERS, "example", f"must be one of {EXAMPLE_NUMBERS}, got {number!r}")
-    require(
-        load_reading in EXAMPLE2_READINGS, "load_reading", f"must be one of {EXAMPLE2_READINGS}, got {load_reading!r}"
-    )
+    require_choice("example", number, EXAMPLE_NUMBERS)
+    require_choice("example2_reading", load_reading, EXAMPLE2_READINGS)
     whole_boundary = ("left", "right", "bottom", "top")
     if number == 1:
         # f jumps on x1 = 1/2, the centre line of the middle cell column when N is even
@@ -121,33 +189,24 @@ def stadler_example(number: int, load_reading: str = "x1x2") -> StadlerExample:
     )  # fmt: skip
 
 
-def create_stadler_problem(
-    comm: MPI.Comm,
-    example: StadlerExample,
-    N: int,
-    cell_type: str = "quadrilateral",
-    g: float | None = None,
-    mu: float | None = None,
-) -> FrictionProblem:
-    """The discrete problem of ``example`` with N grid points per direction (N - 1 cells).
+def create_stadler_problem(comm: MPI.Comm, **parameters: typing.Any) -> FrictionProblem:
+    """The discrete problem of an example with N grid points per direction (N - 1 cells).
 
     Args:
         comm: communicator.
-        example: the example's data (:func:`stadler_example`).
-        N: grid points per direction, >= 3 (the paper's N).
-        cell_type: ``quadrilateral`` (Q1, default) or ``triangle`` (P1).
-        g, mu: override the example's g and mu (for parameter studies).
+        parameters: values of :data:`PARAMETERS` (example, N, discretisation, g and
+            mu overriding the example's, example2_reading), checked first.
     """
-    valid = isinstance(N, (int, np.integer)) and N >= 3
-    require(valid, "N", f"must be an integer >= 3 (grid points per direction), got {N!r}")
+    params = PARAMETERS.check(parameters)
+    example = stadler_example(params["example"], params["example2_reading"])
+    g = example.g if params["g"] is None else params["g"]
+    mu = example.mu if params["mu"] is None else params["mu"]
+    N = params["N"]
+    if params["discretisation"] == "fd":
+        return PaperFiniteDifferences(comm, example, N, g=g, mu=mu)
+    cell_type = "quadrilateral" if params["discretisation"] == "q1" else "triangle"
     msh, facet_tags = create_unit_square(comm, N - 1, cell_type)
     return FrictionProblem(
-        msh,
-        facet_tags,
-        example.friction_boundaries,
-        example.dirichlet_boundaries,
-        example.load,
-        mu=example.mu if mu is None else mu,
-        g=example.g if g is None else g,
+        msh, facet_tags, example.friction_boundaries, example.dirichlet_boundaries, example.load, mu=mu, g=g,
         quadrature_degree=example.quadrature_degree,
-    )
+    )  # fmt: skip
