@@ -2,7 +2,7 @@
 # Build docker/Dockerfile and check the image: the flagship on 2 ranks and
 # `make test` run inside it (`make container-check`).
 #
-#   scripts/container-check.sh [--cold]
+#   scripts/container-check.sh [--cold] [--head]
 #
 # Engine: docker when its daemon answers, else podman (podman and runc installed
 # from Debian when missing, configured by docker/containers.conf through
@@ -13,6 +13,8 @@
 #
 # --cold  first removes the image, the base made here and podman's build cache,
 #         so the measured build includes making the base and every layer.
+# --head  builds the committed HEAD (git archive) instead of the working tree, e.g.
+#         while uncommitted edits are under way.
 #
 # Environment: ENGINE (docker|podman), IMAGE (contactqvi), SHM_SIZE (1g),
 # MIRROR, SECURITY_MIRROR (Debian mirrors for a local base), PULL_TIMEOUT (60 s).
@@ -30,9 +32,11 @@ BASE=docker.io/library/debian:trixie
 work=$repo/build/container
 report=$work/report.txt
 cold=0
+head=0
 for arg in "$@"; do
     case $arg in
         --cold) cold=1 ;;
+        --head) head=1 ;;
         -h | --help) sed -n '2,/^set -euo/p' "$0" | sed -e '$d' -e 's/^# \{0,1\}//'; exit 0 ;;
         *) echo "container-check: unknown argument $arg (see --help)" >&2; exit 2 ;;
     esac
@@ -106,7 +110,8 @@ else
             trixie "$tar" \
             "deb $MIRROR trixie main" "deb $MIRROR trixie-updates main" "deb $SECURITY_MIRROR trixie-security main" \
             >"$work/mmdebstrap.log" 2>&1 || { tail -20 "$work/mmdebstrap.log" >&2; exit 1; }
-        ce import --change 'CMD ["bash"]' "$tar" "$BASE" >/dev/null
+        ce import --change 'CMD ["bash"]' "$tar" "$BASE" >"$work/import.log" 2>&1 \
+            || { cat "$work/import.log" >&2; exit 1; }
         rm -f "$tar"
     fi
     t_base=$(since "$t0")
@@ -114,16 +119,26 @@ else
 fi
 
 # --- build ------------------------------------------------------------------
+context=.
+if [ $head -eq 1 ]; then
+    context=$work/context
+    rm -rf "$context"
+    mkdir -p "$context"
+    git archive HEAD | tar -x -C "$context"
+    log "context: HEAD $(git rev-parse --short HEAD) (git archive)"
+else
+    log "context: the working tree$(git diff --quiet HEAD -- 2>/dev/null || echo ' (with uncommitted changes)')"
+fi
 load=$(cut -d' ' -f1-3 /proc/loadavg)
 t0=$(now)
-build_args=(build -f docker/Dockerfile -t "$IMAGE")
+build_args=(build -f "$context/docker/Dockerfile" -t "$IMAGE")
 # podman: the host network, so no bridge or slirp is needed for apt in the build.
 [ "$engine" = podman ] && build_args+=(--network=host)
-ce "${build_args[@]}" . >"$work/build.log" 2>&1 || { tail -30 "$work/build.log" >&2; exit 1; }
+ce "${build_args[@]}" "$context" >"$work/build.log" 2>&1 || { tail -30 "$work/build.log" >&2; exit 1; }
 t_build=$(since "$t0")
 size=$(ce image inspect --format '{{.Size}}' "$IMAGE")
-log "image $IMAGE built in ${t_build} s (+ ${t_base} s base; load average before: $load, $(nproc) cores)"
-log "image size $(awk -v s="$size" 'BEGIN { printf "%.2f GB (%d bytes)", s / 1e9, s }')"
+log "image $IMAGE built in ${t_build} s (+ ${t_base} s base; $(nproc) cores, load average before: $load, after: $(cut -d' ' -f1-3 /proc/loadavg))"
+log "image size $(awk -v s="$size" 'BEGIN { printf "%.2f GB (%.0f bytes)", s / 1e9, s }')"
 
 # --- checks inside the image ------------------------------------------------
 # No network: the checks must pass with what the image holds.

@@ -76,7 +76,7 @@ ALWAYS_IN_LEGEND = (0, 1, 2)
 #: The rigid foundation's plane x3 = FOUNDATION_X3 (drawn in the deformed view).
 FOUNDATION_X3 = 0.0
 
-IMAGE_SIZE = (1600, 1000)
+IMAGE_SIZE = (1600, 900)
 FONT = 22  # titles and colour-bar text, in points at IMAGE_SIZE
 
 
@@ -355,7 +355,8 @@ def plan_axes(view, font=FONT - 2):
     """x1 and x2 axes (m) along the bottom and left of a plan view."""
     grid = view.AxesGrid
     grid.Visibility = 1
-    grid.XTitle, grid.YTitle, grid.ZTitle = "x1 (m)", "x2 (m)", ""
+    # The y title is centred on the axis next to the tick labels: spaces move it clear of them.
+    grid.XTitle, grid.YTitle, grid.ZTitle = "x1 (m)", "x2 (m)" + " " * 7, ""
     grid.AxesToLabel = 1 + 2  # Min-X and Min-Y only
     for axis in "XYZ":
         setattr(grid, f"{axis}TitleFontSize", font)
@@ -419,7 +420,8 @@ def deformed_view(volume, case, path):
 
     if von_mises is not None:
         association, values = von_mises
-        name, label, _, _, unit, factor = "vm_shown", *FIELDS["von_mises"][2:]
+        name = "vm_shown"
+        label, _, unit, factor = FIELDS["von_mises"][2:]
         shown = values * factor
         where = "cell-wise" if association == "CELLS" else "nodal"
         title = f"Deformed body coloured by von Mises stress ({case})"
@@ -450,7 +452,7 @@ def deformed_view(volume, case, path):
     colour_bar(view, lut, f"{label} ({unit})", position=(0.87, 0.2), fmt=label_format(shown.max()))
 
     # The foundation x3 = FOUNDATION_X3, a little larger than the body's footprint.
-    margin = 0.15 * extent
+    margin = 0.06 * extent
     plane = simple.Plane(Origin=[bounds[0] - margin, bounds[2] - margin, FOUNDATION_X3],
                          Point1=[bounds[1] + margin, bounds[2] - margin, FOUNDATION_X3],
                          Point2=[bounds[0] - margin, bounds[3] + margin, FOUNDATION_X3])
@@ -463,7 +465,11 @@ def deformed_view(volume, case, path):
     view.CameraPosition = [centre[0] - 1.6 * extent, centre[1] - 2.4 * extent, centre[2] + 1.5 * extent]
     view.CameraViewUp = [0.0, 0.0, 1.0]
     simple.ResetCamera(view)
-    view.CameraPosition = [c + 0.75 * (p - c) for p, c in zip(view.CameraPosition, centre)]
+    view.CameraPosition = [c + 0.8 * (p - c) for p, c in zip(view.CameraPosition, centre)]
+    # Move the scene up a little: room for the caption at the bottom.
+    lift = [0.0, 0.0, 0.09 * extent]
+    view.CameraFocalPoint = [c - d for c, d in zip(view.CameraFocalPoint, lift)]
+    view.CameraPosition = [c - d for c, d in zip(view.CameraPosition, lift)]
     add_title(view, title, f"displacement magnified \u00d7{scale:g} (largest {u_max * 1e3:.3g} mm); {what}\n"
                            f"grey box: undeformed body; brown plane: rigid foundation x3 = {FOUNDATION_X3:g} m")
     save(view, path)
@@ -540,7 +546,7 @@ def traction_view(surface, case, path):
         arrows.DiffuseColor = arrows.AmbientColor = [0.85, 0.1, 0.1]
         # Arrows a little above the surface (towards the camera), so the surface does not hide them.
         arrows.Translation = [0.0, 0.0, 0.02 * max(bounds[1] - bounds[0], bounds[3] - bounds[2])]
-    plan_view_camera(view, grid, box=(0.08, 0.80, 0.15, 0.87))
+    plan_view_camera(view, grid, box=(0.11, 0.80, 0.16, 0.86))
     plan_axes(view)
     add_title(view, f"Contact pressure and friction traction ({case})",
               f"contact surface in plan view (from +x3, through the body); red arrows: friction traction on the body, "
@@ -598,7 +604,7 @@ def stick_slip_view(surface, case, path):
     simple.ColorBy(edges, None)
     edges.AmbientColor = edges.DiffuseColor = [0.3, 0.3, 0.3]
     edges.Translation = [0.0, 0.0, 1e-3]
-    plan_view_camera(view, grid, box=(0.08, 0.68, 0.15, 0.87))
+    plan_view_camera(view, grid, box=(0.11, 0.68, 0.16, 0.86))
     plan_axes(view)
     add_title(view, f"Stick/slip map ({case})", f"contact surface in plan view (from +x3, through the body); {how}")
     save(view, path)

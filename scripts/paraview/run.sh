@@ -36,4 +36,13 @@ export PYTHONPATH=$unpacked/usr/lib/python3/dist-packages${PYTHONPATH:+:$PYTHONP
 # pvbatch is an MPI program: let it start as root on a single rank.
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_btl=self,sm
 echo "paraview: $(pvbatch --version 2>/dev/null | head -1), rendering $result_dir to $image_dir"
-xvfb-run -a -s "-screen 0 1920x1200x24" pvbatch "$here/pv_views.py" "$result_dir" --out "$image_dir"
+# A display number away from :99 (pyvista's start_xvfb), where concurrent X servers
+# race; one retry when X itself failed (exit 2 is the script's own "file/field missing").
+for attempt in 1 2; do
+    rc=0
+    xvfb-run -a -n $((200 + $$ % 500)) -s "-screen 0 1920x1200x24" \
+        pvbatch "$here/pv_views.py" "$result_dir" --out "$image_dir" || rc=$?
+    [ $rc -eq 0 ] || [ $rc -eq 2 ] && exit $rc
+    echo "paraview: pvbatch exited with $rc (attempt $attempt)" >&2
+done
+exit $rc
