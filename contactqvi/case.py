@@ -62,6 +62,7 @@ import pathlib
 import tomllib
 import typing
 
+from contactqvi import obstacles
 from contactqvi.parameters import ParameterError, require, require_choice, require_positive
 
 __all__ = [
@@ -73,7 +74,7 @@ __all__ = [
     "Displacement",
     "Material",
     "MeshSource",
-    "Obstacle",
+    "ObstacleShape",
     "PaperBody",
     "Step",
     "check_groups",
@@ -145,6 +146,10 @@ class Displacement:
     y: float | None = None
     z: float | None = None
 
+    def components(self) -> dict[int, float]:
+        """The prescribed components by index (0, 1, 2), e.g. ``{1: 0.0}``."""
+        return {i: value for i, value in enumerate((self.x, self.y, self.z)) if value is not None}
+
 
 @dataclasses.dataclass(frozen=True)
 class Boundary:
@@ -181,7 +186,7 @@ class Contact:
 
 
 @dataclasses.dataclass(frozen=True)
-class Obstacle:
+class ObstacleShape:
     """``[obstacle]``: a rigid obstacle in its initial position.
 
     ``type = "plane"``: ``point``, unit ``normal`` pointing into the body's side;
@@ -196,6 +201,11 @@ class Obstacle:
     center: Vector | None = None
     axis: Vector | None = None
     radius: float | None = None
+
+    def create(self) -> obstacles.Obstacle:
+        """The analytic obstacle (:mod:`contactqvi.obstacles`) in its initial position."""
+        kinds = {"plane": obstacles.Plane, "sphere": obstacles.Sphere, "cylinder": obstacles.Cylinder}
+        return kinds[self.type](**{key: getattr(self, key) for key in OBSTACLE_KEYS[self.type]})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -232,7 +242,7 @@ class ContactCase:
     material: Material
     boundary: Boundary
     contact: Contact
-    obstacle: Obstacle
+    obstacle: ObstacleShape
     steps: tuple[Step, ...] = ()
     solver: dict[str, typing.Any] = dataclasses.field(default_factory=dict)
     petsc: dict[str, typing.Any] = dataclasses.field(default_factory=dict)
@@ -308,7 +318,7 @@ def parse_case(data: collections.abc.Mapping, base_dir: str | pathlib.Path = "."
         material=Material(**_section(top, "material", Material)),
         boundary=Boundary(**boundary),
         contact=Contact(**_section(top, "contact", Contact)),
-        obstacle=Obstacle(**_section(top, "obstacle", Obstacle)),
+        obstacle=ObstacleShape(**_section(top, "obstacle", ObstacleShape)),
         steps=tuple(Step(**_table(step, f"steps[{i}]", Step)) for i, step in enumerate(steps)),
         solver=_table(top.get("solver", {}), "solver"),
         petsc=_table(top.get("petsc", {}), "petsc"),
@@ -383,7 +393,7 @@ def _name(value: typing.Any, name: str) -> str:
 
 
 def _instance(value: typing.Any, cls: type, name: str) -> None:
-    require(isinstance(value, cls), name, f"must be a {cls.__name__}, got {value!r}")
+    require(isinstance(value, cls), name, f"must be {cls.__name__}(...), got {value!r}")
 
 
 def _check_mesh(mesh: MeshSource) -> MeshSource:
@@ -460,8 +470,8 @@ def _check_contact(contact: Contact) -> Contact:
     return Contact(surface, contact.law, friction, slip_bound)
 
 
-def _check_obstacle(obstacle: Obstacle) -> Obstacle:
-    _instance(obstacle, Obstacle, "obstacle")
+def _check_obstacle(obstacle: ObstacleShape) -> ObstacleShape:
+    _instance(obstacle, ObstacleShape, "obstacle")
     require_choice("obstacle.type", obstacle.type, OBSTACLE_KEYS)
     keys = OBSTACLE_KEYS[obstacle.type]
     given = {k: v for k, v in dataclasses.asdict(obstacle).items() if k != "type" and v is not None}
@@ -480,7 +490,7 @@ def _check_obstacle(obstacle: Obstacle) -> Obstacle:
             require_positive(name, checked[key])
         else:
             checked[key] = _vector(value, name)
-    return Obstacle(obstacle.type, **checked)
+    return ObstacleShape(obstacle.type, **checked)
 
 
 def _check_steps(steps: typing.Sequence[Step]) -> tuple[Step, ...]:

@@ -1,4 +1,4 @@
 // Cattaneo-Mindlin, half model (y >= 0), h = a / 8 at the contact (R = 1 m, delta = 1 mm: a = 31.6 mm).
 refinement = 8;
-half = 1;
+symmetry_planes = 1;
 Include "sphere_indentation.geo";

@@ -7,9 +7,10 @@ import pathlib
 
 from mpi4py import MPI
 
+import numpy as np
 import pytest
 
-from contactqvi import meshes
+from contactqvi import meshes, obstacles
 from contactqvi.case import (
     Boundary,
     Contact,
@@ -17,7 +18,7 @@ from contactqvi.case import (
     Displacement,
     Material,
     MeshSource,
-    Obstacle,
+    ObstacleShape,
     Step,
     check_groups,
     load_case,
@@ -76,7 +77,7 @@ def test_paper_case_is_the_demo_problem():
     assert case.contact == Contact("contact", "coulomb", friction=data.FRICTION)
     assert case.boundary.clamped == ("dirichlet",) and case.boundary.body_force is None
     assert case.boundary.traction == data.tractions("L2")
-    assert case.obstacle == Obstacle("plane", point=(0.0, 0.0, 0.0), normal=(0.0, 0.0, 1.0))
+    assert case.obstacle == ObstacleShape("plane", point=(0.0, 0.0, 0.0), normal=(0.0, 0.0, 1.0))
     assert case.steps == (Step(1.0, (0.0, 0.0, 0.0)),)
     assert case.solver == {} and case.petsc == {}
 
@@ -90,7 +91,7 @@ def test_case_built_in_python_equals_the_file():
             clamped=["bottom"], displacement={"symmetry_x": Displacement(x=0), "symmetry_y": Displacement(y=0)}
         ),
         contact=Contact("contact", friction=0),
-        obstacle=Obstacle("sphere", center=[0, 0, 1], radius=1),
+        obstacle=ObstacleShape("sphere", center=[0, 0, 1], radius=1),
         steps=[Step(translation=(0, 0, -depth)) for depth in (0.25e-3, 0.5e-3, 0.75e-3, 1e-3)],
     )
     assert case == load_case(ROOT / "cases" / "hertz.toml")
@@ -105,6 +106,25 @@ def test_values_are_normalised():
     assert case.steps == (Step(),)
     case = parse_case(_with(BASE, ("obstacle", "normal", [0, 0, 2]), ("steps", [{"load": 2}])))
     assert case.obstacle.normal == (0.0, 0.0, 1.0) and case.steps == (Step(2.0, (0.0, 0.0, 0.0)),)
+
+
+def test_obstacles_and_displacements_for_the_problem_builder():
+    case = load_case(ROOT / "cases" / "hertz.toml")
+    sphere = case.obstacle.create()
+    assert isinstance(sphere, obstacles.Sphere) and sphere.radius == 1.0
+    gap, normal = sphere.translated(case.steps[-1].translation).distance(np.array([[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]))
+    assert gap == pytest.approx([-1e-3, np.hypot(0.1, 0.999) - 1.0])
+    assert normal[0] == pytest.approx([0.0, 0.0, -1.0])
+    assert {name: d.components() for name, d in case.boundary.displacement.items()} == {
+        "symmetry_x": {0: 0.0}, "symmetry_y": {1: 0.0}
+    }
+    plane = load_case(ROOT / "cases" / "inclined_plane.toml").obstacle.create()
+    assert isinstance(plane, obstacles.Plane)
+    assert plane.normal == pytest.approx([np.sin(np.radians(20)), 0.0, np.cos(np.radians(20))], abs=1e-10)
+    cylinder = parse_case(
+        _with(BASE, ("obstacle", {"type": "cylinder", "point": [0, 0, -1], "axis": [0, 2, 0], "radius": 0.5}))
+    ).obstacle.create()
+    assert isinstance(cylinder, obstacles.Cylinder) and cylinder.distance(np.zeros((1, 3)))[0] == pytest.approx(0.5)
 
 
 def test_solver_and_petsc_tables_pass_through():
@@ -221,8 +241,8 @@ def test_bad_values_in_python_are_named_by_their_key_path():
     with pytest.raises(ParameterError, match=r"^steps\[1\]\.translation: must be a list of 3"):
         ContactCase(**kwargs, steps=[Step(), Step(translation=(1.0, 2.0))])
     with pytest.raises(ParameterError, match=r"^obstacle\.normal: must have nonzero length"):
-        ContactCase(**{**kwargs, "obstacle": Obstacle("plane", point=(0, 0, 0), normal=(0, 0, 0))})
-    with pytest.raises(ParameterError, match=r"^material: must be a Material, got"):
+        ContactCase(**{**kwargs, "obstacle": ObstacleShape("plane", point=(0, 0, 0), normal=(0, 0, 0))})
+    with pytest.raises(ParameterError, match=r"^material: must be Material\(\.\.\.\), got"):
         ContactCase(**{**kwargs, "material": {"young": 1.0, "poisson": 0.3}})
 
 
@@ -265,6 +285,7 @@ def test_check_groups_names_the_key_and_lists_the_mesh_groups():
     [
         ("hertz_coarse", {"contact", "bottom", "symmetry_x", "symmetry_y", "sides"}),
         ("mindlin_coarse", {"contact", "bottom", "symmetry_y", "sides"}),
+        ("hertz_full_coarse", {"contact", "bottom", "sides"}),
         ("inclined_block", {"contact", "top", "dirichlet", "right", "front", "back"}),
     ],
 )
