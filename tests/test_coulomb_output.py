@@ -1,6 +1,8 @@
-"""Coulomb output on the contact surface (``contact_surface.xdmf``), read back with meshio."""
+"""Coulomb output: surface fields, the files of ``write_contact_results`` read back, the summary."""
 
 from __future__ import annotations
+
+import json
 
 from mpi4py import MPI
 
@@ -8,23 +10,27 @@ import numpy as np
 import pytest
 
 from contactqvi import io, meshes
-from contactqvi.contact import SCDNewtonSolver, State, build_contact_problem
-from contactqvi.contact.postprocess import contact_fields
+from contactqvi.contact import LoadStep, State, build_contact_problem, solve_load_path
+from contactqvi.contact.postprocess import STATE_NAMES, UNITS, contact_fields, write_contact_results
+from contactqvi.postprocess import ElasticBody
 from contactqvi.problems import coulomb as data
 
 LEV = 3
-FIELDS = {"contact_state", "contact_pressure", "friction_traction", "slip", "gap", "nodal_area"}
+FIELDS = {"contact_state", "contact_pressure", "friction_traction", "slip", "tangential_displacement", "gap",
+          "displacement", "nodal_area"}
+STICKING = (State.STICKING, State.WEAK_STICKING)
 
 
 @pytest.fixture(scope="module")
 def solution():
-    """Converged d1/L1 problem at lev 3 (exact inner solves), u and result."""
+    """Converged d1/L1 problem at lev 3 (exact inner solves), u, result and the body data."""
     msh, tags = meshes.create_contact_body(MPI.COMM_WORLD, LEV, data.gap_function("d1"))
     problem = build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions("L1"), data.FRICTION)
     u = problem.A.createVecRight()
-    result = SCDNewtonSolver(problem, {"pc": "lu"}, prefix="surface_").solve(u)
+    (result,) = solve_load_path(problem, [LoadStep()], u, {"pc": "lu"}, prefix="surface_")
     assert result.converged
-    return problem, u, result
+    body = ElasticBody(data.YOUNG, data.POISSON, tags, ("dirichlet",), data.tractions("L1"))
+    return problem, u, result, body
 
 
 def _rows(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
@@ -37,9 +43,9 @@ def _rows(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
     return lookup[ids[len(points) :]]
 
 
-def test_contact_surface_file(solution, mpi_tmp_path):
-    """The surface fields read back with meshio hold each node's state, forces and slip."""
-    problem, u, result = solution
+def test_contact_surface_fields(solution, mpi_tmp_path):
+    """The surface fields (XDMF, read with meshio) hold each node's state, forces, slip and gap."""
+    problem, u, result, _ = solution
     comm = problem.comm
     surface = contact_fields(problem, u, result)
     io.write_xdmf(mpi_tmp_path / "contact_surface.xdmf", surface.mesh, surface.functions)
@@ -47,6 +53,7 @@ def test_contact_surface_file(solution, mpi_tmp_path):
     assert set(fields) == FIELDS
     state, pressure, area = fields["contact_state"], fields["contact_pressure"], fields["nodal_area"]
     traction, slip, gap = fields["friction_traction"], fields["slip"], fields["gap"]
+    tangential, displacement = fields["tangential_displacement"], fields["displacement"]
 
     # Vertices: the p contact nodes and the nx2 + 1 nodes of the clamped edge x1 = 0.
     sizes = meshes.contact_body_sizes(LEV)
@@ -55,22 +62,29 @@ def test_contact_surface_file(solution, mpi_tmp_path):
     edge = np.isclose(points[:, 0], 0.0)
     assert np.count_nonzero(edge) == sizes["nx2"] + 1
     assert np.all(state[edge] == State.NO_CONTACT) and np.all(pressure[edge] == 0.0)
-    assert np.all(traction[edge] == 0.0) and np.all(slip[edge] == 0.0)
+    assert np.all(traction[edge] == 0.0) and np.all(slip[edge] == 0.0) and np.all(displacement[edge] == 0.0)
     assert np.allclose(gap[edge], points[edge, 2], rtol=0, atol=1e-14)  # clamped: the initial gap
 
-    # Total normal force.
+    # Total normal force; states as counted by the solver.
     total = comm.allreduce(float(result.normal_force.sum()), op=MPI.SUM)
     assert abs(np.sum(pressure * area) - total) <= 1e-10 * total
-
-    # States: values of the State enum, as many per state as the solver counted.
     assert set(np.unique(state)) <= {float(s) for s in State}
     counts = comm.allreduce(np.bincount(result.states.astype(np.int64), minlength=len(State)), op=MPI.SUM)
     assert np.array_equal(np.bincount(state[~edge].astype(np.int64), minlength=len(State)), counts)
-    stick = np.isin(state, (State.STICKING, State.WEAK_STICKING))
+
+    # Slip: zero where not touching, the tangential displacement where touching (one step from rest).
+    open_ = state == State.NO_CONTACT
+    assert np.any(open_) and np.all(slip[open_] == 0.0)
+    assert np.any(np.abs(tangential[open_]).max(axis=1) > 1e-6)  # free nodes move tangentially
+    assert np.allclose(slip[~open_], tangential[~open_], rtol=0, atol=1e-14)
+    stick = np.isin(state, STICKING)
     assert np.any(stick) and np.all(np.linalg.norm(slip[stick], axis=1) <= 1e-10 * np.abs(slip).max())
-    assert np.all(traction[:, 2] == 0.0) and np.all(slip[:, 2] == 0.0)  # tangential vectors
+    assert np.allclose(tangential[:, :2], displacement[:, :2], rtol=0, atol=1e-14) and np.all(tangential[:, 2] == 0.0)
+    assert np.all(traction[:, 2] == 0.0)
     cone = np.linalg.norm(traction, axis=1) - problem.law.friction * pressure
     assert np.all(cone <= 1e-8 * np.abs(pressure).max())
+    sliding = state == State.SLIDING
+    assert np.all(np.einsum("ij,ij->i", traction[sliding], slip[sliding]) < 0.0)  # friction opposes slip
 
     # Node by node: the owned contact nodes of every rank, found by coordinates.
     x = problem.V.tabulate_dof_coordinates()[problem.contact_blk]
@@ -79,9 +93,9 @@ def test_contact_surface_file(solution, mpi_tmp_path):
     assert np.array_equal(state[rows], result.states)
     assert np.allclose(pressure[rows], result.normal_force / problem.contact_area, rtol=1e-12, atol=0)
     assert np.allclose(traction[rows, :2], result.friction_force / problem.contact_area[:, None], rtol=1e-12, atol=0)
-    u_contact = u.array.reshape(-1, 3)[problem.contact_blk]  # slip u~12 = u12, gap = u3 (shifted)
-    assert np.allclose(slip[rows, :2], u_contact[:, :2], rtol=0, atol=1e-14)
-    assert np.allclose(gap[rows], u_contact[:, 2], rtol=0, atol=1e-14)
+    shifted = u.array.reshape(-1, 3)[problem.contact_blk]  # frames e1, e2, e3: (slip, gap after deformation)
+    assert np.allclose(gap[rows], shifted[:, 2], rtol=0, atol=1e-14)
+    assert np.all(gap >= -1e-12)
 
     # In memory, ghost entries (under mpirun) hold their owner's values.
     for f in surface.functions:
@@ -90,12 +104,72 @@ def test_contact_surface_file(solution, mpi_tmp_path):
         assert np.all(rows >= 0) and np.array_equal(local, fields[f.name][rows].reshape(local.shape))
 
 
+def _patch_areas(dataset: io.Dataset) -> np.ndarray:
+    """Areas of planar quadrilaterals (half the cross product of the diagonals)."""
+    p = dataset.points[dataset.cells]
+    return 0.5 * np.linalg.norm(np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 1]), axis=1)
+
+
+def _box_volumes(dataset: io.Dataset) -> np.ndarray:
+    """Volumes of box-shaped hexahedra in VTK order."""
+    p = dataset.points[dataset.cells]
+    return np.abs(np.linalg.det(np.stack([p[:, 1] - p[:, 0], p[:, 3] - p[:, 0], p[:, 4] - p[:, 0]], axis=1)))
+
+
+def test_write_contact_results(solution, mpi_tmp_path):
+    """Files and summary: the same counts on any number of ranks; integrals match the summary."""
+    problem, u, result, body = solution
+    comm = problem.comm
+    summary = write_contact_results(mpi_tmp_path / "run", problem, u, result, body, plot=True)
+    assert summary["files"] == ["body.bp", "contact_surface.bp", "solution.npz", "contact_states.png"]
+    assert summary["equilibrium_error"] < 1e-8
+    assert set(summary["units"]) <= set(UNITS) and summary["units"]["contact_force"] == "N"
+    assert summary["contact_area"] == pytest.approx(summary["sticking_area"] + summary["sliding_area"])
+    assert sum(summary["state_counts"].values()) == problem.n_contact
+    assert set(summary["state_counts"]) == set(STATE_NAMES.values())
+    assert json.loads(json.dumps(io._to_builtin(summary))) is not None  # JSON-ready
+    if comm.rank != 0:
+        return
+    sizes = meshes.contact_body_sizes(LEV)
+    nx1, nx2, nx3 = sizes["nx1"], sizes["nx2"], sizes["nx3"]
+
+    volume = io.read_vtx(mpi_tmp_path / "run" / "body.bp")
+    assert volume.points.shape == ((nx1 + 1) * (nx2 + 1) * (nx3 + 1), 3) and volume.cells.shape == (nx1 * nx2 * nx3, 8)
+    assert set(volume.point_data) == {"displacement [m]"}
+    assert set(volume.cell_data) == {"stress [Pa]", "von_mises [Pa]"}
+    assert volume.cell_data["stress [Pa]"].shape == (nx1 * nx2 * nx3, 9)
+    assert _box_volumes(volume).sum() == pytest.approx(2.0 * 1.0 * (1.0 - 0.01), rel=1e-12)
+    assert volume.cell_data["von_mises [Pa]"].max() == pytest.approx(summary["max_von_mises"], rel=1e-14)
+
+    surface = io.read_vtx(mpi_tmp_path / "run" / "contact_surface.bp")
+    n_nodes, n_edges, n_facets = (nx1 + 1) * (nx2 + 1), nx1 * (nx2 + 1) + (nx1 + 1) * nx2, nx1 * nx2
+    assert surface.points.shape == (n_nodes + n_edges + n_facets, 3) and surface.cells.shape == (4 * n_facets, 4)
+    assert set(surface.point_data) == {f"{name} [{UNITS[name]}]" for name in FIELDS - {"contact_state", "nodal_area"}}
+    assert set(surface.cell_data) == {"contact_state", "is_open", "is_sliding", "is_sticking"}
+    area = _patch_areas(surface)
+    assert area.sum() == pytest.approx(2.0, rel=1e-12)
+    cells = surface.cell_data
+    assert np.array_equal(cells["is_open"] + cells["is_sliding"] + cells["is_sticking"], np.ones(len(area)))
+    assert area @ cells["is_sticking"] == pytest.approx(summary["sticking_area"], rel=1e-12)
+    assert area @ cells["is_sliding"] == pytest.approx(summary["sliding_area"], rel=1e-12)
+    # Bilinear pressure on rectangles: its integral is the total normal force (lumped areas).
+    pressure = surface.point_data["contact_pressure [Pa]"][surface.cells].mean(axis=1)
+    assert area @ pressure == pytest.approx(summary["contact_force"][2], rel=1e-12)
+    traction = surface.point_data["friction_traction [Pa]"][surface.cells].mean(axis=1)
+    assert area @ traction[:, 0] == pytest.approx(summary["contact_force"][0], rel=1e-12)
+
+
 def test_demo_writes_contact_surface(mpi_tmp_path, load_demo):
     out = mpi_tmp_path / "run"
     assert load_demo("coulomb3d").main(["--lev", "1", "--output", str(out), "--no-plot"]) == 0
-    points, fields = io.read_xdmf_point_data(out / "contact_surface.xdmf")
     sizes = meshes.contact_body_sizes(1)
-    assert set(fields) == FIELDS and len(points) == sizes["p"] + sizes["nx2"] + 1
-    _, volume = io.read_xdmf_point_data(out / "contact.xdmf")
-    assert set(volume) == {"displacement"}
+    if (out / "contact_surface.bp").exists():  # write_contact_results
+        if MPI.COMM_WORLD.rank == 0:
+            surface = io.read_vtx(out / "contact_surface.bp")
+            assert surface.cells.shape == (4 * sizes["nx1"] * sizes["nx2"], 4)
+            assert "contact_state" in surface.cell_data
+    else:  # the XDMF files written before it
+        points, fields = io.read_xdmf_point_data(out / "contact_surface.xdmf")
+        assert set(fields) == FIELDS and len(points) == sizes["p"] + sizes["nx2"] + 1
     assert not (out / "contact_states.png").exists()
+
