@@ -350,7 +350,7 @@ def _table(value: typing.Any, path: str, cls: type | None = None, required: bool
     return value
 
 
-_SECTIONS = ("mesh", "material", "boundary", "contact", "obstacle", "steps", "solver", "petsc")
+_SECTIONS = tuple(f.name for f in dataclasses.fields(ContactCase))
 
 
 def _section(top: dict[str, typing.Any], name: str, cls: type) -> dict[str, typing.Any]:
@@ -503,24 +503,14 @@ def _check_steps(steps: typing.Sequence[Step]) -> tuple[Step, ...]:
 
 
 def _check_solver(solver: dict[str, typing.Any]) -> dict[str, typing.Any]:
-    """The given SCD Newton parameters, names checked; values checked by the solver's table."""
-    from contactqvi.contact import scd_newton
+    """The given SCD Newton parameters, checked by the solver's table (defaults not added)."""
+    from contactqvi.contact import scd_newton  # here: the contact package may read cases itself
 
     _instance(solver, dict, "solver")
-    table = scd_newton.PARAMETERS  # a Parameters table with .check, or (old style) name -> (default, help)
-    for name in solver:
-        if name not in table:
-            close = difflib.get_close_matches(name, list(table), n=1)
-            hint = f"did you mean {close[0]!r}?" if close else f"known: {', '.join(sorted(table))}"
-            raise ParameterError(f"solver.{name}", f"unknown parameter; {hint}")
-    check = getattr(table, "check", None) or getattr(scd_newton, "check_parameters", None)
-    if check is None:
-        return dict(solver)
     try:
-        merged = check(solver)
+        merged = scd_newton.PARAMETERS.check(solver)
     except ParameterError as exc:
-        message = str(exc).removeprefix(f"{exc.name}: ")
-        raise ParameterError(f"solver.{exc.name}", message) from None
+        raise ParameterError(f"solver.{exc.name}", str(exc).removeprefix(f"{exc.name}: ")) from None
     return {name: merged[name] for name in solver}
 
 
