@@ -342,6 +342,7 @@ def colour_bar(view, lut, title, position=(0.86, 0.18), length=0.6, fmt="%-#.3g"
     bar.TitleFontSize = FONT
     bar.LabelFontSize = FONT - 2
     bar.TitleBold = 1
+    bar.HorizontalTitle = 1  # above the bar: a rotated title can run into long tick labels
     bar.AutomaticLabelFormat = 0
     bar.LabelFormat = fmt
     bar.RangeLabelFormat = fmt
@@ -449,7 +450,7 @@ def deformed_view(volume, case, path):
     lut = simple.GetColorTransferFunction(name)
     lut.ApplyPreset("Turbo" if von_mises is not None else "Viridis (matplotlib)", True)
     lut.RescaleTransferFunction(0.0, float(shown.max()) or 1.0)  # both are magnitudes: from 0
-    colour_bar(view, lut, f"{label} ({unit})", position=(0.87, 0.2), fmt=label_format(shown.max()))
+    colour_bar(view, lut, f"{label} ({unit})", position=(0.85, 0.2), fmt=label_format(shown.max()))
 
     # The foundation x3 = FOUNDATION_X3, a little larger than the body's footprint.
     margin = 0.06 * extent
@@ -466,10 +467,12 @@ def deformed_view(volume, case, path):
     view.CameraViewUp = [0.0, 0.0, 1.0]
     simple.ResetCamera(view)
     view.CameraPosition = [c + 0.8 * (p - c) for p, c in zip(view.CameraPosition, centre)]
-    # Move the scene up a little: room for the caption at the bottom.
-    lift = [0.0, 0.0, 0.09 * extent]
-    view.CameraFocalPoint = [c - d for c, d in zip(view.CameraFocalPoint, lift)]
-    view.CameraPosition = [c - d for c, d in zip(view.CameraPosition, lift)]
+    # Move the scene up and left a little: room for the caption and the colour bar.
+    direction = np.subtract(view.CameraFocalPoint, view.CameraPosition)
+    right = np.cross(direction, view.CameraViewUp)
+    shift = 0.09 * extent * np.array([0.0, 0.0, -1.0]) + 0.1 * extent * right / np.linalg.norm(right)
+    view.CameraFocalPoint = list(np.add(view.CameraFocalPoint, shift))
+    view.CameraPosition = list(np.add(view.CameraPosition, shift))
     add_title(view, title, f"displacement magnified \u00d7{scale:g} (largest {u_max * 1e3:.3g} mm); {what}\n"
                            f"grey box: undeformed body; brown plane: rigid foundation x3 = {FOUNDATION_X3:g} m")
     save(view, path)
@@ -527,7 +530,7 @@ def traction_view(surface, case, path):
     lut.InvertTransferFunction()  # white: no pressure
     p_max = float(pressure.max()) * p_factor
     lut.RescaleTransferFunction(0.0, p_max or 1.0)
-    colour_bar(view, lut, f"contact pressure ({p_unit})", position=(0.88, 0.2), fmt=label_format(p_max))
+    colour_bar(view, lut, f"contact pressure ({p_unit})", position=(0.86, 0.2), fmt=label_format(p_max))
 
     bounds = grid.GetBounds()
     spacing = math.sqrt((bounds[1] - bounds[0]) * (bounds[3] - bounds[2]) / max(grid.GetNumberOfCells(), 1))
@@ -594,7 +597,7 @@ def stick_slip_view(surface, case, path):
         colours += list(rgb)
     lut.Annotations = annotations
     lut.IndexedColors = colours
-    bar = colour_bar(view, lut, "contact state", position=(0.715, 0.30), length=0.4)
+    bar = colour_bar(view, lut, "contact state", position=(0.70, 0.30), length=0.4)
     bar.DrawTickMarks = 0
     bar.AddRangeLabels = 0
     bar.TextPosition = "Ticks left/bottom, annotations right/top"
@@ -604,7 +607,7 @@ def stick_slip_view(surface, case, path):
     simple.ColorBy(edges, None)
     edges.AmbientColor = edges.DiffuseColor = [0.3, 0.3, 0.3]
     edges.Translation = [0.0, 0.0, 1e-3]
-    plan_view_camera(view, grid, box=(0.11, 0.68, 0.16, 0.86))
+    plan_view_camera(view, grid, box=(0.11, 0.64, 0.16, 0.86))
     plan_axes(view)
     add_title(view, f"Stick/slip map ({case})", f"contact surface in plan view (from +x3, through the body); {how}")
     save(view, path)
