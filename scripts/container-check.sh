@@ -125,6 +125,9 @@ if [ $head -eq 1 ]; then
     rm -rf "$context"
     mkdir -p "$context"
     git archive HEAD | tar -x -C "$context"
+    # One fixed mtime: buildah's COPY cache key includes it, and git archive stamps
+    # every file with the commit time, which would rebuild the apt layer per commit.
+    find "$context" -exec touch -h -d '2000-01-01 00:00:00 UTC' {} +
     log "context: HEAD $(git rev-parse --short HEAD) (git archive)"
 else
     log "context: the working tree$(git diff --quiet HEAD -- 2>/dev/null || echo ' (with uncommitted changes)')"
