@@ -338,7 +338,7 @@ class VTXDatasetWriter:
                 return self._io.define_variable(name, array)
             return self._io.define_variable(name, array, [], [], list(array.shape))
         if not single:
-            variable.set_selection([[0] * array.ndim, list(array.shape)])
+            variable.set_selection([[], list(array.shape)])  # a local array: count only
         return variable
 
     def close(self, ok: bool = True) -> None:
@@ -384,14 +384,13 @@ def read_vtx(path: str | os.PathLike, step: int = 0) -> Dataset:
         }
 
         def blocks(name: str) -> list[np.ndarray]:
-            variable = reader.inquire_variable(name)
             n_blocks = len(reader.all_blocks_info(name)[step])
-            return [reader.read(variable, block_id=b, step_selection=None) for b in range(n_blocks)]
+            return [reader.read(name, block_id=b, step_selection=[step, 1]) for b in range(n_blocks)]
 
-        nodes = [int(n) for n in np.atleast_1d(reader.read("NumberOfNodes"))]
+        nodes = [int(n) for n in np.atleast_1d(reader.read("NumberOfNodes", step_selection=[step, 1]))]
         offsets = np.concatenate([[0], np.cumsum(nodes)[:-1]])
         connectivity = [c.reshape(-1, c.reshape(-1)[0] + 1)[:, 1:] + offset for c, offset in zip(blocks("connectivity"), offsets)]
-        types = int(np.atleast_1d(reader.read("types"))[0])
+        types = int(np.atleast_1d(reader.read("types", step_selection=[step, 1]))[0])
         dataset = Dataset(
             points=np.concatenate(blocks("geometry")).reshape(-1, 3),
             cells=np.concatenate(connectivity),
