@@ -41,8 +41,9 @@ def _prefixed(method: str) -> Parameters:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of every method, one argument group per table."""
+    notes = {"pdas": "pdas and ss (sigma = 1/gamma)", "alm": "gamma, sigma and --max-iterations (per step): pdas options"}
     for method in _OPTIONS:
-        _prefixed(method).add_arguments(parser.add_argument_group(f"{method} options"))
+        _prefixed(method).add_arguments(parser.add_argument_group(f"{method} options", notes.get(method)))
 
 
 def checked_parameters(args: argparse.Namespace, method: str) -> dict[str, typing.Any]:

@@ -184,6 +184,16 @@ class FrictionActiveSetSolver(OwnsPETScObjects):
             return Status.DIVERGED_MAX_IT
         return Status.ITERATING
 
+    def _step(self, gamma: float, sigma: float, states: np.ndarray, lam_hat: np.ndarray, previous: list[np.ndarray],
+              reference: np.ndarray | None) -> dict[str, typing.Any] | None:  # fmt: skip
+        """(PDAS) steps 4-5 for the sets ``states``; its history entry, or None if the linear solve failed."""
+        start = time.perf_counter()
+        if not self.solve_linear(gamma, states, lam_hat):
+            return None
+        self._update_multipliers(gamma, states, lam_hat)
+        residual = self._residual(sigma)
+        return self._record(len(previous) + 1, states, previous, residual, reference, time.perf_counter() - start)
+
     def _record(self, k: int, states: np.ndarray, previous: list[np.ndarray], residual: float,
                 reference: np.ndarray | None, seconds: float) -> dict[str, typing.Any]:  # fmt: skip
         """History entry of iteration k: set sizes and changes, (3.2c) residual, d_lambda (6.1)."""
@@ -249,20 +259,17 @@ class FrictionActiveSetSolver(OwnsPETScObjects):
             status = self._stop_reason(states, previous, params["max_iterations"])
             if status != Status.ITERATING:
                 break
-            start = time.perf_counter()
             with timings.phase("iterations"):
-                if not self.solve_linear(gamma, states, hat):
-                    status = Status.DIVERGED_LINEAR_SOLVE
-                    break
-                self._update_multipliers(gamma, states, hat)
-            residual = self._residual(sigma)
-            history.append(self._record(len(history) + 1, states, previous, residual, reference,
-                                        time.perf_counter() - start))  # fmt: skip
+                entry = self._step(gamma, sigma, states, hat, previous, reference)
+            if entry is None:
+                status = Status.DIVERGED_LINEAR_SOLVE
+                break
+            history.append(entry)
             if monitor is not None:
                 monitor(len(history), self.y, self.lam, self.xi)
             previous.append(states)
             states = boundary_states(self.xi, self.lam, p.g, sigma)
-            if reduction is not None and residual <= reduction * initial_residual:
+            if reduction is not None and entry["residual_32c"] <= reduction * initial_residual:
                 repeated = self._repeats(states, previous[-1])
                 status = Status.CONVERGED_ACTIVE_SET if repeated else Status.CONVERGED_INEXACT
         return ActiveSetResult(

@@ -53,8 +53,8 @@ PARAMETERS = Parameters(
     N=Parameter(80, "grid points per direction (N - 1 cells)", int, minimum=3),
     discretisation=Parameter("q1", "q1/p1 finite elements or the paper's finite differences", str,
                              choices=DISCRETISATIONS),
-    g=Parameter(None, "friction bound g (default: the example's)", minimum=0.0, exclusive=True, optional=True),
-    mu=Parameter(None, "coefficient mu of (y, z) in a(y, z) (default: the example's)", minimum=0.0, optional=True),
+    g=Parameter(None, "friction bound g; none: the example's", minimum=0.0, exclusive=True, optional=True),
+    mu=Parameter(None, "coefficient mu of (y, z) in a(y, z); none: the example's", minimum=0.0, optional=True),
     example2_reading=Parameter("x1x2", "reading of f in Example 2 (module docstring)", str,
                                choices=EXAMPLE2_READINGS),
 )  # fmt: skip
