@@ -41,8 +41,8 @@ import sys
 #: Datasets of a result directory: candidate files, in order of preference. A
 #: field is taken from the first existing file of its dataset that holds it.
 SOURCES = {
-    "volume": ("volume.xdmf", "contact.xdmf", "displacement.bp"),
-    "surface": ("contact_surface.xdmf", "surface.xdmf", "contact_surface.bp"),
+    "volume": ("body.bp", "contact.xdmf", "displacement.bp"),
+    "surface": ("contact_surface.bp", "contact_surface.xdmf"),
 }
 
 #: ParaView reader for each file type.
@@ -72,6 +72,11 @@ CONTACT_STATES = {
 
 #: The states always shown in the legend (others only when they occur).
 ALWAYS_IN_LEGEND = (0, 1, 2)
+
+#: A surface with a cell-wise contact_state is cut into tributary patches (one
+#: quadrilateral per node and facet: node, edge midpoint, facet centre, edge
+#: midpoint); this corner of each cell is the patch's node. Arrows are drawn there.
+PATCH_NODE_CORNER = 0
 
 #: The rigid foundation's plane x3 = FOUNDATION_X3 (drawn in the deformed view).
 FOUNDATION_X3 = 0.0
@@ -170,7 +175,7 @@ def _find_array(grid, name):
         for i in range(data.GetNumberOfArrays()):
             found = data.GetArrayName(i) or ""
             if found == name or (found.startswith(name) and found[len(name)] in " [(_" and
-                                 found[len(name) + 1:].strip(" [()_") in ("m", "Pa", "MPa", "1")):
+                                 found[len(name) + 1:].strip(" []()_") in ("m", "Pa", "MPa", "1")):
                 return association, data.GetArray(i)
     return None
 
@@ -248,6 +253,44 @@ def producer(grid):
     source.GetClientSideObject().SetOutput(grid)
     source.UpdatePipeline()
     return source
+
+
+def node_points(grid, values, name, patches):
+    """The nodes of a surface as points carrying ``values`` (point data ``name``):
+    all points, or on a tributary-patch surface the PATCH_NODE_CORNER of each cell."""
+    from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+    from vtkmodules.vtkCommonCore import vtkPoints
+    from vtkmodules.vtkCommonDataModel import vtkPolyData
+
+    import numpy as np
+
+    x = vtk_to_numpy(grid.GetPoints().GetData())
+    if patches:
+        connectivity = vtk_to_numpy(grid.GetCells().GetConnectivityArray())
+        offsets = vtk_to_numpy(grid.GetCells().GetOffsetsArray())
+        ids = np.unique(connectivity[offsets[:-1] + PATCH_NODE_CORNER])
+    else:
+        ids = np.arange(len(x))
+    points = vtkPoints()
+    points.SetData(numpy_to_vtk(np.ascontiguousarray(x[ids], dtype=np.float64), deep=True))
+    poly = vtkPolyData()
+    poly.SetPoints(points)
+    add_array(poly, "POINTS", name, values[ids])
+    return poly
+
+
+def cell_areas(grid):
+    """Area of each (polygonal) cell of ``grid``, as a numpy array."""
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.vtkFiltersVerdict import vtkCellSizeFilter
+
+    sizes = vtkCellSizeFilter()
+    sizes.SetInputData(grid)
+    for kind in ("Vertex", "Length", "Volume"):
+        getattr(sizes, f"Compute{kind}CountOff" if kind == "Vertex" else f"Compute{kind}Off")()
+    sizes.ComputeAreaOn()
+    sizes.Update()
+    return vtk_to_numpy(sizes.GetOutput().GetCellData().GetArray("Area"))
 
 
 def nodal_tiles(grid, state):
@@ -508,6 +551,7 @@ def traction_view(surface, case, path):
 
     p_assoc, pressure = surface.field("contact_pressure")
     t_assoc, traction = surface.field("friction_traction")
+    patches = surface.field("contact_state")[0] == "CELLS"
     grid = surface.grid
     _, _, _, _, p_unit, p_factor = FIELDS["contact_pressure"]
     _, _, _, _, t_unit, t_factor = FIELDS["friction_traction"]
@@ -533,19 +577,23 @@ def traction_view(surface, case, path):
     colour_bar(view, lut, f"contact pressure ({p_unit})", position=(0.86, 0.2), fmt=label_format(p_max))
 
     bounds = grid.GetBounds()
-    spacing = math.sqrt((bounds[1] - bounds[0]) * (bounds[3] - bounds[2]) / max(grid.GetNumberOfCells(), 1))
     if t_max > 0:
-        source_points = source if t_assoc == "POINTS" else simple.CellCenters(Input=source)
+        if t_assoc == "POINTS":
+            source_points = producer(node_points(grid, traction * t_factor, "traction_shown", patches))
+        else:
+            source_points = simple.CellCenters(Input=source)
+        n_arrows = source_points.GetDataInformation().GetNumberOfPoints()
+        spacing = math.sqrt((bounds[1] - bounds[0]) * (bounds[3] - bounds[2]) / max(n_arrows, 1))
         glyph = simple.Glyph(Input=source_points, GlyphType="Arrow")
         glyph.OrientationArray = ["POINTS", "traction_shown"]
         glyph.ScaleArray = ["POINTS", "traction_shown"]
-        glyph.ScaleFactor = 1.6 * spacing / t_max  # the largest arrow: 1.6 mesh cells
+        glyph.ScaleFactor = 1.6 * spacing / t_max  # the largest arrow: 1.6 node spacings
         glyph.GlyphMode = "All Points"
         glyph.GlyphType.TipLength = 0.3
         glyph.GlyphType.TipRadius = 0.12
         glyph.GlyphType.ShaftRadius = 0.04
         arrows = simple.Show(glyph, view)
-        simple.ColorBy(arrows, None)
+        arrows.ColorArrayName = ["POINTS", ""]  # a solid colour
         arrows.DiffuseColor = arrows.AmbientColor = [0.85, 0.1, 0.1]
         # Arrows a little above the surface (towards the camera), so the surface does not hide them.
         arrows.Translation = [0.0, 0.0, 0.02 * max(bounds[1] - bounds[0], bounds[3] - bounds[2])]
@@ -563,6 +611,8 @@ def stick_slip_view(surface, case, path):
 
     import numpy as np
 
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
     association, state = surface.field("contact_state")
     grid = surface.grid
     codes = np.rint(state).astype(int)
@@ -576,7 +626,7 @@ def stick_slip_view(surface, case, path):
     else:
         shown = grid
         add_array(shown, "CELLS", "contact_state", codes)
-        how = "cell-wise states"
+        how = "cell-wise states (in contactqvi output each cell is a node's tributary patch)"
 
     view = new_view(parallel_projection=True)
     source = producer(shown)
@@ -588,23 +638,23 @@ def stick_slip_view(surface, case, path):
     lut.InterpretValuesAsCategories = 1
     lut.AnnotationsInitialized = 1
     present = sorted(set(codes.tolist()) | set(ALWAYS_IN_LEGEND))
-    counts = {s: int((codes == s).sum()) for s in present}
-    unit = "nodes" if association == "POINTS" else "cells"
+    shown_codes = vtk_to_numpy(shown.GetCellData().GetArray("contact_state"))
+    areas = {s: float(cell_areas(shown)[shown_codes == s].sum()) for s in present}
     annotations, colours = [], []
     for s in present:
         label, rgb = CONTACT_STATES[s]
-        annotations += [str(s), f"{label} ({counts[s]} {unit})"]
+        annotations += [str(s), f"{label} ({areas[s]:.3g} m\u00b2)"]
         colours += list(rgb)
     lut.Annotations = annotations
     lut.IndexedColors = colours
-    bar = colour_bar(view, lut, "contact state", position=(0.70, 0.30), length=0.4)
+    bar = colour_bar(view, lut, "contact state", position=(0.72, 0.30), length=0.4)
     bar.DrawTickMarks = 0
     bar.AddRangeLabels = 0
     bar.TextPosition = "Ticks left/bottom, annotations right/top"
 
     edges = simple.Show(producer(grid), view)  # the mesh on top, thin
     edges.Representation = "Wireframe"
-    simple.ColorBy(edges, None)
+    edges.ColorArrayName = ["POINTS", ""]  # a solid colour
     edges.AmbientColor = edges.DiffuseColor = [0.3, 0.3, 0.3]
     edges.Translation = [0.0, 0.0, 1e-3]
     plan_view_camera(view, grid, box=(0.11, 0.64, 0.16, 0.86))
