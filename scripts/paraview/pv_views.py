@@ -169,13 +169,24 @@ def read_file(path):
     return grid
 
 
+#: Unit suffixes a field name may carry in the files.
+UNIT_SUFFIXES = ("m", "Pa", "MPa", "1")
+
+
+def field_matches(found, name):
+    """Whether the array name ``found`` is field ``name``, bare or with a unit suffix
+    ("von_mises", "von_mises [Pa]", "von_mises (Pa)", "von_mises_Pa")."""
+    if found == name:
+        return True
+    rest = found[len(name):] if found.startswith(name) else ""
+    return rest[:1] in (" ", "[", "(", "_") and rest.strip(" []()_") in UNIT_SUFFIXES
+
+
 def _find_array(grid, name):
-    """(association, array) of field ``name`` (or ``name`` plus a unit suffix) in ``grid``."""
+    """(association, array) of field ``name`` in ``grid`` (see :func:`field_matches`)."""
     for association, data in (("POINTS", grid.GetPointData()), ("CELLS", grid.GetCellData())):
         for i in range(data.GetNumberOfArrays()):
-            found = data.GetArrayName(i) or ""
-            if found == name or (found.startswith(name) and found[len(name)] in " [(_" and
-                                 found[len(name) + 1:].strip(" []()_") in ("m", "Pa", "MPa", "1")):
+            if field_matches(data.GetArrayName(i) or "", name):
                 return association, data.GetArray(i)
     return None
 
