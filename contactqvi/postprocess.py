@@ -106,18 +106,24 @@ def _load_form(msh: dmesh.Mesh, v: ufl.core.expr.Expr, body: ElasticBody, load_f
     return form
 
 
-def reaction_forces(u: fem.Function, body: ElasticBody, load_factor: float = 1.0) -> dict[str, np.ndarray]:
+def reaction_forces(
+    u: fem.Function, body: ElasticBody, load_factor: float = 1.0, dirichlet_dofs_loc: np.ndarray | None = None
+) -> dict[str, np.ndarray]:
     """Reaction force (N, global components) of each support of ``body`` on it.
 
     The residual r(v) = a(u, v) - l(v) is assembled without boundary conditions
-    and summed over the nodes of each support; a node on two supports counts for
-    the first in ``body.supports``. Collective.
+    and summed over the constrained dofs of each support's nodes; a node on two
+    supports counts for the first in ``body.supports``. Collective.
 
     Args:
         u: displacement (global components; for a contact problem the physical
             displacement u~).
         body: material, boundaries and loads.
         load_factor: factor on tractions and body force.
+        dirichlet_dofs_loc: local unrolled indices of the constrained dofs (global
+            components, e.g. ``ContactProblem.dirichlet_dofs_loc``); the free
+            components of a support node (a roller) carry other forces, such as
+            contact. None: every component of the supports' nodes.
     """
     V = u.function_space
     msh = V.mesh
@@ -128,6 +134,10 @@ def reaction_forces(u: fem.Function, body: ElasticBody, load_factor: float = 1.0
     residual.scatter_reverse(la.InsertMode.add)
     n_owned = V.dofmap.index_map.size_local
     values = residual.array[: 3 * n_owned].reshape(n_owned, 3)
+    if dirichlet_dofs_loc is not None:
+        constrained = np.zeros(residual.array.size, dtype=bool)
+        constrained[dirichlet_dofs_loc] = True
+        values = values * constrained[: 3 * n_owned].reshape(n_owned, 3)
     fdim = msh.topology.dim - 1
     msh.topology.create_connectivity(fdim, msh.topology.dim)
     counted = np.zeros(n_owned, dtype=bool)

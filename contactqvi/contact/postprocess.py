@@ -27,7 +27,8 @@ Summary entries (:func:`contact_summary`), SI units listed under ``units``: tota
 contact force of the obstacle on the body (N, global components), reaction force
 of each support (N), applied force (N) and the relative equilibrium error of
 their sum, contact/sticking/sliding areas (m^2, lumped nodal areas by state),
-node counts per state, the largest contact pressure and von Mises stress (Pa).
+node counts per state, the largest contact pressure and von Mises stress (Pa),
+the global l2 norm of u~ (m; the number demos print to compare runs).
 """
 
 from __future__ import annotations
@@ -103,6 +104,7 @@ UNITS = {
     "max_contact_pressure": "Pa",
     "max_von_mises": "Pa",
     "equilibrium_error": "1",
+    "displacement_norm": "m",
 }
 
 
@@ -318,7 +320,7 @@ def contact_summary(
     """
     comm = problem.comm
     displacement = problem.physical_displacement(u, fem.Function(problem.V))
-    reactions = reaction_forces(displacement, body, problem.load_factor)
+    reactions = reaction_forces(displacement, body, problem.load_factor, problem.dirichlet_dofs_loc)
     applied = applied_force(problem.V.mesh, body, problem.load_factor)
     resultants = contact_resultants(problem, result)
     contact_force = np.asarray(resultants["contact_force"])
@@ -336,6 +338,7 @@ def contact_summary(
         "sliding_area": resultants["sliding_area"],
         "state_counts": {STATE_NAMES[s]: int(counts[s]) for s in State},
         "max_contact_pressure": comm.allreduce(float(pressure.max(initial=0.0)), op=MPI.MAX),
+        "displacement_norm": displacement.x.petsc_vec.norm(),
     }
     if von_mises is not None:
         n_cells = von_mises.function_space.mesh.topology.index_map(3).size_local
