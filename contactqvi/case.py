@@ -44,6 +44,20 @@ SI units throughout (m, Pa, N/m^3). Example::
     [petsc]                             # PETSc options under the solver's prefix
     ksp_monitor = true                  # true: a flag without value
 
+The same case in Python (sections left out take their defaults)::
+
+    ContactCase(
+        mesh=MeshSource(file="meshes/arch_block.geo"),
+        material=Material(young=70e9, poisson=0.334),
+        boundary=Boundary(clamped=["dirichlet"], traction={"top": (0, 0, -1e9)}),
+        contact=Contact("contact", friction=0.23),
+        obstacle=ObstacleShape("plane", point=(0, 0, 0), normal=(0, 0, 1)),
+        steps=[Step(load=0.5), Step(load=1.0)],
+    )
+
+``case.obstacle.create()`` is the :mod:`contactqvi.obstacles` object, and
+``case.to_dict()`` the tables again (for ``summary.json``).
+
 :func:`load_case` validates everything that needs no mesh before any expensive
 work; errors are :class:`~contactqvi.parameters.ParameterError` named by the key
 path (``obstacle.normal``, ``steps[2].translation``), unknown keys name the
@@ -404,7 +418,7 @@ def _check_mesh(mesh: MeshSource) -> MeshSource:
         lev = mesh.box.lev
         ok = isinstance(lev, int) and not isinstance(lev, bool) and lev >= 0
         require(ok, "mesh.box.lev", f"must be an integer >= 0, got {lev!r}")
-        from contactqvi.problems.coulomb import GEOMETRIES
+        from contactqvi.problems.coulomb import GEOMETRIES  # imports dolfinx: only for the paper's body
 
         require_choice("mesh.box.geometry", mesh.box.geometry, GEOMETRIES)
         return mesh
