@@ -11,12 +11,14 @@ import pytest
 import ufl
 
 import dolfinx.fem.petsc
+import dolfinx.mesh
 from dolfinx import fem
 
 from contactqvi.meshes import create_unit_interval
 from contactqvi.parameters import ParameterError
 from contactqvi.problems import thermoforming
 from contactqvi.qvi import BallProjection, build, create_mesh
+from contactqvi.qvi.build import exterior_facets
 
 
 def test_ball_projection_and_its_newton_derivative():
@@ -152,3 +154,14 @@ def test_semilinear_vi_converges_and_is_feasible(method):
     u = result.solution.x.array[:n]
     assert comm.allreduce(float(np.max(u)), op=MPI.MAX) <= 1.0  # u <= Phi0 = 1
     assert comm.allreduce(int(np.count_nonzero(result.evaluation.active))) > 0
+
+
+@pytest.mark.parametrize("dim, n, expected", [(1, 10, 2), (2, 4, 16)])
+def test_dirichlet_boundary_is_the_domain_boundary_on_any_partition(dim, n, expected):
+    # Without ghost cells, DOLFINx 0.9 counts the partition interface of a 1D mesh as exterior.
+    msh, _ = create_mesh(MPI.COMM_WORLD, dim, 1 / n)
+    facets = exterior_facets(msh)
+    owned = facets[facets < msh.topology.index_map(dim - 1).size_local]
+    assert msh.comm.allreduce(owned.size) == expected
+    x = dolfinx.mesh.compute_midpoints(msh, dim - 1, facets)[:, :dim]
+    assert np.all(np.any(np.isclose(x, 0.0) | np.isclose(x, 1.0), axis=1))

@@ -11,10 +11,11 @@ import dataclasses
 from mpi4py import MPI
 from petsc4py import PETSc
 
+import numpy as np
 import ufl
 
 import dolfinx.fem.petsc
-from dolfinx import fem
+from dolfinx import fem, la
 from dolfinx import mesh as dmesh
 
 from contactqvi.linalg import create_ksp, preset
@@ -29,7 +30,7 @@ from contactqvi.vi.moreau_yosida import PathFollowingMoreauYosida
 from contactqvi.vi.problem import ObstacleProblem
 from contactqvi.vi.solver import ObstacleSolver, check_obstacle_parameters
 
-__all__ = ["BUILD_PARAMETERS", "OUTER_METHODS", "QVISetup", "create_mesh", "build"]
+__all__ = ["BUILD_PARAMETERS", "OUTER_METHODS", "QVISetup", "create_mesh", "build", "exterior_facets"]
 
 OUTER_METHODS = ("alg1", "alg2", "c1", "c2", "c3")
 
@@ -61,6 +62,28 @@ class QVISetup(PETScOwner):
     def __post_init__(self) -> None:
         self._own(self.fmap)
         self._own(self.solver)
+
+
+def exterior_facets(msh: dmesh.Mesh) -> np.ndarray:
+    """Local indices of the facets that belong to exactly one cell of the whole mesh.
+
+    Counts each facet's owned cells on every rank and sums the counts over the
+    ranks sharing the facet. Needed because on a 1D mesh distributed without
+    ghost cells (:func:`contactqvi.meshes.cell_partitioner`), DOLFINx 0.9's
+    ``exterior_facet_indices`` also returns the vertices on the partition interface.
+    """
+    tdim = msh.topology.dim
+    msh.topology.create_entities(tdim - 1)
+    msh.topology.create_connectivity(tdim - 1, tdim)
+    facet_map, n_cells_owned = msh.topology.index_map(tdim - 1), msh.topology.index_map(tdim).size_local
+    f2c = msh.topology.connectivity(tdim - 1, tdim)
+    n_facets = facet_map.size_local + facet_map.num_ghosts
+    counts = la.vector(facet_map)
+    owned_cells = (f2c.array < n_cells_owned).astype(float)
+    counts.array[:] = np.add.reduceat(owned_cells, f2c.offsets[:n_facets])  # every facet has a cell here
+    counts.scatter_reverse(la.InsertMode.add)
+    counts.scatter_forward()
+    return np.flatnonzero(counts.array == 1).astype(np.int32)
 
 
 def _interpolate(V: fem.FunctionSpace, expr: ufl.core.expr.Expr, name: str) -> fem.Function:
@@ -145,9 +168,8 @@ def build(
     V = fem.functionspace(msh, ("Lagrange", 1))
     x = ufl.SpatialCoordinate(msh)
     fdim = msh.topology.dim - 1
-    msh.topology.create_connectivity(fdim, msh.topology.dim)
-    boundary = dmesh.exterior_facet_indices(msh.topology)
-    bcs = [fem.dirichletbc(PETSc.ScalarType(0.0), fem.locate_dofs_topological(V, fdim, boundary), V)]
+    boundary_dofs = fem.locate_dofs_topological(V, fdim, exterior_facets(msh))
+    bcs = [fem.dirichletbc(PETSc.ScalarType(0.0), boundary_dofs, V)]
     Phi0 = _interpolate(V, data.Phi0(x), "Phi0")
     obstacle = fem.Function(V, name="obstacle")
     obstacle.x.array[:] = Phi0.x.array

@@ -1,0 +1,158 @@
+"""Every solver object of the obstacle, QVI and SNES-VI families frees its PETSc objects.
+
+Two independent checks around build + solve + ``destroy()``:
+
+* a reference audit: every PETSc object created meanwhile that Python still
+  references (the stack is kept alive on purpose) must be destroyed, except the
+  vectors DOLFINx wraps around its own Function arrays;
+* PETSc's own count of created minus destroyed objects per type (``-log_view``'s
+  object table) must be back where it was once Python has dropped the stack. In
+  parallel, petsc4py hands an object that was never destroyed to PETSc's garbage
+  list instead of freeing it, so under ``mpirun`` this also catches objects that
+  were dropped without ``destroy()`` (serially those are freed on the spot).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import gc
+import pathlib
+import re
+import typing
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import numpy as np
+import pytest
+
+import dolfinx.la
+from dolfinx import fem
+
+from contactqvi.contact import FrictionLaw, build_contact_problem
+from contactqvi.contact.signorini_vi import solve_signorini_vi
+from contactqvi.meshes import create_contact_body, create_unit_square
+from contactqvi.problems import coulomb, thermoforming
+from contactqvi.problems.obstacle import radial_obstacle
+from contactqvi.qvi import build, create_mesh
+from contactqvi.vi import ObstacleProblem, ObstacleSolver
+
+
+def _live_objects() -> list[PETSc.Object]:
+    return [o for o in gc.get_objects() if isinstance(o, PETSc.Object) and o.handle]
+
+
+def _dolfinx_wrappers() -> set[int]:
+    """ids of the PETSc vectors DOLFINx created around Function arrays (freed with the Function)."""
+    vectors = (v for v in gc.get_objects() if isinstance(v, dolfinx.la.Vector))
+    return {id(v._petsc_x) for v in vectors if v._petsc_x is not None}
+
+
+def _object_balance(path: pathlib.Path) -> dict[str, int]:
+    """Objects created minus destroyed per PETSc type, from PETSc's log (all stages summed)."""
+    comm = MPI.COMM_WORLD
+    viewer = PETSc.Viewer().createASCII(str(path), comm=comm)
+    PETSc.Log.view(viewer)
+    viewer.destroy()
+    text = comm.bcast(path.read_text() if comm.rank == 0 else None, root=0)
+    balance: dict[str, int] = {}
+    for line in text.split("Object Type")[1].split("=" * 20)[0].splitlines():
+        match = re.match(r"^\s*(\S.*?)\s+(\d+)\s+(\d+)\s*$", line)
+        if match and match[1] != "Viewer":
+            balance[match[1]] = balance.get(match[1], 0) + int(match[2]) - int(match[3])
+    return balance
+
+
+def assert_frees_petsc_objects(run: typing.Callable[[], list], tmp: pathlib.Path) -> None:
+    """``run()`` builds and solves and returns its owners; their ``destroy()`` must free everything."""
+    PETSc.Log.begin()
+    gc.collect()
+    PETSc.garbage_cleanup(MPI.COMM_WORLD)
+    before = _live_objects()  # kept referenced: their ids stay unique
+    known = {id(o) for o in before}
+    balance = _object_balance(tmp / "before.log")
+    owners = run()
+    for owner in owners:
+        owner.destroy()
+    del owner
+    gc.collect()
+    wrappers = _dolfinx_wrappers()
+    alive = [o for o in _live_objects() if id(o) not in known and id(o) not in wrappers]
+    assert not alive, [(o.getType(), o.getOptionsPrefix()) for o in alive]
+    del owners, alive
+    gc.collect()
+    after = _object_balance(tmp / "after.log")
+    leaked = {name: n - balance.get(name, 0) for name, n in after.items() if n != balance.get(name, 0)}
+    assert not leaked, leaked
+
+
+def _radial_problem(n: int) -> ObstacleProblem:
+    data = radial_obstacle()
+    msh, tags = create_unit_square(MPI.COMM_WORLD, n)
+    V = fem.functionspace(msh, ("Lagrange", 1))
+    msh.topology.create_connectivity(1, 2)
+    g, theta = fem.Function(V), fem.Function(V)
+    g.interpolate(data.exact)
+    theta.interpolate(data.obstacle)
+    bc = fem.dirichletbc(g, fem.locate_dofs_topological(V, 1, tags.indices))
+    return ObstacleProblem(V, fem.Constant(msh, 0.0), theta, [bc])
+
+
+@pytest.mark.parametrize("s_solver", ["pfmy-pdas", "vinewtonrsls"])
+def test_obstacle_solver_frees_its_petsc_objects(s_solver, mpi_tmp_path):
+    def run():
+        problem = _radial_problem(8)
+        solver = ObstacleSolver(problem, {"s_solver": s_solver}, prefix=f"tlife_{s_solver}_")
+        assert solver.solve().converged and solver.solve().converged  # cold, then warm
+        return [solver, problem]
+
+    assert_frees_petsc_objects(run, mpi_tmp_path)
+
+
+@pytest.mark.parametrize("test, method", [(3, "alg2"), (3, "c2"), (3, "c3"), (4, "alg1"), (2, "alg2")])
+def test_qvi_stack_frees_its_petsc_objects(test, method, mpi_tmp_path):
+    def run():
+        data = thermoforming.make_test(test)
+        msh, _ = create_mesh(MPI.COMM_WORLD, data.dim, 0.1 if data.dim == 2 else 0.05)
+        outer = {"tol": 1e-10, "radius": 0.01} if test == 2 else {"tol": 1e-10}
+        setup = build(data, msh, method, outer)
+        assert setup.solver.solve(setup.initial).converged
+        return [setup]
+
+    assert_frees_petsc_objects(run, mpi_tmp_path)
+
+
+def test_signorini_snes_vi_frees_its_petsc_objects(mpi_tmp_path):
+    def run():
+        msh, tags = create_contact_body(MPI.COMM_WORLD, 1, coulomb.gap_function("d3"))
+        problem = build_contact_problem(msh, tags, coulomb.YOUNG, coulomb.POISSON, coulomb.tractions("L2"), 0.0)
+        problem = dataclasses.replace(problem, law=FrictionLaw())
+        u = problem.A.createVecRight()
+        assert solve_signorini_vi(problem, u, {"snes_rtol": 1e-12}, ksp="lu").converged
+        assert np.all(u.array.reshape(-1, 3)[problem.contact_blk, 2] >= 0.0)
+        # the caller's objects: PETSc caches a vector on A in the first SNES solve with it
+        return [u, problem]
+
+    assert_frees_petsc_objects(run, mpi_tmp_path)
+
+
+class _LeakyOwner:
+    """Forgets one of its two vectors in destroy()."""
+
+    def __init__(self):
+        self.kept, self.forgotten = PETSc.Vec().createMPI(4), PETSc.Vec().createMPI(4)
+
+    def destroy(self):
+        self.kept.destroy()
+
+
+def test_the_audit_catches_an_object_left_alive(mpi_tmp_path):
+    made = []
+
+    def run():
+        made.append(_LeakyOwner())
+        return list(made)
+
+    with pytest.raises(AssertionError, match="mpi|seq"):
+        assert_frees_petsc_objects(run, mpi_tmp_path)
+    made[0].forgotten.destroy()
