@@ -173,3 +173,24 @@ def test_demo_writes_contact_surface(mpi_tmp_path, load_demo):
         assert set(fields) == FIELDS and len(points) == sizes["p"] + sizes["nx2"] + 1
     assert not (out / "contact_states.png").exists()
 
+
+
+def test_tributary_patches_of_triangles():
+    """Triangles are cut into three quadrilaterals of a third of their area each (the lumped P1 area)."""
+    from contactqvi.contact.postprocess import _tributary_patches
+
+    points = np.array([[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 1.0, 0.0], [2.0, 1.0, 0.0]])
+    cells = np.array([[0, 1, 2], [1, 3, 2]])
+    state = np.array([State.STICKING, State.SLIDING, State.NO_CONTACT, State.SLIDING], dtype=float)
+    dataset = io.Dataset(points, cells, 69, {"contact_state": state, "f [m]": points[:, 0] + points[:, 1]})
+    patches = _tributary_patches(dataset)
+    assert patches.cells.shape == (6, 4) and len(patches.points) == 4 + 5 + 2
+    area = _patch_areas(patches)
+    assert np.allclose(area, 1.0 / 3.0, rtol=1e-14)  # each triangle has area 1
+    assert np.allclose(patches.point_data["f [m]"], patches.points[:, 0] + patches.points[:, 1], rtol=1e-14)
+    owner = patches.cells[:, 0]
+    assert np.array_equal(patches.cell_data["contact_state"], state[owner])
+    assert area @ patches.cell_data["is_sliding"] == pytest.approx(1.0)  # node 1: 2/3, node 3: 1/3
+    assert area @ patches.cell_data["is_sticking"] == pytest.approx(1.0 / 3.0)
+    normals = np.cross(*np.moveaxis(patches.points[patches.cells[:, [1, 3]]] - patches.points[owner][:, None], 1, 0))
+    assert np.all(normals[:, 2] > 0)  # oriented as the facets
