@@ -8,9 +8,10 @@ DOLFINx 0.9's own ``VTXWriter`` writes each rank's ghost points and ghost cells
 (at lev 4 of the paper's body on 2 ranks 1620 points and 1152 cells instead of
 1377 and 1024, and ParaView integrated 12.5 % too much volume). :func:`write_vtx`
 therefore gathers the owned points and cells on rank 0 (:func:`gather_dataset`)
-and writes one VTX block there (:class:`VTXDatasetWriter`), which also lets
-point data (P1) and cell data (DG0) share one file. XDMF from DOLFINx is written
-from owned entities only and needs no such care.
+and writes one VTX block there (:class:`VTXDatasetWriter`, with the ADIOS2
+Python module, Debian's serial build), which also lets point data (P1) and cell
+data (DG0) share one file and one file hold time steps. XDMF from DOLFINx is
+written from owned entities only and needs no such care.
 """
 
 from __future__ import annotations
@@ -155,7 +156,8 @@ class Dataset:
     Attributes:
         points: (N, 3) point coordinates.
         cells: (C, k) point indices of each cell, in VTK's vertex order.
-        cell_type: VTK cell type of all cells (e.g. 9 quadrilateral, 12 hexahedron).
+        cell_type: VTK cell type of all cells (DOLFINx's Lagrange types, e.g. 72
+            hexahedron, 70 quadrilateral, or the linear 9 quadrilateral).
         point_data: name -> (N,) or (N, c) array.
         cell_data: name -> (C,) or (C, c) array.
     """
@@ -225,20 +227,19 @@ def gather_dataset(
     cells = cells.reshape(n_cells, -1)
     gdim = msh.geometry.dim
 
-    n_local = x_map.size_local + x_map.num_ghosts
-    node_dof = np.zeros(n_local, dtype=np.int32)
-    local: dict[str, tuple[str, np.ndarray]] = {}
+    node_dof = np.zeros(x_map.size_local + x_map.num_ghosts, dtype=np.int32)
+    local: dict[str, np.ndarray] = {}
     for name, f in point_data.items():
         V = f.function_space
         node_dof[msh.geometry.dofmap.ravel()] = V.dofmap.list.ravel()  # same vertex order in both maps
         bs = V.dofmap.index_map_bs
-        local[name] = ("point", _vtk_components(f.x.array.reshape(-1, bs)[node_dof[:n_nodes]], bs, gdim))
+        local[name] = _vtk_components(f.x.array.reshape(-1, bs)[node_dof[:n_nodes]], bs, gdim)
     for name, f in cell_data.items():
         V = f.function_space
         bs = V.dofmap.index_map_bs
-        local[name] = ("cell", _vtk_components(f.x.array.reshape(-1, bs)[V.dofmap.list[:n_cells, 0]], bs, gdim))
+        local[name] = _vtk_components(f.x.array.reshape(-1, bs)[V.dofmap.list[:n_cells, 0]], bs, gdim)
 
-    pieces = comm.gather((x[:n_nodes], cells, {k: v for k, (_, v) in local.items()}), root=0)
+    pieces = comm.gather((x[:n_nodes], cells, local), root=0)
     if comm.rank != 0:
         return None
 
@@ -378,10 +379,10 @@ def read_vtx(path: str | os.PathLike, step: int = 0) -> Dataset:
     with adios2.FileReader(str(path)) as reader:
         schema = reader.read_attribute_string("vtk.xml")
         schema = schema if isinstance(schema, str) else schema[0]
-        sections = {
-            kind: re.findall(r'<DataArray Name="([^"]*)"\s*/>', (re.search(f"<{kind}>(.*?)</{kind}>", schema, re.S) or [""])[0])
-            for kind in ("PointData", "CellData")
-        }
+        sections = {}
+        for kind in ("PointData", "CellData"):
+            section = re.search(f"<{kind}>(.*?)</{kind}>", schema, re.S)
+            sections[kind] = re.findall(r'<DataArray Name="([^"]*)"\s*/>', section[1] if section else "")
 
         def blocks(name: str) -> list[np.ndarray]:
             n_blocks = len(reader.all_blocks_info(name)[step])
@@ -389,7 +390,8 @@ def read_vtx(path: str | os.PathLike, step: int = 0) -> Dataset:
 
         nodes = [int(n) for n in np.atleast_1d(reader.read("NumberOfNodes", step_selection=[step, 1]))]
         offsets = np.concatenate([[0], np.cumsum(nodes)[:-1]])
-        connectivity = [c.reshape(-1, c.reshape(-1)[0] + 1)[:, 1:] + offset for c, offset in zip(blocks("connectivity"), offsets)]
+        connectivity = [c.reshape(-1, c.reshape(-1)[0] + 1)[:, 1:] + offset
+                        for c, offset in zip(blocks("connectivity"), offsets)]
         types = int(np.atleast_1d(reader.read("types", step_selection=[step, 1]))[0])
         dataset = Dataset(
             points=np.concatenate(blocks("geometry")).reshape(-1, 3),
