@@ -3,10 +3,12 @@
 :func:`build_problem` turns a :class:`~contactqvi.case.ContactCase` into a
 :class:`~contactqvi.contact.problem.ContactProblem`; :func:`run_case` solves its
 load path with the SCD semismooth* Newton method and writes, per step, the result
-files of :func:`~contactqvi.contact.output.write_contact_results` to
-``OUTPUT/step_NNN/`` and an updated ``OUTPUT/summary.json`` (status, Newton and
-Krylov counts, contact force, contact/sticking/sliding areas per step), so
-everything up to the last converged step stays readable if a later step fails.
+results of every converged step as one time step (time = step number) of
+``OUTPUT/body.bp`` (displacement, stress, von Mises) and ``OUTPUT/contact_surface.bp``
+(:class:`~contactqvi.contact.postprocess.ContactResultsWriter`), and rewrites
+``OUTPUT/summary.json`` after each step (status, Newton and Krylov counts, contact
+force, reactions, equilibrium error, contact/sticking/sliding areas), so everything
+up to the last converged step stays readable if a later step fails.
 ``OUTPUT/solution.npz`` holds ``x`` and ``u`` of the last converged step.
 """
 
@@ -14,7 +16,6 @@ from __future__ import annotations
 
 import logging
 import pathlib
-import shutil
 import typing
 
 from mpi4py import MPI
@@ -25,7 +26,7 @@ from dolfinx import mesh as dmesh
 from contactqvi import io
 from contactqvi.case import ContactCase, check_groups
 from contactqvi.contact.load_path import LoadStep, solve_load_path
-from contactqvi.contact.output import write_contact_results
+from contactqvi.contact.postprocess import ContactResultsWriter, plot_contact_states
 from contactqvi.contact.problem import ContactProblem, build_contact_problem
 from contactqvi.contact.scd_newton import SCDNewtonResult
 from contactqvi.meshes import create_contact_body, read_gmsh
@@ -74,8 +75,12 @@ def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
 
 
 def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
-             plot: bool = True) -> tuple[list[SCDNewtonResult], int]:
+             plot: bool = True, start: str = "rest") -> tuple[list[SCDNewtonResult], int]:
     """Solve the case's load path and write the results to ``output``.
+
+    The first step starts from the body at rest (``start = "rest"``, u~ = 0) or, as in
+    seed 000, Sect. 7, from u = 0 in the shifted variables (``"contact"``: every
+    contact node on the obstacle).
 
     Returns the step results and the exit code (0 all steps converged, 1 a step did not).
     """
@@ -84,35 +89,39 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
         if not opts.hasName(PREFIX + name):
             opts[PREFIX + name] = "" if value is True else value
     problem = build_problem(case, comm)
-    out = io.prepare_output_dir(comm, output)
     logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks",
                 problem.n_contact, problem.n_free, len(case.steps), comm.size)
     summary: dict[str, typing.Any] = {
         "problem": "contact case", "case": case.to_dict(), "mpi_size": comm.size,
         "p": problem.n_contact, "n": problem.n_free, "steps": [],
     }
-
-    def record(index: int, step: LoadStep, u: PETSc.Vec, result: SCDNewtonResult) -> None:
-        entry = {"step": index + 1, "load": step.load, "translation": list(step.translation), **result.summary()}
-        if result.converged:
-            entry.update(write_contact_results(out / f"step_{index + 1:03d}", problem, u, result, plot=plot))
-            if comm.rank == 0:
-                shutil.copyfile(out / f"step_{index + 1:03d}" / "solution.npz", out / ".solution.npz.partial")
-                (out / ".solution.npz.partial").replace(out / "solution.npz")
-        summary["steps"].append(entry)
-        summary["status"] = str(result.status)
-        io.write_summary(comm, out / "summary.json", summary)
-        logger.info("step %d: %s, %d Newton steps, %d Krylov; contact force %s N, contact area %.4g m^2",
-                    index + 1, result.status, result.iterations, result.inner_iterations,
-                    _vector_text(entry.get("contact_force")), entry.get("contact_area", float("nan")))
-
     steps = [LoadStep(s.load, s.translation) for s in case.steps]
     u = problem.A.createVecRight()
-    try:
-        results = solve_load_path(problem, steps, u, case.solver, prefix=PREFIX, on_step=record)
-    finally:
-        u.destroy()
-        problem.destroy()
+    if start == "rest":
+        problem.set_step(steps[0].load, steps[0].translation)
+        problem.shift.copy(u)  # u~ = 0
+    with ContactResultsWriter(output, comm) as writer:
+
+        def record(index: int, step: LoadStep, u: PETSc.Vec, result: SCDNewtonResult) -> None:
+            entry = {"step": index + 1, "load": step.load, "translation": list(step.translation), **result.summary()}
+            if result.converged:
+                entry.update(writer.write(problem, u, result, t=index + 1))
+                io.write_solution_npz(writer.out / "solution.npz", writer.last[0])
+            summary["steps"].append(entry)
+            summary["status"] = str(result.status)
+            io.write_summary(comm, writer.out / "summary.json", summary)
+            logger.info("step %d: %s, %d Newton steps, %d Krylov; contact force %s N, contact area %.4g m^2",
+                        index + 1, result.status, result.iterations, result.inner_iterations,
+                        _vector_text(entry.get("contact_force")), entry.get("contact_area", float("nan")))
+
+        try:
+            results = solve_load_path(problem, steps, u, case.solver, prefix=PREFIX, on_step=record)
+        finally:
+            u.destroy()
+            problem.destroy()
+        if plot and writer.last is not None:
+            summary["plot"] = plot_contact_states(writer.out / "contact_states.png", writer.last[1])
+            io.write_summary(comm, writer.out / "summary.json", summary)
     return results, 0 if results and results[-1].converged and len(results) == len(steps) else 1
 
 

@@ -25,7 +25,7 @@ from petsc4py import PETSc
 
 from contactqvi import cli, io
 from contactqvi.contact.driver import solve_nested
-from contactqvi.contact.output import write_contact_results
+from contactqvi.contact.postprocess import write_contact_results
 from contactqvi.contact.scd_newton import PARAMETERS
 from contactqvi.elasticity import lame_parameters
 from contactqvi.parameters import ParameterError, require

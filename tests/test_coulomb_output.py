@@ -12,7 +12,6 @@ import pytest
 from contactqvi import io, meshes
 from contactqvi.contact import LoadStep, State, build_contact_problem, solve_load_path
 from contactqvi.contact.postprocess import STATE_NAMES, UNITS, contact_fields, write_contact_results
-from contactqvi.postprocess import ElasticBody
 from contactqvi.problems import coulomb as data
 
 LEV = 3
@@ -23,14 +22,13 @@ STICKING = (State.STICKING, State.WEAK_STICKING)
 
 @pytest.fixture(scope="module")
 def solution():
-    """Converged d1/L1 problem at lev 3 (exact inner solves), u, result and the body data."""
+    """Converged d1/L1 problem at lev 3 (exact inner solves), u and result."""
     msh, tags = meshes.create_contact_body(MPI.COMM_WORLD, LEV, data.gap_function("d1"))
     problem = build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions("L1"), data.FRICTION)
     u = problem.A.createVecRight()
     (result,) = solve_load_path(problem, [LoadStep()], u, {"pc": "lu"}, prefix="surface_")
     assert result.converged
-    body = ElasticBody(data.YOUNG, data.POISSON, tags, ("dirichlet",), data.tractions("L1"))
-    return problem, u, result, body
+    return problem, u, result
 
 
 def _rows(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
@@ -45,7 +43,7 @@ def _rows(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
 
 def test_contact_surface_fields(solution, mpi_tmp_path):
     """The surface fields (XDMF, read with meshio) hold each node's state, forces, slip and gap."""
-    problem, u, result, _ = solution
+    problem, u, result = solution
     comm = problem.comm
     surface = contact_fields(problem, u, result)
     io.write_xdmf(mpi_tmp_path / "contact_surface.xdmf", surface.mesh, surface.functions)
@@ -118,9 +116,9 @@ def _box_volumes(dataset: io.Dataset) -> np.ndarray:
 
 def test_write_contact_results(solution, mpi_tmp_path):
     """Files and summary: the same counts on any number of ranks; integrals match the summary."""
-    problem, u, result, body = solution
+    problem, u, result = solution
     comm = problem.comm
-    summary = write_contact_results(mpi_tmp_path / "run", problem, u, result, body, plot=True)
+    summary = write_contact_results(mpi_tmp_path / "run", problem, u, result, plot=True)
     assert summary["files"] == ["body.bp", "contact_surface.bp", "solution.npz", "contact_states.png"]
     assert summary["equilibrium_error"] < 1e-8
     assert set(summary["units"]) <= set(UNITS) and summary["units"]["contact_force"] == "N"
@@ -163,16 +161,13 @@ def test_demo_writes_contact_surface(mpi_tmp_path, load_demo):
     out = mpi_tmp_path / "run"
     assert load_demo("coulomb3d").main(["--lev", "1", "--output", str(out), "--no-plot"]) == 0
     sizes = meshes.contact_body_sizes(1)
-    if (out / "contact_surface.bp").exists():  # write_contact_results
-        if MPI.COMM_WORLD.rank == 0:
-            surface = io.read_vtx(out / "contact_surface.bp")
-            assert surface.cells.shape == (4 * sizes["nx1"] * sizes["nx2"], 4)
-            assert "contact_state" in surface.cell_data
-    else:  # the XDMF files written before it
-        points, fields = io.read_xdmf_point_data(out / "contact_surface.xdmf")
-        assert set(fields) == FIELDS and len(points) == sizes["p"] + sizes["nx2"] + 1
+    if MPI.COMM_WORLD.rank == 0:
+        surface = io.read_vtx(out / "contact_surface.bp")
+        assert surface.cells.shape == (4 * sizes["nx1"] * sizes["nx2"], 4)
+        assert "contact_state" in surface.cell_data
+        summary = json.loads((out / "summary.json").read_text())
+        assert summary["equilibrium_error"] < 1e-8 and summary["units"]["contact_force"] == "N"
     assert not (out / "contact_states.png").exists()
-
 
 
 def test_tributary_patches_of_triangles():

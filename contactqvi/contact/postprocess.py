@@ -53,7 +53,7 @@ from contactqvi.contact.load_path import contact_resultants
 from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult
-from contactqvi.postprocess import ElasticBody, applied_force, reaction_forces, stress_fields
+from contactqvi.postprocess import applied_force, reaction_forces, stress_fields
 
 __all__ = [
     "STATE_NAMES",
@@ -307,7 +307,6 @@ def contact_summary(
     problem: ContactProblem,
     u: PETSc.Vec,
     result: SCDNewtonResult,
-    body: ElasticBody,
     von_mises: fem.Function | None = None,
 ) -> dict[str, typing.Any]:
     """Force balance, areas and extreme values of a solved step, with ``units``. Collective.
@@ -315,13 +314,12 @@ def contact_summary(
     Args:
         problem, u, result: the solved problem at its current step, its solution
             (shifted displacements) and the solver's result.
-        body: material, supports and loads, for the reactions.
         von_mises: the von Mises field (DG0) if computed, for its maximum.
     """
     comm = problem.comm
     displacement = problem.physical_displacement(u, fem.Function(problem.V))
-    reactions = reaction_forces(displacement, body, problem.load_factor, problem.dirichlet_dofs_loc)
-    applied = applied_force(problem.V.mesh, body, problem.load_factor)
+    reactions = reaction_forces(displacement, problem.body, problem.load_factor, problem.dirichlet_dofs_loc)
+    applied = applied_force(problem.V.mesh, problem.body, problem.load_factor)
     resultants = contact_resultants(problem, result)
     contact_force = np.asarray(resultants["contact_force"])
     total = sum(reactions.values(), np.zeros(3)) + contact_force + applied
@@ -356,12 +354,10 @@ class ContactResultsWriter:
 
     Args:
         out: output directory (created if needed).
-        body: material, supports and loads (stress and reactions).
     """
 
-    def __init__(self, out: str | os.PathLike, body: ElasticBody, comm: MPI.Comm = MPI.COMM_WORLD):
+    def __init__(self, out: str | os.PathLike, comm: MPI.Comm = MPI.COMM_WORLD):
         self.out = io.prepare_output_dir(comm, out)
-        self.body = body
         self.comm = comm
         self._body_file = io.VTXDatasetWriter(comm, self.out / "body.bp")
         self._surface_file = io.VTXDatasetWriter(comm, self.out / "contact_surface.bp")
@@ -374,7 +370,7 @@ class ContactResultsWriter:
         """Write one step; returns its :func:`contact_summary` entries."""
         t = float(self._steps if t is None else t)
         displacement = problem.physical_displacement(u, fem.Function(problem.V, name="displacement"))
-        stress, von_mises = stress_fields(displacement, self.body.young, self.body.poisson)
+        stress, von_mises = stress_fields(displacement, problem.body.young, problem.body.poisson)
         msh = problem.V.mesh
         volume = io.gather_dataset(
             msh, {_labelled("displacement"): displacement},
@@ -385,7 +381,7 @@ class ContactResultsWriter:
         self._surface_file.write(contact_surface_dataset(surface), t)
         self._steps += 1
         self.last = (displacement, surface)
-        return contact_summary(problem, u, result, self.body, von_mises)
+        return contact_summary(problem, u, result, von_mises)
 
     def close(self, ok: bool = True) -> None:
         """Finish both files (collective); ``ok=False`` discards them."""
@@ -404,7 +400,6 @@ def write_contact_results(
     problem: ContactProblem,
     u: PETSc.Vec,
     result: SCDNewtonResult,
-    body: ElasticBody,
     plot: bool = True,
 ) -> dict[str, typing.Any]:
     """Write ``body.bp``, ``contact_surface.bp``, ``solution.npz`` and ``contact_states.png``.
@@ -416,7 +411,7 @@ def write_contact_results(
         The :func:`contact_summary` entries, with ``files`` (names written) and
         ``plot`` (whether the PNG was made) added.
     """
-    with ContactResultsWriter(out, body, problem.comm) as writer:
+    with ContactResultsWriter(out, problem.comm) as writer:
         summary = writer.write(problem, u, result)
     displacement, surface = writer.last
     io.write_solution_npz(writer.out / "solution.npz", displacement)

@@ -41,6 +41,7 @@ from contactqvi.elasticity import elasticity_forms, rigid_motions_nullspace
 from contactqvi.meshes import boundary_facets
 from contactqvi.obstacles import Obstacle, Plane
 from contactqvi.parameters import require, require_positive
+from contactqvi.postprocess import ElasticBody
 
 __all__ = ["ContactProblem", "build_contact_problem"]
 
@@ -66,6 +67,7 @@ class ContactProblem:
         frames: (m, 3, 3) frame of each owned contact node; rows t1, t2, n in global
             coordinates, fixed in the reference configuration.
         obstacle: the rigid obstacle in its initial position.
+        body: material, supports and loads at load factor 1 (for stresses and reactions).
         rotation: T (frame components to global), or None where every frame is (e1, e2, e3).
         dirichlet_dofs_loc: local unrolled indices of Dirichlet dofs (incl. ghosts).
         n_contact: global number p of contact nodes.
@@ -84,6 +86,7 @@ class ContactProblem:
     law: FrictionLaw
     frames: np.ndarray
     obstacle: Obstacle
+    body: ElasticBody
     rotation: PETSc.Mat | None
     dirichlet_dofs_loc: np.ndarray
     n_contact: int
@@ -176,8 +179,9 @@ def build_contact_problem(
 ) -> ContactProblem:
     """Assemble the GE (6.3) for a body against a rigid obstacle, at load factor 1.
 
-    The contact nodes are the nodes of the ``contact`` boundary without a Dirichlet
-    condition (their number is p of Table 2).
+    The contact nodes are the nodes of the ``contact`` boundary that are not clamped
+    (their number is p of Table 2); a node with some prescribed components (a roller
+    on a symmetry plane) stays a contact node if those components are tangential.
 
     Args:
         msh, facet_tags: mesh with named boundaries.
@@ -215,11 +219,13 @@ def build_contact_problem(
     n_owned = V.dofmap.index_map.size_local
     contact_facets = boundary_facets(facet_tags, contact)
     contact_blk = fem.locate_dofs_topological(V, msh.topology.dim - 1, contact_facets)
-    contact_blk = np.setdiff1d(contact_blk, dirichlet_dofs_loc // 3)  # no contact law on constrained nodes
-    contact_blk = contact_blk[contact_blk < n_owned].astype(np.int32)
+    constrained = np.zeros((V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts) * 3, dtype=bool)
+    constrained[dirichlet_dofs_loc] = True
+    constrained = constrained.reshape(-1, 3)
+    contact_blk = contact_blk[(contact_blk < n_owned) & ~constrained[contact_blk].all(axis=1)].astype(np.int32)
     x = V.tabulate_dof_coordinates()[contact_blk]
     _check_penetration(msh, obstacle, x)
-    frames = obstacle.frames(x)
+    frames = _align_frames(obstacle.frames(x), constrained[contact_blk], msh.comm)
     rotation = _nodal_rotation(A, contact_blk, frames)
     if rotation is not None:
         A_global, A = A, A.PtAP(rotation)
@@ -235,6 +241,8 @@ def build_contact_problem(
         V=V, A=A, applied=applied, load=applied.duplicate(), shift=applied.duplicate(),
         contact_blk=contact_blk, contact_facets=contact_facets, contact_area=contact_area,
         law=FrictionLaw(float(friction), float(slip_bound) * contact_area), frames=frames, obstacle=obstacle,
+        body=ElasticBody(young, poisson, facet_tags, tuple(dict.fromkeys([*clamped, *(displacements or {})])),
+                         dict(tractions), body_force),
         rotation=rotation, dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32),
         n_contact=comm.allreduce(len(contact_blk), op=MPI.SUM),
         n_free=comm.allreduce(3 * n_owned - n_fixed_owned, op=MPI.SUM),
@@ -260,6 +268,27 @@ def _dirichlet_conditions(
             dofs = fem.locate_dofs_topological(V.sub(component), fdim, facets)
             bcs.append(fem.dirichletbc(PETSc.ScalarType(value), dofs, V.sub(component)))
     return bcs
+
+
+def _align_frames(frames: np.ndarray, constrained: np.ndarray, comm: MPI.Comm) -> np.ndarray:
+    """Frames whose t1 is the first prescribed global axis at partly constrained contact nodes.
+
+    A prescribed displacement component on a contact node (a roller on a symmetry
+    plane through the contact) must lie in the tangent plane; with t1 = e_c,
+    t2 = n x e_c it is a frame component, so its Dirichlet row stays an identity row
+    in nodal frames and the nodal law acts on the free components.
+    """
+    partly = np.flatnonzero(constrained.any(axis=1))
+    normals = frames[partly, 2]
+    tangential = np.abs(normals[constrained[partly]] if len(partly) else np.empty(0)) <= 1e-10
+    bad = comm.allreduce(int(np.count_nonzero(~tangential)), op=MPI.SUM)
+    require(bad == 0, "boundary.displacement", f"{bad} contact nodes have a prescribed displacement component "
+            "along the obstacle's normal; only tangential components can be prescribed on the contact surface")
+    frames = frames.copy()
+    axis = np.eye(3)[np.argmax(constrained[partly], axis=1)]
+    frames[partly, 0] = axis
+    frames[partly, 1] = np.cross(normals, axis)
+    return frames
 
 
 def _check_penetration(msh: dmesh.Mesh, obstacle: Obstacle, x: np.ndarray) -> None:
