@@ -18,7 +18,9 @@ sets A-, A+, I of (3.3) are nodewise, and ||v||_{L2(Gamma_f)} is evaluated
 exactly as sqrt(sum_i m_i v_i^2) for nodal boundary vectors.
 
 Nodes on Gamma_f that are also Dirichlet nodes (the corners of Example 1) carry
-no multiplier: y = 0 there.
+no multiplier: y = 0 there. The paper's finite-difference scheme has the same form
+(:class:`contactqvi.problems.stadler_fd.PaperFiniteDifferences` replaces K, F and m),
+so every solver runs on both.
 """
 
 from __future__ import annotations
