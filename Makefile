@@ -12,7 +12,8 @@ OUT     ?= results
 ifeq ($(shell id -u),0)
 MPIENV := OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 endif
-MPIENV  += OMPI_MCA_rmaps_base_oversubscribe=1 OMPI_MCA_btl=self,sm
+# More ranks than cores: OpenMPI 4 reads OMPI_MCA_rmaps_base_oversubscribe, OpenMPI 5 (PRRTE) the PRTE_ variable.
+MPIENV  += OMPI_MCA_rmaps_base_oversubscribe=1 PRTE_MCA_rmaps_default_mapping_policy=:oversubscribe OMPI_MCA_btl=self,sm
 MPIRUN  := $(MPIENV) mpirun -n $(NP)
 
 .PHONY: deps venv demo test test-serial test-mpi benchmarks container-check paraview clean
