@@ -56,6 +56,7 @@ container-check:
 PV_OUT ?= $(OUT)/pv
 PV_IMAGES ?= docs/images
 paraview: $(PY)
+	rm -rf $(PV_OUT)
 	$(MPIRUN) $(PY) demos/coulomb3d.py --lev 4 --geometry d3 --load L2 --output $(PV_OUT)
 	bash scripts/paraview/run.sh $(PV_OUT) $(PV_IMAGES)
 
