@@ -46,11 +46,8 @@ DEMO = Parameters(
 
 def parse(argv: list[str] | None) -> tuple[str, dict, dict, dict]:
     """Output directory and the checked problem, demo and solver parameters; raises ParameterError."""
-    parser = make_parser(__doc__.split("\n")[0], "results/simplified_friction")
-    parser.epilog = (
-        "Unknown options starting with '-' are passed to PETSc, e.g. -friction_ksp_view (the linear solver "
-        "of PDAS/SS/ALM) or -uzawa_ksp_view."
-    )
+    petsc_example = "-friction_ksp_view (PDAS/SS/ALM) or -uzawa_ksp_view"
+    parser = make_parser(__doc__.split("\n")[0], "results/simplified_friction", petsc_example)
     stadler.PARAMETERS.add_arguments(parser.add_argument_group("problem"))
     DEMO.add_arguments(parser)
     methods.add_arguments(parser)
