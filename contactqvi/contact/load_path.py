@@ -87,6 +87,7 @@ def solve_load_path(
                 previous.waxpy(-1.0, problem.shift, u)  # u~ of the last step, nodal frames
                 problem.set_step(step.load, step.translation, previous)
                 u.waxpy(1.0, problem.shift, previous)
+                u.array.reshape(-1, 3)[problem.contact_blk, :2] = 0.0  # predictor: no slip increment
             else:
                 problem.set_step(step.load, step.translation)
             logger.info("step %d: load factor %g, obstacle translation %s m", index + 1, step.load,

@@ -1,7 +1,8 @@
 """Nodal friction laws of seed 000: resolvent, contact states and SCD subspace bases.
 
 All functions act on arrays of shape (m, 3) holding one 3-vector per contact node
-(components: two tangential, then normal = e3), vectorised over the nodes.
+(components: two tangential, then normal, in the node's frame), vectorised over
+the nodes; gamma is one number or one per node (a diagonal Gamma in (6.17)).
 
 Notation (seed 000, Sect. 6): the nodal multifunction of Coulomb friction is
     Q~(v) = {(-F theta dd||v12||, theta) : theta in N_{R+}(v3)},
@@ -85,12 +86,16 @@ class Tangential(enum.IntEnum):
     WEAK_FREE = 3  # v12 = 0, g = 0, b = 0: rge(I, 0) (the graph of 0 * dd||.|| is R^2 x {0})
 
 
-def resolvent(w: np.ndarray, gamma: float, law: FrictionLaw) -> tuple[np.ndarray, np.ndarray]:
+def _per_node(gamma: float | np.ndarray, m: int) -> np.ndarray:
+    return np.broadcast_to(np.asarray(gamma, dtype=float), (m,))
+
+
+def resolvent(w: np.ndarray, gamma: float | np.ndarray, law: FrictionLaw) -> tuple[np.ndarray, np.ndarray]:
     """(gamma I + Q~)^{-1}(w) in closed form (Prop. 6.4, (6.6)-(6.8)).
 
     Args:
         w: (m, 3) arguments.
-        gamma: gamma > 0.
+        gamma: gamma > 0, one or per node.
         law: the slip bound.
 
     Returns:
@@ -98,6 +103,7 @@ def resolvent(w: np.ndarray, gamma: float, law: FrictionLaw) -> tuple[np.ndarray
         (v, z) lies on the graph of Q~.
     """
     v = np.empty_like(w)
+    gamma = _per_node(gamma, len(w))
     theta = np.minimum(w[:, 2], 0.0)  # (6.8)
     v[:, 2] = np.maximum(w[:, 2], 0.0) / gamma
     w12 = w[:, :2]
@@ -105,9 +111,9 @@ def resolvent(w: np.ndarray, gamma: float, law: FrictionLaw) -> tuple[np.ndarray
     bound = np.broadcast_to(law.bound(theta), norm_w12.shape)
     slides = norm_w12 > bound
     shrink = np.zeros_like(norm_w12)
-    shrink[slides] = (1.0 - bound[slides] / norm_w12[slides]) / gamma
+    shrink[slides] = (1.0 - bound[slides] / norm_w12[slides]) / gamma[slides]
     v[:, :2] = shrink[:, None] * w12  # (6.7): block soft thresholding
-    z = w - gamma * v
+    z = w - gamma[:, None] * v
     z[:, 2] = theta
     return v, z
 
@@ -120,7 +126,9 @@ def lipschitz_constant(gamma: float, law: FrictionLaw) -> float:
     return float(np.sqrt(2.0 * (1.0 + law.friction**2)) / gamma)
 
 
-def classify(v: np.ndarray, z: np.ndarray, gamma: float, law: FrictionLaw, tol: float) -> tuple[np.ndarray, np.ndarray]:
+def classify(
+    v: np.ndarray, z: np.ndarray, gamma: float | np.ndarray, law: FrictionLaw, tol: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Normal and tangential kind of each graph point (v, z) of Q~.
 
     A quantity counts as zero when its magnitude is <= ``tol``. ``tol`` is a force:
@@ -193,7 +201,8 @@ def contact_states(normal: np.ndarray, tangential: np.ndarray) -> np.ndarray:
 
 
 def scd_adjoint_blocks(
-    v: np.ndarray, z: np.ndarray, normal: np.ndarray, tangential: np.ndarray, gamma: float, law: FrictionLaw
+    v: np.ndarray, z: np.ndarray, normal: np.ndarray, tangential: np.ndarray, gamma: float | np.ndarray,
+    law: FrictionLaw,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Transposed bases (W*^T, U*^T) of an element rge(W*, U*) of S*Q~(v, z).
 
@@ -224,22 +233,24 @@ def scd_adjoint_blocks(
         ``(Wt, Ut)``, each (m, 3, 3): the blocks W*^T and U*^T.
     """
     m = len(v)
+    gamma = _per_node(gamma, m)
     Wt = np.zeros((m, 3, 3))
     Ut = np.zeros((m, 3, 3))
     contact = normal == Normal.CONTACT
     Wt[~contact, 2, 2] = 1.0
-    Ut[contact, 2, 2] = gamma
+    Ut[contact, 2, 2] = gamma[contact]
     Wt[tangential == Tangential.WEAK_FREE, :2, :2] = np.eye(2)
-    Ut[np.isin(tangential, (Tangential.STICKING, Tangential.WEAK_STICKING)), :2, :2] = gamma * np.eye(2)
+    stick = np.isin(tangential, (Tangential.STICKING, Tangential.WEAK_STICKING))
+    Ut[stick, :2, :2] = gamma[stick, None, None] * np.eye(2)
     slide = tangential == Tangential.SLIDING
     v12 = v[slide, :2]
     norm_v12 = np.linalg.norm(v12, axis=1)
     t = v12 / norm_v12[:, None]
     P = t[:, :, None] * t[:, None, :]
     bound = np.broadcast_to(law.bound(z[:, 2]), (m,))[slide]
-    beta = bound / (gamma * norm_v12 + bound)
+    beta = bound / (gamma[slide] * norm_v12 + bound)
     I2 = np.eye(2)
     Wt[slide, :2, :2] = (1.0 - beta)[:, None, None] * I2 + beta[:, None, None] * P
-    Ut[slide, :2, :2] = (gamma * beta)[:, None, None] * (I2 - P)
+    Ut[slide, :2, :2] = (gamma[slide] * beta)[:, None, None] * (I2 - P)
     Wt[slide & contact, :2, 2] = law.friction * t[contact[slide]]  # (W*^T)_{12,3} = F t
     return Wt, Ut
