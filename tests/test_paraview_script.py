@@ -55,3 +55,12 @@ def test_demo_output_has_the_fields(pv_views, load_demo, mpi_tmp_path):
         for field, (dataset, required, *_) in pv_views.FIELDS.items():
             if dataset == role and required:
                 assert any(pv_views.field_matches(n, field) for n in names), (field, names)
+
+
+def test_state_names(pv_views):
+    """The legend uses the contact-state names of the package's own output."""
+    from contactqvi.contact.postprocess import STATE_NAMES
+
+    assert {int(state): name for state, name in STATE_NAMES.items()} == {
+        state: label for state, (label, _) in pv_views.CONTACT_STATES.items()
+    }

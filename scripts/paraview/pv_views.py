@@ -59,15 +59,17 @@ FIELDS = {
     "contact_state": ("surface", True, "contact state", "", "", 1.0),
 }
 
-#: Values of ``contact_state`` (contactqvi.contact.nodal.State) -> (label, RGB).
+#: Values of ``contact_state`` (contactqvi.contact.nodal.State) -> (label, RGB): the
+#: names of contactqvi.contact.postprocess.STATE_NAMES and the (colour-blind safe,
+#: Okabe-Ito) colours of its contact_states.png.
 CONTACT_STATES = {
-    0: ("no contact", (0.80, 0.80, 0.80)),
-    1: ("sliding", (0.84, 0.15, 0.16)),
-    2: ("sticking", (0.12, 0.47, 0.71)),
-    3: ("weak contact, sliding", (1.00, 0.60, 0.20)),
-    4: ("weak sticking", (0.55, 0.80, 0.95)),
-    5: ("weak contact, sticking", (0.58, 0.40, 0.74)),
-    6: ("separated sticking (Tresca)", (0.17, 0.63, 0.17)),
+    0: ("no contact", (0.851, 0.851, 0.851)),  # #d9d9d9
+    1: ("sliding", (0.902, 0.624, 0.0)),  # #e69f00
+    2: ("sticking", (0.0, 0.447, 0.698)),  # #0072b2
+    3: ("grazing, sliding", (0.941, 0.894, 0.259)),  # #f0e442
+    4: ("sticking on the cone boundary", (0.337, 0.706, 0.914)),  # #56b4e9
+    5: ("grazing, at rest", (0.8, 0.475, 0.655)),  # #cc79a7
+    6: ("separated, sticking (Tresca)", (0.0, 0.62, 0.451)),  # #009e73
 }
 
 #: The states always shown in the legend (others only when they occur).
