@@ -5,9 +5,9 @@ Step k scales tractions and body force by its load factor and moves the obstacle
 rigidly to its translation c_k; friction acts on the slip increment since step
 k - 1 relative to the obstacle's tangential motion c_k - c_{k-1}
 (:meth:`~contactqvi.contact.problem.ContactProblem.set_step`). Each step is solved
-by the SCD semismooth* Newton method from the previous step's solution; the first
-starts from u = 0 in the shifted variables (every contact node on the obstacle),
-the initial guess of seed 000, Sect. 7.
+by the SCD semismooth* Newton method from the previous step's solution, with the
+nodes that touched the obstacle moved along with it (no slip increment); the
+first step starts from the given guess.
 """
 
 from __future__ import annotations
@@ -87,7 +87,8 @@ def solve_load_path(
                 previous.waxpy(-1.0, problem.shift, u)  # u~ of the last step, nodal frames
                 problem.set_step(step.load, step.translation, previous)
                 u.waxpy(1.0, problem.shift, previous)
-                u.array.reshape(-1, 3)[problem.contact_blk, :2] = 0.0  # predictor: no slip increment
+                touching = np.isin(results[-1].states, (State.SLIDING, State.STICKING, State.WEAK_STICKING))
+                u.array.reshape(-1, 3)[problem.contact_blk[touching], :2] = 0.0  # predictor: they stick
             else:
                 problem.set_step(step.load, step.translation)
             logger.info("step %d: load factor %g, obstacle translation %s m", index + 1, step.load,
