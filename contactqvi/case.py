@@ -516,16 +516,25 @@ def _check_steps(steps: typing.Sequence[Step]) -> tuple[Step, ...]:
     return tuple(checked) or (Step(),)
 
 
+#: Initial guesses of the first step (``solver.start``): the body at rest (u~ = 0), or
+#: u = 0 in the shifted variables, every contact node on the obstacle (seed 000, Sect. 7).
+STARTS = ("rest", "contact")
+
+
 def _check_solver(solver: dict[str, typing.Any]) -> dict[str, typing.Any]:
-    """The given SCD Newton parameters, checked by the solver's table (defaults not added)."""
+    """The given SCD Newton parameters, checked by the solver's table (defaults not added),
+    and ``start`` (:data:`STARTS`)."""
     from contactqvi.contact import scd_newton  # here: the contact package may read cases itself
 
     _instance(solver, dict, "solver")
+    newton = {name: value for name, value in solver.items() if name != "start"}
+    if "start" in solver:
+        require_choice("solver.start", solver["start"], STARTS)
     try:
-        merged = scd_newton.PARAMETERS.check(solver)
+        merged = scd_newton.PARAMETERS.check(newton)
     except ParameterError as exc:
         raise ParameterError(f"solver.{exc.name}", str(exc).removeprefix(f"{exc.name}: ")) from None
-    return {name: merged[name] for name in solver}
+    return {**{name: merged[name] for name in newton}, **({"start": solver["start"]} if "start" in solver else {})}
 
 
 def _check_petsc(petsc: dict[str, typing.Any]) -> dict[str, typing.Any]:

@@ -128,7 +128,7 @@ def markdown_table(header: typing.Sequence[str], rows: typing.Iterable[typing.Se
             return f"{value:.3g}"
         return str(value)
 
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines = ["| " + " | ".join(map(str, header)) + " |", "|" + "---|" * len(header)]
     lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in rows]
     return "\n".join(lines) + "\n"
 

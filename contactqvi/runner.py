@@ -75,12 +75,15 @@ def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
 
 
 def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
-             plot: bool = True, start: str = "rest") -> tuple[list[SCDNewtonResult], int]:
+             plot: bool = True) -> tuple[dict[str, typing.Any], int]:
     """Solve the case's load path and write the results to ``output``.
 
-    The first step starts from the body at rest (``start = "rest"``, u~ = 0) or, as in
-    seed 000, Sect. 7, from u = 0 in the shifted variables (``"contact"``: every
-    contact node on the obstacle).
+    The first step starts from the body at rest (``solver.start = "rest"``, the
+    default, u~ = 0) or, as in seed 000, Sect. 7, from u = 0 in the shifted variables
+    (``"contact"``: every contact node on the obstacle).
+
+    Returns the summary (also in ``output/summary.json``) and the exit code (0 all
+    steps converged, 1 a step did not).
 
     Returns the step results and the exit code (0 all steps converged, 1 a step did not).
     """
@@ -96,8 +99,9 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
         "p": problem.n_contact, "n": problem.n_free, "steps": [],
     }
     steps = [LoadStep(s.load, s.translation) for s in case.steps]
+    parameters = dict(case.solver)
     u = problem.A.createVecRight()
-    if start == "rest":
+    if parameters.pop("start", "rest") == "rest":
         problem.set_step(steps[0].load, steps[0].translation)
         problem.shift.copy(u)  # u~ = 0
     with ContactResultsWriter(output, comm) as writer:
@@ -115,14 +119,14 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
                         _vector_text(entry.get("contact_force")), entry.get("contact_area", float("nan")))
 
         try:
-            results = solve_load_path(problem, steps, u, case.solver, prefix=PREFIX, on_step=record)
+            results = solve_load_path(problem, steps, u, parameters, prefix=PREFIX, on_step=record)
         finally:
             u.destroy()
             problem.destroy()
         if plot and writer.last is not None:
             summary["plot"] = plot_contact_states(writer.out / "contact_states.png", writer.last[1])
             io.write_summary(comm, writer.out / "summary.json", summary)
-    return results, 0 if results and results[-1].converged and len(results) == len(steps) else 1
+    return summary, 0 if results and results[-1].converged and len(results) == len(steps) else 1
 
 
 def _vector_text(vector: typing.Sequence[float] | None) -> str:

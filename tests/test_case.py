@@ -79,7 +79,7 @@ def test_paper_case_is_the_demo_problem():
     assert case.boundary.traction == data.tractions("L2")
     assert case.obstacle == ObstacleShape("plane", point=(0.0, 0.0, 0.0), normal=(0.0, 0.0, 1.0))
     assert case.steps == (Step(1.0, (0.0, 0.0, 0.0)),)
-    assert case.solver == {} and case.petsc == {}
+    assert case.solver == {"start": "contact"} and case.petsc == {}  # u0 = 0 shifted, as the demo
 
 
 def test_case_built_in_python_equals_the_file():
@@ -93,6 +93,7 @@ def test_case_built_in_python_equals_the_file():
         contact=Contact("contact", friction=0),
         obstacle=ObstacleShape("sphere", center=[0, 0, 1], radius=1),
         steps=[Step(translation=(0, 0, -depth)) for depth in (0.25e-3, 0.5e-3, 0.75e-3, 1e-3)],
+        solver={"gamma_rule": "nodal_diagonal", "state_tol": 0.0},
     )
     assert case == load_case(ROOT / "cases" / "hertz.toml")
     assert case.groups == ["bottom", "symmetry_x", "symmetry_y", "contact"]
@@ -314,3 +315,9 @@ def test_case_meshes_read_with_named_groups(name, groups):
         closest = comm.allreduce(float((x**2).sum(axis=1).min(initial=1.0)), op=MPI.MIN)
         assert closest == pytest.approx(0.0, abs=1e-20)
         assert comm.allreduce(float(x[:, 2].max(initial=-1.0)), op=MPI.MAX) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_solver_start_is_checked():
+    assert parse_case(_with(BASE, ("solver", {"start": "contact"}))).solver == {"start": "contact"}
+    with pytest.raises(ParameterError, match=r"^solver.start: must be one of rest, contact, got 'zero'"):
+        parse_case(_with(BASE, ("solver", {"start": "zero"})))
