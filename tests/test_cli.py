@@ -1,0 +1,40 @@
+"""``python -m contactqvi`` from an installed (non-editable) package; PETSc options at start-up."""
+
+from __future__ import annotations
+
+import pathlib
+import subprocess
+import sys
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+
+
+@pytest.mark.serial
+def test_installed_package_runs_the_demos_and_cases(tmp_path):
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)], check=True)
+    python = venv / "bin" / "python"
+    subprocess.run([str(python), "-m", "pip", "install", "-q", "--no-build-isolation", "--no-deps", str(ROOT)],
+                   check=True, cwd=tmp_path)
+    listing = subprocess.run([str(python), "-m", "contactqvi", "--help"], capture_output=True, text=True,
+                             check=True, cwd=tmp_path).stdout
+    assert "coulomb3d" in listing and "not installed" not in listing
+    run = subprocess.run([str(python), "-m", "contactqvi", "coulomb3d", "--lev", "0", "--no-plot",
+                          "--output", str(tmp_path / "out")], capture_output=True, text=True, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    where = subprocess.run([str(python), "-c", "import contactqvi; print(contactqvi.__file__)"],
+                           capture_output=True, text=True, cwd=tmp_path).stdout
+    assert where.startswith(str(venv))  # the installed copy, not the source tree
+    bad = subprocess.run([str(python), "-m", "contactqvi", "elasticity"], capture_output=True, text=True, cwd=tmp_path)
+    assert bad.returncode == 2 and "unknown command 'elasticity'" in bad.stderr
+
+
+@pytest.mark.serial
+def test_log_view_through_the_petsc_pass_through(tmp_path):
+    """-log_view is read by PETSc at initialisation; given on the command line it still prints at exit."""
+    run = subprocess.run([sys.executable, str(ROOT / "demos" / "coulomb3d.py"), "--lev", "0", "--no-plot",
+                          "--output", str(tmp_path), "-log_view"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert "PETSc Performance Summary" in run.stdout and "linear_solve" in run.stdout
