@@ -8,14 +8,12 @@ active set A_i are imposed exactly as identity rows of that block (the rows of
 
 The block matrices are given once and their owners re-assemble the values in
 place between Newton steps; :meth:`BlockNewtonSystem.update` then converts the
-nest into the same AIJ matrix (MAT_REUSE_MATRIX), whose identity rows keep their
-zeroed entries (MAT_KEEP_NONZERO_PATTERN): the sparsity never changes, so MUMPS
-repeats only the numerical factorisation. (An earlier version converted into the
-previous matrix without keeping the pattern, MUMPS' numerical refactorisation of
-it was wrong under MPI with PETSc 3.22, and the matrix was rebuilt each step. With
-the pattern kept, the finite-difference tests of the Newton systems and the
-serial/parallel comparison in ``tests/test_qvi_thermoforming.py`` pass on 2 ranks,
-and serial and 2-rank runs of Tests 1, 3, 4 give the same iterations.)
+nest to a new AIJ matrix; the vectors are allocated once. Refilling the previous
+AIJ matrix instead (MAT_REUSE_MATRIX, then MUMPS' numerical refactorisation) gave
+wrong Newton directions under MPI with PETSc 3.22, also with the zeroed identity
+rows kept in the pattern (MAT_KEEP_NONZERO_PATTERN): Test 1 (h = 1/200, Algorithm
+2, u0 the Poisson solution) then converged only linearly on 2 ranks until Phi's
+Newton failed, while it takes 3 iterations serially and with the rebuilt matrix.
 """
 
 from __future__ import annotations
@@ -68,15 +66,13 @@ class BlockNewtonSystem(PETScOwner):
 
     def update(self, fixed: list[np.ndarray]) -> None:
         """Build the matrix from the blocks' current values; row i of block j becomes an identity row if fixed[j][i]."""
-        if self.K is None:
-            self.K = self._own(self.nest.convert("aij", out=PETSc.Mat()))
-            self.K.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)
-            self.ksp.setOperators(self.K)
-        else:
-            self.nest.convert("aij", out=self.K)
+        if self.K is not None:
+            self.K.destroy()
+        self.K = self.nest.convert("aij", out=PETSc.Mat())
         self.fixed = fixed
         rows = np.concatenate([idx[mask] for idx, mask in zip(self.indices, fixed)])
         self.K.zeroRows(rows.astype(PETSc.IntType), 1.0)
+        self.ksp.setOperators(self.K)
 
     def solve(self, rhs: list[np.ndarray | None]) -> list[np.ndarray]:
         """Solve with right-hand side blocks (owned values; None = 0); fixed rows get 0."""
@@ -89,3 +85,8 @@ class BlockNewtonSystem(PETScOwner):
             raise RuntimeError(f"Newton system: linear solve failed ({ksp_converged_reason(self.ksp)})")
         return [self.x.array[pos].copy() for pos in self.positions]
 
+    def destroy(self) -> None:
+        if self.K is not None:
+            self.K.destroy()
+            self.K = None
+        super().destroy()
