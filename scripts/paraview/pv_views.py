@@ -8,14 +8,15 @@ installs ParaView from Debian and runs it on a fresh result::
 
 Writes three PNGs to ``--out`` (default: the result directory):
 
-* ``paraview_deformed.png``: the body warped by the displacement (magnified, the
-  factor is in the title) coloured by the von Mises stress (cell-wise); without a
-  ``von_mises`` field, by |displacement|, and the title says so.
-* ``paraview_contact_traction.png``: the contact surface seen from the foundation,
-  coloured by the contact pressure, with friction-traction arrows.
-* ``paraview_stick_slip.png``: the contact states as categories (a nodal state
-  fills the quarter of each adjacent face nearest to its node, i.e. its lumped
-  area; a cell-wise state fills its cell).
+* ``paraview_deformed.png``: the body warped by the displacement (magnified; the
+  factor is in the caption) coloured by the von Mises stress (cell-wise); without
+  a ``von_mises`` field, by the displacement magnitude, and the title says so.
+* ``paraview_contact_traction.png``: the contact surface in plan view, coloured by
+  the contact pressure, with friction-traction arrows at the nodes.
+* ``paraview_stick_slip.png``: the contact states as categories with their areas.
+  A cell-wise state (contactqvi writes one cell per node and facet, the node's
+  tributary patch) fills its cell; a nodal state fills the quarter of each
+  adjacent face nearest to its node, i.e. its lumped area.
 
 Every file and field the script reads is listed in ``SOURCES`` and ``FIELDS``
 below; a missing file or field stops it with a message that names it.
