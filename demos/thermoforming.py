@@ -66,7 +66,8 @@ def parse(argv: list[str] | None = None) -> tuple[dict[str, dict], str]:
         given["outer"]["radius"] = 0.01
     if given["demo"]["h"] is None:
         given["demo"]["h"] = DEFAULT_H[test]
-    prm = {group: table.check(given[group]) for group, (table, _) in TABLES.items()}
+    prm = {group: {n: v for n, v in table.check(given[group]).items() if n in given[group]}
+           for group, (table, _) in TABLES.items()}
     check_obstacle_parameters(prm["obstacle"])
     return prm, args.output
 

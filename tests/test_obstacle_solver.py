@@ -76,6 +76,18 @@ def test_pfmy_pdas_agrees_with_snes_vi_and_is_exactly_feasible():
     assert diff < 1e-8
 
 
+def test_pdas_refactorisations_agree_with_snes_vi():
+    # A short PFMY path leaves PDAS several solves: its one matrix is refilled and MUMPS refactorises.
+    msh, problem = _radial(32)
+    pdas = ObstacleSolver(problem, {"rho_min": 1e-3}, prefix="t_refac_pdas_").solve()
+    assert pdas.converged and pdas.pdas_iterations >= 3
+    u_pdas = problem.u.x.array.copy()
+    problem.u.x.array[:] = 0.0
+    assert ObstacleSolver(problem, {"s_solver": "vinewtonrsls"}, prefix="t_refac_vi_").solve().converged
+    n = problem.n_owned
+    assert msh.comm.allreduce(float(np.max(np.abs(problem.u.x.array[:n] - u_pdas[:n]))), op=MPI.MAX) < 1e-10
+
+
 def test_rho_path_ends_at_rho_min():
     assert rho_path(1.0, 1e-6, 10.0) == pytest.approx([10.0**-k for k in range(7)], rel=1e-12)
     assert rho_path(1.0, 5e-4, 10.0) == pytest.approx([1.0, 0.1, 0.01, 1e-3, 5e-4], rel=1e-12)

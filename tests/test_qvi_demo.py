@@ -3,9 +3,18 @@
 from __future__ import annotations
 
 import json
+import logging
 
 import numpy as np
 import pytest
+
+
+@pytest.fixture(autouse=True)
+def _drop_demo_log_handlers():
+    """The demo logs to the sys.stdout of its call, which pytest closes after the test."""
+    yield
+    for handler in logging.root.handlers[:]:
+        logging.root.removeHandler(handler)
 
 
 def test_demo_test3_writes_results(mpi_tmp_path, load_demo):
