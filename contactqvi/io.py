@@ -283,8 +283,8 @@ class VTXDatasetWriter:
 
     ParaView opens it with ``ADIOS2VTXReader``; every :meth:`write` is one time
     step, all steps must have the same array names. The directory appears under
-    its name when the writer is closed (collective); on an exception inside a
-    ``with`` block it is removed.
+    its name when the writer is closed (collective) after at least one step; on an
+    exception inside a ``with`` block it is removed.
     """
 
     def __init__(self, comm: MPI.Comm, path: str | os.PathLike):
@@ -343,11 +343,12 @@ class VTXDatasetWriter:
         return variable
 
     def close(self, ok: bool = True) -> None:
-        """Finish the file (collective); ``ok=False`` discards it."""
+        """Finish the file (collective); ``ok=False`` or no step written discards it."""
+        written = self.comm.bcast(self._engine is not None, root=0)
         if self._engine is not None:
             self._engine.close()
             self._engine = None
-        if ok:
+        if ok and written:
             self._atomic.__exit__(None, None, None)
         else:
             error = RuntimeError("VTXDatasetWriter: discarded")
