@@ -209,25 +209,15 @@ def build_contact_problem(
     msh.topology.create_connectivity(msh.topology.dim - 1, msh.topology.dim)
     bcs = _dirichlet_conditions(V, facet_tags, clamped, displacements or {})
     dirichlet_dofs_loc = np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs] + [np.empty(0, np.int32)]))
-    A = dolfinx.fem.petsc.assemble_matrix(a, bcs=bcs)
-    A.assemble()
-    applied = dolfinx.fem.petsc.assemble_vector(L)
-    dolfinx.fem.petsc.apply_lifting(applied, [a], bcs=[bcs])
-    applied.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-    dolfinx.fem.petsc.set_bc(applied, bcs)
-
+    A, applied = _assemble(a, L, bcs)
     n_owned = V.dofmap.index_map.size_local
     contact_facets = boundary_facets(facet_tags, contact)
-    contact_blk = fem.locate_dofs_topological(V, msh.topology.dim - 1, contact_facets)
-    constrained = np.zeros((V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts) * 3, dtype=bool)
-    constrained[dirichlet_dofs_loc] = True
-    constrained = constrained.reshape(-1, 3)
-    contact_blk = contact_blk[(contact_blk < n_owned) & ~constrained[contact_blk].all(axis=1)].astype(np.int32)
+    contact_blk, constrained = _contact_nodes(V, contact_facets, dirichlet_dofs_loc)
     x = V.tabulate_dof_coordinates()[contact_blk]
     _check_penetration(msh, obstacle, x)
-    frames = _align_frames(obstacle.frames(x), constrained[contact_blk], msh.comm)
+    frames = _align_frames(obstacle.frames(x), constrained, msh.comm)
     rotation = _nodal_rotation(A, contact_blk, frames)
-    if rotation is not None:
+    if rotation is not None:  # nodal frames: A = T^T A T, l~ = T^T l~
         A_global, A = A, A.PtAP(rotation)
         A_global.destroy()
         applied_global, applied = applied, applied.duplicate()
@@ -249,6 +239,31 @@ def build_contact_problem(
     )
     problem.set_step()
     return problem
+
+
+def _assemble(a: fem.Form, L: fem.Form, bcs: list[fem.DirichletBC]) -> tuple[PETSc.Mat, PETSc.Vec]:
+    """Stiffness with identity Dirichlet rows/columns and the lifted load (values on Dirichlet dofs)."""
+    A = dolfinx.fem.petsc.assemble_matrix(a, bcs=bcs)
+    A.assemble()
+    applied = dolfinx.fem.petsc.assemble_vector(L)
+    dolfinx.fem.petsc.apply_lifting(applied, [a], bcs=[bcs])
+    applied.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    dolfinx.fem.petsc.set_bc(applied, bcs)
+    return A, applied
+
+
+def _contact_nodes(
+    V: fem.FunctionSpace, contact_facets: np.ndarray, dirichlet_dofs_loc: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Owned nodes of the contact facets that are not clamped, and their (m, 3) mask of
+    prescribed components."""
+    index_map = V.dofmap.index_map
+    constrained = np.zeros((index_map.size_local + index_map.num_ghosts) * 3, dtype=bool)
+    constrained[dirichlet_dofs_loc] = True
+    constrained = constrained.reshape(-1, 3)
+    blk = fem.locate_dofs_topological(V, V.mesh.topology.dim - 1, contact_facets)
+    blk = blk[(blk < index_map.size_local) & ~constrained[blk].all(axis=1)].astype(np.int32)
+    return blk, constrained[blk]
 
 
 def _dirichlet_conditions(
