@@ -61,7 +61,7 @@ def hertz_table(comm) -> tuple[dict, str]:
                "equilibrium_error": last["equilibrium_error"]}
         rows.append(row)
     header = ["mesh (h at contact)", "dofs", "Newton per step", "P (MN) / Hertz", "error P", "a (mm) / Hertz",
-              "|a - a_H| / h", "p0 (GPa) / Hertz", "error p0"]
+              "dist(a, a_H) / h", "p0 (GPa) / Hertz", "error p0"]
     body = [[f"{r['mesh']} (a/{MESHES[r['mesh']]})", r["n"], " ".join(map(str, r["newton"])),
              f"{r['P'] / 1e6:.4f} / {r['P_hertz'] / 1e6:.4f}", f"{r['P'] / r['P_hertz'] - 1:+.2%}",
              f"{r['a'] * 1e3:.2f} / {r['a_hertz'] * 1e3:.2f}", f"{abs(r['a'] - r['a_hertz']) / r['h']:.2f}",
