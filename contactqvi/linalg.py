@@ -28,6 +28,7 @@ __all__ = [
     "default_options",
     "create_ksp",
     "create_snes",
+    "assemble_system",
     "reassemble_matrix",
     "power_iteration",
     "ksp_converged_reason",
@@ -143,6 +144,18 @@ def create_snes(comm: MPI.Comm, prefix: str, options: OptionsDict) -> PETSc.SNES
     with default_options(prefix, options):
         snes.setFromOptions()
     return snes
+
+
+def assemble_system(a: fem.Form, L: fem.Form, bcs: list[fem.DirichletBC]) -> tuple[PETSc.Mat, PETSc.Vec]:
+    """Matrix of ``a`` with identity Dirichlet rows/columns and the lifted load of ``L``
+    (the Dirichlet values on their dofs), in DOLFINx's assembly order."""
+    A = dolfinx.fem.petsc.assemble_matrix(a, bcs=bcs)
+    A.assemble()
+    b = dolfinx.fem.petsc.assemble_vector(L)
+    dolfinx.fem.petsc.apply_lifting(b, [a], bcs=[bcs])
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    dolfinx.fem.petsc.set_bc(b, bcs)
+    return A, b
 
 
 def reassemble_matrix(A: PETSc.Mat, form: fem.Form, bcs: list[fem.DirichletBC] | None = None) -> PETSc.Mat:

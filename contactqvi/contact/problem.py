@@ -32,12 +32,12 @@ from petsc4py import PETSc
 import numpy as np
 import ufl
 
-import dolfinx.fem.petsc
 from dolfinx import fem, la
 from dolfinx import mesh as dmesh
 
 from contactqvi.contact.nodal import FrictionLaw
 from contactqvi.elasticity import elasticity_forms, rigid_motions_nullspace
+from contactqvi.linalg import assemble_system
 from contactqvi.meshes import boundary_facets
 from contactqvi.obstacles import Obstacle, Plane
 from contactqvi.parameters import require, require_positive
@@ -209,7 +209,7 @@ def build_contact_problem(
     msh.topology.create_connectivity(msh.topology.dim - 1, msh.topology.dim)
     bcs = _dirichlet_conditions(V, facet_tags, clamped, displacements or {})
     dirichlet_dofs_loc = np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs] + [np.empty(0, np.int32)]))
-    A, applied = _assemble(a, L, bcs)
+    A, applied = assemble_system(a, L, bcs)
     n_owned = V.dofmap.index_map.size_local
     contact_facets = boundary_facets(facet_tags, contact)
     contact_blk, constrained = _contact_nodes(V, contact_facets, dirichlet_dofs_loc)
@@ -239,17 +239,6 @@ def build_contact_problem(
     )
     problem.set_step()
     return problem
-
-
-def _assemble(a: fem.Form, L: fem.Form, bcs: list[fem.DirichletBC]) -> tuple[PETSc.Mat, PETSc.Vec]:
-    """Stiffness with identity Dirichlet rows/columns and the lifted load (values on Dirichlet dofs)."""
-    A = dolfinx.fem.petsc.assemble_matrix(a, bcs=bcs)
-    A.assemble()
-    applied = dolfinx.fem.petsc.assemble_vector(L)
-    dolfinx.fem.petsc.apply_lifting(applied, [a], bcs=[bcs])
-    applied.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-    dolfinx.fem.petsc.set_bc(applied, bcs)
-    return A, applied
 
 
 def _contact_nodes(
