@@ -154,5 +154,5 @@ log "flagship (mpirun -n 2, lev 3): exit 0 in $(since "$t0") s: $(grep -m1 'conv
 t0=$(now)
 ce "${run[@]}" "$IMAGE" make test >"$work/test.log" 2>&1 \
     || { tail -30 "$work/test.log" >&2; log "FAILED: make test (log: $work/test.log)"; exit 1; }
-log "make test: exit 0 in $(since "$t0") s: $(grep -E '^[0-9]+ passed|passed' "$work/test.log" | tr '\n' ';' | sed 's/;$//')"
+log "make test: exit 0 in $(since "$t0") s: $(grep -a -E '[0-9]+ (passed|failed)' "$work/test.log" | awk '!seen[$0]++' | paste -sd';')"
 log "OK (report: $report)"
