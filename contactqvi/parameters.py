@@ -173,15 +173,3 @@ def _none_or(kind: type) -> typing.Callable[[str], typing.Any]:
     convert.__name__ = kind.__name__
     return convert
 
-
-# Transitional: the old table style, removed once every family declares Parameters.
-ParameterTable = dict[str, tuple[typing.Any, str]]
-
-
-def merge_parameters(table: ParameterTable, given: dict[str, typing.Any] | None) -> dict[str, typing.Any]:
-    """Defaults of ``table`` overridden by ``given``; unknown names raise."""
-    merged = {name: default for name, (default, _) in table.items()}
-    for name, value in (given or {}).items():
-        require(name in table, name, f"unknown parameter; known: {', '.join(sorted(table))}")
-        merged[name] = value
-    return merged

@@ -14,12 +14,15 @@ from dolfinx import fem
 
 from contactqvi.case import load_case, parse_case
 from contactqvi.contact import LoadStep, build_contact_problem, contact_resultants, solve_load_path
+from contactqvi.contact.postprocess import write_contact_results
 from contactqvi.meshes import create_contact_body
 from contactqvi.obstacles import Cylinder, Plane, Sphere, tangent_frames
 from contactqvi.parameters import ParameterError
 from contactqvi.problems import coulomb as data
 from contactqvi.problems import hertz
 from contactqvi.runner import run_case
+
+from petsc_audit import assert_frees_petsc_objects
 
 CASES = pathlib.Path(__file__).resolve().parent.parent / "cases"
 
@@ -182,3 +185,19 @@ def test_hertz_coarse_mesh_meets_the_closed_form(mpi_tmp_path):
     assert abs(np.sqrt(4 * last["contact_area"] / np.pi) - a) <= 0.5 * a / 8
     assert last["max_contact_pressure"] == pytest.approx(hertz.peak_pressure(70e9, 0.3, 1.0, 1e-3), rel=0.10)
     assert last["equilibrium_error"] < 1e-8
+
+
+def test_contact_objects_free_their_petsc_objects(mpi_tmp_path):
+    """Problem in nodal frames (sphere), a two-step load path and the result files: after
+    ``destroy()`` nothing the contact family created is alive."""
+
+    def run():
+        problem = _paper_problem(2, obstacle=Sphere((1.0, 0.5, -10.0), 10.0))
+        u = problem.A.createVecRight()
+        steps = [LoadStep(0.0, (0.0, 0.0, 0.015)), LoadStep(0.0, (5e-4, 0.0, 0.015))]
+        results = solve_load_path(problem, steps, u, {"pc": "gamg"}, prefix="life_")
+        assert problem.rotation is not None and all(r.converged for r in results)
+        write_contact_results(mpi_tmp_path / "life", problem, u, results[-1], plot=False)
+        return [u, problem]
+
+    assert_frees_petsc_objects(run, mpi_tmp_path)

@@ -37,6 +37,7 @@ from dolfinx import mesh as dmesh
 
 from contactqvi.contact.nodal import FrictionLaw
 from contactqvi.elasticity import elasticity_forms, rigid_motions_nullspace
+from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import assemble_system
 from contactqvi.meshes import boundary_facets
 from contactqvi.obstacles import Obstacle, Plane
@@ -49,7 +50,7 @@ Vector3 = tuple[float, float, float]
 
 
 @dataclasses.dataclass
-class ContactProblem:
+class ContactProblem(PETScOwner):
     """Stiffness, loads and contact nodes of the GE (6.3) in nodal frames.
 
     Attributes:
@@ -98,17 +99,9 @@ class ContactProblem:
     def comm(self) -> MPI.Comm:
         return self.V.mesh.comm
 
-    def destroy(self) -> None:
-        """Free the PETSc objects (collective); copies by ``dataclasses.replace`` share them."""
-        for obj in (self.A, self.applied, self.load, self.shift, self.rotation):
-            if obj is not None:
-                obj.destroy()
-
-    def __enter__(self) -> ContactProblem:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.destroy()
+    def petsc_objects(self) -> list[typing.Any]:
+        """A, the load vectors and T (copies by ``dataclasses.replace`` share them)."""
+        return [obj for obj in (self.A, self.applied, self.load, self.shift, self.rotation) if obj is not None]
 
     def gap(self, translation: typing.Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
         """Gap of each owned contact node to the obstacle translated by ``translation`` (m)."""

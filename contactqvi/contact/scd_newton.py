@@ -36,6 +36,7 @@ import numpy as np
 
 from contactqvi.contact.nodal import State, classify, contact_states, resolvent, scd_adjoint_blocks, stick_reversed_slip
 from contactqvi.contact.problem import ContactProblem
+from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import create_ksp, default_options, ksp_converged_reason, power_iteration, preset
 from contactqvi.parameters import Parameter, Parameters
 from contactqvi.result import Result, Status
@@ -173,7 +174,7 @@ class SCDNewtonResult(Result):
     friction_force: np.ndarray
 
 
-class SCDNewtonSolver:
+class SCDNewtonSolver(PETScOwner):
     """SCD semismooth* Newton solver for :class:`ContactProblem` (seed 000, Sects. 4-7).
 
     Owns the Newton matrix, the Krylov solver and work vectors; ``solve`` can be
@@ -205,18 +206,10 @@ class SCDNewtonSolver:
         names = ("r", "dhat", "y2", "rhs", "du", "Adu", "u_trial", "r_trial", "d_trial")
         self._work = {name: A.createVecRight() for name in names}
 
-    def destroy(self) -> None:
-        """Free the solver's PETSc objects (collective)."""
-        for obj in (self.ksp, self._D, self._U, self._J, self._near_nullspace, *self._work.values(),
-                    *self._gamma_dofs.values()):
-            if obj is not None:
-                obj.destroy()
-
-    def __enter__(self) -> SCDNewtonSolver:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.destroy()
+    def petsc_objects(self) -> list[typing.Any]:
+        objects = (self.ksp, self._D, self._U, self._J, self._near_nullspace, *self._work.values(),
+                   *self._gamma_dofs.values())
+        return [obj for obj in objects if obj is not None]
 
     @property
     def gamma(self) -> float:

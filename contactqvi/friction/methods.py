@@ -16,8 +16,9 @@ import numpy as np
 
 from contactqvi.friction import alm, pdas, uzawa
 from contactqvi.friction.pdas import ActiveSetResult, FrictionActiveSetSolver, semismooth_newton_sigma
-from contactqvi.friction.problem import FrictionProblem, OwnsPETScObjects
+from contactqvi.friction.problem import FrictionProblem
 from contactqvi.friction.uzawa import UzawaSolver
+from contactqvi.lifetime import PETScOwner
 from contactqvi.parameters import Parameters, require_choice
 from contactqvi.problems.stadler import REFERENCE_GAMMA
 from contactqvi.result import Result
@@ -71,7 +72,7 @@ def nodal_states(problem: FrictionProblem, lam: np.ndarray) -> np.ndarray:
     return np.where(np.abs(lam) >= problem.g, np.sign(lam), 0).astype(np.int8)
 
 
-class FrictionSolvers(OwnsPETScObjects):
+class FrictionSolvers(PETScOwner):
     """The solvers of one problem, created on first use: (PDAS) (pdas, ss, alm, lambda_bar) and Uzawa's."""
 
     def __init__(self, problem: FrictionProblem):

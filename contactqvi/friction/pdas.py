@@ -29,10 +29,10 @@ from contactqvi.friction.problem import (
     ACTIVE_PLUS,
     INACTIVE,
     FrictionProblem,
-    OwnsPETScObjects,
     boundary_states,
     complementarity_residual,
 )
+from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import OptionsDict, create_ksp, preset
 from contactqvi.parameters import Parameter, Parameters, require, require_positive
 from contactqvi.result import Result, Status, Timings
@@ -97,7 +97,7 @@ class ActiveSetResult(Result):
         return {**super().summary(), "initial_residual": self.initial_residual}
 
 
-class FrictionActiveSetSolver(OwnsPETScObjects):
+class FrictionActiveSetSolver(PETScOwner):
     """(PDAS) of seed 002 for the regularised problem (P*_gamma); (SS) with sigma = 1/gamma.
 
     The solver owns the system matrix K + gamma M_I, its KSP (options prefix

@@ -37,6 +37,7 @@ import dolfinx.fem.petsc
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 
+from contactqvi.lifetime import PETScOwner
 from contactqvi.meshes import tag_of
 from contactqvi.parameters import require, require_positive
 
@@ -45,7 +46,6 @@ __all__ = [
     "ACTIVE_PLUS",
     "INACTIVE",
     "FrictionProblem",
-    "OwnsPETScObjects",
     "boundary_states",
     "complementarity_residual",
 ]
@@ -73,26 +73,7 @@ def complementarity_residual(xi: np.ndarray, lam: np.ndarray, g: float, sigma: f
     return xi - np.maximum(0.0, xi + sigma * (lam - g)) - np.minimum(0.0, xi + sigma * (lam + g))
 
 
-class OwnsPETScObjects:
-    """Collective ``destroy()`` of the PETSc objects listed by :meth:`petsc_objects`; ``with`` support."""
-
-    def petsc_objects(self) -> list[typing.Any]:
-        """The PETSc objects this instance owns (each with a collective ``destroy()``)."""
-        raise NotImplementedError
-
-    def destroy(self) -> None:
-        """Free the PETSc objects (collective; a second call does nothing)."""
-        for obj in self.petsc_objects():
-            obj.destroy()
-
-    def __enter__(self) -> typing.Self:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.destroy()
-
-
-class FrictionProblem(OwnsPETScObjects):
+class FrictionProblem(PETScOwner):
     """Forms, matrices and nodal boundary data of the discrete problem (P).
 
     The problem owns the stiffness matrix K of a(., .) (Dirichlet rows and

@@ -15,7 +15,8 @@ import numpy as np
 
 from dolfinx import fem
 
-from contactqvi.friction.problem import FrictionProblem, OwnsPETScObjects
+from contactqvi.friction.problem import FrictionProblem
+from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import OptionsDict, create_ksp, preset
 from contactqvi.parameters import Parameter, Parameters
 from contactqvi.result import Result, Status, Timings
@@ -56,7 +57,7 @@ class UzawaResult(Result):
     lam: np.ndarray
 
 
-class UzawaSolver(OwnsPETScObjects):
+class UzawaSolver(PETScOwner):
     """Uzawa's method for (P*) on ``problem``; K is factorised once (options prefix ``prefix``).
 
     Args:

@@ -25,7 +25,7 @@ from contactqvi.qvi.data import ObstacleQVIData, SemilinearVIData
 from contactqvi.qvi.maps import CompositeMap, ObstacleQVIMap, RegularisedQVIMap, SemilinearVIMap
 from contactqvi.qvi.outer import FIXED_POINT_PARAMETERS, FixedPointSolver
 from contactqvi.qvi.temperature import TemperatureMap
-from contactqvi.vi.lifetime import PETScOwner
+from contactqvi.lifetime import PETScOwner
 from contactqvi.vi.moreau_yosida import PathFollowingMoreauYosida
 from contactqvi.vi.problem import ObstacleProblem
 from contactqvi.vi.solver import ObstacleSolver, check_obstacle_parameters

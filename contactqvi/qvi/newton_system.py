@@ -24,7 +24,7 @@ from petsc4py import PETSc
 import numpy as np
 
 from contactqvi.linalg import create_ksp, ksp_converged_reason, preset
-from contactqvi.vi.lifetime import PETScOwner
+from contactqvi.lifetime import PETScOwner
 
 __all__ = ["BlockNewtonSystem", "diagonal_matrix"]
 

@@ -42,7 +42,7 @@ from contactqvi.parameters import Parameter, Parameters
 from contactqvi.qvi.maps import CompositeMap, Evaluation
 from contactqvi.qvi.projection import BallProjection
 from contactqvi.result import Result, Status, Timings
-from contactqvi.vi.lifetime import PETScOwner
+from contactqvi.lifetime import PETScOwner
 
 __all__ = ["FIXED_POINT_PARAMETERS", "QVIResult", "FixedPointSolver"]
 

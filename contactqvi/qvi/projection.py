@@ -9,7 +9,7 @@ from petsc4py import PETSc
 import numpy as np
 
 from contactqvi.parameters import require_positive
-from contactqvi.vi.lifetime import PETScOwner
+from contactqvi.lifetime import PETScOwner
 
 __all__ = ["BallProjection"]
 

@@ -23,7 +23,7 @@ from dolfinx import fem
 
 from contactqvi.linalg import create_snes, preset, reassemble_matrix
 from contactqvi.parameters import require_positive
-from contactqvi.vi.lifetime import PETScOwner
+from contactqvi.lifetime import PETScOwner
 from contactqvi.vi.nonlinear import NonlinearFormProblem, snes_converged_reason
 
 __all__ = ["ScalarNonlinearity", "TemperatureMap", "DEFAULT_PHI_OPTIONS"]

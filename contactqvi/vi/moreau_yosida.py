@@ -13,7 +13,7 @@ from dolfinx import fem
 
 from contactqvi.linalg import create_snes, preset
 from contactqvi.result import Result, Status
-from contactqvi.vi.lifetime import PETScOwner
+from contactqvi.lifetime import PETScOwner
 from contactqvi.vi.nonlinear import NonlinearFormProblem, snes_converged_reason, snes_status
 from contactqvi.vi.problem import ObstacleProblem
 

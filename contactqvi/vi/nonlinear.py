@@ -18,7 +18,7 @@ from dolfinx import fem
 
 from contactqvi.linalg import reassemble_matrix
 from contactqvi.result import Status
-from contactqvi.vi.lifetime import PETScOwner
+from contactqvi.lifetime import PETScOwner
 
 __all__ = ["AffineProblem", "NonlinearFormProblem", "SNESProblem", "snes_converged_reason", "snes_status"]
 

@@ -25,7 +25,7 @@ import numpy as np
 
 from contactqvi.linalg import create_ksp, preset
 from contactqvi.result import Result, Status
-from contactqvi.vi.lifetime import PETScOwner
+from contactqvi.lifetime import PETScOwner
 from contactqvi.vi.problem import ObstacleProblem
 
 __all__ = ["PDASResult", "ObstacleActiveSetSolver"]

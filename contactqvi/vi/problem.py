@@ -18,7 +18,7 @@ import dolfinx.fem.petsc
 from dolfinx import fem
 
 from contactqvi.parameters import require
-from contactqvi.vi.lifetime import PETScOwner
+from contactqvi.lifetime import PETScOwner
 
 __all__ = ["ObstacleProblem"]
 

@@ -21,7 +21,7 @@ from dolfinx import fem
 
 from contactqvi.linalg import OptionsDict, create_snes, preset
 from contactqvi.result import Result, Status
-from contactqvi.vi.lifetime import PETScOwner
+from contactqvi.lifetime import PETScOwner
 from contactqvi.vi.nonlinear import NonlinearFormProblem, SNESProblem, snes_converged_reason, snes_status
 from contactqvi.vi.problem import ObstacleProblem
 
