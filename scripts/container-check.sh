@@ -88,7 +88,14 @@ if [ $cold -eq 1 ]; then
     log "--cold: removing $IMAGE, $BASE and the build cache"
     ce rmi -f "$IMAGE" >/dev/null 2>&1 || true
     ce rmi -f "$BASE" >/dev/null 2>&1 || true
-    if [ "$engine" = podman ]; then ce image prune -f >/dev/null; else ce builder prune -af >/dev/null; fi
+    if [ "$engine" = podman ]; then
+        # Working containers left by interrupted builds hold their layers.
+        ce ps -a --external --format '{{.ID}} {{.Names}}' | awk '$2 ~ /-working-container$/ { print $1 }' \
+            | while read -r id; do ce rm -f "$id" >/dev/null; done
+        ce image prune -f >/dev/null
+    else
+        ce builder prune -af >/dev/null
+    fi
 fi
 
 # --- base image -------------------------------------------------------------
