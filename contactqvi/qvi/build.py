@@ -14,18 +14,17 @@ from petsc4py import PETSc
 import numpy as np
 import ufl
 
-import dolfinx.fem.petsc
 from dolfinx import fem, la
 from dolfinx import mesh as dmesh
 
-from contactqvi.linalg import create_ksp, preset
+from contactqvi.lifetime import PETScOwner
+from contactqvi.linalg import assemble_system, create_ksp, preset
 from contactqvi.meshes import create_unit_interval, create_unit_square
 from contactqvi.parameters import Parameter, Parameters, require
 from contactqvi.qvi.data import ObstacleQVIData, SemilinearVIData
 from contactqvi.qvi.maps import CompositeMap, ObstacleQVIMap, RegularisedQVIMap, SemilinearVIMap
 from contactqvi.qvi.outer import FIXED_POINT_PARAMETERS, FixedPointSolver
 from contactqvi.qvi.temperature import TemperatureMap
-from contactqvi.lifetime import PETScOwner
 from contactqvi.vi.moreau_yosida import PathFollowingMoreauYosida
 from contactqvi.vi.problem import ObstacleProblem
 from contactqvi.vi.solver import ObstacleSolver, check_obstacle_parameters
@@ -97,12 +96,7 @@ def _poisson(V: fem.FunctionSpace, f: ufl.core.expr.Expr, bcs: list[fem.Dirichle
     u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
     a = fem.form(ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx)
     L = fem.form(f * v * ufl.dx(metadata={"quadrature_degree": 4}))
-    A = dolfinx.fem.petsc.assemble_matrix(a, bcs=bcs)
-    A.assemble()
-    b = dolfinx.fem.petsc.assemble_vector(L)
-    dolfinx.fem.petsc.apply_lifting(b, [a], bcs=[bcs])
-    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-    dolfinx.fem.petsc.set_bc(b, bcs)
+    A, b = assemble_system(a, L, bcs)
     w = fem.Function(V, name="initial")
     ksp = create_ksp(V.mesh.comm, "qvi_initial_", preset("lu"), A=A)
     ksp.solve(b, w.x.petsc_vec)

@@ -28,10 +28,10 @@ import ufl
 import dolfinx.fem.petsc
 from dolfinx import fem
 
+from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import reassemble_matrix
 from contactqvi.qvi.newton_system import BlockNewtonSystem, diagonal_matrix
 from contactqvi.qvi.temperature import TemperatureMap
-from contactqvi.lifetime import PETScOwner
 from contactqvi.vi.moreau_yosida import PathFollowingMoreauYosida, huber_derivative
 from contactqvi.vi.problem import ObstacleProblem
 from contactqvi.vi.solver import ObstacleResult, ObstacleSolver, rho_path

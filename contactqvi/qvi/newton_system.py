@@ -23,8 +23,8 @@ from petsc4py import PETSc
 
 import numpy as np
 
-from contactqvi.linalg import create_ksp, ksp_converged_reason, preset
 from contactqvi.lifetime import PETScOwner
+from contactqvi.linalg import create_ksp, ksp_converged_reason, preset
 
 __all__ = ["BlockNewtonSystem", "diagonal_matrix"]
 

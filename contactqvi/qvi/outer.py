@@ -38,11 +38,11 @@ import ufl
 import dolfinx.fem.petsc
 from dolfinx import fem
 
+from contactqvi.lifetime import PETScOwner
 from contactqvi.parameters import Parameter, Parameters
 from contactqvi.qvi.maps import CompositeMap, Evaluation
 from contactqvi.qvi.projection import BallProjection
 from contactqvi.result import Result, Status, Timings
-from contactqvi.lifetime import PETScOwner
 
 __all__ = ["FIXED_POINT_PARAMETERS", "QVIResult", "FixedPointSolver"]
 

@@ -8,8 +8,8 @@ from petsc4py import PETSc
 
 import numpy as np
 
-from contactqvi.parameters import require_positive
 from contactqvi.lifetime import PETScOwner
+from contactqvi.parameters import require_positive
 
 __all__ = ["BallProjection"]
 

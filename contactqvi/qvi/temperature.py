@@ -21,9 +21,9 @@ import ufl
 import dolfinx.fem.petsc
 from dolfinx import fem
 
+from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import create_snes, preset, reassemble_matrix
 from contactqvi.parameters import require_positive
-from contactqvi.lifetime import PETScOwner
 from contactqvi.vi.nonlinear import NonlinearFormProblem, snes_converged_reason
 
 __all__ = ["ScalarNonlinearity", "TemperatureMap", "DEFAULT_PHI_OPTIONS"]

@@ -1,6 +1,5 @@
 """Obstacle problems: PFMY path following, PDAS feasibility restoration, SNES VI (seed 003, E2)."""
 
-from contactqvi.lifetime import PETScOwner
 from contactqvi.vi.moreau_yosida import PathFollowingMoreauYosida, PFMYResult, huber, huber_derivative
 from contactqvi.vi.nonlinear import AffineProblem, NonlinearFormProblem, snes_converged_reason, snes_status
 from contactqvi.vi.pdas import ObstacleActiveSetSolver, PDASResult
@@ -18,7 +17,6 @@ __all__ = [
     "ObstacleSNESVI",
     "ObstacleSolver",
     "PDASResult",
-    "PETScOwner",
     "PFMYResult",
     "PathFollowingMoreauYosida",
     "SNESVIResult",

@@ -11,9 +11,9 @@ import ufl
 
 from dolfinx import fem
 
+from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import create_snes, preset
 from contactqvi.result import Result, Status
-from contactqvi.lifetime import PETScOwner
 from contactqvi.vi.nonlinear import NonlinearFormProblem, snes_converged_reason, snes_status
 from contactqvi.vi.problem import ObstacleProblem
 

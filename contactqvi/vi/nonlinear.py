@@ -16,9 +16,9 @@ from petsc4py import PETSc
 import dolfinx.fem.petsc
 from dolfinx import fem
 
+from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import reassemble_matrix
 from contactqvi.result import Status
-from contactqvi.lifetime import PETScOwner
 
 __all__ = ["AffineProblem", "NonlinearFormProblem", "SNESProblem", "snes_converged_reason", "snes_status"]
 

@@ -23,9 +23,9 @@ from petsc4py import PETSc
 
 import numpy as np
 
+from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import create_ksp, preset
 from contactqvi.result import Result, Status
-from contactqvi.lifetime import PETScOwner
 from contactqvi.vi.problem import ObstacleProblem
 
 __all__ = ["PDASResult", "ObstacleActiveSetSolver"]

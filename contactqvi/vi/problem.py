@@ -17,8 +17,8 @@ import ufl
 import dolfinx.fem.petsc
 from dolfinx import fem
 
-from contactqvi.parameters import require
 from contactqvi.lifetime import PETScOwner
+from contactqvi.parameters import require
 
 __all__ = ["ObstacleProblem"]
 

@@ -9,9 +9,9 @@ import numpy as np
 
 from dolfinx import fem
 
+from contactqvi.lifetime import PETScOwner
 from contactqvi.parameters import Parameter, Parameters, require
 from contactqvi.result import Result, Status
-from contactqvi.lifetime import PETScOwner
 from contactqvi.vi.moreau_yosida import PathFollowingMoreauYosida
 from contactqvi.vi.pdas import ObstacleActiveSetSolver
 from contactqvi.vi.problem import ObstacleProblem
