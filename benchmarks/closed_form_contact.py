@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import pathlib
+import shutil
 import tempfile
 
 import benchlib
@@ -34,8 +35,11 @@ def _run(case_file: pathlib.Path, mesh: str | None, comm) -> tuple[dict, dict]:
     if mesh is not None:
         raw["mesh"] = {"file": str(ROOT / "meshes" / mesh)}
     case = parse_case(raw, case_file.parent)
-    with tempfile.TemporaryDirectory() as tmp:
-        summary, code = run_case(case, comm.bcast(tmp, root=0), comm, plot=False)
+    tmp = comm.bcast(tempfile.mkdtemp() if comm.rank == 0 else None, root=0)
+    summary, _ = run_case(case, tmp, comm, plot=False)  # a failed step shows as its status in the table
+    comm.Barrier()
+    if comm.rank == 0:
+        shutil.rmtree(tmp)
     return summary, raw
 
 

@@ -35,9 +35,11 @@ def profile(comm: MPI.Comm, lev: int, case: str, pc: str) -> dict:
         if stage is not None:
             for event in EVENTS:
                 info = PETSc.Log.Event(event).getPerfInfo(stage.id)
-                if info["count"]:
-                    events[event] = {"count": info["count"], "seconds": comm.allreduce(info["time"], op=MPI.MAX)}
-        phases[name] = {"seconds": seconds, "events": events}
+                count = comm.allreduce(info["count"], op=MPI.MAX)
+                seconds_max = comm.allreduce(info["time"], op=MPI.MAX)
+                if count:
+                    events[event] = {"count": count, "seconds": seconds_max}
+        phases[name] = {"seconds": comm.allreduce(seconds, op=MPI.MAX), "events": events}
     return {**{k: row[k] for k in ("lev", "case", "mpi_size", "status", "it", "krylov", "n", "peak_rss_mib")},
             "phases": phases}
 

@@ -68,8 +68,12 @@ def main(argv: list[str] | None = None) -> int:
     name = argv[0]
     if name == "run":
         return run(argv[1:])
-    if name not in DEMOS or demos is None:
+    if name not in DEMOS:
         print(f"contactqvi: unknown command {name!r}; known: run, {', '.join(DEMOS)}", file=sys.stderr)
+        return 2
+    if demos is None:
+        print(f"contactqvi: the demos are not installed (neither ../demos nor <prefix>/share/contactqvi/demos)",
+              file=sys.stderr)
         return 2
     script = demos / f"{name}.py"
     sys.argv = [str(script), *argv[1:]]

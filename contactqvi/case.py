@@ -32,7 +32,7 @@ SI units throughout (m, Pa, N/m^3). Example::
     normal = [0.0, 0.0, 1.0]            # sphere: center, radius; cylinder: point, axis, radius
 
     [[steps]]                           # load path; none = one step, load 1, no translation
-    load = 0.5                          # factor on tractions and body force
+    load = 0.5                          # factor on tractions, body force, prescribed displacements
     translation = [0.0, 0.0, 0.0]       # obstacle translation (m) from its initial position
     [[steps]]
     load = 1.0
@@ -77,6 +77,7 @@ import tomllib
 import typing
 
 from contactqvi import obstacles
+from contactqvi.contact.load_path import LoadStep as Step
 from contactqvi.parameters import ParameterError, require, require_choice, require_positive
 
 __all__ = [
@@ -220,20 +221,6 @@ class ObstacleShape:
         """The analytic obstacle (:mod:`contactqvi.obstacles`) in its initial position."""
         kinds = {"plane": obstacles.Plane, "sphere": obstacles.Sphere, "cylinder": obstacles.Cylinder}
         return kinds[self.type](**{key: getattr(self, key) for key in OBSTACLE_KEYS[self.type]})
-
-
-@dataclasses.dataclass(frozen=True)
-class Step:
-    """``[[steps]]``: one load step of the quasi-static path.
-
-    Attributes:
-        load: factor on the tractions and the body force.
-        translation: rigid translation of the obstacle (m), total at this step,
-            relative to its initial position.
-    """
-
-    load: float = 1.0
-    translation: Vector = (0.0, 0.0, 0.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -512,7 +499,9 @@ def _check_steps(steps: typing.Sequence[Step]) -> tuple[Step, ...]:
     checked = []
     for i, step in enumerate(steps):
         _instance(step, Step, f"steps[{i}]")
-        checked.append(Step(_number(step.load, f"steps[{i}].load"), _vector(step.translation, f"steps[{i}].translation")))
+        load = _number(step.load, f"steps[{i}].load")
+        require(load >= 0.0, f"steps[{i}].load", f"must be >= 0, got {load!r}")
+        checked.append(Step(load, _vector(step.translation, f"steps[{i}].translation")))
     return tuple(checked) or (Step(),)
 
 

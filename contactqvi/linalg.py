@@ -90,9 +90,10 @@ KSP_PRESETS: dict[str, OptionsDict] = {
 }
 
 
-def preset(name: str, **overrides: typing.Any) -> OptionsDict:
-    """A copy of the options of preset ``name`` (:data:`KSP_PRESETS`), with ``overrides``."""
-    require_choice("pc", name, KSP_PRESETS)
+def preset(name: str, parameter: str = "pc", **overrides: typing.Any) -> OptionsDict:
+    """A copy of the options of preset ``name`` (:data:`KSP_PRESETS`), with ``overrides``;
+    an unknown name raises :class:`~contactqvi.parameters.ParameterError` for ``parameter``."""
+    require_choice(parameter, name, KSP_PRESETS)
     return {**KSP_PRESETS[name], **overrides}
 
 

@@ -65,7 +65,8 @@ class Obstacle(abc.ABC):
 
     @abc.abstractmethod
     def distance(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Signed distance g (m,) and unit normal n (m, 3) at points ``x`` (m, 3)."""
+        """Signed distance g (m,) and unit normal n (m, 3) at points ``x`` (m, 3); the
+        normal is nan where it is undefined (a sphere's centre, a cylinder's axis)."""
 
     @abc.abstractmethod
     def translated(self, c: Vector) -> Obstacle:
@@ -110,8 +111,8 @@ class Sphere(Obstacle):
     def distance(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         offset = np.asarray(x, dtype=float).reshape(-1, 3) - self.center
         length = np.linalg.norm(offset, axis=1)
-        require(bool(np.all(length > 0)), "obstacle.center", "a body node lies at the sphere's centre")
-        return length - self.radius, offset / length[:, None]
+        with np.errstate(invalid="ignore", divide="ignore"):  # a point at the centre: nan normal
+            return length - self.radius, offset / length[:, None]
 
     def translated(self, c: Vector) -> Sphere:
         return Sphere(self.center + _point("translation", c), self.radius)
@@ -135,8 +136,8 @@ class Cylinder(Obstacle):
         offset = np.asarray(x, dtype=float).reshape(-1, 3) - self.point
         radial = offset - (offset @ self.axis)[:, None] * self.axis
         length = np.linalg.norm(radial, axis=1)
-        require(bool(np.all(length > 0)), "obstacle.axis", "a body node lies on the cylinder's axis")
-        return length - self.radius, radial / length[:, None]
+        with np.errstate(invalid="ignore", divide="ignore"):  # a point on the axis: nan normal
+            return length - self.radius, radial / length[:, None]
 
     def translated(self, c: Vector) -> Cylinder:
         return Cylinder(self.point + _point("translation", c), self.axis, self.radius)

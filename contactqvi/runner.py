@@ -2,8 +2,8 @@
 
 :func:`build_problem` turns a :class:`~contactqvi.case.ContactCase` into a
 :class:`~contactqvi.contact.problem.ContactProblem`; :func:`run_case` solves its
-load path with the SCD semismooth* Newton method and writes, per step, the result
-results of every converged step as one time step (time = step number) of
+load path with the SCD semismooth* Newton method and writes the results of every
+converged step as one time step (time = step number) of
 ``OUTPUT/body.bp`` (displacement, stress, von Mises) and ``OUTPUT/contact_surface.bp``
 (:class:`~contactqvi.contact.postprocess.ContactResultsWriter`), and rewrites
 ``OUTPUT/summary.json`` after each step (status, Newton and Krylov counts, contact
@@ -29,11 +29,11 @@ from contactqvi.contact.load_path import LoadStep, solve_load_path
 from contactqvi.contact.postprocess import ContactResultsWriter, plot_contact_states
 from contactqvi.contact.problem import ContactProblem, build_contact_problem
 from contactqvi.contact.scd_newton import SCDNewtonResult
+from contactqvi.linalg import default_options
 from contactqvi.meshes import create_contact_body, read_gmsh
-from contactqvi.obstacles import Cylinder, Obstacle, Plane, Sphere
 from contactqvi.problems.coulomb import gap_function
 
-__all__ = ["PREFIX", "build_problem", "obstacle_of", "run_case"]
+__all__ = ["PREFIX", "build_problem", "read_mesh", "run_case"]
 
 logger = logging.getLogger(__name__)
 
@@ -51,26 +51,15 @@ def read_mesh(case: ContactCase, comm: MPI.Comm) -> tuple[dmesh.Mesh, dmesh.Mesh
     return msh, tags
 
 
-def obstacle_of(case: ContactCase) -> Obstacle:
-    """The rigid obstacle of ``[obstacle]``."""
-    o = case.obstacle
-    if o.type == "plane":
-        return Plane(o.point, o.normal)
-    if o.type == "sphere":
-        return Sphere(o.center, o.radius)
-    return Cylinder(o.point, o.axis, o.radius)
-
-
 def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
     """Mesh and assembled contact problem of ``case`` (load factor 1, obstacle at rest)."""
     msh, tags = read_mesh(case, comm)
     b, c = case.boundary, case.contact
-    displacements = {name: {i: value for i, value in enumerate((d.x, d.y, d.z)) if value is not None}
-                     for name, d in b.displacement.items()}
     return build_contact_problem(
         msh, tags, case.material.young, case.material.poisson, dict(b.traction),
         friction=c.friction or 0.0, slip_bound=c.slip_bound or 0.0, clamped=b.clamped, contact=c.surface,
-        obstacle=obstacle_of(case), body_force=b.body_force, displacements=displacements,
+        obstacle=case.obstacle.create(), body_force=b.body_force,
+        displacements={name: d.components() for name, d in b.displacement.items()},
     )
 
 
@@ -80,31 +69,23 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
 
     The first step starts from the body at rest (``solver.start = "rest"``, the
     default, u~ = 0) or, as in seed 000, Sect. 7, from u = 0 in the shifted variables
-    (``"contact"``: every contact node on the obstacle).
+    (``"contact"``: every contact node on the obstacle). The case's ``[petsc]``
+    options are in the options database only while it runs.
 
-    Returns the summary (also in ``output/summary.json``) and the exit code (0 all
-    steps converged, 1 a step did not).
-
-    Returns the step results and the exit code (0 all steps converged, 1 a step did not).
+    Returns:
+        The summary (also in ``output/summary.json``) and the exit code: 0 when every
+        step converged, 1 when one did not.
     """
-    opts = PETSc.Options()
-    for name, value in case.petsc.items():
-        if not opts.hasName(PREFIX + name):
-            opts[PREFIX + name] = "" if value is True else value
-    problem = build_problem(case, comm)
-    logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks",
-                problem.n_contact, problem.n_free, len(case.steps), comm.size)
-    summary: dict[str, typing.Any] = {
-        "problem": "contact case", "case": case.to_dict(), "mpi_size": comm.size,
-        "p": problem.n_contact, "n": problem.n_free, "steps": [],
-    }
-    steps = [LoadStep(s.load, s.translation) for s in case.steps]
     parameters = dict(case.solver)
-    u = problem.A.createVecRight()
-    if parameters.pop("start", "rest") == "rest":
-        problem.set_step(steps[0].load, steps[0].translation)
-        problem.shift.copy(u)  # u~ = 0
-    with ContactResultsWriter(output, comm) as writer:
+    from_rest = parameters.pop("start", "rest") == "rest"
+    with default_options(PREFIX, case.petsc), build_problem(case, comm) as problem:
+        logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks",
+                    problem.n_contact, problem.n_free, len(case.steps), comm.size)
+        summary: dict[str, typing.Any] = {
+            "problem": "contact case", "case": case.to_dict(), "mpi_size": comm.size,
+            "p": problem.n_contact, "n": problem.n_free, "steps": [],
+        }
+        writer = ContactResultsWriter(output, comm)
 
         def record(index: int, step: LoadStep, u: PETSc.Vec, result: SCDNewtonResult) -> None:
             entry = {"step": index + 1, "load": step.load, "translation": list(step.translation), **result.summary()}
@@ -118,15 +99,16 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
                         index + 1, result.status, result.iterations, result.inner_iterations,
                         _vector_text(entry.get("contact_force")), entry.get("contact_area", float("nan")))
 
+        u = problem.A.createVecRight()
         try:
-            results = solve_load_path(problem, steps, u, parameters, prefix=PREFIX, on_step=record)
+            results = solve_load_path(problem, case.steps, u, parameters, PREFIX, record, from_rest)
         finally:
             u.destroy()
-            problem.destroy()
-        if plot and writer.last is not None:
-            summary["plot"] = plot_contact_states(writer.out / "contact_states.png", writer.last[1])
-            io.write_summary(comm, writer.out / "summary.json", summary)
-    return summary, 0 if results and results[-1].converged and len(results) == len(steps) else 1
+            writer.close()  # keeps every converged step, also when a later one raised
+    if plot and writer.last is not None:
+        summary["plot"] = plot_contact_states(writer.out / "contact_states.png", writer.last[1])
+        io.write_summary(comm, writer.out / "summary.json", summary)
+    return summary, 0 if results[-1].converged and len(results) == len(case.steps) else 1
 
 
 def _vector_text(vector: typing.Sequence[float] | None) -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pathlib
+import shutil
 import subprocess
 import sys
 
@@ -13,10 +14,11 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 
 @pytest.mark.serial
 def test_installed_package_runs_the_demos_and_cases(tmp_path):
-    venv = tmp_path / "venv"
+    venv, source = tmp_path / "venv", tmp_path / "source"  # the build writes into its source tree: a copy
+    shutil.copytree(ROOT, source, ignore=shutil.ignore_patterns(".git", ".venv", "build", "results", "*.egg-info"))
     subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)], check=True)
     python = venv / "bin" / "python"
-    subprocess.run([str(python), "-m", "pip", "install", "-q", "--no-build-isolation", "--no-deps", str(ROOT)],
+    subprocess.run([str(python), "-m", "pip", "install", "-q", "--no-build-isolation", "--no-deps", str(source)],
                    check=True, cwd=tmp_path)
     listing = subprocess.run([str(python), "-m", "contactqvi", "--help"], capture_output=True, text=True,
                              check=True, cwd=tmp_path).stdout

@@ -201,3 +201,18 @@ def test_contact_objects_free_their_petsc_objects(mpi_tmp_path):
         return [u, problem]
 
     assert_frees_petsc_objects(run, mpi_tmp_path)
+
+
+def test_rollers_on_the_contact_surface_must_be_zero():
+    with pytest.raises(ParameterError, match=r"^boundary.displacement: \d+ components prescribed on contact nodes"):
+        _paper_problem(1, displacements={"contact": {0: 1e-4}})
+
+
+def test_a_step_that_starts_at_its_solution():
+    """Nothing loaded, nothing moved: ||y^(0)|| = 0 is converged, not a division by zero."""
+    problem = _paper_problem(1)
+    u = problem.A.createVecRight()
+    results = solve_load_path(problem, [LoadStep(0.0), LoadStep(1.0)], u, {"pc": "lu"}, prefix="cases_",
+                              from_rest=True)
+    assert [r.iterations for r in results][0] == 0 and all(r.converged for r in results)
+    assert results[0].history[0]["relative_residual"] == 0.0

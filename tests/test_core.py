@@ -19,14 +19,17 @@ TABLE = Parameters(
 )
 
 
-def test_status_sign_is_convergence():
-    assert all(s.converged == (s.value > 0) for s in Status)
+def test_status_names_and_signs():
+    converged = {s.name for s in Status if s.converged}
+    assert converged == {"CONVERGED_RTOL", "CONVERGED_ATOL", "CONVERGED_ACTIVE_SET", "CONVERGED_STEP",
+                         "CONVERGED_INEXACT", "CONVERGED_ITERATIONS"}
     assert str(Status.DIVERGED_LINE_SEARCH) == "diverged_line_search"
     result = Result(status=Status.CONVERGED_RTOL, iterations=3)
     assert result.converged and result.summary()["status"] == "converged_rtol"
-    with result.timings.phase("solve"):
-        pass
-    assert result.timings["solve"] >= 0.0
+    for _ in range(2):
+        with result.timings.phase("solve"):
+            sum(range(10000))
+    assert result.timings["solve"] > 0.0 and list(result.timings) == ["solve"]
     assert not Result(status=Status.DIVERGED_MAX_IT, iterations=3).converged
 
 
@@ -50,7 +53,7 @@ def test_parameters_merge_and_convert():
     ],
 )
 def test_parameters_reject_bad_values_by_name(given, text):
-    with pytest.raises(ParameterError, match=None) as info:
+    with pytest.raises(ParameterError) as info:
         TABLE.check(given)
     assert str(info.value).startswith(text)
 

@@ -75,7 +75,7 @@ def solve_tresca_fixed_point(
         norm0 = point.norm
         target = max(p["rtol"] * norm0, p["atol"])
         for j in range(max_iterations + 1):
-            entry = {"j": j, "residual": point.norm, "relative_residual": point.norm / norm0}
+            entry = {"j": j, "residual": point.norm, "relative_residual": point.norm / norm0 if norm0 else 0.0}
             result.history.append(entry)
             if point.norm <= target:
                 result.status = Status.CONVERGED_ATOL if point.norm <= p["atol"] else Status.CONVERGED_RTOL
@@ -91,7 +91,7 @@ def solve_tresca_fixed_point(
             entry.update(tresca_status=str(inner.status), newton_iterations=inner.iterations,
                          krylov_iterations=inner.inner_iterations)
             logger.info("  fixed point %3d  |y^| %.3e  rel %.2e  Tresca: %s after %d Newton steps",
-                        j, point.norm, point.norm / norm0, inner.status, inner.iterations)
+                        j, point.norm, entry["relative_residual"], inner.status, inner.iterations)
             if not inner.converged:
                 result.status = Status.DIVERGED_INNER
                 break

@@ -26,7 +26,7 @@ from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult, SCDNewtonSolver
 from contactqvi.parameters import require, require_positive
 
-__all__ = ["LoadStep", "contact_resultants", "solve_load_path"]
+__all__ = ["LoadStep", "check_steps", "contact_resultants", "solve_load_path"]
 
 logger = logging.getLogger(__name__)
 
@@ -45,11 +45,14 @@ class LoadStep:
     load: float = 1.0
     translation: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
-    def __post_init__(self) -> None:
-        require_positive("steps.load", self.load, allow_zero=True)
-        array = np.asarray(self.translation, dtype=float)
-        require(array.shape == (3,) and bool(np.all(np.isfinite(array))), "steps.translation",
-                f"must be 3 finite numbers (m), got {self.translation!r}")
+
+def check_steps(steps: typing.Sequence[LoadStep]) -> None:
+    """Raise :class:`~contactqvi.parameters.ParameterError` for a negative load or a bad translation."""
+    for i, step in enumerate(steps):
+        require_positive(f"steps[{i}].load", step.load, allow_zero=True)
+        array = np.asarray(step.translation, dtype=float)
+        require(array.shape == (3,) and bool(np.all(np.isfinite(array))), f"steps[{i}].translation",
+                f"must be 3 finite numbers (m), got {step.translation!r}")
 
 
 def solve_load_path(
@@ -59,6 +62,7 @@ def solve_load_path(
     parameters: dict[str, typing.Any] | None = None,
     prefix: str = "coulomb_",
     on_step: StepCallback | None = None,
+    from_rest: bool = False,
 ) -> list[SCDNewtonResult]:
     """Solve the steps in turn with one SCD Newton solver; stop at the first that fails.
 
@@ -70,6 +74,7 @@ def solve_load_path(
         parameters: SCD Newton parameters.
         prefix: PETSc options prefix of the Newton-step KSP.
         on_step: called after each step with (index, step, u, result), e.g. to write output.
+        from_rest: start the first step from the body at rest (u~ = 0) instead of ``u``.
 
     Every step after the first stops at the absolute accuracy ``rtol`` times the first
     step's initial residual (or ``atol`` if larger): a step that starts near its
@@ -78,6 +83,7 @@ def solve_load_path(
     Returns:
         The results of the steps solved; the last one failed if it is not converged.
     """
+    check_steps(steps)
     results: list[SCDNewtonResult] = []
     previous = u.duplicate()
     with SCDNewtonSolver(problem, parameters, prefix=prefix) as solver:
@@ -91,6 +97,8 @@ def solve_load_path(
                 u.array.reshape(-1, 3)[problem.contact_blk[touching], :2] = 0.0  # predictor: they stick
             else:
                 problem.set_step(step.load, step.translation)
+                if from_rest:
+                    problem.shift.copy(u)  # u~ = 0
             logger.info("step %d: load factor %g, obstacle translation %s m", index + 1, step.load,
                         np.array2string(np.asarray(step.translation), precision=4))
             result = solver.solve(u)

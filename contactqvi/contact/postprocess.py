@@ -444,8 +444,8 @@ def plot_contact_states(path: str | os.PathLike, fields: ContactSurfaceFields) -
         try:
             _draw_states(pathlib.Path(path), dataset)
             ok = True
-        except ImportError as exc:  # a missing matplotlib must never end a solve
-            logger.warning("no matplotlib (%s); %s is skipped", exc, path)
+        except Exception as exc:  # a figure must never end a solve (nor leave the other ranks waiting)
+            logger.warning("%s is skipped: %s", path, exc)
     return bool(comm.bcast(ok, root=0))
 
 

@@ -70,6 +70,7 @@ class ContactProblem(PETScOwner):
         obstacle: the rigid obstacle in its initial position.
         body: material, supports and loads at load factor 1 (for stresses and reactions).
         rotation: T (frame components to global), or None where every frame is (e1, e2, e3).
+        rollers: (m,) mask of contact nodes whose t1 component is prescribed (zero).
         dirichlet_dofs_loc: local unrolled indices of Dirichlet dofs (incl. ghosts).
         n_contact: global number p of contact nodes.
         n_free: global number n of free dofs.
@@ -89,6 +90,7 @@ class ContactProblem(PETScOwner):
     obstacle: Obstacle
     body: ElasticBody
     rotation: PETSc.Mat | None
+    rollers: np.ndarray
     dirichlet_dofs_loc: np.ndarray
     n_contact: int
     n_free: int
@@ -112,13 +114,17 @@ class ContactProblem(PETScOwner):
         self, load_factor: float = 1.0, translation: typing.Sequence[float] = (0.0, 0.0, 0.0),
         previous: PETSc.Vec | None = None,
     ) -> None:
-        """Shift and load of a load step: tractions and body force times ``load_factor``,
+        """Shift and load of a load step: tractions, body force and prescribed displacements
+        times ``load_factor``,
         the obstacle translated by ``translation`` (total, m), slip measured from the
         physical displacement ``previous`` (nodal frames; None: from rest) and from the
         obstacle's position of the step before.
         """
         translation = np.asarray(translation, dtype=float)
         moved = self.frames[:, :2, :] @ (translation - self.translation)  # tangential obstacle motion per node
+        along = self.comm.allreduce(float(np.abs(moved[self.rollers, 0]).max(initial=0.0)), op=MPI.MAX)
+        require(along <= 1e-12 * max(float(np.linalg.norm(translation - self.translation)), 1e-300),
+                "steps.translation", "the obstacle must not move along a component prescribed on contact nodes")
         nodal = np.zeros((len(self.contact_blk), 3))
         if previous is not None:
             nodal[:, :2] = previous.array.reshape(-1, 3)[self.contact_blk, :2]
@@ -153,7 +159,10 @@ class ContactProblem(PETScOwner):
             vectors.append(self.A.createVecRight())
             self.rotation.multTranspose(mode, vectors[-1])
         modes.destroy()
-        return PETSc.NullSpace().create(vectors=vectors, comm=self.comm)
+        rotated = PETSc.NullSpace().create(vectors=vectors, comm=self.comm)
+        for vector in vectors:  # the null space holds its own references
+            vector.destroy()
+        return rotated
 
 
 def build_contact_problem(
@@ -206,6 +215,9 @@ def build_contact_problem(
     n_owned = V.dofmap.index_map.size_local
     contact_facets = boundary_facets(facet_tags, contact)
     contact_blk, constrained = _contact_nodes(V, contact_facets, dirichlet_dofs_loc)
+    nonzero = msh.comm.allreduce(int(np.count_nonzero(applied.array.reshape(-1, 3)[contact_blk][constrained])))
+    require(nonzero == 0, "boundary.displacement", f"{nonzero} components prescribed on contact nodes are not "
+            "zero; on the contact surface only rollers (zero tangential components) are supported")
     x = V.tabulate_dof_coordinates()[contact_blk]
     _check_penetration(msh, obstacle, x)
     frames = _align_frames(obstacle.frames(x), constrained, msh.comm)
@@ -226,7 +238,7 @@ def build_contact_problem(
         law=FrictionLaw(float(friction), float(slip_bound) * contact_area), frames=frames, obstacle=obstacle,
         body=ElasticBody(young, poisson, facet_tags, tuple(dict.fromkeys([*clamped, *(displacements or {})])),
                          dict(tractions), body_force),
-        rotation=rotation, dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32),
+        rotation=rotation, rollers=constrained.any(axis=1), dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32),
         n_contact=comm.allreduce(len(contact_blk), op=MPI.SUM),
         n_free=comm.allreduce(3 * n_owned - n_fixed_owned, op=MPI.SUM),
     )
@@ -273,7 +285,9 @@ def _align_frames(frames: np.ndarray, constrained: np.ndarray, comm: MPI.Comm) -
     A prescribed displacement component on a contact node (a roller on a symmetry
     plane through the contact) must lie in the tangent plane; with t1 = e_c,
     t2 = n x e_c it is a frame component, so its Dirichlet row stays an identity row
-    in nodal frames and the nodal law acts on the free components.
+    in nodal frames. The nodal law still sees all components; with u_t1 = 0, no
+    obstacle motion along t1 (both checked) and r_t1 = 0 on the Dirichlet row, its
+    argument has w_t1 = 0, so the law leaves u_t1 = 0 and puts no force on it.
     """
     partly = np.flatnonzero(constrained.any(axis=1))
     normals = frames[partly, 2]
@@ -290,7 +304,10 @@ def _align_frames(frames: np.ndarray, constrained: np.ndarray, comm: MPI.Comm) -
 
 def _check_penetration(msh: dmesh.Mesh, obstacle: Obstacle, x: np.ndarray) -> None:
     """Raise if a contact node lies inside the obstacle (beyond round-off of the mesh size)."""
-    gap = obstacle.distance(x)[0]
+    gap, normal = obstacle.distance(x)
+    undefined = msh.comm.allreduce(int(np.count_nonzero(~np.isfinite(normal).all(axis=1))), op=MPI.SUM)
+    require(undefined == 0, "obstacle", f"{undefined} contact nodes lie where the obstacle has no normal "
+            "(a sphere's centre or a cylinder's axis)")
     extent = np.ptp(msh.geometry.x, axis=0).max() if len(msh.geometry.x) else 0.0
     tol = 1e-10 * msh.comm.allreduce(float(extent), op=MPI.MAX)
     count = msh.comm.allreduce(int(np.count_nonzero(gap < -tol)), op=MPI.SUM)

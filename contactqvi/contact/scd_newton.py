@@ -237,8 +237,8 @@ class SCDNewtonSolver(PETScOwner):
             x0.destroy()
         elif self._gamma is None:
             self._gamma = comm.allreduce(float(nodal.max(initial=0.0)), op=MPI.MAX)
-        per_node = self._gamma_nodes is None and self.parameters["gamma_rule"] == "nodal_diagonal"
-        self._gamma_nodes = nodal if per_node and self.parameters["gamma"] is None else np.full(len(blk), self._gamma)
+        per_node = self.parameters["gamma"] is None and self.parameters["gamma_rule"] == "nodal_diagonal"
+        self._gamma_nodes = nodal if per_node else np.full(len(blk), self._gamma)
         gamma = diagonal  # reused: gamma per dof
         gamma.set(self._gamma)
         gamma.array.reshape(-1, 3)[blk] = self._gamma_nodes[:, None]
@@ -386,7 +386,7 @@ class SCDNewtonSolver(PETScOwner):
             normal, tangential, moved = self.classify(point, v_previous if k > 0 else None)
             v_previous = v_forward_backward
             result.states = contact_states(normal, tangential)
-            entry = {"k": k, "residual": point.norm, "relative_residual": point.norm / norm0,
+            entry = {"k": k, "residual": point.norm, "relative_residual": point.norm / norm0 if norm0 else 0.0,
                      "states": _state_counts(comm, result.states), "reversed": moved}
             result.history.append(entry)
             if point.norm <= p["rtol"] * norm0 or point.norm <= p["atol"] or k == p["max_iterations"]:

@@ -59,7 +59,7 @@ class BlockNewtonSystem(PETScOwner):
         self.indices = [is_.getIndices().copy() for is_ in self.nest.getNestISs()[0]]
         self.positions = [idx - start for idx in self.indices]
         self.fixed = [np.zeros(idx.size, bool) for idx in self.indices]
-        self.ksp = self._own(create_ksp(comm, prefix, preset(ksp)))
+        self.ksp = self._own(create_ksp(comm, prefix, preset(ksp, "ksp")))
         sizes = (self.nest.getLocalSize()[0], self.nest.getSize()[0])
         #: solution and right-hand side in the layout of the monolithic matrix
         self.x, self.b = (self._own(PETSc.Vec().createMPI(sizes, comm=comm)) for _ in range(2))

@@ -58,7 +58,7 @@ class ObstacleActiveSetSolver(PETScOwner):
         ksp: str = "lu",
     ):
         self.problem, self.max_iterations = problem, max_iterations
-        self.ksp = self._own(create_ksp(problem.comm, prefix, preset(ksp)))
+        self.ksp = self._own(create_ksp(problem.comm, prefix, preset(ksp, "ksp")))
         self.c = self._own(problem.A.getDiagonal())
         self.c.scale(c)
         self.rhs = self._own(problem.load.duplicate())

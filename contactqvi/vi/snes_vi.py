@@ -64,7 +64,7 @@ class SNESVariationalInequality(PETScOwner):
     def __init__(self, problem: SNESProblem, prefix: str, ksp: str = "lu", options: OptionsDict | None = None):
         self.problem = problem
         comm = problem.A.getComm()
-        self.snes = self._own(create_snes(comm, prefix, {**VI_OPTIONS, **preset(ksp), **(options or {})}))
+        self.snes = self._own(create_snes(comm, prefix, {**VI_OPTIONS, **preset(ksp, "ksp"), **(options or {})}))
         problem.attach(self.snes)
         self.lower = self._own(problem.b.duplicate())
         self.lower.set(PETSc.NINFINITY)
