@@ -117,4 +117,7 @@ def rigid_motions_nullspace(V: fem.FunctionSpace) -> PETSc.NullSpace:
         vec = la.create_petsc_vector(index_map, bs)
         vec.array[:] = b.array[: n_owned * bs]
         vectors.append(vec)
-    return PETSc.NullSpace().create(vectors=vectors, comm=msh.comm)
+    nullspace = PETSc.NullSpace().create(vectors=vectors, comm=msh.comm)
+    for vec in vectors:  # our handles; left to the garbage collector they outlive the null space in parallel
+        vec.destroy()
+    return nullspace

@@ -154,14 +154,14 @@ class ContactProblem(PETScOwner):
         modes = rigid_motions_nullspace(self.V)
         if self.rotation is None:
             return modes
-        vectors = []
-        for mode in modes.getVecs():
-            vectors.append(self.A.createVecRight())
-            self.rotation.multTranspose(mode, vectors[-1])
-        modes.destroy()
+        global_modes = modes.getVecs()
+        vectors = [self.A.createVecRight() for _ in global_modes]
+        for mode, vector in zip(global_modes, vectors):
+            self.rotation.multTranspose(mode, vector)
         rotated = PETSc.NullSpace().create(vectors=vectors, comm=self.comm)
-        for vector in vectors:  # the null space holds its own references
+        for vector in [*global_modes, *vectors]:  # the null spaces hold their own references
             vector.destroy()
+        modes.destroy()
         return rotated
 
 
