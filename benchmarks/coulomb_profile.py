@@ -18,7 +18,6 @@ from petsc4py import PETSc
 
 import benchlib
 
-from contactqvi import io
 from contactqvi.result import Timings
 
 #: PETSc events reported inside the phases.
@@ -66,7 +65,7 @@ def main() -> None:
     args, comm, out = benchlib.parse(parser)
     rows = benchlib.merge_rows(out / "coulomb_profile.json", [profile(comm, args.lev, args.case, args.pc)],
                                ("lev", "case", "mpi_size"))
-    io.write_table(comm, out / "coulomb_profile", {"machine": benchlib.machine(comm), "rows": rows}, markdown(rows))
+    benchlib.emit(comm, out, "coulomb_profile", rows, markdown(rows))
 
 
 if __name__ == "__main__":
