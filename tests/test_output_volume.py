@@ -8,13 +8,13 @@ from petsc4py import PETSc
 import numpy as np
 import pytest
 
-import dolfinx.fem.petsc
 from dolfinx import fem
 
 from contactqvi import meshes
 from contactqvi.contact import build_contact_problem
 from contactqvi.contact.load_path import LoadStep, contact_resultants, solve_load_path
 from contactqvi.elasticity import elasticity_forms
+from contactqvi.linalg import assemble_system, create_ksp, preset
 from contactqvi.postprocess import ElasticBody, applied_force, reaction_forces, stress_fields, von_mises
 from contactqvi.problems import coulomb as data
 
@@ -75,17 +75,8 @@ def test_uniaxial_stress_and_reactions():
 
 def _solve(V: fem.FunctionSpace, a: fem.Form, L: fem.Form, bcs: list[fem.DirichletBC]) -> fem.Function:
     """Linear solve by LU (MUMPS)."""
-    A = dolfinx.fem.petsc.assemble_matrix(a, bcs=bcs)
-    A.assemble()
-    b = dolfinx.fem.petsc.assemble_vector(L)
-    dolfinx.fem.petsc.apply_lifting(b, [a], bcs=[bcs])
-    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-    dolfinx.fem.petsc.set_bc(b, bcs)
-    ksp = PETSc.KSP().create(A.getComm())
-    ksp.setOperators(A)
-    ksp.setType("preonly")
-    ksp.getPC().setType("lu")
-    ksp.getPC().setFactorSolverType("mumps")
+    A, b = assemble_system(a, L, bcs)
+    ksp = create_ksp(A.getComm(), "test_volume_", preset("lu"), A=A)
     u = fem.Function(V)
     ksp.solve(b, u.x.petsc_vec)
     u.x.scatter_forward()

@@ -11,6 +11,8 @@ A problem owns its work vector ``b``, its matrix ``A`` and the callbacks
 
 from __future__ import annotations
 
+import abc
+
 from petsc4py import PETSc
 
 import dolfinx.fem.petsc
@@ -23,17 +25,19 @@ from contactqvi.result import Status
 __all__ = ["AffineProblem", "NonlinearFormProblem", "SNESProblem", "snes_converged_reason", "snes_status"]
 
 
-class SNESProblem(PETScOwner):
+class SNESProblem(PETScOwner, abc.ABC):
     """Callbacks ``F``, ``J`` with the work vector ``b`` and matrix ``A`` they fill."""
 
     b: PETSc.Vec
     A: PETSc.Mat
 
+    @abc.abstractmethod
     def F(self, snes: PETSc.SNES, x: PETSc.Vec, b: PETSc.Vec) -> None:
-        raise NotImplementedError
+        """Residual at ``x`` into ``b``."""
 
+    @abc.abstractmethod
     def J(self, snes: PETSc.SNES, x: PETSc.Vec, A: PETSc.Mat, P: PETSc.Mat) -> None:
-        raise NotImplementedError
+        """Jacobian at ``x`` into ``A`` (= ``P``)."""
 
     def attach(self, snes: PETSc.SNES) -> None:
         """Register the callbacks and work objects with ``snes``."""
