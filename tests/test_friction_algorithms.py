@@ -122,8 +122,12 @@ def test_alm_reports_a_failed_inner_solve():
         result = augmented_lagrangian(pdas, max_outer=3, **parameters)
         assert result.status == Status.DIVERGED_INNER and not result.converged and result.iterations == 2
         assert result.history[-1]["inner_status"] == "diverged_cycling"
-        # y and lambda are the last accepted iterate, that of step 1
-        assert np.array_equal(result.lam, first.lam) and np.array_equal(result.y.x.array, y_first)
+        # y and lambda are the last accepted iterate, that of step 1 (a separate run: MUMPS on 2 ranks is
+        # reproducible to round-off only), not the rejected one, which is O(1) away
+        scale = problem.max_abs(first.lam)
+        assert problem.max_abs(result.lam - first.lam) <= 1e-12 * scale
+        assert np.allclose(result.y.x.array, y_first, rtol=0, atol=1e-12 * np.abs(y_first).max())
+        assert result.history[-1]["lambda_change"] > 0.1 * scale
 
 
 def test_pdas_inexact_stop_reduces_residual():
