@@ -14,12 +14,15 @@ named after it:
      (d^, gamma u - (A u - l) - gamma d^) (Cor. 6.8, nodal bases in
      :func:`contactqvi.contact.nodal.scd_adjoint_blocks`);
   3. :meth:`~SCDNewtonSolver.newton_system` (5.4): (W*^T A + U*^T) du = -(W*^T y1^ + U*^T y2^),
-     rows of non-contact dofs those of A (Q^R = 0: rge(I, 0)), assembled as D A + U
-     with block-diagonal D = W*^T, U = U*^T within the sparsity of A; rows whose
-     subspace is rge(0, I) (the normal row of a contact node, all rows of a sticking
-     node) are pure identity rows and are eliminated exactly (MatZeroRowsColumns);
+     rows of non-contact dofs those of A (Q^R = 0: rge(I, 0)), J = D A + U with
+     block-diagonal D = W*^T, U = U*^T, kept as A plus a change on the contact rows
+     (:class:`~contactqvi.contact.newton_matrix.NewtonMatrix`); rows whose subspace
+     is rge(0, I) (the normal row of a contact node, all rows of a sticking node) are
+     pure identity rows and are eliminated exactly (MatZeroRowsColumns);
   4. :meth:`~SCDNewtonSolver.linear_solve`: the inexact Krylov solve to ``tol``
-     (Sect. 7), preconditioner kept while no contact node changes its kind;
+     (Sect. 7); a multigrid preconditioner is set up once and its coarse operators
+     follow J by Galerkin products of the contact rows' change
+     (:class:`~contactqvi.multigrid.GalerkinUpdate`);
   5. :meth:`~SCDNewtonSolver.line_search`: the non-monotone line search of Sect. 7 on ||y^||.
 """
 
@@ -35,9 +38,11 @@ from petsc4py import PETSc
 import numpy as np
 
 from contactqvi.contact.nodal import State, classify, contact_states, resolvent, scd_adjoint_blocks, stick_reversed_slip
+from contactqvi.contact.newton_matrix import NewtonMatrix
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import create_ksp, default_options, ksp_converged_reason, power_iteration, preset
+from contactqvi.multigrid import GalerkinUpdate, is_multigrid
 from contactqvi.parameters import Parameter, Parameters
 from contactqvi.result import Result, Status
 
@@ -83,7 +88,8 @@ PARAMETERS = Parameters(
     eliminate_fixed_rows=Parameter(True, "solve the identity rows (sticking, normal contact rows) exactly", type=bool),
     max_line_search=Parameter(20, "step sizes tried by the line search before it fails", type=int, minimum=1),
     pc=Parameter("gamg", "Newton-step solver", type=str, choices=tuple(NEWTON_STEP_SOLVERS)),
-    reuse_pc=Parameter(True, "keep the preconditioner while no contact node changes its kind", type=bool),
+    reuse_pc=Parameter(True, "multigrid: set up once, coarse operators updated by the contact rows' change; "
+                       "other preconditioners: kept while no contact node changes its kind", type=bool),
 )
 
 #: Rules for gamma of (6.17) when it is not given.
@@ -192,10 +198,10 @@ class SCDNewtonSolver(PETScOwner):
         self.problem = problem
         self.parameters = p = PARAMETERS.check(parameters)
         A = problem.A
-        self._D = _block_diagonal_like(A, np.eye(3))  # W*^T = I off the contact nodes
-        self._U = _block_diagonal_like(A, np.zeros((3, 3)))  # U*^T = 0 off the contact nodes
-        self._J: PETSc.Mat | None = None
+        self._newton = NewtonMatrix(A, problem.contact_blk)
         self._near_nullspace = problem.near_nullspace()  # for AMG; the rows of J off the contact are A's
+        self._newton.J.setNearNullSpace(self._near_nullspace)
+        self._galerkin: GalerkinUpdate | None = None
         self._ksp_options = preset(NEWTON_STEP_SOLVERS[p["pc"]])
         self.ksp = create_ksp(problem.comm, prefix, self._ksp_options, rtol=p["tol"])
         self._steps = line_search_steps(p["max_line_search"])
@@ -207,7 +213,7 @@ class SCDNewtonSolver(PETScOwner):
         self._work = {name: A.createVecRight() for name in names}
 
     def petsc_objects(self) -> list[typing.Any]:
-        objects = (self.ksp, self._D, self._U, self._J, self._near_nullspace, *self._work.values(),
+        objects = (self._galerkin, self.ksp, self._newton, self._near_nullspace, *self._work.values(),
                    *self._gamma_dofs.values())
         return [obj for obj in objects if obj is not None]
 
@@ -306,46 +312,51 @@ class SCDNewtonSolver(PETScOwner):
         The right-hand side goes to ``rhs`` and the eliminated rows' exact values to
         ``du`` (work vectors); returns J.
         """
-        gamma, blk = self.gamma, self.problem.contact_blk
         w = self._work
-        _set_diagonal_blocks(self._D, blk, Wt)
-        _set_diagonal_blocks(self._U, blk, Ut)
-        self._J = self._D.matMult(self.problem.A, result=self._J)
-        self._J.axpy(1.0, self._U, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
-        self._J.setNearNullSpace(self._near_nullspace)
+        self._newton.set_blocks(Wt, Ut)
         w["y2"].waxpy(-1.0, w["dhat"], u)  # y1^ = Gamma y2^ = Gamma (u - d^)
-        self._D.mult(w["y2"], w["rhs"])  # D Gamma = Gamma D: gamma is constant on each node
-        w["rhs"].pointwiseMult(w["rhs"], self._gamma_dofs["gamma"])
-        self._U.multAdd(w["y2"], w["rhs"], w["rhs"])
+        self._newton.mult_blocks(w["y2"], w["rhs"], self._gamma_dofs["gamma"])
         w["rhs"].scale(-1.0)
         w["du"].set(0.0)
-        if self.parameters["eliminate_fixed_rows"]:
-            fixed_loc = _fixed_rows(Wt, blk)
-            w["du"].array[fixed_loc] = w["rhs"].array[fixed_loc] / self._gamma_dofs["gamma"].array[fixed_loc]
-            rows_glob = (fixed_loc + self.problem.A.getOwnershipRange()[0]).astype(PETSc.IntType)
-            self._J.zeroRowsColumns(rows_glob, diag=gamma, x=w["du"], b=w["rhs"])
-        return self._J
+        if not self.parameters["eliminate_fixed_rows"]:
+            return self._newton.assemble()
+        fixed = ~np.any(Wt, axis=2)  # (m, 3): W*^T rows that vanish, pure (gamma-scaled) identity rows
+        fixed_loc = (3 * self.problem.contact_blk[:, None] + np.arange(3))[fixed]
+        w["du"].array[fixed_loc] = w["rhs"].array[fixed_loc] / self._gamma_dofs["gamma"].array[fixed_loc]
+        return self._newton.assemble(fixed, self.gamma, w["du"], w["rhs"])
 
     # -- step 4: linear solve ----------------------------------------------------------
     def linear_solve(self, J: PETSc.Mat, kinds: np.ndarray) -> int:
         """Inexact solve J du = rhs to ``tol`` (Sect. 7); returns the KSP's converged reason.
 
-        The preconditioner is kept (parameter ``reuse_pc``) between steps in which no
-        contact node changes its kind: J then changes only in the sliding rows'
-        coefficients, and GMRES still solves the current system to ``tol``. Direct
-        solves (``preonly``) always refactor.
+        With ``reuse_pc`` a multigrid preconditioner is set up at the first step only;
+        afterwards its coarse operators are updated by the Galerkin products of J's
+        change, which lives on the contact rows (:class:`~contactqvi.multigrid.GalerkinUpdate`),
+        so every step is preconditioned for its own J at the cost of the contact
+        surface. Other preconditioners are kept between steps in which no contact node
+        changes its kind (J then changes only in the sliding rows' coefficients, and
+        GMRES still solves the current system to ``tol``). Direct solves (``preonly``)
+        always refactor.
         """
-        same = self._pc_kinds is not None and np.array_equal(self._pc_kinds, kinds)
-        reuse = self.problem.comm.allreduce(same, op=MPI.LAND)
-        reuse = reuse and self.parameters["reuse_pc"] and self.ksp.getType() != "preonly"
-        if not reuse:
-            self._pc_kinds = kinds
-        self.ksp.setOperators(J)
-        self.ksp.getPC().setReusePreconditioner(reuse)
+        pc = self.ksp.getPC()
+        galerkin = self.parameters["reuse_pc"] and is_multigrid(pc)
+        if galerkin and self._galerkin is not None:
+            self._galerkin.update(self._newton.change)
+        else:
+            same = self._pc_kinds is not None and np.array_equal(self._pc_kinds, kinds)
+            reuse = self.problem.comm.allreduce(same, op=MPI.LAND)
+            reuse = reuse and self.parameters["reuse_pc"] and not galerkin and self.ksp.getType() != "preonly"
+            if not reuse:
+                self._pc_kinds = kinds
+            self.ksp.setOperators(J)
+            pc.setReusePreconditioner(reuse)
         # The eliminated rows carry their exact values in the initial guess (direct solvers need none).
         self.ksp.setInitialGuessNonzero(self.parameters["eliminate_fixed_rows"] and self.ksp.getType() != "preonly")
-        # GAMG reads its multigrid options again when it builds its levels, inside the solve.
+        # GAMG reads its multigrid options when it builds its levels.
         with default_options(self.ksp.getOptionsPrefix(), self._ksp_options):
+            if galerkin and self._galerkin is None:
+                self.ksp.setUp()
+                self._galerkin = GalerkinUpdate(pc)
             self.ksp.solve(self._work["rhs"], self._work["du"])
         return self.ksp.getConvergedReason()
 
@@ -419,32 +430,6 @@ class SCDNewtonSolver(PETScOwner):
         result.iterations = len(result.history) - 1
         result.normal_force, result.friction_force = -point.z[:, 2].copy(), -point.z[:, :2].copy()
         return result
-
-
-def _block_diagonal_like(A: PETSc.Mat, block: np.ndarray) -> PETSc.Mat:
-    """Block-diagonal AIJ matrix with A's layout and every 3x3 diagonal block = ``block``.
-
-    All nine entries of every diagonal block are stored (zeros included), so the
-    pattern of D A equals that of A and U fits into it.
-    """
-    M = PETSc.Mat().createAIJ(size=A.getSizes(), bsize=3, nnz=(3, 0), comm=A.getComm())
-    M.setOption(PETSc.Mat.Option.IGNORE_ZERO_ENTRIES, False)
-    n_blk = A.getLocalSize()[0] // 3
-    _set_diagonal_blocks(M, np.arange(n_blk), np.broadcast_to(block, (n_blk, 3, 3)))
-    return M
-
-
-def _set_diagonal_blocks(M: PETSc.Mat, blk: np.ndarray, blocks: np.ndarray) -> None:
-    """Overwrite the diagonal 3x3 blocks of the owned local nodes ``blk``."""
-    rows = (np.asarray(blk) + M.getOwnershipRange()[0] // 3).astype(PETSc.IntType)[:, None]
-    M.setValuesBlockedRCV(rows, rows, np.ascontiguousarray(blocks).reshape(len(rows), 1, 9))
-    M.assemble()
-
-
-def _fixed_rows(Wt: np.ndarray, blk: np.ndarray) -> np.ndarray:
-    """Owned local rows whose W*^T row vanishes: pure (gamma-scaled) identity rows."""
-    zero_rows = ~np.any(Wt, axis=2)  # (m, 3)
-    return (3 * np.asarray(blk, dtype=np.int64)[:, None] + np.arange(3))[zero_rows].astype(np.int32)
 
 
 def _coordinate_noise(problem: ContactProblem) -> PETSc.Vec:

@@ -1,0 +1,176 @@
+"""The Newton matrix J = D A + U of (5.4) (seed 000) as A plus a change on the contact rows.
+
+Off the contact nodes D = W*^T = I and U = U*^T = 0 (Q^R = 0: rge(I, 0)), so J and A
+differ only in
+
+* the rows of the contact dofs: (D - I) A + U with 3x3 diagonal blocks D, U per node, and
+* after the exact elimination of the identity rows (MatZeroRowsColumns), the
+  columns of the eliminated dofs, i.e. the rows of the contact nodes' neighbours.
+
+:class:`NewtonMatrix` keeps J = A + E with E stored on exactly these rows (a
+surface-sized matrix with A's row pattern there): a Newton step copies A into J and
+adds E, and the cost of everything else scales with the contact surface, not with
+the body. The step-to-step change of E is what a multigrid preconditioner needs to
+keep its Galerkin coarse operators exact (:class:`contactqvi.multigrid.GalerkinUpdate`).
+"""
+
+from __future__ import annotations
+
+import typing
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import numpy as np
+
+from contactqvi.lifetime import PETScOwner
+
+__all__ = ["NewtonMatrix"]
+
+_SAME = PETSc.Mat.Structure.SAME_NONZERO_PATTERN
+_SUBSET = PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN
+
+
+class NewtonMatrix(PETScOwner):
+    """J = D A + U of (5.4) for the contact nodes ``contact_blk``, stored as A + E.
+
+    Args:
+        A: the stiffness matrix (block size 3, nodes in their frames).
+        contact_blk: owned local node indices of the contact nodes.
+
+    Attributes:
+        J: the Newton matrix (A's pattern; the same object for the solver's lifetime).
+        change: E of this step minus E of the previous :meth:`assemble`
+            (the whole E after the first), on E's pattern.
+    """
+
+    def __init__(self, A: PETSc.Mat, contact_blk: np.ndarray):
+        self._A = A
+        self._contact_blk = np.asarray(contact_blk, dtype=np.int64)
+        self._rows_of_A = _rows_of(A, _coupled_rows(A, self._contact_blk))  # A on the rows of E
+        self._E = self._rows_of_A.duplicate(copy=False)
+        self._E_previous = self._rows_of_A.duplicate(copy=False)
+        self.change = self._rows_of_A.duplicate(copy=False)
+        self._D_minus_I = _contact_blocks(A, self._contact_blk)
+        self._U = _contact_blocks(A, self._contact_blk)
+        self._fixed_diagonal = _contact_blocks(A, self._contact_blk)
+        self._DA = self._D_minus_I.matMult(self._rows_of_A)
+        self.J = A.duplicate(copy=True)
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [self.J, self._DA, self._fixed_diagonal, self._U, self._D_minus_I, self.change, self._E_previous, self._E, self._rows_of_A]
+
+    def set_blocks(self, Wt: np.ndarray, Ut: np.ndarray) -> None:
+        """D = I + blockdiag(Wt - I) and U = blockdiag(Ut) on the contact nodes ((m, 3, 3) each)."""
+        _set_blocks(self._D_minus_I, self._contact_blk, Wt - np.eye(3))
+        _set_blocks(self._U, self._contact_blk, Ut)
+
+    def assemble(
+        self, fixed: np.ndarray | None = None, gamma: float = 1.0, x: PETSc.Vec | None = None,
+        b: PETSc.Vec | None = None,
+    ) -> PETSc.Mat:
+        """J = D A + U for the blocks of :meth:`set_blocks`; returns J.
+
+        ``fixed`` ((m, 3) bool, per contact node and component) marks the dofs whose
+        rows and columns are eliminated as by ``J.zeroRowsColumns(rows, gamma, x, b)``:
+        their rows become gamma times identity rows, b takes the eliminated columns
+        times x, and b = gamma x on them.
+        """
+        E = self._E
+        self._rows_of_A.copy(E, _SAME)
+        self._D_minus_I.matMult(self._rows_of_A, result=self._DA)
+        E.axpy(1.0, self._DA, _SUBSET)
+        E.axpy(1.0, self._U, _SUBSET)
+        if fixed is not None:
+            self._eliminate(fixed, gamma, x, b)
+        E.axpy(-1.0, self._rows_of_A, _SAME)  # E = J - A on its rows
+        self._A.copy(self.J, _SAME)
+        self.J.axpy(1.0, E, _SUBSET)
+        E.copy(self.change, _SAME)
+        self.change.axpy(-1.0, self._E_previous, _SAME)
+        E.copy(self._E_previous, _SAME)
+        return self.J
+
+    def _eliminate(self, fixed: np.ndarray, gamma: float, x: PETSc.Vec, b: PETSc.Vec) -> None:
+        """Rows and columns of the ``fixed`` contact dofs of J (held by E on its rows) become gamma I.
+
+        MatZeroRowsColumns with a nonzero diagonal wants a diagonal entry in every row,
+        which E lacks off its rows: it zeroes the diagonal too, gamma is added by a
+        contact-block matrix, and b = gamma x is set on the fixed rows.
+        """
+        fixed_loc = _contact_dofs_loc(self._contact_blk)[fixed.ravel()]
+        start = self._A.getOwnershipRange()[0]
+        self._E.zeroRowsColumns((start + fixed_loc).astype(PETSc.IntType), diag=0.0, x=x, b=b)
+        b.array[fixed_loc] = gamma * x.array[fixed_loc]
+        _set_blocks(self._fixed_diagonal, self._contact_blk, gamma * fixed[:, :, None] * np.eye(3))
+        self._E.axpy(1.0, self._fixed_diagonal, _SUBSET)
+
+    def mult_blocks(self, x: PETSc.Vec, y: PETSc.Vec, gamma: PETSc.Vec) -> None:
+        """y = Gamma D x + U x for the blocks of :meth:`set_blocks`: the right-hand side operator of (5.4)
+        with y1^ = Gamma x."""
+        self._D_minus_I.multAdd(x, x, y)
+        y.pointwiseMult(y, gamma)  # D Gamma = Gamma D: gamma is constant on each node
+        self._U.multAdd(x, y, y)
+
+
+def _contact_dofs_loc(contact_blk: np.ndarray) -> np.ndarray:
+    """Owned local dofs of the contact nodes, node by node (sorted for sorted ``contact_blk``)."""
+    return (3 * contact_blk[:, None] + np.arange(3)).ravel()
+
+
+def _coupled_rows(A: PETSc.Mat, contact_blk: np.ndarray) -> np.ndarray:
+    """Owned local rows of A that hold a contact dof's row or column (A is structurally symmetric)."""
+    start, end = A.getOwnershipRange()
+    contact_glob = (start + _contact_dofs_loc(contact_blk)).astype(PETSc.IntType)
+    rows = PETSc.IS().createGeneral(contact_glob, comm=A.getComm())
+    columns = PETSc.IS().createStride(end - start, first=start, step=1, comm=A.getComm())
+    contact_rows = A.createSubMatrix(rows, columns)
+    neighbours_glob = np.unique(contact_rows.getValuesCSR()[1]).astype(PETSc.IntType)
+    for obj in (contact_rows, columns, rows):
+        obj.destroy()
+    marker = A.createVecLeft()
+    marker.setValues(neighbours_glob, np.ones(len(neighbours_glob)), addv=PETSc.InsertMode.INSERT_VALUES)
+    marker.assemble()
+    coupled = np.flatnonzero(marker.array).astype(np.int64)
+    marker.destroy()
+    return coupled
+
+
+def _rows_of(A: PETSc.Mat, rows_loc: np.ndarray) -> PETSc.Mat:
+    """A matrix of A's layout holding A's values on the owned local rows ``rows_loc`` only."""
+    start, end = A.getOwnershipRange()
+    comm = A.getComm()
+    rows = PETSc.IS().createGeneral((start + rows_loc).astype(PETSc.IntType), comm=comm)
+    columns = PETSc.IS().createStride(end - start, first=start, step=1, comm=comm)
+    sub = A.createSubMatrix(rows, columns)
+    indptr, indices, values = sub.getValuesCSR()
+    lengths = np.zeros(end - start, dtype=np.int64)
+    lengths[rows_loc] = np.diff(indptr)
+    full_indptr = np.concatenate([[0], np.cumsum(lengths)]).astype(PETSc.IntType)
+    M = PETSc.Mat().createAIJ(size=A.getSizes(), csr=(full_indptr, indices, values), comm=comm)
+    for obj in (sub, columns, rows):
+        obj.destroy()
+    return M
+
+
+def _contact_blocks(A: PETSc.Mat, contact_blk: np.ndarray) -> PETSc.Mat:
+    """Zero matrix of A's layout with room for a 3x3 block on the diagonal of each contact node.
+
+    All nine entries of each block are stored, zeros included, so products with it
+    keep one pattern from step to step.
+    """
+    n_local = A.getLocalSize()[0]
+    nnz = np.zeros(n_local, dtype=PETSc.IntType)
+    nnz.reshape(-1, 3)[contact_blk] = 3
+    M = PETSc.Mat().createAIJ(size=A.getSizes(), bsize=3, nnz=(nnz, np.zeros_like(nnz)), comm=A.getComm())
+    M.setOption(PETSc.Mat.Option.IGNORE_ZERO_ENTRIES, False)
+    _set_blocks(M, contact_blk, np.zeros((len(contact_blk), 3, 3)))
+    return M
+
+
+def _set_blocks(M: PETSc.Mat, blk: np.ndarray, blocks: np.ndarray) -> None:
+    """Overwrite the diagonal 3x3 blocks of the owned local nodes ``blk``."""
+    rows = (np.asarray(blk) + M.getOwnershipRange()[0] // 3).astype(PETSc.IntType)[:, None]
+    values = np.ascontiguousarray(np.broadcast_to(blocks, (len(rows), 3, 3))).reshape(len(rows), 1, 9)
+    M.setValuesBlockedRCV(rows, rows, values)
+    M.assemble()

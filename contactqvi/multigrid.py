@@ -1,0 +1,65 @@
+"""Galerkin coarse operators of a multigrid preconditioner kept exact under a sparse change.
+
+A set-up of PETSc's GAMG builds interpolations P_l (level l-1 to l) and the coarse
+operators by Galerkin products, C_{l-1} = P_l^T C_l P_l from C_{L-1} = J. Most of a
+set-up is these products (the finest one dominates). When J changes by a matrix
+Delta_{L-1} on a few rows only (in the Newton steps of a contact problem: the rows of
+the contact nodes and their neighbours, :mod:`contactqvi.contact.newton_matrix`),
+the coarse operators change by
+
+    Delta_{l-1} = P_l^T Delta_l P_l,    C_{l-1} <- C_{l-1} + Delta_{l-1},
+
+products whose cost scales with the changed rows (and one pass over P_l), while the
+interpolations are kept. The updated operators are exactly the Galerkin operators
+of the new J with the old interpolations, i.e. what ``-pc_gamg_reuse_interpolation``
+gives after a full set-up, at the cost of the change only. Each level's smoother
+(and the coarse solver) is set up again on its updated operator.
+"""
+
+from __future__ import annotations
+
+import typing
+
+from petsc4py import PETSc
+
+from contactqvi.lifetime import PETScOwner
+
+__all__ = ["GalerkinUpdate", "is_multigrid"]
+
+_SUBSET = PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN
+
+
+def is_multigrid(pc: PETSc.PC) -> bool:
+    """True for preconditioners with Galerkin levels this module can update (GAMG, MG)."""
+    return pc.getType() in (PETSc.PC.Type.GAMG, PETSc.PC.Type.MG)
+
+
+class GalerkinUpdate(PETScOwner):
+    """Updates the levels of the set-up multigrid preconditioner ``pc`` for changes of its fine operator.
+
+    Args:
+        pc: a GAMG or MG preconditioner after its set-up; its fine operator must
+            keep its identity (changes are made in place).
+    """
+
+    def __init__(self, pc: PETSc.PC):
+        self._pc = pc
+        levels = pc.getMGLevels()
+        self._interpolations = [pc.getMGInterpolation(level) for level in range(1, levels)]
+        self._operators = [pc.getMGSmoother(level).getOperators()[0] for level in range(levels)]
+        self._changes: list[PETSc.Mat | None] = [None] * (levels - 1)
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [*(change for change in self._changes if change is not None), *self._interpolations, *self._operators,
+                self._pc]
+
+    def update(self, change: PETSc.Mat) -> None:
+        """Add ``change`` (already added to the fine operator) to every coarse level and
+        set up the smoothers again; the preconditioner is then to be reused."""
+        for level in reversed(range(len(self._changes))):
+            self._changes[level] = change.PtAP(self._interpolations[level], result=self._changes[level])
+            self._operators[level].axpy(1.0, self._changes[level], _SUBSET)
+            change = self._changes[level]
+        for level, operator in enumerate(self._operators):
+            self._pc.getMGSmoother(level).setOperators(operator, operator)
+        self._pc.setReusePreconditioner(True)
