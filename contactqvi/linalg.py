@@ -72,7 +72,6 @@ KSP_PRESETS: dict[str, OptionsDict] = {
         "pc_type": "gamg",
         "pc_gamg_type": "agg",
         "pc_mg_cycle_type": "w",
-        "pc_gamg_reuse_interpolation": True,
     },
     "gmres_ilu": {
         "ksp_type": "gmres",

@@ -88,8 +88,10 @@ PARAMETERS = Parameters(
     eliminate_fixed_rows=Parameter(True, "solve the identity rows (sticking, normal contact rows) exactly", type=bool),
     max_line_search=Parameter(20, "step sizes tried by the line search before it fails", type=int, minimum=1),
     pc=Parameter("gamg", "Newton-step solver", type=str, choices=tuple(NEWTON_STEP_SOLVERS)),
-    reuse_pc=Parameter(True, "multigrid: set up once, coarse operators updated by the contact rows' change; "
-                       "other preconditioners: kept while no contact node changes its kind", type=bool),
+    reuse_pc=Parameter(True, "multigrid: coarse operators updated by the contact rows' change instead of a new "
+                       "set-up; other preconditioners: kept while no contact node changes its kind", type=bool),
+    pc_rebuild_iterations=Parameter(3, "multigrid with reuse_pc: a new set-up (new interpolation) after a Krylov "
+                                    "solve that took more iterations than this", type=int, minimum=1),
 )
 
 #: Rules for gamma of (6.17) when it is not given.
@@ -329,17 +331,25 @@ class SCDNewtonSolver(PETScOwner):
     def linear_solve(self, J: PETSc.Mat, kinds: np.ndarray) -> int:
         """Inexact solve J du = rhs to ``tol`` (Sect. 7); returns the KSP's converged reason.
 
-        With ``reuse_pc`` a multigrid preconditioner is set up at the first step only;
-        afterwards its coarse operators are updated by the Galerkin products of J's
-        change, which lives on the contact rows (:class:`~contactqvi.multigrid.GalerkinUpdate`),
-        so every step is preconditioned for its own J at the cost of the contact
-        surface. Other preconditioners are kept between steps in which no contact node
+        With ``reuse_pc`` a multigrid preconditioner is set up at the first step; then
+        its coarse operators are updated by the Galerkin products of J's change, which
+        lives on the contact rows (:class:`~contactqvi.multigrid.GalerkinUpdate`), so
+        every step is preconditioned for its own J at the cost of the contact surface.
+        The interpolation stays that of the set-up; once the contact zone has formed it
+        can fit J better (J_0 at u = 0 has no eliminated rows), so a solve that takes
+        more than ``pc_rebuild_iterations`` Krylov iterations triggers a new set-up at the
+        next step (lev 7 d3/L2, 2 ranks: 46 Krylov iterations with the first
+        interpolation throughout, 30 with one new set-up at step 3). Other preconditioners are kept between steps in which no contact node
         changes its kind (J then changes only in the sliding rows' coefficients, and
         GMRES still solves the current system to ``tol``). Direct solves (``preonly``)
         always refactor.
         """
         pc = self.ksp.getPC()
         galerkin = self.parameters["reuse_pc"] and is_multigrid(pc)
+        if self._galerkin is not None and self.ksp.getIterationNumber() > self.parameters["pc_rebuild_iterations"]:
+            self._galerkin.destroy()
+            self._galerkin = None
+            pc.reset()  # a new set-up from scratch (GAMG keeps eigenvalue estimates across a plain re-set-up)
         if galerkin and self._galerkin is not None:
             self._galerkin.update(self._newton.change)
         else:
