@@ -40,6 +40,9 @@ class GalerkinUpdate(PETScOwner):
     Args:
         pc: a GAMG or MG preconditioner after its set-up; its fine operator must
             keep its identity (changes are made in place).
+
+    Attributes:
+        updates: number of :meth:`update` calls since the set-up.
     """
 
     def __init__(self, pc: PETSc.PC):
@@ -48,6 +51,7 @@ class GalerkinUpdate(PETScOwner):
         self._interpolations = [pc.getMGInterpolation(level) for level in range(1, levels)]
         self._operators = [pc.getMGSmoother(level).getOperators()[0] for level in range(levels)]
         self._changes: list[PETSc.Mat | None] = [None] * (levels - 1)
+        self.updates = 0  # updates since the set-up
 
     def petsc_objects(self) -> list[typing.Any]:
         return [*(change for change in self._changes if change is not None), *self._interpolations, *self._operators,
@@ -63,3 +67,4 @@ class GalerkinUpdate(PETScOwner):
         for level, operator in enumerate(self._operators):
             self._pc.getMGSmoother(level).setOperators(operator, operator)
         self._pc.setReusePreconditioner(True)
+        self.updates += 1
