@@ -62,6 +62,7 @@ class GalerkinUpdate(PETScOwner):
         set up the smoothers again; the preconditioner is then to be reused."""
         for level in reversed(range(len(self._changes))):
             self._changes[level] = change.PtAP(self._interpolations[level], result=self._changes[level])
+            self._operators[level].setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)  # rows added by owners
             self._operators[level].axpy(1.0, self._changes[level], _SUBSET)
             change = self._changes[level]
         for level, operator in enumerate(self._operators):

@@ -56,6 +56,8 @@ class NewtonMatrix(PETScOwner):
         self._fixed_diagonal = _contact_blocks(A, self._contact_blk)
         self._DA = self._D_minus_I.matMult(self._rows_of_A)
         self.J = A.duplicate(copy=True)
+        for M in (self.J, self._E, self.change, self._E_previous):  # every row is set by its owner
+            M.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)
 
     def petsc_objects(self) -> list[typing.Any]:
         return [self.J, self._DA, self._fixed_diagonal, self._U, self._D_minus_I, self.change, self._E_previous, self._E, self._rows_of_A]
@@ -164,6 +166,7 @@ def _contact_blocks(A: PETSc.Mat, contact_blk: np.ndarray) -> PETSc.Mat:
     nnz.reshape(-1, 3)[contact_blk] = 3
     M = PETSc.Mat().createAIJ(size=A.getSizes(), bsize=3, nnz=(nnz, np.zeros_like(nnz)), comm=A.getComm())
     M.setOption(PETSc.Mat.Option.IGNORE_ZERO_ENTRIES, False)
+    M.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)
     _set_blocks(M, contact_blk, np.zeros((len(contact_blk), 3, 3)))
     return M
 
