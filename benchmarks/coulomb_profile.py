@@ -1,71 +1,146 @@
-"""Where the time of a Coulomb solve goes (seed 000): per phase of the Newton step.
+"""Where the time of a Coulomb solve goes (seed 000), and what it costs in elastic solves.
 
 Each phase of :class:`~contactqvi.contact.scd_newton.SCDNewtonSolver` is a PETSc log
-stage (``Timings.phase``); this script solves one case with PETSc's logging on and
-tabulates, per phase, the wall time and the PETSc events that dominate it:
+stage (``Timings.phase``); this script solves cases with PETSc's logging on and
+tabulates, per phase, the wall time and the PETSc events that dominate it. On the
+same mesh it then times the floor: one linear elastic solve A u = l (CG + GAMG with
+the rigid-body near-nullspace, relative residual 1e-12), and reports the Coulomb
+solve (everything after assembly, u0 = 0, ||y^|| <= 1e-12 ||y^0||) divided by it:
 
-    python benchmarks/coulomb_profile.py --lev 7 --case d1/L1
-    mpirun -n 2 python benchmarks/coulomb_profile.py --lev 8 --case d3/L2
+    python benchmarks/coulomb_profile.py --lev 7 --cases d1/L1
+    mpirun -n 2 python benchmarks/coulomb_profile.py --lev 8
 
-Rows are added to ``coulomb_profile.{json,md}`` in ``--output`` (same lev, case and
-ranks replaced).
+Rows are added to ``coulomb_profile.{json,md}`` in ``--output`` (same version, lev,
+case and ranks replaced); ``--version`` names the code measured (rows of other
+versions, e.g. the profile before a change, are kept beside).
 """
 
 from __future__ import annotations
+
+import time
 
 from mpi4py import MPI
 from petsc4py import PETSc
 
 import benchlib
-
+from contactqvi.contact import SCDNewtonSolver, build_contact_problem
+from contactqvi.elasticity import rigid_motions_nullspace
+from contactqvi.linalg import create_ksp, preset
+from contactqvi.meshes import create_contact_body
+from contactqvi.problems import coulomb as data
 from contactqvi.result import Timings
 
 #: PETSc events reported inside the phases.
-EVENTS = ("PCSetUp", "KSPSolve", "MatMatMultSym", "MatMatMultNum", "MatAXPY", "MatZeroRowsCol", "MatMult", "VecNorm")
+EVENTS = ("PCSetUp", "KSPSolve", "MatPtAPNumeric", "MatMatMultNum", "MatAXPY", "MatCopy", "MatZeroRowsCol",
+          "MatMult", "VecNorm")
 
 
-def profile(comm: MPI.Comm, lev: int, case: str, pc: str) -> dict:
-    PETSc.Log.begin()
-    row = benchlib.run_coulomb_case(comm, lev, case, {"pc": pc}, prefix="profile_")
+def _event_totals() -> dict[tuple[str, str], tuple[int, float]]:
+    """(count, seconds) of every reported event in every phase's stage so far (this rank)."""
+    totals = {}
+    for name, stage in Timings._stages.items():
+        for event in EVENTS:
+            info = PETSc.Log.Event(event).getPerfInfo(stage.id)
+            totals[name, event] = (info["count"], info["time"])
+    return totals
+
+
+def _phases(comm: MPI.Comm, timings: dict[str, float], before: dict[tuple[str, str], tuple[int, float]]) -> dict:
+    """Wall time (largest rank) and dominant PETSc events of every phase since ``before``."""
+    after = _event_totals()
     phases = {}
-    for name, seconds in row["timings"].items():
-        stage = Timings._stages.get(name)
+    for name, seconds in timings.items():
         events = {}
-        if stage is not None:
-            for event in EVENTS:
-                info = PETSc.Log.Event(event).getPerfInfo(stage.id)
-                count = comm.allreduce(info["count"], op=MPI.MAX)
-                seconds_max = comm.allreduce(info["time"], op=MPI.MAX)
-                if count:
-                    events[event] = {"count": count, "seconds": seconds_max}
+        for event in EVENTS if name in Timings._stages else ():
+            count0, time0 = before.get((name, event), (0, 0.0))
+            count = comm.allreduce(after[name, event][0] - count0, op=MPI.MAX)
+            if count:
+                events[event] = {"count": count,
+                                 "seconds": comm.allreduce(after[name, event][1] - time0, op=MPI.MAX)}
         phases[name] = {"seconds": comm.allreduce(seconds, op=MPI.MAX), "events": events}
-    return {**{k: row[k] for k in ("lev", "case", "mpi_size", "status", "it", "krylov", "n", "peak_rss_mib")},
-            "phases": phases}
+    return phases
+
+
+def _elastic_seconds(problem) -> tuple[int, float]:
+    """Krylov iterations and wall time of one elastic solve A u = l (set-up included)."""
+    nullspace = rigid_motions_nullspace(problem.V)
+    A = problem.A.duplicate(copy=True)
+    A.setNearNullSpace(nullspace)
+    ksp = create_ksp(problem.comm, "profile_elastic_", preset("cg_gamg"), A=A, rtol=1e-12)
+    x = A.createVecRight()
+    problem.comm.Barrier()
+    t0 = time.perf_counter()
+    ksp.solve(problem.load, x)
+    seconds = problem.comm.allreduce(time.perf_counter() - t0, op=MPI.MAX)
+    iterations = ksp.getIterationNumber()
+    benchlib.release(problem.comm, ksp, x, A, nullspace)
+    return iterations, seconds
+
+
+def profile(comm: MPI.Comm, lev: int, case: str, pc: str, version: str) -> dict:
+    geometry, load = case.split("/")
+    msh, tags = create_contact_body(comm, lev, data.gap_function(geometry))
+    problem = build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions(load), data.FRICTION)
+    u = problem.A.createVecRight()
+    before = _event_totals()
+    comm.Barrier()
+    t0 = time.perf_counter()
+    with SCDNewtonSolver(problem, {"pc": pc}, prefix="profile_") as solver:
+        result = solver.solve(u)
+    seconds = comm.allreduce(time.perf_counter() - t0, op=MPI.MAX)
+    elastic_krylov, elastic_seconds = _elastic_seconds(problem)
+    row = {"version": version, "lev": lev, "case": case, "mpi_size": comm.size, "status": str(result.status),
+           "it": result.iterations, "krylov": result.inner_iterations, "n": problem.n_free,
+           "seconds": seconds, "elastic": {"krylov": elastic_krylov, "seconds": elastic_seconds},
+           "ratio": seconds / elastic_seconds, "phases": _phases(comm, result.timings, before),
+           "peak_rss_mib": benchlib.peak_rss_mib(comm)}
+    benchlib.release(comm, u, problem)
+    return row
 
 
 def markdown(rows: list[dict]) -> str:
-    lines = ["## Coulomb solve by phase (PETSc log stages; wall seconds, largest rank)", "",
-             "| lev | case | ranks | it / Krylov | phase | seconds | share | dominant PETSc events (count, s) |",
+    lines = ["## Coulomb solve against one elastic solve", "",
+             "Coulomb: SCD Newton from u0 = 0 to ||y^|| <= 1e-12 ||y^0||, all phases after assembly. Elastic: "
+             "A u = l by CG + GAMG (rigid-body near-nullspace) to 1e-12, set-up included. Wall seconds, largest "
+             "rank; paper's Newton steps (Table 2) in parentheses.", "",
+             "| version | lev | ranks | case | it / Krylov | Coulomb s | elastic Krylov / s | Coulomb ÷ elastic |",
              "|---|---|---|---|---|---|---|---|"]
-    for r in sorted(rows, key=lambda r: (r["lev"], r["case"], r["mpi_size"])):
+    key = lambda r: (r["version"], r["lev"], r["mpi_size"], r["case"])  # noqa: E731
+    for r in sorted((r for r in rows if "ratio" in r), key=key):
+        paper = data.PAPER_TABLE2.get(r["lev"], {}).get(r["case"])
+        lines.append(f"| {r['version']} | {r['lev']} | {r['mpi_size']} | {r['case']} | {r['it']} / {r['krylov']}"
+                     f"{f' ({paper[0]})' if paper else ''} | {r['seconds']:.2f} | {r['elastic']['krylov']} / "
+                     f"{r['elastic']['seconds']:.2f} | {r['ratio']:.2f} |")
+    lines += ["", "## Coulomb solve by phase (PETSc log stages; wall seconds, largest rank)", "",
+              "| version | lev | case | ranks | it / Krylov | phase | seconds | share | dominant PETSc events (count, s) |",
+              "|---|---|---|---|---|---|---|---|---|"]
+    for r in sorted(rows, key=lambda r: (r.get("version", ""), r["lev"], r["mpi_size"], r["case"])):
         total = sum(p["seconds"] for name, p in r["phases"].items() if name != "assembly")
         for name, p in r["phases"].items():
             events = ", ".join(f"{e} ({v['count']}, {v['seconds']:.2f})" for e, v in
                                sorted(p["events"].items(), key=lambda kv: -kv[1]["seconds"])[:3])
             share = "" if name == "assembly" else f"{p['seconds'] / total:.0%}"
-            lines.append(f"| {r['lev']} | {r['case']} | {r['mpi_size']} | {r['it']} / {r['krylov']} | {name} "
-                         f"| {p['seconds']:.2f} | {share} | {events} |")
+            lines.append(f"| {r.get('version', '')} | {r['lev']} | {r['case']} | {r['mpi_size']} | {r['it']} / "
+                         f"{r['krylov']} | {name} | {p['seconds']:.2f} | {share} | {events} |")
     return "\n".join(lines) + "\n"
 
 
 def main() -> None:
     parser = benchlib.make_parser(__doc__)
     parser.add_argument("--lev", type=int, default=7)
-    parser.add_argument("--case", default="d1/L1", choices=benchlib.CASES)
+    parser.add_argument("--cases", nargs="+", default=benchlib.CASES, choices=benchlib.CASES)
+    parser.add_argument("--version", default="after", help="name of the code version measured")
     args, comm, out = benchlib.parse(parser)
-    rows = benchlib.merge_rows(out / "coulomb_profile.json", [profile(comm, args.lev, args.case, args.pc)],
-                               ("lev", "case", "mpi_size"))
-    benchlib.emit(comm, out, "coulomb_profile", rows, markdown(rows))
+    PETSc.Log.begin()
+    rows = []
+    for case in args.cases:
+        rows.append(profile(comm, args.lev, case, args.pc, args.version))
+        if comm.rank == 0:
+            r = rows[-1]
+            print(f"lev {args.lev} {case} ({comm.size} ranks): {r['it']} / {r['krylov']}, {r['seconds']:.2f} s, "
+                  f"elastic {r['elastic']['seconds']:.2f} s, ratio {r['ratio']:.2f}", flush=True)
+    merged = benchlib.merge_rows(out / "coulomb_profile.json", rows, ("version", "lev", "case", "mpi_size"))
+    benchlib.emit(comm, out, "coulomb_profile", merged, markdown(merged))
 
 
 if __name__ == "__main__":
