@@ -202,7 +202,9 @@ def _nodal_table(problem: ContactProblem, u: PETSc.Vec, result: SCDNewtonResult)
     return table
 
 
-def contact_fields(problem: ContactProblem, u: PETSc.Vec, result: SCDNewtonResult) -> ContactSurfaceFields:
+def contact_fields(
+    problem: ContactProblem, u: PETSc.Vec, result: SCDNewtonResult, displacement: fem.Function | None = None
+) -> ContactSurfaceFields:
     """Contact state, pressure, friction traction, slip, gap and displacement on the contact surface.
 
     Forces and states are those of the last approximation step's graph point
@@ -214,6 +216,7 @@ def contact_fields(problem: ContactProblem, u: PETSc.Vec, result: SCDNewtonResul
         problem: the contact problem that was solved (at its current load step).
         u: its solution (shifted displacements).
         result: the solver's result for ``u``.
+        displacement: the physical displacement of ``u`` if computed already.
     """
     V = problem.V
     msh = V.mesh
@@ -224,7 +227,8 @@ def contact_fields(problem: ContactProblem, u: PETSc.Vec, result: SCDNewtonResul
 
     table = _nodal_table(problem, u, result)
     nodal = table.array.reshape(-1, 13)[parent_blk]
-    displacement = problem.physical_displacement(u, fem.Function(V))
+    if displacement is None:
+        displacement = problem.physical_displacement(u, fem.Function(V))
     u_tilde = displacement.x.array.reshape(-1, 3)[parent_blk]
     contact = nodal[:, _COLUMNS["contact"]] > 0
     scalar_blk, vector_blk = _vertex_blocks(scalars), _vertex_blocks(vectors)
@@ -308,6 +312,7 @@ def contact_summary(
     u: PETSc.Vec,
     result: SCDNewtonResult,
     von_mises: fem.Function | None = None,
+    displacement: fem.Function | None = None,
 ) -> dict[str, typing.Any]:
     """Force balance, areas and extreme values of a solved step, with ``units``. Collective.
 
@@ -315,9 +320,11 @@ def contact_summary(
         problem, u, result: the solved problem at its current step, its solution
             (shifted displacements) and the solver's result.
         von_mises: the von Mises field (DG0) if computed, for its maximum.
+        displacement: the physical displacement of ``u`` if computed already.
     """
     comm = problem.comm
-    displacement = problem.physical_displacement(u, fem.Function(problem.V))
+    if displacement is None:
+        displacement = problem.physical_displacement(u, fem.Function(problem.V))
     reactions = reaction_forces(displacement, problem.body, problem.load_factor, problem.dirichlet_dofs_loc)
     applied = applied_force(problem.V.mesh, problem.body, problem.load_factor)
     resultants = contact_resultants(problem, result)
@@ -377,11 +384,11 @@ class ContactResultsWriter:
             {_labelled("stress"): stress, _labelled("von_mises"): von_mises},
         )
         self._body_file.write(volume, t)
-        surface = contact_fields(problem, u, result)
+        surface = contact_fields(problem, u, result, displacement)
         self._surface_file.write(contact_surface_dataset(surface), t)
         self._steps += 1
         self.last = (displacement, surface)
-        return contact_summary(problem, u, result, von_mises)
+        return contact_summary(problem, u, result, von_mises, displacement)
 
     def close(self, ok: bool = True) -> None:
         """Finish both files (collective); ``ok=False`` discards them."""
