@@ -39,18 +39,22 @@ def main() -> None:
     parser.add_argument("--levels", type=int, nargs="+", default=[3, 4, 5, 6, 7])
     parser.add_argument("--tables", type=int, nargs="+", default=[2, 3, 4], choices=[2, 3, 4])
     parser.add_argument("--table4-lev", type=int, default=6, help="level of the tol sweep (paper: 10)")
-    PARAMETERS.add_arguments(parser, ["gamma_rule", "approximation"])
+    PARAMETERS.add_arguments(parser, ["gamma_rule", "approximation", "tol_rule"])
     args, comm, out = benchlib.parse(parser)
     prefix = "bench_"
-    tag = "".join(f"_{getattr(args, name)}" for name in ("pc", "gamma_rule", "approximation")
+    tag = "".join(f"_{getattr(args, name)}" for name in ("pc", "gamma_rule", "approximation", "tol_rule")
                   if getattr(args, name) != PARAMETERS[name].default)
-    solver = {"tol": 0.1, "pc": args.pc, "gamma_rule": args.gamma_rule, "approximation": args.approximation}
+    solver = {"tol": 0.1, "pc": args.pc, "gamma_rule": args.gamma_rule, "approximation": args.approximation,
+              "tol_rule": args.tol_rule}
     solver_note = {
         "lu": "exact inner solves (LU)",
         "paper": "GMRES + ILU, tol = 0.1 on the left-preconditioned relative residual",
-        "gamg": "GMRES + GAMG, tol = 0.1 on the unpreconditioned relative residual",
-        "hypre": "GMRES + BoomerAMG, tol = 0.1 on the unpreconditioned relative residual",
+        "gamg": "FGMRES + GAMG set up once, coarse operators Galerkin-updated, tol = 0.1 on the unpreconditioned "
+                "relative residual",
+        "hypre": "FGMRES + BoomerAMG, tol = 0.1 on the unpreconditioned relative residual",
     }[args.pc]
+    if args.tol_rule == "local":
+        solver_note += ", Eisenstat-Walker once no contact node changes its kind"
     note = (f"Ours: Newton it / Krylov its, ({solver_note}, u0 = 0 unless nested), "
             "stop at ||y^|| <= 1e-12 ||y^0||; paper's it / gmres in parentheses. MPI ranks per row in the JSON.")
 
