@@ -20,8 +20,9 @@ named after it:
      is rge(0, I) (the normal row of a contact node, all rows of a sticking node) are
      pure identity rows and are eliminated exactly (MatZeroRowsColumns);
   4. :meth:`~SCDNewtonSolver.linear_solve`: the inexact Krylov solve to ``tol``
-     (Sect. 7; tighter in the local phase, :meth:`~SCDNewtonSolver.forcing_term`); a multigrid preconditioner is set up once and its coarse operators
-     follow J by Galerkin products of the contact rows' change
+     (Sect. 7; tighter in the local phase, :meth:`~SCDNewtonSolver.forcing_term`);
+     a multigrid preconditioner is set up once and its coarse operators follow J by
+     Galerkin products of the contact rows' change
      (:class:`~contactqvi.multigrid.GalerkinUpdate`);
   5. :meth:`~SCDNewtonSolver.line_search`: the non-monotone line search of Sect. 7 on ||y^||.
 """
@@ -356,14 +357,15 @@ class SCDNewtonSolver(PETScOwner):
         its coarse operators are updated by the Galerkin products of J's change, which
         lives on the contact rows (:class:`~contactqvi.multigrid.GalerkinUpdate`), so
         every step is preconditioned for its own J at the cost of the contact surface.
-        The interpolation stays that of the set-up; once the contact zone has formed it
-        can fit J better (J_0 at u = 0 has no eliminated rows), so a solve that takes
-        more than ``pc_rebuild_iterations`` Krylov iterations triggers a new set-up at the
-        next step (lev 7 d3/L2, 2 ranks: 46 Krylov iterations with the first
-        interpolation throughout, 30 with one new set-up at step 3). Other preconditioners are kept between steps in which no contact node
-        changes its kind (J then changes only in the sliding rows' coefficients, and
-        GMRES still solves the current system to ``tol``). Direct solves (``preonly``)
-        always refactor.
+        The interpolation stays that of the set-up, made from J at u = 0 before the
+        contact zone forms; a solve that takes more than ``pc_rebuild_iterations``
+        Krylov iterations triggers a new set-up at the next step (lev 7 d3/L2, 2 ranks:
+        46 Krylov iterations with the first interpolation throughout, 30 with a new
+        set-up at step 3, in about the same time: the threshold only catches a
+        hierarchy that has really degraded). Other preconditioners are kept between
+        steps in which no contact node changes its kind (J then changes only in the
+        sliding rows' coefficients, and GMRES still solves the current system to
+        ``tol``). Direct solves (``preonly``) always refactor.
         """
         pc = self.ksp.getPC()
         galerkin = self.parameters["reuse_pc"] and is_multigrid(pc)
