@@ -112,7 +112,8 @@ def markdown(rows: list[dict]) -> str:
                      f"{f' ({paper[0]})' if paper else ''} | {r['seconds']:.2f} | {r['elastic']['krylov']} / "
                      f"{r['elastic']['seconds']:.2f} | {r['ratio']:.2f} |")
     lines += ["", "## Coulomb solve by phase (PETSc log stages; wall seconds, largest rank)", "",
-              "| version | lev | case | ranks | it / Krylov | phase | seconds | share | dominant PETSc events (count, s) |",
+              "| version | lev | case | ranks | it / Krylov | phase | seconds | share "
+              "| dominant PETSc events (count, s) |",
               "|---|---|---|---|---|---|---|---|---|"]
     for r in sorted(rows, key=lambda r: (r.get("version", ""), r["lev"], r["mpi_size"], r["case"])):
         total = sum(p["seconds"] for name, p in r["phases"].items() if name != "assembly")

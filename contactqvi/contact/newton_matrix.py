@@ -60,7 +60,8 @@ class NewtonMatrix(PETScOwner):
             M.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [self.J, self._DA, self._fixed_diagonal, self._U, self._D_minus_I, self.change, self._E_previous, self._E, self._rows_of_A]
+        return [self.J, self._DA, self._fixed_diagonal, self._U, self._D_minus_I, self.change, self._E_previous,
+                self._E, self._rows_of_A]
 
     def set_blocks(self, Wt: np.ndarray, Ut: np.ndarray) -> None:
         """D = I + blockdiag(Wt - I) and U = blockdiag(Ut) on the contact nodes ((m, 3, 3) each)."""
