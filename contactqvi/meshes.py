@@ -95,16 +95,24 @@ def cell_partitioner(
 
 
 def _tag_facets(msh: dmesh.Mesh, markers: dict[str, typing.Callable], names: dict[str, int]) -> dmesh.MeshTags:
-    """Facet tags from boundary markers; a facet takes the first marker that claims it."""
+    """Facet tags from boundary markers; a facet takes the first marker that claims all its nodes.
+
+    The markers are evaluated at the nodes of the exterior facets, which needs only
+    the facet-cell connectivity (``locate_entities_boundary`` would also build the
+    vertex-to-cell and facet-to-facet connectivities, about 20 bytes per dof that the
+    mesh then keeps).
+    """
     fdim = msh.topology.dim - 1
     msh.topology.create_connectivity(fdim, msh.topology.dim)
-    tagged: dict[int, int] = {}
+    exterior = dmesh.exterior_facet_indices(msh.topology)
+    nodes = dmesh.entities_to_geometry(msh, fdim, exterior)
+    points = msh.geometry.x[nodes.ravel()].T
+    values = np.zeros(len(exterior), dtype=np.int32)
     for name, marker in markers.items():
-        for facet in dmesh.locate_entities_boundary(msh, fdim, marker):
-            tagged.setdefault(int(facet), names[name])
-    facets = np.fromiter(sorted(tagged), dtype=np.int32, count=len(tagged))
-    values = np.array([tagged[f] for f in facets], dtype=np.int32)
-    tags = dmesh.meshtags(msh, fdim, facets, values)
+        claimed = np.asarray(marker(points), dtype=bool).reshape(nodes.shape).all(axis=1)
+        values[(values == 0) & claimed] = names[name]
+    tagged = values > 0
+    tags = dmesh.meshtags(msh, fdim, exterior[tagged], values[tagged])
     tags.names = dict(names)
     return tags
 

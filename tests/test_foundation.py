@@ -51,6 +51,22 @@ def test_contact_body_mesh_counts(lev, geometry):
     assert 1.9 < area < 2.0  # 2 m^2 minus the half-row of nodes on x1 = 0
 
 
+@pytest.mark.parametrize("geometry", ["d1", "d2"])
+def test_contact_body_facet_tags(geometry):
+    """Each face of the box is tagged whole (global facet counts), on the curved bottom too,
+    without the vertex-to-cell connectivity that locate_entities_boundary would leave behind."""
+    comm = MPI.COMM_WORLD
+    sizes = meshes.contact_body_sizes(4)
+    nx1, nx2, nx3 = sizes["nx1"], sizes["nx2"], sizes["nx3"]
+    msh, tags = meshes.create_contact_body(comm, 4, gap_function(geometry))
+    expected = {"dirichlet": nx2 * nx3, "right": nx2 * nx3, "top": nx1 * nx2, "contact": nx1 * nx2,
+                "front": nx1 * nx3, "back": nx1 * nx3}
+    counts = {name: comm.allreduce(len(meshes.boundary_facets(tags, name)), op=MPI.SUM) for name in expected}
+    assert counts == expected
+    with pytest.raises(RuntimeError):
+        msh.topology.connectivity(0, 3)
+
+
 def _uniaxial_bar(comm, lev):
     """Box (2 x 1 x 1) pulled by a traction s on x1 = 2, exact u on x1 = 0: uniaxial stress."""
     young, poisson, s = 70e9, 0.3, 1e8
