@@ -50,9 +50,10 @@ def machine(comm: MPI.Comm) -> dict:
             "machine": platform.machine(), "petsc": ".".join(map(str, PETSc.Sys.getVersion()))}
 
 
-def peak_rss_mib(comm: MPI.Comm) -> float:
-    """Largest peak resident memory of any rank so far (MiB, from the OS)."""
-    return comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, op=MPI.MAX)
+def peak_rss_mib(comm: MPI.Comm, op: MPI.Op = MPI.MAX) -> float:
+    """Peak resident memory so far (MiB, from the OS): the largest of any rank, or with
+    ``op=MPI.SUM`` the ranks' peaks added (what the job needs at most)."""
+    return comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, op=op)
 
 
 def merge_rows(path: pathlib.Path, rows: list[dict], key: tuple[str, ...]) -> list[dict]:
@@ -90,7 +91,7 @@ def run_coulomb_case(
            "status": str(result.status), "it": result.iterations, "krylov": result.inner_iterations,
            "seconds": time.perf_counter() - t0, "solve_seconds": sum(v for k, v in timings.items() if k != "assembly"),
            "timings": timings, "p": solution.problem.n_contact, "n": solution.problem.n_free,
-           "peak_rss_mib": peak_rss_mib(comm)}
+           "peak_rss_mib": peak_rss_mib(comm), "peak_rss_total_mib": peak_rss_mib(comm, MPI.SUM)}
     release(comm, *solutions)
     return row
 

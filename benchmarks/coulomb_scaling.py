@@ -17,15 +17,21 @@ import benchlib
 def markdown(rows: list[dict]) -> str:
     lines = ["## MPI scaling of the Coulomb solve (u0 = 0, tol = 0.1, stop at 1e-12)", "",
              "Solve = everything after assembly (gamma, approximation steps, Newton matrices, Krylov solves, "
-             "line search). Speed-up against 1 rank, same level and case.", "",
-             "| lev | n | case | pc | ranks | it / Krylov | assembly s | solve s | speed-up | peak RSS / rank MiB |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "line search). Speed-up against 1 rank, same level and case. Memory: peak resident memory of the "
+             "largest rank and of all ranks added; B/dof = all ranks' peak / n (benchmarks/coulomb_memory.py "
+             "splits it by phase).", "",
+             "| lev | n | case | pc | ranks | it / Krylov | assembly s | solve s | speed-up | peak RSS / rank MiB "
+             "| peak RSS total MiB | B/dof |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in sorted(rows, key=lambda r: (r["lev"], r["case"], r["pc"], r["mpi_size"])):
         serial = next((s for s in rows if (s["lev"], s["case"], s["pc"], s["mpi_size"]) == (r["lev"], r["case"], r["pc"], 1)),
                       None)
         speedup = f"{serial['solve_seconds'] / r['solve_seconds']:.2f}" if serial else "—"
+        total = r.get("peak_rss_total_mib", r["peak_rss_mib"] if r["mpi_size"] == 1 else None)  # older rows
+        memory = f"{total:.0f} | {total * 2**20 / r['n']:.0f}" if total else "— | —"
         lines.append(f"| {r['lev']} | {r['n']} | {r['case']} | {r['pc']} | {r['mpi_size']} | {r['it']} / {r['krylov']} "
-                     f"| {r['timings']['assembly']:.1f} | {r['solve_seconds']:.1f} | {speedup} | {r['peak_rss_mib']:.0f} |")
+                     f"| {r['timings']['assembly']:.1f} | {r['solve_seconds']:.1f} | {speedup} | {r['peak_rss_mib']:.0f} "
+                     f"| {memory} |")
     return "\n".join(lines) + "\n"
 
 
