@@ -83,7 +83,10 @@ def run_coulomb_case(
     kwargs = dict(gap=data.gap_function(geometry), tractions=data.tractions(load), young=data.YOUNG,
                   poisson=data.POISSON, friction=data.FRICTION, parameters=parameters, prefix=prefix)
     t0 = time.perf_counter()
-    solutions = solve_nested(comm, [*initial_levels, lev], **kwargs) if initial_levels else [solve_level(comm, lev, **kwargs)]
+    if initial_levels:
+        solutions = solve_nested(comm, [*initial_levels, lev], **kwargs)
+    else:
+        solutions = [solve_level(comm, lev, **kwargs)]
     solution = solutions[-1]
     result = solution.result
     timings = result.timings

@@ -172,7 +172,8 @@ def markdown(rows: list[dict]) -> str:
              "| lev | n | case | ranks | configuration | it / Krylov | peak MiB | B/dof | B/dof above the start |",
              "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append(f"| {r['lev']} | {r['n']} | {r['case']} | {r['mpi_size']} | {r['label']} | {r['it']} / {r['krylov']} "
+        lines.append(f"| {r['lev']} | {r['n']} | {r['case']} | {r['mpi_size']} | {r['label']} "
+                     f"| {r['it']} / {r['krylov']} "
                      f"| {r['peak_mib']:.0f} | {r['peak_bytes_per_dof']:.0f} "
                      f"| {(r['peak_mib'] - r['start_mib']) * KIB * KIB / r['n']:.0f} |")
     lines.append("")
@@ -185,7 +186,8 @@ def markdown(rows: list[dict]) -> str:
                   f"| start (Python, DOLFINx, PETSc) | {r['start_mib']:.0f} | | | | |"]
         n = r["n"]
         for p in r["phases"]:
-            lines.append(f"| {p['phase']} | {p['rss_mib']:.0f} | {p['delta_mib']:+.0f} | {p['delta_bytes_per_dof']:+.0f} "
+            lines.append(f"| {p['phase']} | {p['rss_mib']:.0f} | {p['delta_mib']:+.0f} "
+                         f"| {p['delta_bytes_per_dof']:+.0f} "
                          f"| {p['peak_mib']:.0f} | {p['peak_over_start_mib'] * KIB * KIB / n:.0f} |")
         storage = ", ".join(f"{k} {v / n:.0f}" for k, v in r["storage"].items() if k != "multigrid levels")
         lines += ["", f"Storage after the first linear solve (B/dof): {storage}; "

@@ -24,14 +24,14 @@ def markdown(rows: list[dict]) -> str:
              "| peak RSS total MiB | B/dof |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in sorted(rows, key=lambda r: (r["lev"], r["case"], r["pc"], r["mpi_size"])):
-        serial = next((s for s in rows if (s["lev"], s["case"], s["pc"], s["mpi_size"]) == (r["lev"], r["case"], r["pc"], 1)),
-                      None)
+        serial = next((s for s in rows
+                       if (s["lev"], s["case"], s["pc"], s["mpi_size"]) == (r["lev"], r["case"], r["pc"], 1)), None)
         speedup = f"{serial['solve_seconds'] / r['solve_seconds']:.2f}" if serial else "—"
         total = r.get("peak_rss_total_mib", r["peak_rss_mib"] if r["mpi_size"] == 1 else None)  # older rows
         memory = f"{total:.0f} | {total * 2**20 / r['n']:.0f}" if total else "— | —"
         lines.append(f"| {r['lev']} | {r['n']} | {r['case']} | {r['pc']} | {r['mpi_size']} | {r['it']} / {r['krylov']} "
-                     f"| {r['timings']['assembly']:.1f} | {r['solve_seconds']:.1f} | {speedup} | {r['peak_rss_mib']:.0f} "
-                     f"| {memory} |")
+                     f"| {r['timings']['assembly']:.1f} | {r['solve_seconds']:.1f} | {speedup} "
+                     f"| {r['peak_rss_mib']:.0f} | {memory} |")
     return "\n".join(lines) + "\n"
 
 
