@@ -11,6 +11,8 @@ Writes ``coulomb_scaling.json`` / ``.md`` to ``--output``.
 
 from __future__ import annotations
 
+import os
+
 import benchlib
 
 
@@ -21,8 +23,8 @@ def markdown(rows: list[dict]) -> str:
              "largest rank and of all ranks added; B/dof = all ranks' peak / n (benchmarks/coulomb_memory.py "
              "splits it by phase).", "",
              "| lev | n | case | pc | ranks | it / Krylov | assembly s | solve s | speed-up | peak RSS / rank MiB "
-             "| peak RSS total MiB | B/dof |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| peak RSS total MiB | B/dof | PETSC_OPTIONS |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in sorted(rows, key=lambda r: (r["lev"], r["case"], r["pc"], r["mpi_size"])):
         serial = next((s for s in rows
                        if (s["lev"], s["case"], s["pc"], s["mpi_size"]) == (r["lev"], r["case"], r["pc"], 1)), None)
@@ -31,7 +33,7 @@ def markdown(rows: list[dict]) -> str:
         memory = f"{total:.0f} | {total * 2**20 / r['n']:.0f}" if total else "— | —"
         lines.append(f"| {r['lev']} | {r['n']} | {r['case']} | {r['pc']} | {r['mpi_size']} | {r['it']} / {r['krylov']} "
                      f"| {r['timings']['assembly']:.1f} | {r['solve_seconds']:.1f} | {speedup} "
-                     f"| {r['peak_rss_mib']:.0f} | {memory} |")
+                     f"| {r['peak_rss_mib']:.0f} | {memory} | {r.get('petsc_options', '')} |")
     return "\n".join(lines) + "\n"
 
 
@@ -42,6 +44,7 @@ def main() -> None:
     args, comm, out = benchlib.parse(parser)
     row = benchlib.run_coulomb_case(comm, args.lev, args.case, {"pc": args.pc}, "scaling_")
     row["pc"] = args.pc
+    row["petsc_options"] = os.environ.get("PETSC_OPTIONS", "")  # e.g. -matptap_via allatonce for lev 11
     rows = benchlib.merge_rows(out / "coulomb_scaling.json", [row], ("lev", "case", "pc", "mpi_size"))
     benchlib.emit(comm, out, "coulomb_scaling", rows, markdown(rows))
 
