@@ -71,13 +71,16 @@ def test_qvi_stack_frees_its_petsc_objects(test, method, mpi_tmp_path):
     assert_frees_petsc_objects(run, mpi_tmp_path)
 
 
-def test_signorini_snes_vi_frees_its_petsc_objects(mpi_tmp_path):
+@pytest.mark.parametrize("ksp, near_nullspace", [("lu", False), ("cg_gamg", True)])
+def test_signorini_snes_vi_frees_its_petsc_objects(ksp, near_nullspace, mpi_tmp_path):
     def run():
         msh, tags = create_contact_body(MPI.COMM_WORLD, 1, coulomb.gap_function("d3"))
         problem = build_contact_problem(msh, tags, coulomb.YOUNG, coulomb.POISSON, coulomb.tractions("L2"), 0.0)
         problem = dataclasses.replace(problem, law=FrictionLaw())
         u = problem.A.createVecRight()
-        assert solve_signorini_vi(problem, u, {"snes_rtol": 1e-12}, ksp="lu").converged
+        result = solve_signorini_vi(problem, u, {"snes_rtol": 1e-12}, prefix=f"tlife_signorini_{ksp}_", ksp=ksp,
+                                    near_nullspace=near_nullspace)
+        assert result.converged
         assert np.all(u.array.reshape(-1, 3)[problem.contact_blk, 2] >= 0.0)
         # the caller's objects: PETSc caches a vector on A in the first SNES solve with it
         return [u, problem]

@@ -21,15 +21,23 @@ import logging
 
 from petsc4py import PETSc
 
+import numpy as np
+
 from contactqvi.contact.nodal import FrictionLaw
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonSolver
 from contactqvi.parameters import require
 from contactqvi.result import Result, Status
 
-__all__ = ["TrescaFixedPointResult", "solve_tresca_fixed_point"]
+__all__ = ["FORCING", "TrescaFixedPointResult", "solve_tresca_fixed_point"]
 
 logger = logging.getLogger(__name__)
+
+#: Inner tolerance factor of the Tresca solves (``forcing``). Measured (benchmarks/coulomb_peers.py,
+#: lev 6 and 7, all six cases, 1 rank, CPU time of the six solves at lev 7): 1e-1 49 s, 3e-2 59 s,
+#: 1e-2 61 s, 1e-3 74 s; 3e-1 and 5e-1 within 2 % of 1e-1. Looser Tresca solves cost more
+#: Tresca problems but fewer Newton steps in all.
+FORCING = 1e-1
 
 
 @dataclasses.dataclass(kw_only=True)
@@ -49,10 +57,16 @@ def solve_tresca_fixed_point(
     u: PETSc.Vec,
     parameters: dict | None = None,
     max_iterations: int = 50,
-    forcing: float = 1e-2,
+    forcing: float = FORCING,
     prefix: str = "tresca_",
 ) -> TrescaFixedPointResult:
     """Solve the Coulomb problem ``problem`` by fixed-point iteration on the slip bound, in place.
+
+    One :class:`SCDNewtonSolver` solves every Tresca problem (its gamma, matrices and
+    Krylov solver are kept; the slip bound of its law is updated in place). It also
+    measures the Coulomb residual: the normal part theta of the graph point (6.17)
+    does not depend on the slip bound, so with the bound s + F lambda(u) (s the law's
+    given part, zero for Coulomb) the Tresca point at u is the Coulomb point at u.
 
     Args:
         problem: Coulomb contact problem (``problem.law.friction`` = F > 0).
@@ -62,16 +76,20 @@ def solve_tresca_fixed_point(
         max_iterations: Tresca problems before giving up (status ``DIVERGED_MAX_IT``).
         forcing: each Tresca solve stops at ``forcing`` times the Coulomb residual
             at its start (and never below the final target).
-        prefix: PETSc options prefix of the Newton-step KSPs of the Tresca solves.
+        prefix: PETSc options prefix of the Newton-step KSP of the Tresca solves.
     """
     p = PARAMETERS.check(parameters)
-    require(problem.law.friction > 0.0, "friction", "the fixed-point method needs a Coulomb problem with F > 0")
+    law = problem.law
+    friction = law.friction
+    require(friction > 0.0, "friction", "the fixed-point method needs a Coulomb problem with F > 0")
     require(0.0 < forcing < 1.0, "forcing", f"must lie in (0, 1), got {forcing!r}")
     require(max_iterations >= 1, "max_iterations", f"must be >= 1, got {max_iterations!r}")
     result = TrescaFixedPointResult(status=Status.DIVERGED_MAX_IT, iterations=0)
-    with result.timings.phase("solve"), SCDNewtonSolver(problem, p) as coulomb:  # residual (6.17) and gamma only
-        p["gamma"] = coulomb.gamma
-        point = coulomb.residual(u)
+    slip_bound = np.zeros(len(problem.contact_blk))  # s + F lambda(u) of the current iterate, written in place
+    tresca = dataclasses.replace(problem, law=FrictionLaw(slip_bound=slip_bound))
+    with result.timings.phase("solve"), SCDNewtonSolver(tresca, p, prefix=prefix) as solver:
+        slip_bound[:] = law.slip_bound - friction * solver.residual(u).z[:, 2]  # theta does not depend on s
+        point = solver.residual(u)  # the Coulomb graph point (6.17) at u
         norm0 = point.norm
         target = max(p["rtol"] * norm0, p["atol"])
         for j in range(max_iterations + 1):
@@ -82,10 +100,8 @@ def solve_tresca_fixed_point(
                 break
             if j == max_iterations:
                 break
-            # s = F lambda, lambda = -theta of the current iterate's graph point (6.17).
-            tresca = dataclasses.replace(problem, law=FrictionLaw(slip_bound=-problem.law.friction * point.z[:, 2]))
-            with SCDNewtonSolver(tresca, {**p, "atol": max(forcing * point.norm, target)}, prefix=prefix) as solver:
-                inner = solver.solve(u)
+            solver.parameters["atol"] = max(forcing * point.norm, target)
+            inner = solver.solve(u)
             result.newton_iterations += inner.iterations
             result.inner_iterations += inner.inner_iterations
             entry.update(tresca_status=str(inner.status), newton_iterations=inner.iterations,
@@ -95,6 +111,7 @@ def solve_tresca_fixed_point(
             if not inner.converged:
                 result.status = Status.DIVERGED_INNER
                 break
-            point = coulomb.residual(u)
+            slip_bound[:] = law.slip_bound + friction * inner.normal_force
+            point = solver.residual(u)
     result.iterations = len(result.history) - 1
     return result

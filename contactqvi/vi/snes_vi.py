@@ -4,15 +4,17 @@
 takes a problem with residual/Jacobian callbacks (:mod:`contactqvi.vi.nonlinear`)
 and the bounds lower <= x <= upper, and solves under an options prefix with a
 named KSP preset (:data:`contactqvi.linalg.KSP_PRESETS`) for the inactive-set
-systems. Its users: :class:`ObstacleSNESVI`, the alternative S-solver and the
-independent oracle for PFMY+PDAS, and the Signorini peer
-(:mod:`contactqvi.contact.signorini_vi`).
+systems; given the Jacobian's near-nullspace, the preset's preconditioner works on
+the full space with the active rows eliminated (:class:`EmbeddedInactivePC`). Its
+users: :class:`ObstacleSNESVI`, the alternative S-solver and the independent oracle
+for PFMY+PDAS, and the Signorini peer (:mod:`contactqvi.contact.signorini_vi`).
 """
 
 from __future__ import annotations
 
 import dataclasses
 
+from mpi4py import MPI
 from petsc4py import PETSc
 
 import ufl
@@ -20,12 +22,19 @@ import ufl
 from dolfinx import fem
 
 from contactqvi.lifetime import PETScOwner
-from contactqvi.linalg import OptionsDict, create_snes, preset
+from contactqvi.linalg import OptionsDict, create_snes, default_options, preset
 from contactqvi.result import Result, Status
 from contactqvi.vi.nonlinear import NonlinearFormProblem, SNESProblem, snes_converged_reason, snes_status
 from contactqvi.vi.problem import ObstacleProblem
 
-__all__ = ["VI_OPTIONS", "OBSTACLE_VI_OPTIONS", "SNESVIResult", "SNESVariationalInequality", "ObstacleSNESVI"]
+__all__ = [
+    "VI_OPTIONS",
+    "OBSTACLE_VI_OPTIONS",
+    "EmbeddedInactivePC",
+    "SNESVIResult",
+    "SNESVariationalInequality",
+    "ObstacleSNESVI",
+]
 
 #: Options of every SNES VI: the method, and the line search it converged with on these machines
 #: (PETSc 3.22; ``snes_linesearch_type basic``).
@@ -46,6 +55,78 @@ class SNESVIResult(Result):
     reason: str = ""
 
 
+class EmbeddedInactivePC:
+    """Preconditioner of the inactive-set systems of ``vinewtonrsls`` that keeps the
+    Jacobian's block size and near-nullspace (a petsc4py Python-PC context).
+
+    ``vinewtonrsls`` solves J_II dx_I = -F_I on the inactive set I with the
+    submatrix J_II (MatCreateSubMatrix), which keeps neither J's block size nor
+    its near-nullspace: a contact bound removes single components of a node, so
+    GAMG would aggregate scalar dofs without rigid-body modes. This PC applies an
+    inner PC (e.g. GAMG) to J_II embedded in the full space, J with the active rows
+    and columns replaced by identity rows: x_I -> (inner PC applied to (x_I, 0))_I.
+    For an exact inner solve that is J_II^{-1}. PETSc sets the PC up at every Newton
+    step (a new J_II each time); the inner PC is rebuilt only when the inactive set
+    or J changed.
+
+    Args:
+        snes: the ``vinewtonrsls`` SNES whose KSP this PC belongs to.
+        J: the SNES's Jacobian (assembled in place by the problem's callback).
+        near_nullspace: near-nullspace of J (e.g. rigid-body modes), for the inner PC.
+        prefix: options prefix of the inner PC.
+        options: defaults of the inner PC under ``prefix`` (``pc_type`` etc.).
+    """
+
+    def __init__(self, snes: PETSc.SNES, J: PETSc.Mat, near_nullspace: PETSc.NullSpace, prefix: str,
+                 options: OptionsDict):
+        self.snes, self.J = snes, J
+        self.embedded = J.duplicate()
+        self.embedded.setNearNullSpace(near_nullspace)
+        self.inner = PETSc.PC().create(J.getComm())
+        self.inner.setOptionsPrefix(prefix)
+        with default_options(prefix, options):
+            self.inner.setFromOptions()
+        self.x, self.y = J.createVecs()
+        self.scatter: PETSc.Scatter | None = None  # full space -> inactive set
+        self.inactive: PETSc.IS | None = None  # the set the inner PC was built for
+        self.J_state = -1
+
+    def setUp(self, pc: PETSc.PC) -> None:
+        inactive = self.snes.getVIInactiveSet()
+        J_same = self.J.getComm().tompi4py().allreduce(self.J.stateGet() == self.J_state, op=MPI.LAND)
+        if self.inactive is not None and J_same and inactive.equal(self.inactive):
+            inactive.destroy()  # our handle; PETSc keeps the set
+            return
+        self.J.copy(self.embedded, PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        active = inactive.complement(*self.J.getOwnershipRange())
+        self.embedded.zeroRowsColumns(active, diag=1.0)
+        active.destroy()
+        reduced = pc.getOperators()[1].createVecRight()
+        for old in (self.scatter, self.inactive):
+            if old is not None:
+                old.destroy()
+        self.scatter = PETSc.Scatter().create(self.x, inactive, reduced, None)
+        reduced.destroy()
+        self.inactive, self.J_state = inactive, self.J.stateGet()
+        self.inner.setOperators(self.embedded)
+        self.inner.setUp()
+
+    def apply(self, pc: PETSc.PC, x: PETSc.Vec, y: PETSc.Vec) -> None:
+        self.x.set(0.0)
+        self.scatter.scatter(x, self.x, PETSc.InsertMode.INSERT, PETSc.ScatterMode.REVERSE)
+        self.inner.apply(self.x, self.y)
+        self.scatter.scatter(self.y, y, PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD)
+
+    def view(self, pc: PETSc.PC, viewer: PETSc.Viewer) -> None:
+        self.inner.view(viewer)
+
+    def destroy(self, pc: PETSc.PC) -> None:
+        """Called by PETSc when the PC is destroyed (collective)."""
+        for obj in (self.inner, self.embedded, self.x, self.y, self.scatter, self.inactive):
+            if obj is not None:
+                obj.destroy()
+
+
 class SNESVariationalInequality(PETScOwner):
     """Solve F(x) = 0 subject to lower <= x <= upper (complementarity form) by ``vinewtonrsls``.
 
@@ -56,15 +137,30 @@ class SNESVariationalInequality(PETScOwner):
         prefix: PETSc options prefix (``-{prefix}snes_monitor`` etc. on the command line).
         ksp: KSP preset of the inactive-set Newton systems.
         options: further defaults under ``prefix`` (tolerances; they override the preset).
+        near_nullspace: near-nullspace of the Jacobian (stays the caller's). Given, the
+            preset's preconditioner (``pc_*`` options, under ``{prefix}embedded_``) works
+            on the full space (:class:`EmbeddedInactivePC`); the KSP keeps ``ksp_*``.
 
     Attributes:
         lower, upper: the bounds, -inf and +inf until the caller writes them.
     """
 
-    def __init__(self, problem: SNESProblem, prefix: str, ksp: str = "lu", options: OptionsDict | None = None):
+    def __init__(self, problem: SNESProblem, prefix: str, ksp: str = "lu", options: OptionsDict | None = None,
+                 near_nullspace: PETSc.NullSpace | None = None):
         self.problem = problem
         comm = problem.A.getComm()
-        self.snes = self._own(create_snes(comm, prefix, {**VI_OPTIONS, **preset(ksp, "ksp"), **(options or {})}))
+        defaults = {**VI_OPTIONS, **preset(ksp, "ksp"), **(options or {})}
+        pc_options = {k: v for k, v in defaults.items() if not k.startswith(("snes_", "ksp_"))}
+        if near_nullspace is None:
+            self._pc_options = (prefix, pc_options)
+            self.snes = self._own(create_snes(comm, prefix, defaults))
+        else:
+            self._pc_options = (f"{prefix}embedded_", pc_options)
+            self.snes = self._own(create_snes(comm, prefix, {k: v for k, v in defaults.items() if k not in pc_options}))
+            context = EmbeddedInactivePC(self.snes, problem.A, near_nullspace, *self._pc_options)
+            pc = self.snes.getKSP().getPC()
+            pc.setType(PETSc.PC.Type.PYTHON)
+            pc.setPythonContext(context)  # PETSc calls context.destroy with the SNES's
         problem.attach(self.snes)
         self.lower = self._own(problem.b.duplicate())
         self.lower.set(PETSc.NINFINITY)
@@ -81,7 +177,9 @@ class SNESVariationalInequality(PETScOwner):
             x.copy(self.x)
             self.x.pointwiseMax(self.x, self.lower)
             self.x.pointwiseMin(self.x, self.upper)
-            self.snes.solve(None, self.x)
+            # a preconditioner reads some options (GAMG's multigrid ones) when it is set up, inside the solve
+            with default_options(*self._pc_options):
+                self.snes.solve(None, self.x)
             self.x.copy(x)
         result.status, result.reason = snes_status(self.snes), snes_converged_reason(self.snes)
         result.iterations = self.snes.getIterationNumber()
