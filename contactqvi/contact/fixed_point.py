@@ -35,8 +35,8 @@ logger = logging.getLogger(__name__)
 
 #: Inner tolerance factor of the Tresca solves (``forcing``). Measured (benchmarks/coulomb_peers.py,
 #: lev 6 and 7, all six cases, 1 rank, CPU time of the six solves at lev 7): 1e-1 49 s, 3e-2 59 s,
-#: 1e-2 61 s, 1e-3 74 s; 3e-1 and 5e-1 within 2 % of 1e-1. Looser Tresca solves cost more
-#: Tresca problems but fewer Newton steps in all.
+#: 1e-2 61 s, 1e-3 74 s; 3e-1 and 5e-1 are no faster. Looser Tresca solves cost more Tresca
+#: problems but fewer Newton steps in all.
 FORCING = 1e-1
 
 

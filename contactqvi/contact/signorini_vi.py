@@ -13,11 +13,11 @@ six cases, 1 rank): CG + GAMG on the submatrices PETSc extracts (no near-nullspa
 needs about 60 CG iterations per Newton step at rtol 1e-2 and 160 at rtol 1e-10;
 with the embedded PC 4-5 and 20. The six lev-7 solves take 51 s (CPU) against 230 s
 at rtol 1e-2 and 283 s at rtol 1e-10 without it. The near-nullspace restricted to
-the kept rows on the submatrices (block size 1) cuts the CG iterations as much but
-triples the GAMG set-up (lev 7 d1/L1: 27 s against 8 s); GMRES + BoomerAMG and
-MUMPS on the submatrices are 10 and 20 times slower (lev 6 d1/L1). Of the Krylov
-tolerances 1e-1 ... 1e-10, 1e-2 is the fastest (1e-3 and 1e-4 within 7 %), and the
-final ||y^|| still meets 1e-12 ||y^0||.
+the kept rows on the submatrices (block size 1) cuts the CG iterations as much,
+but each GAMG set-up costs three times as much (lev 7 d1/L1: 27 s against 8 s);
+GMRES + BoomerAMG and MUMPS on the submatrices are 10 and 20 times slower (lev 6
+d1/L1). Of the Krylov tolerances 1e-1 ... 1e-10, 1e-2 is the fastest (1e-3 and
+1e-4 within 7 %), and the final ||y^|| still meets 1e-12 ||y^0||.
 """
 
 from __future__ import annotations
