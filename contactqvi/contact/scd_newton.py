@@ -94,7 +94,7 @@ PARAMETERS = Parameters(
     pc=Parameter("gamg", "Newton-step solver", type=str, choices=tuple(NEWTON_STEP_SOLVERS)),
     reuse_pc=Parameter(True, "multigrid: coarse operators updated by the contact rows' change instead of a new "
                        "set-up; other preconditioners: kept while no contact node changes its kind", type=bool),
-    pc_rebuild_iterations=Parameter(4, "multigrid with reuse_pc: a new set-up (new interpolation) after a Krylov "
+    pc_rebuild_iterations=Parameter(10, "multigrid with reuse_pc: a new set-up (new interpolation) after a Krylov "
                                     "solve that took more iterations than this", type=int, minimum=1),
 )
 
@@ -361,7 +361,10 @@ class SCDNewtonSolver(PETScOwner):
         contact zone forms; a solve that takes more than ``pc_rebuild_iterations``
         Krylov iterations triggers a new set-up at the next step (lev 7 d3/L2, 2 ranks:
         46 Krylov iterations with the first interpolation throughout, 30 with a new
-        set-up at step 3; lev 8 d1/L1, 2 ranks: 58 -> 39). Other preconditioners are kept between
+        set-up at step 3; lev 8 d1/L1, 2 ranks: 58 -> 39 with a threshold of 4). A set-up
+        costs more than the iterations it saves at lev 7-8 (Coulomb / elastic solve,
+        lev 7, six cases: 1.62-2.34 with 4, 1.57-1.97 with 10), so the default 10 only
+        catches a hierarchy that has really degraded. Other preconditioners are kept between
         steps in which no contact node changes its kind (J then changes only in the
         sliding rows' coefficients, and GMRES still solves the current system to
         ``tol``). Direct solves (``preonly``) always refactor.
