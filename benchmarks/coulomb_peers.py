@@ -29,8 +29,6 @@ import benchlib
 from contactqvi.contact import ContactProblem, FrictionLaw, SCDNewtonSolver, build_contact_problem
 from contactqvi.contact.fixed_point import FORCING, solve_tresca_fixed_point
 from contactqvi.contact.signorini_vi import SIGNORINI_VI_OPTIONS, solve_signorini_vi
-from contactqvi.elasticity import rigid_motions_nullspace
-from contactqvi.linalg import create_ksp, preset
 from contactqvi.meshes import create_contact_body
 from contactqvi.problems import coulomb as data
 
@@ -126,14 +124,9 @@ def run_case(comm: MPI.Comm, lev: int, case: str, args) -> dict:
                                            args.vi_rtols)
     row["snes_vi"] = _fastest(row["snes_vi_configs"])
 
-    problem.A.setNearNullSpace(rigid_motions_nullspace(problem.V))
-    ksp = create_ksp(comm, "peer_elastic_", preset("cg_gamg"), A=problem.A, rtol=1e-12)
-    x = problem.A.createVecRight()
-    t0 = time.perf_counter()
-    ksp.solve(problem.load, x)
-    row["elastic"] = {"krylov": ksp.getIterationNumber(), "seconds": time.perf_counter() - t0}
+    row["elastic"] = benchlib.elastic_solve(problem, "peer_elastic_")
     row["peak_rss_mib"] = benchlib.peak_rss_mib(comm)
-    benchlib.release(comm, solver0, ksp, x, u, u0, problem)
+    benchlib.release(comm, solver0, u, u0, problem)
     return row
 
 

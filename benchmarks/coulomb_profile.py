@@ -24,8 +24,6 @@ from petsc4py import PETSc
 
 import benchlib
 from contactqvi.contact import SCDNewtonSolver, build_contact_problem
-from contactqvi.elasticity import rigid_motions_nullspace
-from contactqvi.linalg import create_ksp, preset
 from contactqvi.meshes import create_contact_body
 from contactqvi.problems import coulomb as data
 from contactqvi.result import Timings
@@ -61,22 +59,6 @@ def _phases(comm: MPI.Comm, timings: dict[str, float], before: dict[tuple[str, s
     return phases
 
 
-def _elastic_seconds(problem) -> tuple[int, float]:
-    """Krylov iterations and wall time of one elastic solve A u = l (set-up included)."""
-    nullspace = rigid_motions_nullspace(problem.V)
-    A = problem.A.duplicate(copy=True)
-    A.setNearNullSpace(nullspace)
-    ksp = create_ksp(problem.comm, "profile_elastic_", preset("cg_gamg"), A=A, rtol=1e-12)
-    x = A.createVecRight()
-    problem.comm.Barrier()
-    t0 = time.perf_counter()
-    ksp.solve(problem.load, x)
-    seconds = problem.comm.allreduce(time.perf_counter() - t0, op=MPI.MAX)
-    iterations = ksp.getIterationNumber()
-    benchlib.release(problem.comm, ksp, x, A, nullspace)
-    return iterations, seconds
-
-
 def profile(comm: MPI.Comm, lev: int, case: str, pc: str, version: str) -> dict:
     geometry, load = case.split("/")
     msh, tags = create_contact_body(comm, lev, data.gap_function(geometry))
@@ -88,11 +70,10 @@ def profile(comm: MPI.Comm, lev: int, case: str, pc: str, version: str) -> dict:
     with SCDNewtonSolver(problem, {"pc": pc}, prefix="profile_") as solver:
         result = solver.solve(u)
     seconds = comm.allreduce(time.perf_counter() - t0, op=MPI.MAX)
-    elastic_krylov, elastic_seconds = _elastic_seconds(problem)
+    elastic = benchlib.elastic_solve(problem, "profile_elastic_")
     row = {"version": version, "lev": lev, "case": case, "mpi_size": comm.size, "status": str(result.status),
            "it": result.iterations, "krylov": result.inner_iterations, "n": problem.n_free,
-           "seconds": seconds, "elastic": {"krylov": elastic_krylov, "seconds": elastic_seconds},
-           "ratio": seconds / elastic_seconds, "phases": _phases(comm, result.timings, before),
+           "seconds": seconds, "elastic": elastic, "ratio": seconds / elastic["seconds"], "phases": _phases(comm, result.timings, before),
            "peak_rss_mib": benchlib.peak_rss_mib(comm)}
     benchlib.release(comm, u, problem)
     return row
