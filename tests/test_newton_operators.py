@@ -41,7 +41,7 @@ def _block_diagonal(A: PETSc.Mat, blk: np.ndarray, blocks: np.ndarray, default: 
 def test_newton_matrix_is_DA_plus_U(eliminate):
     """J, the right-hand side and the eliminated values equal those of D A + U built on the whole matrix."""
     problem = _problem(3)
-    A, blk = problem.A, problem.contact_blk
+    A, blk = problem.A.duplicate(copy=True), problem.contact_blk  # problem.A holds J after newton_system
     with SCDNewtonSolver(problem, {"eliminate_fixed_rows": eliminate}) as solver:
         rng = np.random.default_rng(7)
         u, w = A.createVecRight(), solver._work
@@ -79,9 +79,18 @@ def test_newton_matrix_is_DA_plus_U(eliminate):
             for mine, theirs in ((w["rhs"], rhs), (w["du"], du)):
                 theirs.axpy(-1.0, mine)
                 assert theirs.norm() <= 1e-14 * max(mine.norm(), 1.0)
-            for obj in (D, U, reference, y2, rhs, du):
+            stiffness, exact = A.createVecLeft(), A.createVecLeft()
+            solver._newton.mult_stiffness(u, stiffness)  # A u while problem.A holds J
+            A.mult(u, exact)
+            assert np.array_equal(stiffness.array, exact.array)
+            for obj in (D, U, reference, y2, rhs, du, stiffness, exact):
                 obj.destroy()
         u.destroy()
+    restored = problem.A.copy()
+    restored.axpy(-1.0, A, PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+    assert restored.norm(PETSc.NormType.INFINITY) == 0.0  # A again, bit for bit
+    for obj in (restored, A):
+        obj.destroy()
 
 
 def test_galerkin_update_keeps_coarse_operators_exact():
@@ -93,7 +102,9 @@ def test_galerkin_update_keeps_coarse_operators_exact():
         pc = solver.ksp.getPC()
         levels = pc.getMGLevels()
         assert levels >= 3 and solver._galerkin is not None and solver._galerkin.updates >= 2
-        fine = solver._newton.J
+        last_J = fine = problem.A.copy()  # A (restored by the solve) with the rows of the last step's J
+        last_J.setValuesCSR(*solver._newton.rows.getValuesCSR())
+        last_J.assemble()
         for level in reversed(range(1, levels)):
             coarse = pc.getMGSmoother(level - 1).getOperators()[0]
             galerkin = fine.PtAP(pc.getMGInterpolation(level))
@@ -102,4 +113,5 @@ def test_galerkin_update_keeps_coarse_operators_exact():
             assert galerkin.norm() <= 1e-12 * scale, level
             galerkin.destroy()
             fine = coarse
-        u.destroy()
+        for obj in (last_J, u):
+            obj.destroy()

@@ -1,4 +1,4 @@
-"""The Newton matrix J = D A + U of (5.4) (seed 000) as A plus a change on the contact rows.
+"""The Newton matrix J = D A + U of (5.4) (seed 000) in the storage of A, changed on the contact rows only.
 
 Off the contact nodes D = W*^T = I and U = U*^T = 0 (Q^R = 0: rge(I, 0)), so J and A
 differ only in
@@ -7,11 +7,14 @@ differ only in
 * after the exact elimination of the identity rows (MatZeroRowsColumns), the
   columns of the eliminated dofs, i.e. the rows of the contact nodes' neighbours.
 
-:class:`NewtonMatrix` keeps J = A + E with E stored on exactly these rows (a
-surface-sized matrix with A's row pattern there): a Newton step copies A into J and
-adds E, and the cost of everything else scales with the contact surface, not with
-the body. The step-to-step change of E is what a multigrid preconditioner needs to
-keep its Galerkin coarse operators exact (:class:`contactqvi.multigrid.GalerkinUpdate`).
+:class:`NewtonMatrix` computes J on exactly these rows (a surface-sized matrix with
+A's row pattern there) and writes them into A's own storage: the body-sized matrix
+exists once, and the cost of a Newton step's matrix scales with the contact
+surface. A's values on these rows are kept, so products with A stay exact while the
+storage holds J (:meth:`NewtonMatrix.mult_stiffness`) and A is restored exactly
+afterwards (:meth:`NewtonMatrix.restore`). The step-to-step change of those rows is
+what a multigrid preconditioner needs to keep its Galerkin coarse operators exact
+(:class:`contactqvi.multigrid.GalerkinUpdate`).
 """
 
 from __future__ import annotations
@@ -32,36 +35,47 @@ _SUBSET = PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN
 
 
 class NewtonMatrix(PETScOwner):
-    """J = D A + U of (5.4) for the contact nodes ``contact_blk``, stored as A + E.
+    """J = D A + U of (5.4) for the contact nodes ``contact_blk``, written into A's storage.
 
     Args:
-        A: the stiffness matrix (block size 3, nodes in their frames).
+        A: the stiffness matrix (block size 3, nodes in their frames). From
+            :meth:`assemble` to :meth:`restore` (or :meth:`destroy`) it holds J;
+            A's values on the rows J changes are kept meanwhile.
         contact_blk: owned local node indices of the contact nodes.
 
     Attributes:
-        J: the Newton matrix (A's pattern; the same object for the solver's lifetime).
-        change: E of this step minus E of the previous :meth:`assemble`
-            (the whole E after the first), on E's pattern.
+        J: the Newton matrix: the object ``A`` itself, whatever it holds now.
+        rows: J on the rows it shares with no other matrix (the contact dofs and their
+            neighbours; A's layout, zero rows elsewhere), as of the last :meth:`assemble`.
+        change: J of this :meth:`assemble` minus J of the previous one (A before the
+            first), on the pattern of ``rows``.
     """
 
     def __init__(self, A: PETSc.Mat, contact_blk: np.ndarray):
-        self._A = A
+        self.J = A
         self._contact_blk = np.asarray(contact_blk, dtype=np.int64)
-        self._rows_of_A = _rows_of(A, _coupled_rows(A, self._contact_blk))  # A on the rows of E
-        self._E = self._rows_of_A.duplicate(copy=False)
-        self._E_previous = self._rows_of_A.duplicate(copy=False)
+        self._coupled = _coupled_rows(A, self._contact_blk)
+        self._rows_of_A = _rows_of(A, self._coupled)
+        self.rows = self._rows_of_A.duplicate(copy=False)
+        self._rows_previous = self._rows_of_A.duplicate(copy=True)
         self.change = self._rows_of_A.duplicate(copy=False)
         self._D_minus_I = _contact_blocks(A, self._contact_blk)
         self._U = _contact_blocks(A, self._contact_blk)
         self._fixed_diagonal = _contact_blocks(A, self._contact_blk)
         self._DA = self._D_minus_I.matMult(self._rows_of_A)
-        self.J = A.duplicate(copy=True)
-        for M in (self.J, self._E, self.change, self._E_previous):  # every row is set by its owner
+        self._product = A.createVecLeft()  # A x on the rows of ``rows``
+        self._holds_J = False
+        for M in (self.rows, self.change, self._rows_previous):  # every row is set by its owner
             M.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [self.J, self._DA, self._fixed_diagonal, self._U, self._D_minus_I, self.change, self._E_previous,
-                self._E, self._rows_of_A]
+        return [self._product, self._DA, self._fixed_diagonal, self._U, self._D_minus_I, self.change,
+                self._rows_previous, self.rows, self._rows_of_A]
+
+    def destroy(self) -> None:
+        """Restore A (:meth:`restore`) and free everything but A (collective)."""
+        self.restore()
+        super().destroy()
 
     def set_blocks(self, Wt: np.ndarray, Ut: np.ndarray) -> None:
         """D = I + blockdiag(Wt - I) and U = blockdiag(Ut) on the contact nodes ((m, 3, 3) each)."""
@@ -72,41 +86,54 @@ class NewtonMatrix(PETScOwner):
         self, fixed: np.ndarray | None = None, gamma: float = 1.0, x: PETSc.Vec | None = None,
         b: PETSc.Vec | None = None,
     ) -> PETSc.Mat:
-        """J = D A + U for the blocks of :meth:`set_blocks`; returns J.
+        """J = D A + U for the blocks of :meth:`set_blocks`, in A's storage; returns J.
 
         ``fixed`` ((m, 3) bool, per contact node and component) marks the dofs whose
         rows and columns are eliminated as by ``J.zeroRowsColumns(rows, gamma, x, b)``:
         their rows become gamma times identity rows, b takes the eliminated columns
         times x, and b = gamma x on them.
         """
-        E = self._E
-        self._rows_of_A.copy(E, _SAME)
+        rows = self.rows
+        self._rows_of_A.copy(rows, _SAME)
         self._D_minus_I.matMult(self._rows_of_A, result=self._DA)
-        E.axpy(1.0, self._DA, _SUBSET)
-        E.axpy(1.0, self._U, _SUBSET)
+        rows.axpy(1.0, self._DA, _SUBSET)
+        rows.axpy(1.0, self._U, _SUBSET)
         if fixed is not None:
             self._eliminate(fixed, gamma, x, b)
-        E.axpy(-1.0, self._rows_of_A, _SAME)  # E = J - A on its rows
-        self._A.copy(self.J, _SAME)
-        self.J.axpy(1.0, E, _SUBSET)
-        E.copy(self.change, _SAME)
-        self.change.axpy(-1.0, self._E_previous, _SAME)
-        E.copy(self._E_previous, _SAME)
+        _insert_rows(self.J, rows)
+        self._holds_J = True
+        rows.copy(self.change, _SAME)
+        self.change.axpy(-1.0, self._rows_previous, _SAME)
+        rows.copy(self._rows_previous, _SAME)
         return self.J
 
+    def restore(self) -> None:
+        """Write A's kept values back into its storage: the object holds A again, bit for bit."""
+        if self._holds_J:
+            _insert_rows(self.J, self._rows_of_A)
+            self._holds_J = False
+
+    def mult_stiffness(self, x: PETSc.Vec, y: PETSc.Vec) -> None:
+        """y = A x, also while the storage holds J: J's rows off ``rows`` are A's, and
+        A's own values are kept for the others."""
+        self.J.mult(x, y)
+        if self._holds_J:
+            self._rows_of_A.mult(x, self._product)
+            y.array[self._coupled] = self._product.array[self._coupled]
+
     def _eliminate(self, fixed: np.ndarray, gamma: float, x: PETSc.Vec, b: PETSc.Vec) -> None:
-        """Rows and columns of the ``fixed`` contact dofs of J (held by E on its rows) become gamma I.
+        """Rows and columns of the ``fixed`` contact dofs of J (held by ``rows``) become gamma I.
 
         MatZeroRowsColumns with a nonzero diagonal wants a diagonal entry in every row,
-        which E lacks off its rows: it zeroes the diagonal too, gamma is added by a
+        which ``rows`` lacks off its rows: it zeroes the diagonal too, gamma is added by a
         contact-block matrix, and b = gamma x is set on the fixed rows.
         """
         fixed_loc = _contact_dofs_loc(self._contact_blk)[fixed.ravel()]
-        start = self._A.getOwnershipRange()[0]
-        self._E.zeroRowsColumns((start + fixed_loc).astype(PETSc.IntType), diag=0.0, x=x, b=b)
+        start = self.J.getOwnershipRange()[0]
+        self.rows.zeroRowsColumns((start + fixed_loc).astype(PETSc.IntType), diag=0.0, x=x, b=b)
         b.array[fixed_loc] = gamma * x.array[fixed_loc]
         _set_blocks(self._fixed_diagonal, self._contact_blk, gamma * fixed[:, :, None] * np.eye(3))
-        self._E.axpy(1.0, self._fixed_diagonal, _SUBSET)
+        self.rows.axpy(1.0, self._fixed_diagonal, _SUBSET)
 
     def mult_blocks(self, x: PETSc.Vec, y: PETSc.Vec, gamma: PETSc.Vec) -> None:
         """y = Gamma D x + U x for the blocks of :meth:`set_blocks`: the right-hand side operator of (5.4)
@@ -114,6 +141,15 @@ class NewtonMatrix(PETScOwner):
         self._D_minus_I.multAdd(x, x, y)
         y.pointwiseMult(y, gamma)  # D Gamma = Gamma D: gamma is constant on each node
         self._U.multAdd(x, y, y)
+
+
+def _insert_rows(M: PETSc.Mat, rows: PETSc.Mat) -> None:
+    """Overwrite M's values on the nonempty owned rows of ``rows`` (same layout, pattern within M's)."""
+    indptr, indices, values = rows.getValuesCSR()
+    M.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)  # for this assembly only: M may be assembled again
+    M.setValuesCSR(indptr, indices, values)
+    M.assemble()
+    M.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, False)
 
 
 def _contact_dofs_loc(contact_blk: np.ndarray) -> np.ndarray:

@@ -279,7 +279,7 @@ class SCDNewtonSolver(PETScOwner):
     def residual(self, u: PETSc.Vec) -> GraphPoint:
         """The graph point of (6.17) at u alone: ||y^|| is the accuracy measure."""
         r, dhat = self._work["r_trial"], self._work["d_trial"]
-        self.problem.A.mult(u, r)
+        self._newton.mult_stiffness(u, r)
         r.axpy(-1.0, self.problem.load)
         return self.approximation_step(r, u, dhat)
 
@@ -405,7 +405,7 @@ class SCDNewtonSolver(PETScOwner):
         Returns ``(alpha, graph point)``, or ``(None, None)`` when no step size is accepted.
         """
         w = self._work
-        self.problem.A.mult(w["du"], w["Adu"])
+        self._newton.mult_stiffness(w["du"], w["Adu"])
         bound = 1.0 + 0.1 / (k + 1)
         for alpha in self._steps:
             w["u_trial"].waxpy(alpha, w["du"], u)
@@ -417,14 +417,24 @@ class SCDNewtonSolver(PETScOwner):
 
     # -- the method ----------------------------------------------------------------------
     def solve(self, u: PETSc.Vec) -> SCDNewtonResult:
-        """Run Algorithm 1 from the initial guess ``u`` (shifted displacements), in place."""
+        """Run Algorithm 1 from the initial guess ``u`` (shifted displacements), in place.
+
+        The Newton matrices are written into the storage of ``problem.A``
+        (:class:`~contactqvi.contact.newton_matrix.NewtonMatrix`); it holds A again on return.
+        """
+        try:
+            return self._algorithm_1(u)
+        finally:
+            self._newton.restore()
+
+    def _algorithm_1(self, u: PETSc.Vec) -> SCDNewtonResult:
         p, w, comm = self.parameters, self._work, self.problem.comm
         result = SCDNewtonResult(status=Status.DIVERGED_MAX_IT, iterations=0, gamma=0.0, states=np.empty(0, np.int8),
                                  normal_force=np.empty(0), friction_force=np.empty((0, 2)))
         with result.timings.phase("gamma"):
             result.gamma = gamma = self.gamma
         with result.timings.phase("residual"):
-            self.problem.A.mult(u, w["r"])
+            self._newton.mult_stiffness(u, w["r"])
             w["r"].axpy(-1.0, self.problem.load)
             point = self.approximation_step(w["r"], u, w["dhat"])
         norm0, v_previous, kinds_previous = point.norm, None, None
