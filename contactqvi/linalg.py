@@ -46,16 +46,16 @@ _GMRES_RIGHT = {"ksp_type": "fgmres", "ksp_pc_side": "right", "ksp_norm_type": "
 #: * ``cg_gamg``: CG + smoothed-aggregation AMG (SPD elasticity/Poisson systems;
 #:   give the matrix the rigid-body near-nullspace, :func:`contactqvi.elasticity.rigid_motions_nullspace`).
 #: * ``gmres_gamg``: GMRES stopped at the *unpreconditioned* relative residual
-#:   ||b - J x|| <= rtol ||b||, right-preconditioned by one W-cycle of GAMG, in its
+#:   ||b - J x|| <= rtol ||b||, right-preconditioned by one V-cycle of GAMG, in its
 #:   flexible form (FGMRES: the preconditioned directions are kept, so the update of
 #:   x needs no extra preconditioner application at the end of a solve; the iterates
 #:   of a fixed preconditioner are GMRES's; a solve of 2-3 iterations saves a quarter
 #:   of its multigrid cycles, lev 7 d1/L1: 4.76 -> 3.96 s). The
 #:   Newton-step solver of the Coulomb problem: AMG reduces all error components
-#:   alike, so a residual reduced by tol is a direction accurate to about tol, and
-#:   the W-cycle lowers the residual a step actually reaches against the V-cycle
-#:   (lev 6 d3/L2, geometric mean 0.046 vs 0.055; lev 5-8, 369 instead of 416
-#:   Newton steps). GAMG reads the cycle type when it builds its levels.
+#:   alike, so a residual reduced by tol is a direction accurate to about tol. With
+#:   one hierarchy kept by Galerkin updates the V-cycle beats the W-cycle (lev 8, six
+#:   cases, 2 ranks: same Newton steps, Krylov iterations 253 against 302, Coulomb
+#:   solve 1.47-2.00 elastic solves against 1.62-2.25; docs/coulomb.md).
 #: * ``gmres_ilu``: GMRES + block-Jacobi/ILU(0) as in seed 000, Sect. 7, stopped at
 #:   the left-preconditioned residual (MATLAB's gmres test with a preconditioner).
 #:   A 10 % reduction of that residual is met by directions that miss the smooth
@@ -71,7 +71,6 @@ KSP_PRESETS: dict[str, OptionsDict] = {
         "ksp_max_it": 2000,
         "pc_type": "gamg",
         "pc_gamg_type": "agg",
-        "pc_mg_cycle_type": "w",
     },
     "gmres_ilu": {
         "ksp_type": "gmres",
@@ -127,7 +126,8 @@ def create_ksp(
     ``rtol`` is set on this KSP only; a ``-{prefix}ksp_rtol`` given by the user still wins.
     The defaults are in the options database only during ``setFromOptions``. Options a
     preconditioner reads when it is set up (PCGAMG's multigrid options, e.g.
-    ``pc_mg_cycle_type``, are read when it builds its levels inside the solve) need
+    ``pc_mg_cycle_type``, are read when it builds its levels inside the solve; PCBJACOBI's
+    ``sub_*`` options when it makes its blocks) need
     ``with default_options(prefix, options)`` around the solve as well.
     """
     ksp = PETSc.KSP().create(comm)

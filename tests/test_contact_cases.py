@@ -76,7 +76,7 @@ def test_foundation_plane_reproduces_the_paper_solver():
     assert problem.rotation is None and np.array_equal(problem.frames[0], np.eye(3))
     u, (result,) = _solve(problem, parameters={})
     displacement = problem.physical_displacement(u, fem.Function(problem.V))
-    assert (result.iterations, result.inner_iterations) == (8, 25)
+    assert (result.iterations, result.inner_iterations) == (8, 26)  # Table 2, lev 3 d1/L1
     assert displacement.x.petsc_vec.norm() == pytest.approx(3.7224231279e-01, rel=1e-10)
 
 

@@ -252,9 +252,15 @@ def test_tresca_fixed_point_reaches_coulomb_solution(gamma_rule):
 
 
 @pytest.mark.serial
-def test_gamg_preset_reaches_the_multigrid_levels(tmp_path):
-    """The preset's W-cycle is in effect after a solve (GAMG reads its MG options when it builds its levels)."""
-    solver, u, result = _solve(_problem(MPI.COMM_WORLD, 3), "cycle_")
+def test_multigrid_option_reaches_the_levels(tmp_path):
+    """A user's multigrid option under the solver's prefix is in effect after a solve (GAMG reads it when
+    it builds its levels, inside the solve; the preset's V-cycle is PETSc's default)."""
+    options = PETSc.Options()
+    options["cycle_pc_mg_cycle_type"] = "w"
+    try:
+        solver, u, result = _solve(_problem(MPI.COMM_WORLD, 3), "cycle_")
+    finally:
+        options.delValue("cycle_pc_mg_cycle_type")
     assert result.converged
     path = tmp_path / "ksp.txt"
     viewer = PETSc.Viewer().createASCII(str(path))

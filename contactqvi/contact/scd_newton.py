@@ -61,7 +61,7 @@ logger = logging.getLogger(__name__)
 #: Newton-step solvers selectable by the parameter ``pc``, each a preset of
 #: :data:`contactqvi.linalg.KSP_PRESETS` applied under the solver's options prefix
 #: (``-{prefix}ksp_*``/``-{prefix}pc_*`` on the command line win). ``gamg``
-#: (default): GMRES + one GAMG W-cycle with the rigid-body near-nullspace, stopped
+#: (default): GMRES + one GAMG V-cycle with the rigid-body near-nullspace, stopped
 #: at the unpreconditioned relative residual (the paper's test, Sect. 7); ``paper``:
 #: GMRES + block-Jacobi/ILU(0) as in Sect. 7; ``hypre``: GMRES + BoomerAMG; ``lu``:
 #: exact (MUMPS), the reference for the Newton counts. Measured in docs/coulomb.md.
@@ -388,7 +388,7 @@ class SCDNewtonSolver(PETScOwner):
         self.ksp.setTolerances(rtol=tol)
         # The eliminated rows carry their exact values in the initial guess (direct solvers need none).
         self.ksp.setInitialGuessNonzero(self.parameters["eliminate_fixed_rows"] and self.ksp.getType() != "preonly")
-        # GAMG reads its multigrid options when it builds its levels.
+        # Options read at set-up (GAMG: multigrid options; block Jacobi: sub_*) come from the preset.
         with default_options(self.ksp.getOptionsPrefix(), self._ksp_options):
             if galerkin and self._galerkin is None:
                 self.ksp.setUp()
