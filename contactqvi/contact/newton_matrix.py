@@ -56,8 +56,7 @@ class NewtonMatrix(PETScOwner):
         self._contact_blk = np.asarray(contact_blk, dtype=np.int64)
         self._coupled = _coupled_rows(A, self._contact_blk)
         self._rows_of_A = _rows_of(A, self._coupled)
-        self.rows = self._rows_of_A.duplicate(copy=False)
-        self._rows_previous = self._rows_of_A.duplicate(copy=True)
+        self.rows = self._rows_of_A.duplicate(copy=True)  # J = A before the first assemble
         self.change = self._rows_of_A.duplicate(copy=False)
         self._D_minus_I = _contact_blocks(A, self._contact_blk)
         self._U = _contact_blocks(A, self._contact_blk)
@@ -65,12 +64,12 @@ class NewtonMatrix(PETScOwner):
         self._DA = self._D_minus_I.matMult(self._rows_of_A)
         self._product = A.createVecLeft()  # A x on the rows of ``rows``
         self._holds_J = False
-        for M in (self.rows, self.change, self._rows_previous):  # every row is set by its owner
+        for M in (self.rows, self.change):  # every row is set by its owner
             M.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [self._product, self._DA, self._fixed_diagonal, self._U, self._D_minus_I, self.change,
-                self._rows_previous, self.rows, self._rows_of_A]
+        return [self._product, self._DA, self._fixed_diagonal, self._U, self._D_minus_I, self.change, self.rows,
+                self._rows_of_A]
 
     def destroy(self) -> None:
         """Restore A (:meth:`restore`) and free everything but A (collective)."""
@@ -94,6 +93,8 @@ class NewtonMatrix(PETScOwner):
         times x, and b = gamma x on them.
         """
         rows = self.rows
+        rows.copy(self.change, _SAME)
+        self.change.scale(-1.0)  # minus J of the previous assemble
         self._rows_of_A.copy(rows, _SAME)
         self._D_minus_I.matMult(self._rows_of_A, result=self._DA)
         rows.axpy(1.0, self._DA, _SUBSET)
@@ -102,9 +103,7 @@ class NewtonMatrix(PETScOwner):
             self._eliminate(fixed, gamma, x, b)
         _insert_rows(self.J, rows)
         self._holds_J = True
-        rows.copy(self.change, _SAME)
-        self.change.axpy(-1.0, self._rows_previous, _SAME)
-        rows.copy(self._rows_previous, _SAME)
+        self.change.axpy(1.0, rows, _SAME)
         return self.J
 
     def restore(self) -> None:
