@@ -54,8 +54,8 @@ _GMRES_RIGHT = {"ksp_type": "fgmres", "ksp_pc_side": "right", "ksp_norm_type": "
 #:   Newton-step solver of the Coulomb problem: AMG reduces all error components
 #:   alike, so a residual reduced by tol is a direction accurate to about tol. With
 #:   one hierarchy kept by Galerkin updates the V-cycle beats the W-cycle (lev 8, six
-#:   cases, 2 ranks: same Newton steps, Krylov iterations 253 against 302, Coulomb
-#:   solve 1.47-2.00 elastic solves against 1.62-2.25; docs/coulomb.md).
+#:   cases, 2 ranks: same Newton steps, Krylov iterations 253 against 302; d1/L1
+#:   8.1 s against 9.5 s; docs/coulomb.md).
 #: * ``gmres_ilu``: GMRES + block-Jacobi/ILU(0) as in seed 000, Sect. 7, stopped at
 #:   the left-preconditioned residual (MATLAB's gmres test with a preconditioner).
 #:   A 10 % reduction of that residual is met by directions that miss the smooth
