@@ -50,6 +50,8 @@ class GalerkinUpdate(PETScOwner):
         levels = pc.getMGLevels()
         self._interpolations = [pc.getMGInterpolation(level) for level in range(1, levels)]
         self._operators = [pc.getMGSmoother(level).getOperators()[0] for level in range(levels)]
+        for operator in self._operators[:-1]:  # the coarse ones, changed here row by row by their owners
+            operator.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)
         self._changes: list[PETSc.Mat | None] = [None] * (levels - 1)
         self.updates = 0  # updates since the set-up
 
@@ -62,7 +64,6 @@ class GalerkinUpdate(PETScOwner):
         set up the smoothers again; the preconditioner is then to be reused."""
         for level in reversed(range(len(self._changes))):
             self._changes[level] = change.PtAP(self._interpolations[level], result=self._changes[level])
-            self._operators[level].setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)  # rows added by owners
             self._operators[level].axpy(1.0, self._changes[level], _SUBSET)
             change = self._changes[level]
         for level, operator in enumerate(self._operators):

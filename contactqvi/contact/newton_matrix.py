@@ -106,6 +106,10 @@ class NewtonMatrix(PETScOwner):
         self.change.axpy(1.0, rows, _SAME)
         return self.J
 
+    def fixed_dofs(self, fixed: np.ndarray) -> np.ndarray:
+        """Owned local dofs of the contact components marked in ``fixed`` ((m, 3) bool)."""
+        return _contact_dofs_loc(self._contact_blk)[fixed.ravel()]
+
     def restore(self) -> None:
         """Write A's kept values back into its storage: the object holds A again, bit for bit."""
         if self._holds_J:
@@ -127,7 +131,7 @@ class NewtonMatrix(PETScOwner):
         which ``rows`` lacks off its rows: it zeroes the diagonal too, gamma is added by a
         contact-block matrix, and b = gamma x is set on the fixed rows.
         """
-        fixed_loc = _contact_dofs_loc(self._contact_blk)[fixed.ravel()]
+        fixed_loc = self.fixed_dofs(fixed)
         start = self.J.getOwnershipRange()[0]
         self.rows.zeroRowsColumns((start + fixed_loc).astype(PETSc.IntType), diag=0.0, x=x, b=b)
         b.array[fixed_loc] = gamma * x.array[fixed_loc]

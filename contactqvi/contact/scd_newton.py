@@ -327,7 +327,7 @@ class SCDNewtonSolver(PETScOwner):
         if not self.parameters["eliminate_fixed_rows"]:
             return self._newton.assemble()
         fixed = ~np.any(Wt, axis=2)  # (m, 3): W*^T rows that vanish, pure (gamma-scaled) identity rows
-        fixed_loc = (3 * self.problem.contact_blk[:, None] + np.arange(3))[fixed]
+        fixed_loc = self._newton.fixed_dofs(fixed)
         w["du"].array[fixed_loc] = w["rhs"].array[fixed_loc] / self._gamma_dofs["gamma"].array[fixed_loc]
         return self._newton.assemble(fixed, self.gamma, w["du"], w["rhs"])
 
@@ -363,7 +363,7 @@ class SCDNewtonSolver(PETScOwner):
         46 Krylov iterations with the first interpolation throughout, 30 with a new
         set-up at step 3; lev 8 d1/L1, 2 ranks: 58 -> 39 with a threshold of 4). A set-up
         costs more than the iterations it saves at lev 7-8 (Coulomb / elastic solve,
-        lev 7, six cases: 1.62-2.34 with 4, 1.57-1.97 with 10), so the default 10 only
+        lev 7, six cases, W-cycle: 1.62-2.34 with 4, 1.57-1.97 with 10), so the default 10 only
         catches a hierarchy that has really degraded. Other preconditioners are kept between
         steps in which no contact node changes its kind (J then changes only in the
         sliding rows' coefficients, and GMRES still solves the current system to
