@@ -16,7 +16,7 @@ endif
 MPIENV  += OMPI_MCA_rmaps_base_oversubscribe=1 PRTE_MCA_rmaps_default_mapping_policy=:oversubscribe OMPI_MCA_btl=self,sm
 MPIRUN  := $(MPIENV) mpirun -n $(NP)
 
-.PHONY: deps venv demo test test-serial test-mpi benchmarks container-check paraview clean
+.PHONY: deps venv demo test test-serial test-mpi benchmarks container-check paraview peers clean
 
 deps:
 	bash scripts/install-deps.sh
@@ -59,6 +59,10 @@ paraview: $(PY)
 	rm -rf $(PV_OUT)
 	$(MPIRUN) $(PY) demos/coulomb3d.py --lev 4 --geometry d3 --load L2 --output $(PV_OUT)
 	bash scripts/paraview/run.sh $(PV_OUT) $(PV_IMAGES)
+
+# Peer codes for benchmarks/peers (GetFEM from Debian trixie, Kratos into build/kratos-venv); make test needs neither.
+peers:
+	bash scripts/install-peers.sh
 
 clean:
 	rm -rf $(OUT) .pytest_cache build *.egg-info
