@@ -34,6 +34,7 @@ __all__ = [
     "create_unit_square",
     "create_unit_interval",
     "read_gmsh",
+    "split_by_body",
     "tag_of",
     "boundary_facets",
     "cell_partitioner",
@@ -218,11 +219,17 @@ def create_unit_interval(comm: MPI.Comm, n: int) -> tuple[dmesh.Mesh, dmesh.Mesh
     return msh, _tag_facets(msh, markers, INTERVAL_BOUNDARIES)
 
 
-def read_gmsh(source: str | pathlib.Path, comm: MPI.Comm, gdim: int = 3) -> tuple[dmesh.Mesh, dmesh.MeshTags]:
-    """Read a gmsh ``.msh`` file (or a ``.py``/``.geo`` script) on rank 0 and distribute it.
+def read_gmsh(
+    source: str | pathlib.Path, comm: MPI.Comm, gdim: int = 3
+) -> tuple[dmesh.Mesh, dmesh.MeshTags, dmesh.MeshTags]:
+    """Read a gmsh ``.msh`` file (or a ``.geo`` script) on rank 0 and distribute it.
 
-    Physical groups of dimension gdim-1 become facet tags; their gmsh names become
-    the boundary names (``facet_tags.names``).
+    Physical groups of dimension gdim-1 become facet tags and those of dimension
+    gdim cell tags; their gmsh names become ``facet_tags.names`` and
+    ``cell_tags.names`` (``dict[str, int]``).
+
+    Returns:
+        ``(mesh, facet_tags, cell_tags)``.
     """
     import gmsh
 
@@ -237,6 +244,7 @@ def read_gmsh(source: str | pathlib.Path, comm: MPI.Comm, gdim: int = 3) -> tupl
         gmsh.initialize(interruptible=False)
     gmsh.option.setNumber("General.Terminal", 0)
     names: dict[str, int] = {}
+    volumes: dict[str, int] = {}
     counts: dict[str, int] = {}
     try:
         if comm.rank == 0:
@@ -248,18 +256,50 @@ def read_gmsh(source: str | pathlib.Path, comm: MPI.Comm, gdim: int = 3) -> tupl
                 names[name] = tag
                 counts[name] = sum(len(gmsh.model.mesh.getElements(dim, entity)[1][0])
                                    for entity in gmsh.model.getEntitiesForPhysicalGroup(dim, tag))
-        names, counts = comm.bcast((names, counts), root=0)
+            volumes = {gmsh.model.getPhysicalName(dim, tag) or str(tag): tag
+                       for dim, tag in gmsh.model.getPhysicalGroups(gdim)}
+        names, volumes, counts = comm.bcast((names, volumes, counts), root=0)
         # Facet tags are distributed with the cells; with GhostMode.none DOLFINx 0.9 lost a whole
         # group now and then on 2 ranks (inclined_block.geo), so gmsh meshes keep shared-facet ghosts.
         partitioner = cell_partitioner(comm, dmesh.GhostMode.shared_facet)
-        msh, _, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=gdim, partitioner=partitioner)
+        msh, cell_tags, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=gdim, partitioner=partitioner)
     finally:
         if not initialised:
             gmsh.finalize()
-    facet_tags.names = names
+    facet_tags.names, cell_tags.names = names, volumes
     n_owned_facets = msh.topology.index_map(gdim - 1).size_local
     for name, tag in names.items():
         found = comm.allreduce(int(np.count_nonzero(facet_tags.find(tag) < n_owned_facets)), op=MPI.SUM)
         require(found == counts[name], "mesh", f"physical group {name!r}: {found} of its {counts[name]} facets "
                 "arrived after distributing the mesh")
-    return msh, facet_tags
+    return msh, facet_tags, cell_tags
+
+
+def split_by_body(msh: dmesh.Mesh, facet_tags: dmesh.MeshTags, cell_tags: dmesh.MeshTags) -> dmesh.MeshTags:
+    """Facet tags named ``"body.group"``: each facet group split by the body its facets bound.
+
+    A body is a named cell group (a gmsh physical volume); a facet of group ``g`` on
+    the boundary of body ``b`` gets the name ``"b.g"``, so one gmsh group (e.g.
+    ``"top"``) can span several bodies and each body's part is addressed on its own.
+    Groups with no facets on a body get no name for it.
+    """
+    tdim = msh.topology.dim
+    msh.topology.create_connectivity(tdim - 1, tdim)
+    f2c = msh.topology.connectivity(tdim - 1, tdim)
+    n_cells = msh.topology.index_map(tdim).size_local + msh.topology.index_map(tdim).num_ghosts
+    body_of_cell = np.full(n_cells, -1, dtype=np.int64)
+    body_of_cell[cell_tags.indices] = cell_tags.values
+    facet_body = body_of_cell[f2c.array[f2c.offsets[facet_tags.indices]]]
+    bodies = {tag: name for name, tag in cell_tags.names.items()}
+    groups = {tag: name for name, tag in facet_tags.names.items()}
+    pairs = np.stack([facet_body, facet_tags.values.astype(np.int64)], axis=1)
+    local_pairs = {(int(b), int(g)) for b, g in np.unique(pairs, axis=0)} if len(pairs) else set()
+    all_pairs = sorted(set().union(*msh.comm.allgather(local_pairs)))
+    names = {f"{bodies[b]}.{groups[g]}": i + 1 for i, (b, g) in enumerate(all_pairs) if b in bodies}
+    width = max([g for _, g in all_pairs], default=0) + 1
+    codes = np.array([b * width + g for b, g in all_pairs], dtype=np.int64)
+    values = (np.searchsorted(codes, pairs[:, 0] * width + pairs[:, 1]) + 1).astype(np.int32)
+    keep = np.isin(facet_body, list(bodies))
+    tags = dmesh.meshtags(msh, tdim - 1, facet_tags.indices[keep], values[keep])
+    tags.names = names
+    return tags

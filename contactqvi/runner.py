@@ -46,7 +46,7 @@ def read_mesh(case: ContactCase, comm: MPI.Comm) -> tuple[dmesh.Mesh, dmesh.Mesh
     if case.mesh.box is not None:
         msh, tags = create_contact_body(comm, case.mesh.box.lev, gap_function(case.mesh.box.geometry))
     else:
-        msh, tags = read_gmsh(case.mesh.file, comm)
+        msh, tags, _ = read_gmsh(case.mesh.file, comm)
     check_groups(case, tags.names)
     return msh, tags
 

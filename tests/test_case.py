@@ -303,7 +303,7 @@ def test_check_groups_names_the_key_and_lists_the_mesh_groups():
 def test_case_meshes_read_with_named_groups(name, groups):
     """The small meshes of the cases read with read_gmsh; every group has facets; the
     sphere touches the Hertz/Mindlin blocks at a vertex at the origin."""
-    msh, tags = meshes.read_gmsh(ROOT / "meshes" / f"{name}.geo", MPI.COMM_WORLD)
+    msh, tags, _ = meshes.read_gmsh(ROOT / "meshes" / f"{name}.geo", MPI.COMM_WORLD)
     comm = msh.comm
     assert set(tags.names) == groups
     for group in groups:

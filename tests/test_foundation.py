@@ -132,7 +132,7 @@ def test_power_iteration_bounds():
 
 def test_gmsh_arch_block():
     """The shipped non-cuboid body reads with its physical groups as named facet tags."""
-    msh, tags = meshes.read_gmsh(MESHES / "arch_block.geo", MPI.COMM_WORLD)
+    msh, tags, _ = meshes.read_gmsh(MESHES / "arch_block.geo", MPI.COMM_WORLD)
     assert set(tags.names) == {"dirichlet", "right", "top", "contact"}
     comm = msh.comm
     for name in tags.names:

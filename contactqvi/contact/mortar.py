@@ -1,0 +1,386 @@
+"""Mortar coupling of two non-matching surfaces with a dual multiplier basis.
+
+The contact conditions between a slave surface Gamma_s and a master surface
+Gamma_m are imposed weakly, tested with the dual (biorthogonal) basis psi_i of the
+slave nodes (Wohlmuth): on a linear triangle psi_i = 4 phi_i - 1, so that
+int_T psi_i phi_k = delta_ik int_T phi_k. The mortar matrices
+
+    D_ii = int_{Gamma_s} psi_i,        M_ij = int_{Gamma_s} psi_i (phi_j^m o pi),
+
+pi the projection of the slave surface onto the master surface along the slave
+normal, give the weighted relative displacement of slave node i,
+
+    w_i = u_i - sum_j C_ij u_j,    C = D^{-1} M,
+
+which vanishes for every linear displacement field continuous across the
+interface: sum_j M_ij p(x_j) = int psi_i p = D_ii p(x_i) for linear p (the contact
+patch test). D_ii is integrated over the mortar segments, the parts of Gamma_s
+that have a master facet, as int psi_i sum_k phi_k; with full coverage this is
+int phi_i (the lumped area), and sum_j C_ij = 1 always, so rigid translations
+of both bodies never open or close the interface.
+
+Segment-to-segment integration (Puso-Laursen): each slave triangle and each
+master triangle facing it are projected onto the slave triangle's plane, the
+master polygon is clipped by the slave triangle (Sutherland-Hodgman), the clipped
+polygon is split into a fan of triangles and integrated with a rule exact for
+quadratics (psi_i phi_j^m is quadratic on a flat pair). A flat non-matching
+interface is therefore integrated exactly.
+
+Parallel search: each rank owns the slave facets of its cells; it receives from
+every rank the master facets that lie within ``search_distance`` of the bounding
+box of its own slave facets (never a whole surface), pairs them by a k-d tree on
+facet centroids, integrates, and sends the rows of ghost slave nodes to their
+owners. Small deformations: geometry in the reference configuration.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+from mpi4py import MPI
+
+import numpy as np
+import scipy.spatial
+
+from dolfinx import fem
+
+from contactqvi.parameters import require
+
+__all__ = ["MortarCoupling", "clip_polygons", "mortar_coupling", "segment_integrals", "surface_triangles"]
+
+#: Degree-2 rule on a triangle (barycentric points, weights summing to 1): exact for
+#: psi_i phi_j^m on a flat pair of linear triangles.
+_POINTS = np.array([[2 / 3, 1 / 6, 1 / 6], [1 / 6, 2 / 3, 1 / 6], [1 / 6, 1 / 6, 2 / 3]])
+_WEIGHTS = np.full(3, 1.0 / 3.0)
+#: Vertices a triangle clipped by a triangle can have (3 + one per clipping edge).
+_MAX_VERTICES = 6
+#: Slave nodes whose mortar segments give D_ii below this fraction of their lumped
+#: area are not coupled (they lie at the rim of the master's shadow).
+MIN_COVERAGE = 0.5
+
+
+@dataclasses.dataclass(frozen=True)
+class SurfaceTriangles:
+    """Linear triangles of a boundary surface, owned by this rank.
+
+    Attributes:
+        blk: (f, 3) local node (block) indices of the vertices (ghosts included).
+        x: (f, 3, 3) vertex coordinates.
+        normal: (f, 3) outward unit normals (away from the body).
+    """
+
+    blk: np.ndarray
+    x: np.ndarray
+    normal: np.ndarray
+
+    @property
+    def area(self) -> np.ndarray:
+        return 0.5 * np.linalg.norm(np.cross(self.x[:, 1] - self.x[:, 0], self.x[:, 2] - self.x[:, 0]), axis=1)
+
+
+def surface_triangles(V: fem.FunctionSpace, facets: np.ndarray) -> SurfaceTriangles:
+    """The owned exterior facets ``facets`` (local indices) of a tetrahedral P1 space."""
+    msh = V.mesh
+    tdim = msh.topology.dim
+    require(msh.topology.cell_name() == "tetrahedron", "mesh",
+            f"mortar contact needs tetrahedral meshes, got {msh.topology.cell_name()} cells")
+    msh.topology.create_connectivity(tdim - 1, tdim)
+    msh.topology.create_connectivity(tdim, tdim - 1)
+    facets = np.asarray(facets, dtype=np.int32)
+    facets = facets[facets < msh.topology.index_map(tdim - 1).size_local]
+    f2c, c2f = msh.topology.connectivity(tdim - 1, tdim), msh.topology.connectivity(tdim, tdim - 1)
+    cells = f2c.array[f2c.offsets[facets]]
+    local = np.argmax(c2f.array.reshape(-1, 4)[cells] == facets[:, None], axis=1)
+    closure = np.array([V.dofmap.dof_layout.entity_closure_dofs(tdim - 1, i) for i in range(4)])
+    cell_blk = V.dofmap.list[cells]
+    blk = np.take_along_axis(cell_blk, closure[local], axis=1)
+    coords = V.tabulate_dof_coordinates()
+    x = coords[blk]
+    normal = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    outward = np.einsum("ij,ij->i", normal, x.mean(axis=1) - coords[cell_blk].mean(axis=1)) > 0.0
+    normal[~outward] *= -1.0
+    return SurfaceTriangles(blk.astype(np.int32), x, normal)
+
+
+def clip_polygons(polygon: np.ndarray, count: np.ndarray, clip: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Sutherland-Hodgman: convex polygons clipped by counter-clockwise triangles, vectorised.
+
+    Args:
+        polygon: (P, K, 2) vertices, counter-clockwise, the first ``count`` valid.
+        count: (P,) vertex counts.
+        clip: (P, 3, 2) counter-clockwise triangles.
+
+    Returns:
+        ``(polygon, count)``: the intersections, (P, K, 2) and (P,); count < 3 means empty.
+    """
+    P, K = polygon.shape[:2]
+    rows = np.arange(P)
+    for e in range(3):
+        a, b = clip[:, e], clip[:, (e + 1) % 3]
+        edge = b - a
+
+        def side(p: np.ndarray) -> np.ndarray:
+            return edge[:, None, 0] * (p[..., 1] - a[:, None, 1]) - edge[:, None, 1] * (p[..., 0] - a[:, None, 0])
+
+        nxt_index = (np.arange(K)[None, :] + 1) % np.maximum(count, 1)[:, None]
+        nxt = polygon[rows[:, None], nxt_index]
+        s_cur, s_nxt = side(polygon), side(nxt)
+        valid = np.arange(K)[None, :] < count[:, None]
+        in_cur, in_nxt = s_cur >= 0.0, s_nxt >= 0.0
+        denom = np.where(s_cur - s_nxt == 0.0, 1.0, s_cur - s_nxt)
+        crossing = polygon + (s_cur / denom)[..., None] * (nxt - polygon)
+        # emitted per input vertex i: [crossing if the edge i -> i+1 crosses] then [nxt if nxt inside]
+        emit_cross = valid & (in_cur != in_nxt)
+        emit_next = valid & in_nxt
+        slots = np.cumsum(np.stack([emit_cross, emit_next], axis=2).reshape(P, 2 * K), axis=1) - 1
+        out = np.zeros_like(polygon)
+        values = np.stack([crossing, nxt], axis=2).reshape(P, 2 * K, 2)
+        emitted = np.stack([emit_cross, emit_next], axis=2).reshape(P, 2 * K)
+        p_idx, k_idx = np.nonzero(emitted)
+        out[p_idx, slots[p_idx, k_idx]] = values[p_idx, k_idx]
+        polygon, count = out, emitted.sum(axis=1)
+    return polygon, count
+
+
+def _plane_coordinates(origin: np.ndarray, e1: np.ndarray, e2: np.ndarray, x: np.ndarray) -> np.ndarray:
+    d = x - origin[:, None, :]
+    return np.stack([np.einsum("pj,pkj->pk", e1, d), np.einsum("pj,pkj->pk", e2, d)], axis=2)
+
+
+def _barycentric(triangle: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(P, Q, 3) barycentric coordinates of (P, Q, 2) points in (P, 3, 2) triangles."""
+    t = np.stack([triangle[:, 1] - triangle[:, 0], triangle[:, 2] - triangle[:, 0]], axis=2)  # (P, 2, 2)
+    lam = np.linalg.solve(t[:, None], (points - triangle[:, None, 0])[..., None])[..., 0]
+    return np.concatenate([1.0 - lam.sum(axis=2, keepdims=True), lam], axis=2)
+
+
+def _signed_area(triangle: np.ndarray) -> np.ndarray:
+    d1, d2 = triangle[:, 1] - triangle[:, 0], triangle[:, 2] - triangle[:, 0]
+    return 0.5 * (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
+
+
+def segment_integrals(slave: np.ndarray, normal: np.ndarray, master: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mortar integrals of pairs of a slave and a master triangle.
+
+    Args:
+        slave: (P, 3, 3) slave vertices; normal: (P, 3) unit normal of the slave triangle.
+        master: (P, 3, 3) master vertices.
+
+    Returns:
+        ``(D, M)``: (P, 3) int psi_i and (P, 3, 3) int psi_i phi_j^m over the
+        overlap of the slave triangle with the master triangle projected onto its
+        plane along ``normal`` (zero where they do not overlap).
+    """
+    P = len(slave)
+    origin = slave[:, 0]
+    e1 = slave[:, 1] - origin
+    e1 /= np.linalg.norm(e1, axis=1)[:, None]
+    e2 = np.cross(normal, e1)
+    s2 = _plane_coordinates(origin, e1, e2, slave)
+    m2 = _plane_coordinates(origin, e1, e2, master)
+    # counter-clockwise copies for clipping; barycentrics below use the original order
+    s_ccw = np.where((_signed_area(s2) < 0.0)[:, None, None], s2[:, [0, 2, 1]], s2)
+    m_area = _signed_area(m2)
+    m_ccw = np.where((m_area < 0.0)[:, None, None], m2[:, [0, 2, 1]], m2)
+    polygon = np.zeros((P, _MAX_VERTICES, 2))
+    polygon[:, :3] = m_ccw
+    scale = np.abs(_signed_area(s2))
+    count = np.where(np.abs(m_area) > 1e-12 * scale, 3, 0)  # a master facet seen edge-on has no shadow
+    polygon, count = clip_polygons(polygon, count, s_ccw)
+    D = np.zeros((P, 3))
+    M = np.zeros((P, 3, 3))
+    for k in range(1, _MAX_VERTICES - 1):  # fan (v0, v_k, v_k+1)
+        has = count >= k + 2
+        if not has.any():
+            break
+        tri = np.stack([polygon[has, 0], polygon[has, k], polygon[has, k + 1]], axis=1)
+        area = np.abs(_signed_area(tri))
+        points = np.einsum("qi,pij->pqj", _POINTS, tri)
+        psi = 4.0 * _barycentric(s2[has], points) - 1.0
+        phi_m = _barycentric(m2[has], points)
+        weights = area[:, None] * _WEIGHTS[None, :]
+        D[has] += np.einsum("pq,pqi->pi", weights, psi)
+        M[has] += np.einsum("pq,pqi,pqj->pij", weights, psi, phi_m)
+    return D, M
+
+
+@dataclasses.dataclass(frozen=True)
+class MortarCoupling:
+    """The mortar rows of the owned slave nodes of one contact pair.
+
+    Attributes:
+        slave_blk: (m,) owned local node indices of the coupled slave nodes, sorted.
+        weight: (m,) D_ii (m^2), the lumped area of the node's mortar segments.
+        C_indptr, C_master_glob, C_values: CSR rows of C = D^{-1} M for ``slave_blk``,
+            columns the global node indices of master nodes; every row sums to 1.
+        normal: (m, 3) unit nodal normals pointing from the master into the slave body.
+        gap: (m,) weighted initial gap n_i . (x_i - sum_j C_ij x_j) (m).
+    """
+
+    slave_blk: np.ndarray
+    weight: np.ndarray
+    C_indptr: np.ndarray
+    C_master_glob: np.ndarray
+    C_values: np.ndarray
+    normal: np.ndarray
+    gap: np.ndarray
+
+
+def _exchange_master(comm: MPI.Comm, slave: SurfaceTriangles, master: SurfaceTriangles,
+                     master_glob: np.ndarray, padding: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Master triangles (coordinates, global node indices, normals) within ``padding`` of
+    this rank's slave triangles' bounding box, gathered from the ranks that own them."""
+    if len(slave.x):
+        box = np.concatenate([slave.x.min(axis=(0, 1)) - padding, slave.x.max(axis=(0, 1)) + padding])
+    else:
+        box = np.array([np.inf] * 3 + [-np.inf] * 3)
+    boxes = np.asarray(comm.allgather(box))  # one box per rank
+    lo, hi = master.x.min(axis=1), master.x.max(axis=1)
+    send = []
+    for r in range(comm.size):
+        near = np.all((hi >= boxes[r, :3]) & (lo <= boxes[r, 3:]), axis=1)
+        send.append((master.x[near], master_glob[near], master.normal[near]))
+    received = comm.alltoall(send)
+    return tuple(np.concatenate([part[i] for part in received]) for i in range(3))
+
+
+def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facets: np.ndarray,
+                    search_distance: float, excluded_blk: np.ndarray | None = None) -> MortarCoupling:
+    """C = D^{-1} M, nodal normals and weighted gaps of a slave and a master surface.
+
+    Args:
+        V: vector P1 space on a tetrahedral mesh holding both bodies.
+        slave_facets, master_facets: local facet indices of the two surfaces.
+        search_distance: master facets farther than this from a slave facet
+            (between bounding boxes, m) are not paired with it.
+        excluded_blk: local node indices never coupled (e.g. clamped slave nodes).
+
+    Collective. Slave nodes with less than :data:`MIN_COVERAGE` of their lumped area
+    in the master's shadow are left out.
+    """
+    comm = V.mesh.comm
+    index_map = V.dofmap.index_map
+    slave, master = surface_triangles(V, slave_facets), surface_triangles(V, master_facets)
+    master_glob = index_map.local_to_global(master.blk.ravel()).reshape(-1, 3)
+    diameter = max(_max_edge(slave.x, comm), _max_edge(master.x, comm))
+    mx, mglob, mnormal = _exchange_master(comm, slave, master, master_glob, search_distance + diameter)
+
+    # candidate pairs: centroids within reach, bounding boxes within search_distance, facing normals
+    pairs_s, pairs_m = _candidate_pairs(slave.x, mx, search_distance, diameter)
+    facing = np.einsum("ij,ij->i", slave.normal[pairs_s], mnormal[pairs_m]) < 0.0
+    pairs_s, pairs_m = pairs_s[facing], pairs_m[facing]
+    D_pair, M_pair = segment_integrals(slave.x[pairs_s], -slave.normal[pairs_s], mx[pairs_m])
+
+    # slave rows: global node index; contributions of ghost rows go to their owners
+    slave_glob = index_map.local_to_global(slave.blk.ravel()).reshape(-1, 3)
+    rows_D = slave_glob[pairs_s].ravel()
+    rows_M = np.repeat(slave_glob[pairs_s], 3, axis=1).ravel()
+    cols_M = np.tile(mglob[pairs_m], (1, 3)).ravel()
+    lumped_rows = slave_glob.ravel()
+    lumped = np.repeat(slave.area / 3.0, 3)
+    normal_rows = slave_glob.ravel()
+    normal_values = np.repeat(slave.area[:, None] * -slave.normal, 3, axis=0)
+
+    owners = _owners(comm, index_map)
+    D = _sum_to_owners(comm, owners, rows_D, np.zeros_like(rows_D), D_pair.ravel())
+    M = _sum_to_owners(comm, owners, rows_M, cols_M, M_pair.ravel())
+    area = _sum_to_owners(comm, owners, lumped_rows, np.zeros_like(lumped_rows), lumped)
+    normals = [_sum_to_owners(comm, owners, normal_rows, np.zeros_like(normal_rows), normal_values[:, k])
+               for k in range(3)]
+
+    start = index_map.local_range[0]
+    n_owned = index_map.size_local
+    weight = np.zeros(n_owned)
+    weight[D[0] - start] = D[2]
+    lumped_area = np.zeros(n_owned)
+    lumped_area[area[0] - start] = area[2]
+    normal = np.zeros((n_owned, 3))
+    for k in range(3):
+        normal[normals[k][0] - start, k] = normals[k][2]
+    coupled = (lumped_area > 0.0) & (weight >= MIN_COVERAGE * lumped_area)
+    if excluded_blk is not None:
+        coupled[excluded_blk[excluded_blk < n_owned]] = False
+    slave_blk = np.flatnonzero(coupled).astype(np.int32)
+
+    rows_loc = M[0] - start
+    keep = coupled[rows_loc]
+    order = np.lexsort((M[1][keep], rows_loc[keep]))
+    rows_loc, cols, values = rows_loc[keep][order], M[1][keep][order], M[2][keep][order]
+    values = values / weight[rows_loc]
+    position = np.searchsorted(slave_blk, rows_loc)
+    indptr = np.zeros(len(slave_blk) + 1, dtype=np.int64)
+    np.add.at(indptr, position + 1, 1)
+    indptr = np.cumsum(indptr)
+
+    n = normal[slave_blk]
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    x = V.tabulate_dof_coordinates()
+    master_x = _master_coordinates(comm, index_map, x, cols)
+    projected = np.zeros((len(slave_blk), 3))
+    np.add.at(projected, position, values[:, None] * master_x)
+    gap = np.einsum("ij,ij->i", n, x[slave_blk] - projected)
+    return MortarCoupling(slave_blk, weight[slave_blk], indptr, cols.astype(np.int64), values, n, gap)
+
+
+def _max_edge(x: np.ndarray, comm: MPI.Comm) -> float:
+    local = float(np.linalg.norm(x - np.roll(x, 1, axis=1), axis=2).max(initial=0.0))
+    return comm.allreduce(local, op=MPI.MAX)
+
+
+def _candidate_pairs(slave_x: np.ndarray, master_x: np.ndarray, search_distance: float,
+                     diameter: float) -> tuple[np.ndarray, np.ndarray]:
+    """Index pairs (slave, master) whose padded bounding boxes overlap."""
+    if len(slave_x) == 0 or len(master_x) == 0:
+        return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
+    tree = scipy.spatial.cKDTree(master_x.mean(axis=1))
+    reach = search_distance + 2.0 * diameter
+    candidates = tree.query_ball_point(slave_x.mean(axis=1), reach)
+    counts = np.fromiter((len(c) for c in candidates), dtype=np.int64, count=len(candidates))
+    pairs_s = np.repeat(np.arange(len(slave_x)), counts)
+    pairs_m = np.fromiter((j for c in candidates for j in c), dtype=np.int64, count=int(counts.sum()))
+    lo_s, hi_s = slave_x.min(axis=1)[pairs_s], slave_x.max(axis=1)[pairs_s]
+    lo_m, hi_m = master_x.min(axis=1)[pairs_m], master_x.max(axis=1)[pairs_m]
+    near = np.all((hi_m >= lo_s - search_distance) & (lo_m <= hi_s + search_distance), axis=1)
+    return pairs_s[near], pairs_m[near]
+
+
+def _owners(comm: MPI.Comm, index_map) -> np.ndarray:
+    """Start of each rank's range of global node indices, and the total, (size + 1,)."""
+    starts = comm.allgather(index_map.local_range[0])
+    return np.array([*starts, index_map.size_global], dtype=np.int64)
+
+
+def _sum_to_owners(comm: MPI.Comm, owners: np.ndarray, rows: np.ndarray, cols: np.ndarray,
+                   values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Send entries (row, col, value) to the owner of ``row`` and sum duplicates there.
+
+    Returns the owned entries ``(rows, cols, values)``, unique (row, col) pairs.
+    """
+    rows, cols = np.asarray(rows, dtype=np.int64), np.asarray(cols, dtype=np.int64)
+    rank = np.searchsorted(owners, rows, side="right") - 1
+    order = np.argsort(rank, kind="stable")
+    bounds = np.searchsorted(rank[order], np.arange(comm.size + 1))
+    send = [(rows[order[a:b]], cols[order[a:b]], values[order[a:b]]) for a, b in zip(bounds[:-1], bounds[1:])]
+    received = comm.alltoall(send)
+    rows = np.concatenate([part[0] for part in received])
+    cols = np.concatenate([part[1] for part in received])
+    values = np.concatenate([part[2] for part in received])
+    keys, inverse = np.unique(np.stack([rows, cols], axis=1), axis=0, return_inverse=True)
+    summed = np.zeros(len(keys))
+    np.add.at(summed, inverse.ravel(), values)
+    return keys[:, 0], keys[:, 1], summed
+
+
+def _master_coordinates(comm: MPI.Comm, index_map, x: np.ndarray, glob: np.ndarray) -> np.ndarray:
+    """Coordinates of the nodes with global indices ``glob``, fetched from their owners."""
+    owners = _owners(comm, index_map)
+    rank = np.searchsorted(owners, glob, side="right") - 1
+    order = np.argsort(rank, kind="stable")
+    bounds = np.searchsorted(rank[order], np.arange(comm.size + 1))
+    requests = comm.alltoall([glob[order[a:b]] for a, b in zip(bounds[:-1], bounds[1:])])
+    start = index_map.local_range[0]
+    replies = comm.alltoall([x[r - start] for r in requests])
+    result = np.empty((len(glob), 3))
+    result[order] = np.concatenate(replies) if replies else np.empty((0, 3))
+    return result
