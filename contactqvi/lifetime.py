@@ -2,10 +2,11 @@
 
 PETSc objects on a parallel communicator must be destroyed collectively; left to
 Python's garbage collector they end up in PETSc's garbage list (petsc4py's delayed
-destruction) or are freed in a rank-dependent order. Every class of
-:mod:`contactqvi.vi` and :mod:`contactqvi.qvi` that creates PETSc objects
-registers them (and the owners it holds) with :meth:`PETScOwner._own`; the
-friction family declares them by :meth:`PETScOwner.petsc_objects`.
+destruction) or are freed in a rank-dependent order. The one rule of contactqvi:
+every class that holds PETSc objects derives from :class:`PETScOwner` and names
+them, and the owners it holds, in :meth:`PETScOwner.petsc_objects`;
+:meth:`PETScOwner.destroy` frees exactly those. ``tests/test_architecture.py``
+checks the rule, ``tests/petsc_audit.py`` that ``destroy()`` leaves nothing alive.
 """
 
 from __future__ import annotations
@@ -14,26 +15,20 @@ import typing
 
 __all__ = ["PETScOwner"]
 
-T = typing.TypeVar("T")
-
 
 class PETScOwner:
     """Owns PETSc objects and other owners; :meth:`destroy` frees them, also at the end of a ``with`` block."""
 
-    def _own(self, obj: T) -> T:
-        """Register ``obj`` (anything with a collective ``destroy()``) and return it."""
-        self.__dict__.setdefault("_owned", []).append(obj)
-        return obj
-
-    def petsc_objects(self) -> list[typing.Any]:
-        """PETSc objects (or owners) held in attributes, freed after the registered ones."""
+    def petsc_objects(self) -> typing.Iterable[typing.Any]:
+        """The PETSc objects and owners held (anything with a collective ``destroy()``; None is skipped)."""
         return []
 
     def destroy(self) -> None:
-        """Free everything registered, last registered first, then :meth:`petsc_objects`
-        (collective; a second call does nothing)."""
-        for obj in [*reversed(self.__dict__.pop("_owned", [])), *self.petsc_objects()]:
-            obj.destroy()
+        """Free everything :meth:`petsc_objects` names, in its order (collective; destroying
+        twice is harmless: a destroyed petsc4py object ignores a second ``destroy()``)."""
+        for obj in self.petsc_objects():
+            if obj is not None:
+                obj.destroy()
 
     def __enter__(self) -> typing.Self:
         return self

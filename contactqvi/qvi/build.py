@@ -58,9 +58,8 @@ class QVISetup(PETScOwner):
     initial: fem.Function
     Phi0: fem.Function
 
-    def __post_init__(self) -> None:
-        self._own(self.fmap)
-        self._own(self.solver)
+    def petsc_objects(self) -> list[PETScOwner]:
+        return [self.solver, self.fmap]
 
 
 def exterior_facets(msh: dmesh.Mesh) -> np.ndarray:

@@ -19,6 +19,7 @@ projection P_B of Sect. 2.3 is active, see :mod:`contactqvi.qvi.outer`).
 from __future__ import annotations
 
 import dataclasses
+import typing
 
 from petsc4py import PETSc
 
@@ -73,19 +74,18 @@ class CompositeMap(PETScOwner):
     Subclasses allocate their blocks once, create :attr:`system` from them, and
     re-assemble the state-dependent ones in place in ``linearize``, from the
     :class:`Evaluation` they are given only. A map owns the problem and the
-    solvers it is given: :meth:`destroy` frees them too.
+    solvers it is given (``parts``): :meth:`destroy` frees them too; subclasses add
+    their own blocks to :meth:`petsc_objects`.
     """
 
     def __init__(self, problem: ObstacleProblem, parts: list[PETScOwner]):
-        self.problem = self._own(problem)
-        for part in parts:
-            self._own(part)
+        self.problem, self.parts = problem, parts
         self.V, self.comm, self.n_owned = problem.V, problem.comm, problem.n_owned
         v, w = ufl.TestFunction(self.V), ufl.TrialFunction(self.V)
-        self.lumped_mass = self._own(dolfinx.fem.petsc.assemble_vector(fem.form(v * ufl.dx)))
+        self.lumped_mass = dolfinx.fem.petsc.assemble_vector(fem.form(v * ufl.dx))
         self.lumped_mass.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         stiffness_form = fem.form(ufl.inner(ufl.grad(w), ufl.grad(v)) * ufl.dx)
-        self.stiffness = self._own(dolfinx.fem.petsc.assemble_matrix(stiffness_form))
+        self.stiffness = dolfinx.fem.petsc.assemble_matrix(stiffness_form)
         self.stiffness.assemble()
         m = self.lumped_mass.array
         #: lumped mass M_L and -M_L: the identity terms of (62)/(65) in the basis of (68)
@@ -93,17 +93,21 @@ class CompositeMap(PETScOwner):
         self.boundary = ~problem.free
         self.system: BlockNewtonSystem | None = None
 
+    def petsc_objects(self) -> list[typing.Any]:
+        return [self.system, self.mass, self.negative_mass, self.stiffness, self.lumped_mass, *self.parts, self.problem]
+
     def _diag(self, values: np.ndarray) -> PETSc.Mat:
-        """A diagonal matrix owned by this map."""
+        """A diagonal matrix with the layout of V."""
         vec = self.lumped_mass.duplicate()
         vec.array[:] = values
-        D = self._own(diagonal_matrix(vec))
+        D = diagonal_matrix(vec)
         vec.destroy()
         return D
 
-    def _assembled(self, form: fem.Form) -> PETSc.Mat:
-        """A matrix of ``form`` owned by this map (re-assembled in place later)."""
-        A = self._own(dolfinx.fem.petsc.assemble_matrix(form))
+    @staticmethod
+    def _assembled(form: fem.Form) -> PETSc.Mat:
+        """The matrix of ``form`` (re-assembled in place later)."""
+        A = dolfinx.fem.petsc.assemble_matrix(form)
         A.assemble()
         return A
 
@@ -159,18 +163,21 @@ class ObstacleQVIMap(_TemperatureCoupledMap):
         # The columns of boundary nodes are zero: delta u = mu + eta vanishes there, so the harmonic extension
         # (64) sees eta = 0 on the boundary. This matters only if varphi != 0 on the boundary, which the paper
         # excludes (Assumption 3.8 ii)).
-        varphi_mass = self._diag(-self.lumped_mass.array * phi)
-        varphi_stiffness = self._own(self.stiffness.duplicate(copy=True))
+        self.varphi_mass = self._diag(-self.lumped_mass.array * phi)
+        self.varphi_stiffness = self.stiffness.duplicate(copy=True)
         interior_varphi = tm.varphi.x.petsc_vec.copy()
         interior_varphi.array[self.boundary] = 0.0
-        varphi_stiffness.diagonalScale(R=interior_varphi)
+        self.varphi_stiffness.diagonalScale(R=interior_varphi)
         interior_varphi.destroy()
         blocks = [
-            [self.mass, varphi_mass, self.negative_mass],
+            [self.mass, self.varphi_mass, self.negative_mass],
             [tm.coupling_matrix, tm.jacobian_matrix, None],
-            [None, varphi_stiffness, self.stiffness],
+            [None, self.varphi_stiffness, self.stiffness],
         ]
-        self.system = self._own(BlockNewtonSystem(self.comm, blocks, prefix))
+        self.system = BlockNewtonSystem(self.comm, blocks, prefix)
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [*super().petsc_objects(), self.varphi_mass, self.varphi_stiffness]
 
     def evaluate(self, y: fem.Function) -> Evaluation:
         """E1: T and Phi(y); E2: u_B = S(Phi0 + Phi(y))."""
@@ -202,7 +209,10 @@ class SemilinearVIMap(CompositeMap):
         self.coupling_form = fem.form(coupling)
         self.coupling = self._assembled(self.coupling_form)
         blocks = [[self.mass, self.negative_mass], [self.coupling, self.stiffness]]
-        self.system = self._own(BlockNewtonSystem(self.comm, blocks, prefix))
+        self.system = BlockNewtonSystem(self.comm, blocks, prefix)
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [*super().petsc_objects(), self.coupling]
 
     def evaluate(self, y: fem.Function) -> Evaluation:
         self.y.x.array[:] = y.x.array
@@ -260,15 +270,18 @@ class RegularisedQVIMap(_TemperatureCoupledMap):
         self.penalty = self._assembled(self.penalty_form)
         self.w_block = self._assembled(self.w_block_form)
         #: -rho^-1 (G_sigma I_h(varphi xi), q) of (67): the penalty times diag(varphi), negated
-        self.penalty_varphi = self._own(self.penalty.duplicate(copy=True))
+        self.penalty_varphi = self.penalty.duplicate(copy=True)
         tm = temperature
         blocks = [
             [self.mass, None, self.negative_mass],
             [tm.coupling_matrix, tm.jacobian_matrix, None],
             [None, self.penalty_varphi, self.w_block],
         ]
-        self.system = self._own(BlockNewtonSystem(self.comm, blocks, prefix))
+        self.system = BlockNewtonSystem(self.comm, blocks, prefix)
         self.warm = False
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [*super().petsc_objects(), self.penalty, self.w_block, self.penalty_varphi]
 
     def evaluate(self, y: fem.Function) -> Evaluation:
         phi_its, mould = self._mould(y)

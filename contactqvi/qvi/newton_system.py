@@ -53,16 +53,19 @@ class BlockNewtonSystem(PETScOwner):
         self, comm: MPI.Comm, blocks: list[list[PETSc.Mat | None]], prefix: str = "qvi_newton_", ksp: str = "lu"
     ):
         self.comm = comm
-        self.nest = self._own(PETSc.Mat().createNest(blocks, comm=comm))
+        self.nest = PETSc.Mat().createNest(blocks, comm=comm)
         self.K: PETSc.Mat | None = None
         start = self.nest.getOwnershipRange()[0]
         self.indices = [is_.getIndices().copy() for is_ in self.nest.getNestISs()[0]]
         self.positions = [idx - start for idx in self.indices]
         self.fixed = [np.zeros(idx.size, bool) for idx in self.indices]
-        self.ksp = self._own(create_ksp(comm, prefix, preset(ksp, "ksp")))
+        self.ksp = create_ksp(comm, prefix, preset(ksp, "ksp"))
         sizes = (self.nest.getLocalSize()[0], self.nest.getSize()[0])
         #: solution and right-hand side in the layout of the monolithic matrix
-        self.x, self.b = (self._own(PETSc.Vec().createMPI(sizes, comm=comm)) for _ in range(2))
+        self.x, self.b = (PETSc.Vec().createMPI(sizes, comm=comm) for _ in range(2))
+
+    def petsc_objects(self) -> list[PETSc.Object | None]:
+        return [self.ksp, self.K, self.x, self.b, self.nest]
 
     def update(self, fixed: list[np.ndarray]) -> None:
         """Build the matrix from the blocks' current values; row i of block j becomes an identity row if fixed[j][i]."""
@@ -84,9 +87,3 @@ class BlockNewtonSystem(PETScOwner):
         if self.ksp.getConvergedReason() <= 0:
             raise RuntimeError(f"Newton system: linear solve failed ({ksp_converged_reason(self.ksp)})")
         return [self.x.array[pos].copy() for pos in self.positions]
-
-    def destroy(self) -> None:
-        if self.K is not None:
-            self.K.destroy()
-            self.K = None
-        super().destroy()

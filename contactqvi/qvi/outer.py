@@ -29,6 +29,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+import typing
 
 from mpi4py import MPI
 
@@ -156,9 +157,9 @@ class FixedPointSolver(PETScOwner):
         self.comm: MPI.Comm = V.mesh.comm
         self.n = fmap.n_owned
         u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
-        self.h1 = self._own(dolfinx.fem.petsc.assemble_matrix(fem.form((ufl.inner(ufl.grad(u), ufl.grad(v)) + u * v) * ufl.dx)))
+        self.h1 = dolfinx.fem.petsc.assemble_matrix(fem.form((ufl.inner(ufl.grad(u), ufl.grad(v)) + u * v) * ufl.dx))
         self.h1.assemble()
-        self.work, self.image = (self._own(w) for w in self.h1.createVecs())
+        self.work, self.image = self.h1.createVecs()
         self.iterate = fem.Function(V, name="membrane")
         self.point = fem.Function(V, name="projected")
         self.error_form = None
@@ -167,7 +168,10 @@ class FixedPointSolver(PETScOwner):
             dx = ufl.dx(metadata={"quadrature_degree": 6})
             self.error_form = fem.form(ufl.inner(ufl.grad(e), ufl.grad(e)) * dx)
         radius = self.params["radius"]
-        self.projection = None if radius is None else self._own(BallProjection(fmap.stiffness, radius, center))
+        self.projection = None if radius is None else BallProjection(fmap.stiffness, radius, center)
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [self.projection, self.work, self.image, self.h1]
 
     # -- helpers on owned coefficient arrays ------------------------------------------------
     def norm(self, a: np.ndarray) -> float:

@@ -25,8 +25,11 @@ class BallProjection(PETScOwner):
     def __init__(self, inner: PETSc.Mat, radius: float, center: np.ndarray | None = None):
         require_positive("radius", radius)
         self.inner, self.radius = inner, radius
-        self.work, self.image = (self._own(v) for v in inner.createVecs())
+        self.work, self.image = inner.createVecs()
         self.center = np.zeros(self.work.getLocalSize()) if center is None else np.asarray(center, dtype=float)
+
+    def petsc_objects(self) -> list[PETSc.Vec]:
+        return [self.work, self.image]
 
     def dot(self, a: np.ndarray, b: np.ndarray) -> float:
         """(a, b)_{H^1_0} of owned coefficient arrays (collective)."""

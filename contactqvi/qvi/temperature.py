@@ -94,19 +94,19 @@ class TemperatureMap(PETScOwner):
 
         s = Psi0 + psi * self.T - self.u
         F = k * self.T * v * dx + ufl.inner(ufl.grad(self.T), ufl.grad(v)) * ufl.dx - g.g(s) * v * dx
-        self.nonlinear = self._own(NonlinearFormProblem(fem.form(F), fem.form(jacobian(self.T, self.u)), self.T, []))
-        self.snes = self._own(create_snes(V.mesh.comm, prefix, DEFAULT_PHI_OPTIONS))
+        self.nonlinear = NonlinearFormProblem(fem.form(F), fem.form(jacobian(self.T, self.u)), self.T, [])
+        self.snes = create_snes(V.mesh.comm, prefix, DEFAULT_PHI_OPTIONS)
         self.snes.setConvergenceHistory(reset=True)
         self.nonlinear.attach(self.snes)
-        self.x = self._own(self.T.x.petsc_vec.duplicate())
+        self.x = self.T.x.petsc_vec.duplicate()
         #: the matrix of (33)/(63) at (u_lin, T_lin)
         self.jacobian_form = fem.form(jacobian(self.T_lin, self.u_lin))
         #: (G_g(s) h, zeta) at (u_lin, T_lin): the u-derivative of the residual, the coupling block of (63)
         s_lin = Psi0 + psi * self.T_lin - self.u_lin
         self.coupling_form = fem.form(g.derivative(s_lin) * ufl.TrialFunction(V) * v * dx)
-        self.jacobian_matrix = self._own(dolfinx.fem.petsc.assemble_matrix(self.jacobian_form))
+        self.jacobian_matrix = dolfinx.fem.petsc.assemble_matrix(self.jacobian_form)
         self.jacobian_matrix.assemble()
-        self.coupling_matrix = self._own(dolfinx.fem.petsc.assemble_matrix(self.coupling_form))
+        self.coupling_matrix = dolfinx.fem.petsc.assemble_matrix(self.coupling_form)
         self.coupling_matrix.assemble()
         self.varphi = fem.Function(V, name="varphi")
         self.varphi.interpolate(fem.Expression(varphi, V.element.interpolation_points(), comm=V.mesh.comm))
@@ -114,6 +114,9 @@ class TemperatureMap(PETScOwner):
         #: residual of the first (cold) solve: the scale for round-off stagnation
         self.reference_norm: float | None = None
         self.roundoff = 1e-10
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [self.snes, self.x, self.jacobian_matrix, self.coupling_matrix, self.nonlinear]
 
     def solve(self, u: fem.Function) -> int:
         """Solve (30) for T at ``u``, starting from the current :attr:`T`; returns Newton steps."""

@@ -79,10 +79,13 @@ class PathFollowingMoreauYosida(PETScOwner):
         dx = problem.dx
         F = ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx + (huber(t, self.rho) / self.rho - problem.source) * v * dx
         J = ufl.inner(ufl.grad(du), ufl.grad(v)) * ufl.dx + huber_derivative(t, self.rho) / self.rho * du * v * dx
-        self.nonlinear = self._own(NonlinearFormProblem(fem.form(F), fem.form(J), u, problem.bcs))
-        self.snes = self._own(create_snes(problem.comm, prefix, DEFAULT_NEWTON_OPTIONS))
+        self.nonlinear = NonlinearFormProblem(fem.form(F), fem.form(J), u, problem.bcs)
+        self.snes = create_snes(problem.comm, prefix, DEFAULT_NEWTON_OPTIONS)
         self.nonlinear.attach(self.snes)
-        self.x = self._own(u.x.petsc_vec.duplicate())
+        self.x = u.x.petsc_vec.duplicate()
+
+    def petsc_objects(self) -> list[PETSc.Object | PETScOwner]:
+        return [self.snes, self.x, self.nonlinear]
 
     def solve(self, rhos: list[float], obstacle: fem.Function | None = None) -> PFMYResult:
         """Run the path from ``problem.u`` (initial guess) through ``rhos``.

@@ -57,8 +57,11 @@ class NonlinearFormProblem(SNESProblem):
 
     def __init__(self, F: fem.Form, J: fem.Form, u: fem.Function, bcs: list[fem.DirichletBC]):
         self.F_form, self.J_form, self.u, self.bcs = F, J, u, bcs
-        self.b = self._own(dolfinx.fem.petsc.create_vector(F))
-        self.A = self._own(dolfinx.fem.petsc.create_matrix(J))
+        self.b = dolfinx.fem.petsc.create_vector(F)
+        self.A = dolfinx.fem.petsc.create_matrix(J)
+
+    def petsc_objects(self) -> list[PETSc.Object]:
+        return [self.b, self.A]
 
     def _update(self, x: PETSc.Vec) -> None:
         # the lifting below reads x's ghost entries: SNES does not update them
@@ -86,7 +89,10 @@ class AffineProblem(SNESProblem):
 
     def __init__(self, A: PETSc.Mat, load: PETSc.Vec):
         self.A, self.load = A, load
-        self.b = self._own(A.createVecLeft())
+        self.b = A.createVecLeft()
+
+    def petsc_objects(self) -> list[PETSc.Object]:
+        return [self.b]
 
     def F(self, snes: PETSc.SNES, x: PETSc.Vec, b: PETSc.Vec) -> None:
         self.A.mult(x, b)

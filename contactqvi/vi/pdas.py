@@ -58,14 +58,17 @@ class ObstacleActiveSetSolver(PETScOwner):
         ksp: str = "lu",
     ):
         self.problem, self.max_iterations = problem, max_iterations
-        self.ksp = self._own(create_ksp(problem.comm, prefix, preset(ksp, "ksp")))
-        self.c = self._own(problem.A.getDiagonal())
+        self.ksp = create_ksp(problem.comm, prefix, preset(ksp, "ksp"))
+        self.c = problem.A.getDiagonal()
         self.c.scale(c)
-        self.rhs = self._own(problem.load.duplicate())
-        self.reduced = self._own(problem.A.duplicate(copy=True))
+        self.rhs = problem.load.duplicate()
+        self.reduced = problem.A.duplicate(copy=True)
         self.reduced.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)
         self.ksp.setOperators(self.reduced)
         self.offset = problem.V.dofmap.index_map.local_range[0]
+
+    def petsc_objects(self) -> list[PETSc.Object]:
+        return [self.ksp, self.c, self.rhs, self.reduced]
 
     def _active(self) -> np.ndarray:
         """{lambda + c (u - theta) > 0} on the owned free nodes."""

@@ -54,10 +54,10 @@ class ObstacleProblem(PETScOwner):
         dx = ufl.Measure("dx", domain=V.mesh, metadata={"quadrature_degree": quadrature_degree})
         self.stiffness_form = fem.form(ufl.inner(ufl.grad(u_trial), ufl.grad(v)) * ufl.dx)
         self.load_form = fem.form(source * v * dx)
-        self.A = self._own(dolfinx.fem.petsc.assemble_matrix(self.stiffness_form, bcs=bcs))
+        self.A = dolfinx.fem.petsc.assemble_matrix(self.stiffness_form, bcs=bcs)
         self.A.assemble()
-        self.load = self._own(dolfinx.fem.petsc.create_vector(self.load_form))
-        self.multiplier = self._own(self.load.duplicate())
+        self.load = dolfinx.fem.petsc.create_vector(self.load_form)
+        self.multiplier = self.load.duplicate()
         self.multiplier.set(0.0)
         bc_loc = np.concatenate([bc.dof_indices()[0] for bc in bcs]) if bcs else np.zeros(0, np.int32)
         self.free = np.ones(self.n_owned, dtype=bool)
@@ -66,6 +66,9 @@ class ObstacleProblem(PETScOwner):
         for bc in bcs:
             bc.set(self.boundary_values.x.array)
         self.dx = dx
+
+    def petsc_objects(self) -> list[PETSc.Object]:
+        return [self.A, self.load, self.multiplier]
 
     def set_obstacle(self, theta: fem.Function) -> None:
         """Copy the nodal values of ``theta`` (same space) into the problem's obstacle."""

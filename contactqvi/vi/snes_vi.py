@@ -153,21 +153,24 @@ class SNESVariationalInequality(PETScOwner):
         pc_options = {k: v for k, v in defaults.items() if not k.startswith(("snes_", "ksp_"))}
         if near_nullspace is None:
             self._pc_options = (prefix, pc_options)
-            self.snes = self._own(create_snes(comm, prefix, defaults))
+            self.snes = create_snes(comm, prefix, defaults)
         else:
             self._pc_options = (f"{prefix}embedded_", pc_options)
-            self.snes = self._own(create_snes(comm, prefix, {k: v for k, v in defaults.items() if k not in pc_options}))
+            self.snes = create_snes(comm, prefix, {k: v for k, v in defaults.items() if k not in pc_options})
             context = EmbeddedInactivePC(self.snes, problem.A, near_nullspace, *self._pc_options)
             pc = self.snes.getKSP().getPC()
             pc.setType(PETSc.PC.Type.PYTHON)
             pc.setPythonContext(context)  # PETSc calls context.destroy with the SNES's
         problem.attach(self.snes)
-        self.lower = self._own(problem.b.duplicate())
+        self.lower = problem.b.duplicate()
         self.lower.set(PETSc.NINFINITY)
-        self.upper = self._own(problem.b.duplicate())
+        self.upper = problem.b.duplicate()
         self.upper.set(PETSc.INFINITY)
         #: the SNES iterate: never a Vec the callbacks assemble from
-        self.x = self._own(problem.b.duplicate())
+        self.x = problem.b.duplicate()
+
+    def petsc_objects(self) -> list[PETSc.Object]:
+        return [self.snes, self.lower, self.upper, self.x]
 
     def solve(self, x: PETSc.Vec) -> SNESVIResult:
         """Solve from ``x`` (projected onto the bounds first); the solution overwrites ``x``."""
@@ -199,8 +202,11 @@ class ObstacleSNESVI(PETScOwner):
         v, du = ufl.TestFunction(V), ufl.TrialFunction(V)
         F = ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx - problem.source * v * problem.dx
         J = ufl.inner(ufl.grad(du), ufl.grad(v)) * ufl.dx
-        self.nonlinear = self._own(NonlinearFormProblem(fem.form(F), fem.form(J), u, problem.bcs))
-        self.vi = self._own(SNESVariationalInequality(self.nonlinear, prefix, "lu", OBSTACLE_VI_OPTIONS))
+        self.nonlinear = NonlinearFormProblem(fem.form(F), fem.form(J), u, problem.bcs)
+        self.vi = SNESVariationalInequality(self.nonlinear, prefix, "lu", OBSTACLE_VI_OPTIONS)
+
+    def petsc_objects(self) -> list[PETScOwner]:
+        return [self.vi, self.nonlinear]
 
     def solve(self) -> SNESVIResult:
         """Solve from ``problem.u`` for the problem's current obstacle."""

@@ -89,12 +89,18 @@ class ObstacleSolver(PETScOwner):
         self.params = check_obstacle_parameters(parameters)
         self.problem = problem
         self.warm = False
+        self.pfmy: PathFollowingMoreauYosida | None = None
+        self.pdas: ObstacleActiveSetSolver | None = None
+        self.vi: ObstacleSNESVI | None = None
         if self.params["s_solver"] == "pfmy-pdas":
-            self.pfmy = self._own(PathFollowingMoreauYosida(problem, prefix + "pfmy_"))
+            self.pfmy = PathFollowingMoreauYosida(problem, prefix + "pfmy_")
             max_it, c = self.params["pdas_max_iterations"], self.params["pdas_c"]
-            self.pdas = self._own(ObstacleActiveSetSolver(problem, max_it, c, prefix + "pdas_"))
+            self.pdas = ObstacleActiveSetSolver(problem, max_it, c, prefix + "pdas_")
         else:
-            self.vi = self._own(ObstacleSNESVI(problem, prefix + "vi_"))
+            self.vi = ObstacleSNESVI(problem, prefix + "vi_")
+
+    def petsc_objects(self) -> list[PETScOwner | None]:
+        return [self.pfmy, self.pdas, self.vi]
 
     def solve(self, obstacle: fem.Function | None = None, warm_start: bool | None = None) -> ObstacleResult:
         """Solve for ``obstacle`` (None: the problem's current one) from ``problem.u``.
