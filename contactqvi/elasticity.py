@@ -5,6 +5,7 @@ Units are the caller's; the demos use SI (Pa, m, N).
 
 from __future__ import annotations
 
+from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
@@ -17,7 +18,9 @@ from contactqvi.meshes import tag_of
 from contactqvi.parameters import require, require_positive
 
 __all__ = [
+    "body_materials",
     "lame_parameters",
+    "orthonormalize",
     "strain",
     "stress",
     "elasticity_forms",
@@ -25,17 +28,55 @@ __all__ = [
 ]
 
 
-def lame_parameters(young: float, poisson: float) -> tuple[float, float]:
+Modulus = float | fem.Function
+
+
+def lame_parameters(young: Modulus, poisson: Modulus) -> tuple[Modulus, Modulus]:
     """Lamé parameters (mu, lambda) from Young's modulus E and Poisson's ratio nu.
+
+    Numbers give numbers; cell-wise functions (:func:`body_materials`, checked there)
+    give UFL expressions.
 
     Raises:
         ParameterError: if E <= 0 or nu is outside (-1, 0.5).
     """
-    require_positive("young", young)
-    require(-1.0 < poisson < 0.5, "poisson", f"must lie in (-1, 0.5), got {poisson!r}")
+    if not isinstance(young, fem.Function):
+        require_positive("young", young)
+    if not isinstance(poisson, fem.Function):
+        require(-1.0 < poisson < 0.5, "poisson", f"must lie in (-1, 0.5), got {poisson!r}")
     mu = young / (2.0 * (1.0 + poisson))
     lmbda = young * poisson / ((1.0 + poisson) * (1.0 - 2.0 * poisson))
     return mu, lmbda
+
+
+def body_materials(
+    msh: dmesh.Mesh, cell_tags: dmesh.MeshTags, materials: dict[str, tuple[float, float]]
+) -> tuple[fem.Function, fem.Function]:
+    """Young's modulus and Poisson's ratio of several bodies as cell-wise (DG0) functions.
+
+    Args:
+        msh: mesh of all bodies.
+        cell_tags: named cell groups (``cell_tags.names``), one per body.
+        materials: body name -> (E (Pa), nu); every body of the mesh needs one.
+
+    Returns:
+        ``(young, poisson)``, named ``young`` and ``poisson``.
+    """
+    W = fem.functionspace(msh, ("DG", 0))
+    young, poisson = fem.Function(W, name="young"), fem.Function(W, name="poisson")
+    young.x.array[:] = np.nan
+    for name, (E, nu) in materials.items():
+        require(name in cell_tags.names, f"bodies.{name}",
+                f"no cell group {name!r} in the mesh; it has: {', '.join(sorted(cell_tags.names))}")
+        lame_parameters(E, nu)  # checks E and nu
+        cells = cell_tags.find(cell_tags.names[name])
+        young.x.array[cells], poisson.x.array[cells] = E, nu
+    young.x.scatter_forward()
+    poisson.x.scatter_forward()
+    n_cells = msh.topology.index_map(msh.topology.dim).size_local
+    missing = msh.comm.allreduce(int(np.count_nonzero(np.isnan(young.x.array[:n_cells]))))
+    require(missing == 0, "bodies", f"{missing} cells belong to no body (every cell needs a material)")
+    return young, poisson
 
 
 def strain(u: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
@@ -90,10 +131,12 @@ def _vector_constant(msh: dmesh.Mesh, value: tuple[float, ...], name: str) -> fe
     return fem.Constant(msh, array)
 
 
-def rigid_motions_nullspace(V: fem.FunctionSpace) -> PETSc.NullSpace:
+def rigid_motions_nullspace(V: fem.FunctionSpace, node_body: np.ndarray | None = None) -> PETSc.NullSpace:
     """Orthonormal rigid-body modes (3 translations, 3 rotations in 3D; 2 + 1 in 2D).
 
-    The near-nullspace for smoothed-aggregation AMG on elasticity operators.
+    The near-nullspace for smoothed-aggregation AMG on elasticity operators. With
+    ``node_body`` (body index of each local node, bodies sharing no nodes) each body
+    moves on its own: six modes per body.
     """
     msh = V.mesh
     gdim = msh.geometry.dim
@@ -111,6 +154,14 @@ def rigid_motions_nullspace(V: fem.FunctionSpace) -> PETSc.NullSpace:
         values[5][:, 2], values[5][:, 1] = x[:, 1], -x[:, 2]
     else:
         values[2][:, 0], values[2][:, 1] = -x[:, 1], x[:, 0]
+    if node_body is not None:
+        owned_body = node_body[:n_owned]
+        bodies = V.mesh.comm.allreduce(int(owned_body.max(initial=-1)), op=MPI.MAX) + 1
+        split = [la.vector(index_map, bs=bs, dtype=PETSc.ScalarType) for _ in range(bodies * len(basis))]
+        for k in range(bodies):
+            for i, b in enumerate(values):
+                split[k * len(basis) + i].array[: n_owned * bs].reshape(-1, bs)[owned_body == k] = b[owned_body == k]
+        basis = split
     la.orthonormalize(basis)
     vectors = []
     for b in basis:  # PETSc-owned copies: the null space keeps references to them
@@ -121,3 +172,12 @@ def rigid_motions_nullspace(V: fem.FunctionSpace) -> PETSc.NullSpace:
     for vec in vectors:  # our handles; left to the garbage collector they outlive the null space in parallel
         vec.destroy()
     return nullspace
+
+
+def orthonormalize(vectors: list[PETSc.Vec]) -> None:
+    """Orthonormalise PETSc vectors in place (modified Gram-Schmidt, twice; collective)."""
+    for _ in range(2):
+        for i, v in enumerate(vectors):
+            for w in vectors[:i]:
+                v.axpy(-v.dot(w), w)
+            v.normalize()

@@ -44,12 +44,13 @@ class FrictionLaw:
     """Slip bound b = s + F lambda of each contact node (lambda = -theta >= 0, N).
 
     Attributes:
-        friction: Coulomb coefficient F >= 0 (seed 000, Sect. 6).
+        friction: Coulomb coefficient F >= 0 (seed 000, Sect. 6), a scalar or one
+            value per owned contact node (pairs with different coefficients).
         slip_bound: given part s >= 0 of the bound (N), a scalar or one value per
             owned contact node (Tresca friction).
     """
 
-    friction: float = 0.0
+    friction: float | np.ndarray = 0.0
     slip_bound: float | np.ndarray = 0.0
 
     def bound(self, theta: np.ndarray) -> np.ndarray:
@@ -121,9 +122,9 @@ def resolvent(w: np.ndarray, gamma: float | np.ndarray, law: FrictionLaw) -> tup
 def lipschitz_constant(gamma: float, law: FrictionLaw) -> float:
     """Lipschitz modulus sqrt(2 (1 + F^2)) / gamma of the resolvent (proof of Prop. 6.4).
 
-    The given part s of the slip bound does not change it.
+    The given part s of the slip bound does not change it; with one F per node, the largest counts.
     """
-    return float(np.sqrt(2.0 * (1.0 + law.friction**2)) / gamma)
+    return float(np.sqrt(2.0 * (1.0 + np.max(law.friction) ** 2)) / gamma)
 
 
 def classify(
@@ -252,5 +253,6 @@ def scd_adjoint_blocks(
     I2 = np.eye(2)
     Wt[slide, :2, :2] = (1.0 - beta)[:, None, None] * I2 + beta[:, None, None] * P
     Ut[slide, :2, :2] = (gamma[slide] * beta)[:, None, None] * (I2 - P)
-    Wt[slide & contact, :2, 2] = law.friction * t[contact[slide]]  # (W*^T)_{12,3} = F t
+    friction = np.broadcast_to(law.friction, (m,))[slide & contact]
+    Wt[slide & contact, :2, 2] = friction[:, None] * t[contact[slide]]  # (W*^T)_{12,3} = F t
     return Wt, Ut

@@ -1,4 +1,4 @@
-"""The discrete contact problem of seed 000, Sect. 6, as PETSc objects, for any rigid obstacle.
+"""The discrete contact problem of seed 000, Sect. 6, as PETSc objects: rigid obstacles and bodies.
 
 Generalized equation (6.3): 0 in A u - l + Q(u) in the shifted displacements
 u = u~ + d, written in *nodal frames*: at each contact node the three dofs are the
@@ -7,6 +7,23 @@ normal pointing into the body), elsewhere the global ones. With the block-diagon
 rotation T (frame to global), A = T^T A_global T and l~ = T^T l~_global, so the
 nodal law Q acts on (two tangential, normal) components exactly as in the seed,
 where T = I (plane x3 = 0, frames e1, e2, e3; then no rotation is applied at all).
+
+Several bodies (seed 000, Remark 6.2: a two-body problem is a one-body problem after
+an algebraic transformation). At the slave nodes of a body pair the unknown is the
+mortar relative displacement w_i = u_i - sum_j C_ij u_j (:mod:`contactqvi.contact.mortar`)
+in the node's frame, elsewhere the displacement itself:
+    u = T w,   T = (I + N) R,
+R the block-diagonal rotation to nodal frames and N the mortar rows
+N_(i,j) = C_ij P_i (slave node i, master node j; P_i drops the components
+prescribed at i, a roller on a symmetry plane through the interface, where both
+bodies' displacement in that direction is prescribed). N maps master to slave dofs
+and no node is both, so N^2 = 0 and T^-1 = R^T (I - N). Master dofs with prescribed
+values g are left out of T and enter as the offset c = N g: u = T w + lambda c.
+With A_K, l~_K the assembled stiffness and load (identity rows and lifting at
+prescribed dofs), the problem in w is again (6.3) with
+    A = T^T A_K T,   l~ = T^T (l~_K - A_K c),
+the prescribed rows of A still identity rows, so the SCD solver sees the seed's
+nodal structure unchanged whatever the master side is.
 
 The shift d (zero off the contact nodes) makes the non-penetration condition
 u3 >= 0 and, for load steps, measures slip from the previous step:
@@ -30,13 +47,13 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
-import ufl
 
-from dolfinx import fem, la
+from dolfinx import fem
 from dolfinx import mesh as dmesh
 
+from contactqvi.contact.interface import Interface, ObstaclePair, Pair, build_interfaces
 from contactqvi.contact.nodal import FrictionLaw
-from contactqvi.elasticity import elasticity_forms, rigid_motions_nullspace
+from contactqvi.elasticity import elasticity_forms, orthonormalize, rigid_motions_nullspace
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import assemble_system
 from contactqvi.meshes import boundary_facets
@@ -44,7 +61,7 @@ from contactqvi.obstacles import Obstacle, Plane
 from contactqvi.parameters import require, require_positive
 from contactqvi.postprocess import ElasticBody
 
-__all__ = ["ContactProblem", "build_contact_problem"]
+__all__ = ["ContactProblem", "assemble_contact_problem", "build_contact_problem"]
 
 Vector3 = tuple[float, float, float]
 
@@ -54,24 +71,33 @@ class ContactProblem(PETScOwner):
     """Stiffness, loads and contact nodes of the GE (6.3) in nodal frames.
 
     Attributes:
-        V: vector P1/Q1 space of the displacement.
-        A: stiffness matrix in nodal frames; Dirichlet rows and columns are identity
-            rows/columns, so A restricted to the free dofs is the paper's A.
-        applied: load l~ at load factor 1 in nodal frames (tractions, body force and
-            the lifting of prescribed displacements; their values on Dirichlet dofs).
+        V: vector P1/Q1 space of the displacement (all bodies).
+        A: stiffness matrix in the solver's variables w (T^T A_K T); prescribed rows
+            and columns are identity rows/columns, so A restricted to the free dofs is
+            the paper's A.
+        applied: load l~ at load factor 1 in the solver's variables (tractions, body
+            force and the lifting of prescribed displacements; their values on
+            prescribed dofs).
         load: shifted load l = lambda l~ + A d of the current step.
         shift: the shift d of the current step (nodal frames).
-        contact_blk: owned local node (block) indices of the contact nodes.
-        contact_facets: local facet indices of the contact boundary (for output on it).
-        contact_area: lumped contact-surface area of each owned contact node (m^2).
+        contact_blk: owned local node (block) indices of the contact (slave) nodes, sorted.
+        contact_facets: local facet indices of the slave surfaces (for output on them).
+        contact_area: contact area of each owned contact node (m^2).
         law: slip bound of the nodal friction law (Coulomb, Tresca or none).
         frames: (m, 3, 3) frame of each owned contact node; rows t1, t2, n in global
             coordinates, fixed in the reference configuration.
-        obstacle: the rigid obstacle in its initial position.
-        body: material, supports and loads at load factor 1 (for stresses and reactions).
-        rotation: T (frame components to global), or None where every frame is (e1, e2, e3).
+        interfaces: the contact pairs' nodal data (:mod:`contactqvi.contact.interface`).
+        interface_of_node: (m,) index into ``interfaces`` of each contact node.
+        body: materials, supports and loads at load factor 1 (for stresses and reactions).
+        rotation: R (frame components to global), or None where every frame is (e1, e2, e3)
+            and there is no body pair.
+        coupling: N of the mortar rows (global components), or None without body pairs.
+        transform: T = (I + N) R, or None (then T = R).
+        offset: c = N g, the slave displacement due to prescribed master dofs at load
+            factor 1, or None.
         rollers: (m,) mask of contact nodes whose t1 component is prescribed (zero).
         dirichlet_dofs_loc: local unrolled indices of Dirichlet dofs (incl. ghosts).
+        node_body: body index of each local node (ghosts included), or None for one body.
         n_contact: global number p of contact nodes.
         n_free: global number n of free dofs.
         load_factor, translation: the current step (:meth:`set_step`).
@@ -87,11 +113,16 @@ class ContactProblem(PETScOwner):
     contact_area: np.ndarray
     law: FrictionLaw
     frames: np.ndarray
-    obstacle: Obstacle
+    interfaces: tuple[Interface, ...]
+    interface_of_node: np.ndarray
     body: ElasticBody
     rotation: PETSc.Mat | None
+    coupling: PETSc.Mat | None
+    transform: PETSc.Mat | None
+    offset: PETSc.Vec | None
     rollers: np.ndarray
     dirichlet_dofs_loc: np.ndarray
+    node_body: np.ndarray | None
     n_contact: int
     n_free: int
     load_factor: float = 1.0
@@ -101,14 +132,29 @@ class ContactProblem(PETScOwner):
     def comm(self) -> MPI.Comm:
         return self.V.mesh.comm
 
+    @property
+    def obstacle(self) -> Obstacle | None:
+        """The rigid obstacle, when the only pair is one against an obstacle."""
+        return self.interfaces[0].obstacle if len(self.interfaces) == 1 else None
+
     def petsc_objects(self) -> list[typing.Any]:
-        """A, the load vectors and T (copies by ``dataclasses.replace`` share them)."""
-        return [obj for obj in (self.A, self.applied, self.load, self.shift, self.rotation) if obj is not None]
+        """A, the load vectors, R, N, T and c (copies by ``dataclasses.replace`` share them)."""
+        objects = (self.A, self.applied, self.load, self.shift, self.rotation, self.coupling, self.transform,
+                   self.offset)
+        return [obj for obj in objects if obj is not None]
 
     def gap(self, translation: typing.Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
-        """Gap of each owned contact node to the obstacle translated by ``translation`` (m)."""
+        """Gap of each owned contact node (m), obstacles translated by ``translation``."""
         x = self.V.tabulate_dof_coordinates()[self.contact_blk]
-        return self.obstacle.translated(translation).distance(x)[0]
+        return self._per_node(lambda i, nodes: i.gap(x[nodes], np.asarray(translation, dtype=float)), 1)
+
+    def _per_node(self, value: typing.Callable[[Interface, np.ndarray], np.ndarray], width: int) -> np.ndarray:
+        """An interface-wise quantity spread over the contact nodes ((m,) or (m, width))."""
+        out = np.zeros((len(self.contact_blk), width))
+        for k, interface in enumerate(self.interfaces):
+            nodes = np.flatnonzero(self.interface_of_node == k)
+            out[nodes] = np.asarray(value(interface, nodes)).reshape(len(nodes), width)
+        return out[:, 0] if width == 1 else out
 
     def set_step(
         self, load_factor: float = 1.0, translation: typing.Sequence[float] = (0.0, 0.0, 0.0),
@@ -116,12 +162,14 @@ class ContactProblem(PETScOwner):
     ) -> None:
         """Shift and load of a load step: tractions, body force and prescribed displacements
         times ``load_factor``,
-        the obstacle translated by ``translation`` (total, m), slip measured from the
+        the obstacles translated by ``translation`` (total, m), slip measured from the
         physical displacement ``previous`` (nodal frames; None: from rest) and from the
-        obstacle's position of the step before.
+        obstacles' position of the step before (tangential obstacle motion per node;
+        a master body moves with the solution, its slip is in w itself).
         """
         translation = np.asarray(translation, dtype=float)
-        moved = self.frames[:, :2, :] @ (translation - self.translation)  # tangential obstacle motion per node
+        on_obstacle = self._per_node(lambda i, nodes: np.full(len(nodes), i.obstacle is not None), 1) > 0
+        moved = on_obstacle[:, None] * (self.frames[:, :2, :] @ (translation - self.translation))
         along = self.comm.allreduce(float(np.abs(moved[self.rollers, 0]).max(initial=0.0)), op=MPI.MAX)
         require(along <= 1e-12 * max(float(np.linalg.norm(translation - self.translation)), 1e-300),
                 "steps.translation", "the obstacle must not move along a component prescribed on contact nodes")
@@ -138,26 +186,38 @@ class ContactProblem(PETScOwner):
         self.load_factor, self.translation = float(load_factor), translation
 
     def physical_displacement(self, u: PETSc.Vec, out: fem.Function) -> fem.Function:
-        """u~ = T (u - d) in global components, written into ``out`` (ghosts updated)."""
-        if self.rotation is None:
+        """u~ = T (u - d) + lambda c in global components, written into ``out`` (ghosts updated)."""
+        transform = self.transform if self.transform is not None else self.rotation
+        if transform is None:
             out.x.petsc_vec.waxpy(-1.0, self.shift, u)
         else:
             local = u.copy()
             local.axpy(-1.0, self.shift)
-            self.rotation.mult(local, out.x.petsc_vec)
+            transform.mult(local, out.x.petsc_vec)
             local.destroy()
+        if self.offset is not None:
+            out.x.petsc_vec.axpy(self.load_factor, self.offset)
         out.x.scatter_forward()
         return out
 
     def near_nullspace(self) -> PETSc.NullSpace:
-        """Rigid-body modes in nodal frames (T^T of the global ones), for AMG."""
-        modes = rigid_motions_nullspace(self.V)
+        """Rigid-body modes of each body in the solver's variables, T^-1 = R^T (I - N) of
+        the global ones, for AMG (six per body)."""
+        modes = rigid_motions_nullspace(self.V, self.node_body)
         if self.rotation is None:
             return modes
         global_modes = modes.getVecs()
         vectors = [self.A.createVecRight() for _ in global_modes]
         for mode, vector in zip(global_modes, vectors):
+            if self.coupling is not None:
+                mode = mode.copy()
+                self.coupling.mult(mode, vector)
+                mode.axpy(-1.0, vector)
             self.rotation.multTranspose(mode, vector)
+            if self.coupling is not None:
+                mode.destroy()
+        if self.coupling is not None:
+            orthonormalize(vectors)
         rotated = PETSc.NullSpace().create(vectors=vectors, comm=self.comm)
         for vector in [*global_modes, *vectors]:  # the null spaces hold their own references
             vector.destroy()
@@ -204,41 +264,99 @@ def build_contact_problem(
     """
     require_positive("friction", friction, allow_zero=True)
     require_positive("slip_bound", slip_bound, allow_zero=True)
-    require(msh.geometry.dim == 3, "mesh", "the contact problem is three-dimensional")
     obstacle = Plane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)) if obstacle is None else obstacle
+    pair = ObstaclePair(contact, obstacle, float(friction), float(slip_bound))
+    return assemble_contact_problem(msh, facet_tags, young, poisson, tractions, [pair], clamped, body_force,
+                                    displacements)
+
+
+def assemble_contact_problem(
+    msh: dmesh.Mesh,
+    facet_tags: dmesh.MeshTags,
+    young: float | fem.Function,
+    poisson: float | fem.Function,
+    tractions: dict[str, Vector3],
+    pairs: typing.Sequence[Pair],
+    clamped: typing.Sequence[str] = (),
+    body_force: Vector3 | None = None,
+    displacements: dict[str, dict[int, float]] | None = None,
+    cell_tags: dmesh.MeshTags | None = None,
+) -> ContactProblem:
+    """Assemble the GE (6.3) of one or several bodies with contact pairs, at load factor 1.
+
+    Args:
+        msh, facet_tags: mesh of all bodies with named facet groups.
+        young, poisson: E (Pa) and nu, numbers or cell-wise (DG0) functions.
+        tractions, clamped, body_force, displacements: as in :func:`build_contact_problem`.
+        pairs: contact pairs (:class:`~contactqvi.contact.interface.ObstaclePair`,
+            :class:`~contactqvi.contact.interface.BodyPair`).
+        cell_tags: named cell groups, one per body, when there are several bodies
+            (each gets its own rigid-body modes for AMG).
+
+    Raises:
+        ParameterError: see :func:`~contactqvi.contact.interface.build_interfaces`,
+            and nonzero prescribed normal components on contact nodes.
+    """
+    require(msh.geometry.dim == 3, "mesh", "the contact problem is three-dimensional")
     V = fem.functionspace(msh, ("Lagrange", 1, (3,)))
     a, L = elasticity_forms(V, young, poisson, facet_tags, tractions, body_force)
     msh.topology.create_connectivity(msh.topology.dim - 1, msh.topology.dim)
     bcs = _dirichlet_conditions(V, facet_tags, clamped, displacements or {})
     dirichlet_dofs_loc = np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs] + [np.empty(0, np.int32)]))
     A, applied = assemble_system(a, L, bcs)
-    n_owned = V.dofmap.index_map.size_local
-    contact_facets = boundary_facets(facet_tags, contact)
-    contact_blk, constrained = _contact_nodes(V, contact_facets, dirichlet_dofs_loc)
-    nonzero = msh.comm.allreduce(int(np.count_nonzero(applied.array.reshape(-1, 3)[contact_blk][constrained])))
+    index_map = V.dofmap.index_map
+    constrained = np.zeros((index_map.size_local + index_map.num_ghosts) * 3, dtype=bool)
+    constrained[dirichlet_dofs_loc] = True
+    constrained = constrained.reshape(-1, 3)
+    interfaces = build_interfaces(V, facet_tags, pairs, np.flatnonzero(constrained.all(axis=1)))
+    contact_blk = np.concatenate([i.blk for i in interfaces]).astype(np.int32)
+    order = np.argsort(contact_blk, kind="stable")
+    contact_blk = contact_blk[order]
+    interface_of_node = np.repeat(np.arange(len(interfaces)), [len(i.blk) for i in interfaces])[order]
+    frames = np.concatenate([i.frames for i in interfaces])[order]
+    contact_area = np.concatenate([i.area for i in interfaces])[order]
+    nonzero = msh.comm.allreduce(int(np.count_nonzero(applied.array.reshape(-1, 3)[contact_blk][constrained[contact_blk]])))
     require(nonzero == 0, "boundary.displacement", f"{nonzero} components prescribed on contact nodes are not "
             "zero; on the contact surface only rollers (zero tangential components) are supported")
-    x = V.tabulate_dof_coordinates()[contact_blk]
-    _check_penetration(msh, obstacle, x)
-    frames = _align_frames(obstacle.frames(x), constrained, msh.comm)
-    rotation = _nodal_rotation(A, contact_blk, frames)
-    if rotation is not None:  # nodal frames: A = T^T A T, l~ = T^T l~
-        A_global, A = A, A.PtAP(rotation)
+    frames = _align_frames(frames, constrained[contact_blk], msh.comm)
+    mortar = any(i.coupling is not None for i in interfaces)
+    rotation = _nodal_rotation(A, contact_blk, frames, always=mortar)
+    coupling = transform = offset = None
+    if mortar:
+        coupling = _mortar_rows(A, interfaces, constrained)
+        transform, offset = _change_of_variables(coupling, rotation, applied, dirichlet_dofs_loc, index_map.size_local)
+    if rotation is not None:  # A = T^T A_K T, l~ = T^T (l~_K - A_K c)
+        T = transform if transform is not None else rotation
+        if offset is not None:
+            lifted = applied.duplicate()
+            A.mult(offset, lifted)
+            lifted.aypx(-1.0, applied)
+            applied.destroy()
+            applied = lifted
+        A_global, A = A, A.PtAP(T)
         A_global.destroy()
         applied_global, applied = applied, applied.duplicate()
-        rotation.multTranspose(applied_global, applied)
+        T.multTranspose(applied_global, applied)
         applied_global.destroy()
 
     comm = msh.comm
+    n_owned = index_map.size_local
     n_fixed_owned = int(np.count_nonzero(dirichlet_dofs_loc < 3 * n_owned))
-    contact_area = _lumped_area(msh, facet_tags, contact, contact_blk)
+    slip_bound = np.array([i.pair.slip_bound for i in interfaces])[interface_of_node] * contact_area
+    friction = np.array([i.pair.friction for i in interfaces])
+    supports = tuple(dict.fromkeys([*clamped, *(displacements or {})]))
     problem = ContactProblem(
         V=V, A=A, applied=applied, load=applied.duplicate(), shift=applied.duplicate(),
-        contact_blk=contact_blk, contact_facets=contact_facets, contact_area=contact_area,
-        law=FrictionLaw(float(friction), float(slip_bound) * contact_area), frames=frames, obstacle=obstacle,
-        body=ElasticBody(young, poisson, facet_tags, tuple(dict.fromkeys([*clamped, *(displacements or {})])),
-                         dict(tractions), body_force),
-        rotation=rotation, rollers=constrained.any(axis=1), dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32),
+        contact_blk=contact_blk, contact_facets=np.unique(np.concatenate(
+            [boundary_facets(facet_tags, _slave_surface(i.pair)) for i in interfaces])).astype(np.int32),
+        contact_area=contact_area,
+        law=FrictionLaw(float(friction[0]) if np.all(friction == friction[0]) else friction[interface_of_node],
+                        slip_bound),
+        frames=frames, interfaces=tuple(interfaces), interface_of_node=interface_of_node,
+        body=ElasticBody(young, poisson, facet_tags, supports, dict(tractions), body_force),
+        rotation=rotation, coupling=coupling, transform=transform, offset=offset,
+        rollers=constrained[contact_blk].any(axis=1), dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32),
+        node_body=None if cell_tags is None else _node_body(V, cell_tags),
         n_contact=comm.allreduce(len(contact_blk), op=MPI.SUM),
         n_free=comm.allreduce(3 * n_owned - n_fixed_owned, op=MPI.SUM),
     )
@@ -246,18 +364,66 @@ def build_contact_problem(
     return problem
 
 
-def _contact_nodes(
-    V: fem.FunctionSpace, contact_facets: np.ndarray, dirichlet_dofs_loc: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Owned nodes of the contact facets that are not clamped, and their (m, 3) mask of
-    prescribed components."""
+def _slave_surface(pair: Pair) -> str:
+    return pair.surface if isinstance(pair, ObstaclePair) else pair.slave
+
+
+def _mortar_rows(A: PETSc.Mat, interfaces: typing.Sequence[Interface], constrained: np.ndarray) -> PETSc.Mat:
+    """N: N_(3i+a, 3j+a) = C_ij at slave node i, master node j, for the components a not
+    prescribed at i (global components; owned rows)."""
+    rows, cols, values = [], [], []
+    for interface in interfaces:
+        c = interface.coupling
+        if c is None:
+            continue
+        node = np.repeat(c.slave_blk, np.diff(c.C_indptr))
+        for a in range(3):
+            free = ~constrained[node, a]
+            rows.append(3 * node[free] + a)
+            cols.append(3 * c.C_master_glob[free] + a)
+            values.append(c.C_values[free])
+    rows, cols, values = np.concatenate(rows), np.concatenate(cols), np.concatenate(values)
+    order = np.lexsort((cols, rows))
+    n_local = A.getLocalSize()[0]
+    indptr = np.zeros(n_local + 1, dtype=PETSc.IntType)
+    np.add.at(indptr, rows + 1, 1)
+    N = PETSc.Mat().createAIJ(size=A.getSizes(), bsize=3, comm=A.getComm(), csr=(
+        np.cumsum(indptr).astype(PETSc.IntType), cols[order].astype(PETSc.IntType), values[order]))
+    N.assemble()
+    return N
+
+
+def _change_of_variables(
+    N: PETSc.Mat, rotation: PETSc.Mat, applied: PETSc.Vec, dirichlet_dofs_loc: np.ndarray, n_owned: int,
+) -> tuple[PETSc.Mat, PETSc.Vec]:
+    """T = (I + N_f) R and c = N g: N_f has no columns at prescribed dofs, whose
+    values g (at load factor 1) are those of the assembled load there. ``N`` becomes N_f."""
+    prescribed = applied.duplicate()
+    prescribed.set(0.0)
+    owned = dirichlet_dofs_loc[dirichlet_dofs_loc < 3 * n_owned]
+    prescribed.array[owned] = applied.array[owned]
+    offset = applied.duplicate()
+    N.mult(prescribed, offset)
+    free = applied.duplicate()
+    free.set(1.0)
+    free.array[owned] = 0.0
+    N.diagonalScale(None, free)
+    NR = N.matMult(rotation)
+    transform = rotation.copy()
+    transform.axpy(1.0, NR, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    for obj in (prescribed, free, NR):
+        obj.destroy()
+    return transform, offset
+
+
+def _node_body(V: fem.FunctionSpace, cell_tags: dmesh.MeshTags) -> np.ndarray:
+    """Index (0, 1, ...) in ``cell_tags.names`` of the body of each local node (ghosts included)."""
     index_map = V.dofmap.index_map
-    constrained = np.zeros((index_map.size_local + index_map.num_ghosts) * 3, dtype=bool)
-    constrained[dirichlet_dofs_loc] = True
-    constrained = constrained.reshape(-1, 3)
-    blk = fem.locate_dofs_topological(V, V.mesh.topology.dim - 1, contact_facets)
-    blk = blk[(blk < index_map.size_local) & ~constrained[blk].all(axis=1)].astype(np.int32)
-    return blk, constrained[blk]
+    node_body = np.full(index_map.size_local + index_map.num_ghosts, -1, dtype=np.int32)
+    for k, tag in enumerate(cell_tags.names.values()):
+        cells = cell_tags.find(tag)
+        node_body[V.dofmap.list[cells].ravel()] = k
+    return node_body
 
 
 def _dirichlet_conditions(
@@ -302,24 +468,11 @@ def _align_frames(frames: np.ndarray, constrained: np.ndarray, comm: MPI.Comm) -
     return frames
 
 
-def _check_penetration(msh: dmesh.Mesh, obstacle: Obstacle, x: np.ndarray) -> None:
-    """Raise if a contact node lies inside the obstacle (beyond round-off of the mesh size)."""
-    gap, normal = obstacle.distance(x)
-    undefined = msh.comm.allreduce(int(np.count_nonzero(~np.isfinite(normal).all(axis=1))), op=MPI.SUM)
-    require(undefined == 0, "obstacle", f"{undefined} contact nodes lie where the obstacle has no normal "
-            "(a sphere's centre or a cylinder's axis)")
-    extent = np.ptp(msh.geometry.x, axis=0).max() if len(msh.geometry.x) else 0.0
-    tol = 1e-10 * msh.comm.allreduce(float(extent), op=MPI.MAX)
-    count = msh.comm.allreduce(int(np.count_nonzero(gap < -tol)), op=MPI.SUM)
-    worst = msh.comm.allreduce(float(gap.min(initial=np.inf)), op=MPI.MIN)
-    require(count == 0, "obstacle", f"initial penetration: {count} contact nodes lie inside the obstacle, "
-            f"the deepest by {-worst:.3e} m")
-
-
-def _nodal_rotation(A: PETSc.Mat, contact_blk: np.ndarray, frames: np.ndarray) -> PETSc.Mat | None:
-    """Block-diagonal T with T_ii = frame_i^T at the contact nodes, I elsewhere; None if T = I."""
+def _nodal_rotation(A: PETSc.Mat, contact_blk: np.ndarray, frames: np.ndarray, always: bool) -> PETSc.Mat | None:
+    """Block-diagonal R with R_ii = frame_i^T at the contact nodes, I elsewhere; None if R = I
+    and not ``always``."""
     comm = A.getComm().tompi4py()
-    if not comm.allreduce(bool(np.any(frames != np.eye(3))), op=MPI.LOR):
+    if not always and not comm.allreduce(bool(np.any(frames != np.eye(3))), op=MPI.LOR):
         return None
     T = PETSc.Mat().createAIJ(size=A.getSizes(), bsize=3, nnz=(3, 0), comm=A.getComm())
     n_blk = A.getLocalSize()[0] // 3
@@ -329,13 +482,3 @@ def _nodal_rotation(A: PETSc.Mat, contact_blk: np.ndarray, frames: np.ndarray) -
     T.setValuesBlockedRCV(rows, rows, blocks.reshape(n_blk, 1, 9))
     T.assemble()
     return T
-
-
-def _lumped_area(msh: dmesh.Mesh, facet_tags: dmesh.MeshTags, contact: str, contact_blk: np.ndarray) -> np.ndarray:
-    """Lumped area of the contact surface at each owned contact node (m^2)."""
-    Q = fem.functionspace(msh, ("Lagrange", 1))
-    ds = ufl.Measure("ds", domain=msh, subdomain_data=facet_tags)
-    area = la.vector(Q.dofmap.index_map)
-    fem.assemble_vector(area.array, fem.form(ufl.TestFunction(Q) * ds(facet_tags.names[contact])))
-    area.scatter_reverse(la.InsertMode.add)
-    return area.array[contact_blk].copy()

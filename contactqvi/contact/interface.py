@@ -1,0 +1,227 @@
+"""Contact pairs: a slave surface and what it may touch, as nodal data for the GE (6.3).
+
+Contact is a relation between two surfaces whatever lies behind them. A pair is
+given by its slave surface and either a rigid analytic obstacle
+(:class:`ObstaclePair`, seed 000's setting) or a master surface of a meshed body
+(:class:`BodyPair`, seed 000, Remark 6.2). :func:`build_interfaces` turns the pairs
+into :class:`Interface` objects that all look the same to the solver: owned slave
+nodes, their frames (t1, t2, n), contact areas, gaps and friction data. What
+differs is the discretisation behind them:
+
+* obstacle: the node's gap to the obstacle and the obstacle's normal; the slave
+  node's displacement is the relative one;
+* body: the mortar coupling (:mod:`contactqvi.contact.mortar`); the relative
+  displacement is w_i = u_i - sum_j C_ij u_j, made a nodal unknown by the change
+  of variables u = T w of :mod:`contactqvi.contact.problem` (two-body to one-body,
+  the algebraic transformation Remark 6.2 refers to).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import typing
+
+from mpi4py import MPI
+
+import numpy as np
+import ufl
+
+from dolfinx import fem, la
+from dolfinx import mesh as dmesh
+
+from contactqvi.contact.mortar import MortarCoupling, mortar_coupling
+from contactqvi.meshes import boundary_facets
+from contactqvi.obstacles import Obstacle, tangent_frames
+from contactqvi.parameters import require, require_positive
+
+__all__ = ["BodyPair", "Interface", "ObstaclePair", "build_interfaces"]
+
+
+@dataclasses.dataclass(frozen=True)
+class ObstaclePair:
+    """A slave surface against a rigid obstacle.
+
+    Attributes:
+        surface: facet group of the slave surface.
+        obstacle: the obstacle in its initial position (moved by the load steps' translations).
+        friction: Coulomb coefficient F >= 0.
+        slip_bound: Tresca bound on the friction traction (Pa) >= 0.
+    """
+
+    surface: str
+    obstacle: Obstacle
+    friction: float = 0.0
+    slip_bound: float = 0.0
+
+    @property
+    def name(self) -> str:
+        return f"{self.surface}/obstacle"
+
+
+@dataclasses.dataclass(frozen=True)
+class BodyPair:
+    """A slave surface against a master surface of another (or the same) meshed body.
+
+    Attributes:
+        slave, master: facet groups (``"body.group"`` for meshes with several bodies).
+        friction, slip_bound: as for :class:`ObstaclePair`.
+        search_distance: master facets farther than this from a slave facet are not
+            paired with it (m); None: twice the largest facet edge of the two surfaces.
+            Nodes whose gap can close within the load path must lie within it.
+    """
+
+    slave: str
+    master: str
+    friction: float = 0.0
+    slip_bound: float = 0.0
+    search_distance: float | None = None
+
+    @property
+    def name(self) -> str:
+        return f"{self.slave}/{self.master}"
+
+
+Pair = ObstaclePair | BodyPair
+
+
+@dataclasses.dataclass(frozen=True)
+class Interface:
+    """The owned slave nodes of one pair and their nodal contact data.
+
+    Attributes:
+        pair: what the interface was built from.
+        blk: (m,) owned local node indices of the slave nodes that may touch.
+        frames: (m, 3, 3) rows t1, t2, n (n from the master side into the slave body).
+        area: (m,) contact area of each node (m^2): the lumped area (obstacle) or
+            D_ii of the mortar segments (body).
+        coupling: the mortar rows C of a body pair; None for an obstacle.
+        initial_gap: (m,) gap in the reference configuration (m), before any
+            translation of an obstacle.
+    """
+
+    pair: Pair
+    blk: np.ndarray
+    frames: np.ndarray
+    area: np.ndarray
+    coupling: MortarCoupling | None
+    initial_gap: np.ndarray
+
+    @property
+    def obstacle(self) -> Obstacle | None:
+        return self.pair.obstacle if isinstance(self.pair, ObstaclePair) else None
+
+    def gap(self, x: np.ndarray, translation: np.ndarray) -> np.ndarray:
+        """Gap of each slave node (m) with the obstacle translated by ``translation``;
+        a body pair's weighted gap does not depend on it."""
+        if self.obstacle is None:
+            return self.initial_gap
+        return self.obstacle.translated(translation).distance(x)[0]
+
+
+def build_interfaces(
+    V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typing.Sequence[Pair], excluded_blk: np.ndarray,
+) -> list[Interface]:
+    """The interfaces of ``pairs`` (collective).
+
+    Args:
+        V: vector P1 space of all bodies.
+        facet_tags: named facet groups.
+        pairs: the contact pairs.
+        excluded_blk: local node indices that cannot be slave nodes (all components prescribed).
+
+    Raises:
+        ParameterError: a bad friction value, a node on two slave surfaces or on a
+            slave and a master surface, a pair that finds no master facet, or
+            bodies/obstacles that overlap initially.
+    """
+    require(len(pairs) > 0, "contacts", "give at least one contact pair")
+    interfaces = []
+    for pair in pairs:
+        require_positive(f"{pair.name}: friction", pair.friction, allow_zero=True)
+        require_positive(f"{pair.name}: slip_bound", pair.slip_bound, allow_zero=True)
+        if isinstance(pair, ObstaclePair):
+            interfaces.append(_obstacle_interface(V, facet_tags, pair, excluded_blk))
+        else:
+            interfaces.append(_body_interface(V, facet_tags, pair, excluded_blk))
+    _check_disjoint(V, facet_tags, pairs, interfaces)
+    return interfaces
+
+
+def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: ObstaclePair,
+                        excluded_blk: np.ndarray) -> Interface:
+    n_owned = V.dofmap.index_map.size_local
+    blk = fem.locate_dofs_topological(V, V.mesh.topology.dim - 1, boundary_facets(facet_tags, pair.surface))
+    blk = np.setdiff1d(blk[blk < n_owned], excluded_blk).astype(np.int32)
+    x = V.tabulate_dof_coordinates()[blk]
+    gap, normal = pair.obstacle.distance(x)
+    comm = V.mesh.comm
+    undefined = comm.allreduce(int(np.count_nonzero(~np.isfinite(normal).all(axis=1))), op=MPI.SUM)
+    require(undefined == 0, "obstacle", f"{undefined} contact nodes lie where the obstacle has no normal "
+            "(a sphere's centre or a cylinder's axis)")
+    _check_overlap(comm, V, gap, "obstacle", "contact nodes lie inside the obstacle")
+    area = _lumped_area(V, facet_tags, pair.surface)[blk]
+    return Interface(pair, blk, tangent_frames(normal), area, None, gap)
+
+
+def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: BodyPair,
+                    excluded_blk: np.ndarray) -> Interface:
+    slave, master = boundary_facets(facet_tags, pair.slave), boundary_facets(facet_tags, pair.master)
+    distance = pair.search_distance
+    if distance is None:
+        distance = 2.0 * _max_edge_length(V, np.concatenate([slave, master]))
+    require(distance > 0.0, f"{pair.name}: search_distance", f"must be > 0, got {distance!r}")
+    coupling = mortar_coupling(V, slave, master, distance, excluded_blk)
+    comm = V.mesh.comm
+    found = comm.allreduce(len(coupling.slave_blk), op=MPI.SUM)
+    require(found > 0, f"{pair.name}", f"no node of {pair.slave!r} has a facet of {pair.master!r} within "
+            f"{distance:.3g} m facing it: the surfaces are nowhere near each other (raise search_distance?)")
+    _check_overlap(comm, V, coupling.gap, pair.name, f"nodes of {pair.slave!r} lie inside the body of {pair.master!r}")
+    return Interface(pair, coupling.slave_blk, tangent_frames(coupling.normal), coupling.weight, coupling,
+                     coupling.gap)
+
+
+def _check_overlap(comm: MPI.Comm, V: fem.FunctionSpace, gap: np.ndarray, name: str, what: str) -> None:
+    """Raise if a gap is negative beyond round-off of the mesh size."""
+    x = V.mesh.geometry.x
+    extent = comm.allreduce(float(np.ptp(x, axis=0).max()) if len(x) else 0.0, op=MPI.MAX)
+    count = comm.allreduce(int(np.count_nonzero(gap < -1e-10 * extent)), op=MPI.SUM)
+    worst = comm.allreduce(float(gap.min(initial=np.inf)), op=MPI.MIN)
+    require(count == 0, name, f"initial penetration: {count} {what}, the deepest by {-worst:.3e} m")
+
+
+def _check_disjoint(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typing.Sequence[Pair],
+                    interfaces: list[Interface]) -> None:
+    """No node on two slave surfaces, nor on a slave and a master surface."""
+    comm = V.mesh.comm
+    n_owned = V.dofmap.index_map.size_local
+    slave_count = np.zeros(n_owned, dtype=np.int32)
+    for interface in interfaces:
+        slave_count[interface.blk] += 1
+    twice = comm.allreduce(int(np.count_nonzero(slave_count > 1)), op=MPI.SUM)
+    require(twice == 0, "contacts", f"{twice} nodes lie on two slave surfaces; a node can be a slave of one pair only")
+    for pair in pairs:
+        if isinstance(pair, BodyPair):
+            master = fem.locate_dofs_topological(V, V.mesh.topology.dim - 1, boundary_facets(facet_tags, pair.master))
+            master = master[master < n_owned]
+            both = comm.allreduce(int(np.count_nonzero(slave_count[master])), op=MPI.SUM)
+            require(both == 0, f"{pair.name}", f"{both} nodes of the master surface {pair.master!r} are slave "
+                    "nodes of a pair; a node cannot be both")
+
+
+def _max_edge_length(V: fem.FunctionSpace, facets: np.ndarray) -> float:
+    msh = V.mesh
+    nodes = dmesh.entities_to_geometry(msh, msh.topology.dim - 1, facets)
+    x = msh.geometry.x[nodes]
+    local = float(np.linalg.norm(x - np.roll(x, 1, axis=1), axis=2).max(initial=0.0))
+    return msh.comm.allreduce(local, op=MPI.MAX)
+
+
+def _lumped_area(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, surface: str) -> np.ndarray:
+    """Lumped area of ``surface`` at each node (local, ghosts included; m^2)."""
+    msh = V.mesh
+    Q = fem.functionspace(msh, ("Lagrange", 1))
+    ds = ufl.Measure("ds", domain=msh, subdomain_data=facet_tags)
+    area = la.vector(Q.dofmap.index_map)
+    fem.assemble_vector(area.array, fem.form(ufl.TestFunction(Q) * ds(facet_tags.names[surface])))
+    area.scatter_reverse(la.InsertMode.add)
+    return area.array
