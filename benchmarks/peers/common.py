@@ -203,9 +203,11 @@ def nodal_resultants(case: Case, mesh: Mesh, nodal: np.ndarray, contact_nodes: n
         prescribed[np.ix_(mesh.roller_nodes(case, name), list(components))] = True
     contact = np.where(prescribed[contact_nodes], 0.0, nodal[contact_nodes]).sum(axis=0)
     reactions = {name: nodal[mesh.group_nodes(name)].sum(axis=0).tolist() for name in case.clamped}
-    for name in case.displacement:
+    for name, components in case.displacement.items():
         nodes = mesh.roller_nodes(case, name)
-        reactions[name] = np.where(prescribed[nodes], nodal[nodes], 0.0).sum(axis=0).tolist()
+        mask = np.zeros(3, dtype=bool)
+        mask[list(components)] = True
+        reactions[name] = np.where(mask, nodal[nodes], 0.0).sum(axis=0).tolist()
     return contact.tolist(), reactions
 
 

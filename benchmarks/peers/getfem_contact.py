@@ -77,6 +77,14 @@ def obstacle_expression(case: common.Case, translation: np.ndarray) -> str:
     raise NotImplementedError(kind)
 
 
+def _tangents(normal: np.ndarray) -> np.ndarray:
+    """(m, 2, 3) orthonormal tangent pairs of the unit normals (m, 3)."""
+    helper = np.where(np.abs(normal[:, [0]]) < 0.9, np.eye(3)[0], np.eye(3)[1])
+    t1 = np.cross(normal, helper)
+    t1 /= np.linalg.norm(t1, axis=1)[:, None]
+    return np.stack([t1, np.cross(normal, t1)], axis=1)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0],
                                      formatter_class=argparse.ArgumentDefaultsHelpFormatter)
@@ -87,7 +95,10 @@ def main() -> int:
     parser.add_argument("--max-res", type=float, default=1e-10, help="Newton stops at this residual (GPa units)")
     parser.add_argument("--max-iter", type=int, default=100)
     parser.add_argument("--r", type=float, default=None,
-                        help="Alart-Curnier augmentation r (GPa m); default E h (h: mean edge of the contact faces)")
+                        help="Alart-Curnier augmentation r (GPa); default E (GetFEM's advice)")
+    parser.add_argument("--brick", default="auto", choices=["auto", "rigid", "basic"],
+                        help="rigid: add_nodal_contact_with_rigid_obstacle_brick; basic: add_basic_contact_brick "
+                             "with BN, BT from the exact obstacle normal; auto: rigid for a plane, basic otherwise")
     parser.add_argument("--option", type=int, default=1, help="augmented_version of the brick (1: non-symmetric AC)")
     parser.add_argument("--noisy", action="store_true")
     args = parser.parse_args()
@@ -161,17 +172,52 @@ def main() -> int:
     if frictional:
         md.add_variable("lambda_t", 2 * n_contact)
         md.add_initialized_data("friction", [case.friction])
-    edges = np.linalg.norm(mesh.points[contact_faces] - np.roll(mesh.points[contact_faces], 1, axis=1), axis=2)
-    r = args.r if args.r is not None else young * float(edges.mean())
+    r = args.r if args.r is not None else young
     md.add_initialized_data("r", [r])
+    # The rigid brick takes the normal by finite differences (step 1e-3 x cell radius) of the moved
+    # obstacle's distance: exact for a plane only; a sphere gets the basic brick with our normals.
+    brick = args.brick if args.brick != "auto" else ("rigid" if case.obstacle["type"] == "plane" else "basic")
+    # GetFEM's vector dofs: node k of the fem has dofs 3 k, 3 k + 1, 3 k + 2 (checked: basic_dof_nodes).
+    dof_nodes = mf_u.basic_dof_nodes()[:, ::3].T
+    dof_pid = np.asarray(m.pid_from_coords(dof_nodes.T, 1e-12 * np.abs(mesh.points).max()), dtype=np.int64)
+    order = np.empty(len(pts), dtype=np.int64)
+    order[dof_pid] = np.arange(len(dof_pid))
+    fem_node = order[pid]  # our node -> GetFEM's fem node
+    if brick == "basic":
+        # The rigid brick's matrices, with the exact normal: BN u <= gap, BN = -n^T (n into the body),
+        # BT an orthonormal tangent basis, alpha = (mass matrix diagonal on the region) / (mesh size l).
+        contact_fem = np.sort(fem_node[contact_nodes])  # the rigid brick's order: increasing dof
+        contact_ours = contact_nodes[np.argsort(fem_node[contact_nodes])]
+        mass = gf.asm_mass_matrix(mim_b, mf_u, mf_u, contact_region)
+        extent = float(np.ptp(mesh.points, axis=0).max())
+        alpha = np.array([mass[3 * k, 3 * k] for k in contact_fem]) / extent
+        md.add_initialized_data("alpha", alpha)
+        md.add_initialized_data("gap", np.zeros(n_contact))
 
     def add_contact(translation: np.ndarray) -> int:
-        obstacle = obstacle_expression(case, translation)
+        if brick == "rigid":
+            obstacle = obstacle_expression(case, translation)
+            if frictional:
+                return md.add_nodal_contact_with_rigid_obstacle_brick(
+                    mim_b, "u", "lambda_n", "lambda_t", "r", "friction", contact_region, obstacle, args.option)
+            return md.add_nodal_contact_with_rigid_obstacle_brick(mim_b, "u", "lambda_n", "r", contact_region,
+                                                                   obstacle, args.option)
+        # As contactqvi: the gap to the moved obstacle, the normal of the obstacle at rest
+        # (frames fixed in the reference configuration, contactqvi.obstacles).
+        gap = case.obstacle_distance(mesh.points[contact_ours], translation)[0]
+        normal = case.obstacle_distance(mesh.points[contact_ours], np.zeros(3))[1]
+        md.set_variable("gap", gap)
+        BN = gf.Spmat("empty", n_contact, mf_u.nbdof())
+        BT = gf.Spmat("empty", 2 * n_contact, mf_u.nbdof())
+        tangents = _tangents(normal)
+        for j, k in enumerate(contact_fem):
+            dofs = np.arange(3 * k, 3 * k + 3)
+            BN.add([j], dofs, -normal[j][None, :])
+            BT.add([2 * j, 2 * j + 1], dofs, tangents[j])
         if frictional:
-            return md.add_nodal_contact_with_rigid_obstacle_brick(
-                mim_b, "u", "lambda_n", "lambda_t", "r", "friction", contact_region, obstacle, args.option)
-        return md.add_nodal_contact_with_rigid_obstacle_brick(mim_b, "u", "lambda_n", "r", contact_region,
-                                                               obstacle, args.option)
+            return md.add_basic_contact_brick("u", "lambda_n", "lambda_t", "r", BN, BT, "friction", "gap", "alpha",
+                                              args.option)
+        return md.add_basic_contact_brick("u", "lambda_n", "r", BN, "gap", "alpha", args.option)
 
     options = ["max_res", args.max_res, "max_iter", args.max_iter, "lsolver", args.lsolver, "lsearch", args.lsearch]
     if args.noisy:
@@ -197,11 +243,7 @@ def main() -> int:
     peak = common.peak_memory_mib()
 
     u = md.variable("u")
-    dof_nodes = mf_u.basic_dof_nodes()[:, ::3].T
-    dof_pid = np.asarray(m.pid_from_coords(dof_nodes.T, 1e-12 * np.abs(mesh.points).max()), dtype=np.int64)
-    order = np.empty(len(pts), dtype=np.int64)
-    order[dof_pid] = np.arange(len(dof_pid))
-    u_nodes = u.reshape(-1, 3)[order[pid]]  # displacement at our nodes
+    u_nodes = u.reshape(-1, 3)[fem_node]  # displacement at our nodes
     # Nodal forces K u - f (GN), the load of the last step; reactions and contact force from them.
     stress = "(lambda*Trace(Grad_u)*Id(3)+mu*(Grad_u+Grad_u'))"
     md.disable_bricks(contact_brick)
@@ -211,11 +253,11 @@ def main() -> int:
     for name in case.traction:
         external += gf.asm_generic(mim_b, 1, f"t_{name}.Test_u", regions[name], "u", 1, mf_u, u,
                                    f"t_{name}", 0, md.variable(f"t_{name}"))
-    nodal = ((internal - external).reshape(-1, 3)[order[pid]]) * STRESS_UNIT  # N
+    nodal = ((internal - external).reshape(-1, 3)[fem_node]) * STRESS_UNIT  # N
     contact_force, reactions = common.nodal_resultants(case, mesh, nodal, contact_nodes)
     lambda_n = md.variable("lambda_n")
     record = {
-        "code": "GetFEM 5.4.4 (nodal rigid-obstacle brick, Alart-Curnier option %d)" % args.option,
+        "code": f"GetFEM 5.4.4 ({brick} nodal contact brick, Alart-Curnier option {args.option})",
         "case": str(case.path), "status": status,
         "dofs": 3 * len(mesh.points), "free_dofs": 3 * (len(mesh.points) - len(fixed)),
         "contact_nodes": int(n_contact), "unknowns": int(md.nbdof()),
@@ -225,7 +267,7 @@ def main() -> int:
         "contact_force_multipliers_normal": float(-np.sum(lambda_n)) * STRESS_UNIT,
         "reactions": reactions,
         "settings": {"lsolver": args.lsolver, "lsearch": args.lsearch, "max_res": args.max_res, "r": r,
-                     "option": args.option, "stress_unit": STRESS_UNIT, "integration": [volume, boundary]},
+                     "option": args.option, "brick": brick, "stress_unit": STRESS_UNIT, "integration": [volume, boundary]},
         "threads": 1,
     }
     common.write_result(args.output, record, mesh.points, u_nodes)
