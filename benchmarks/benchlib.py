@@ -14,7 +14,7 @@ import typing
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from contactqvi import io
+from contactqvi import tables
 from contactqvi.cli import setup_logging
 from contactqvi.contact.driver import solve_level, solve_nested
 from contactqvi.contact.scd_newton import PARAMETERS
@@ -69,7 +69,7 @@ def merge_rows(path: pathlib.Path, rows: list[dict], key: tuple[str, ...]) -> li
 
 def emit(comm: MPI.Comm, out: pathlib.Path, name: str, rows: list[dict], markdown: str) -> None:
     """Write ``name.json`` (machine + rows) and ``name.md`` atomically on rank 0 and print the table."""
-    io.write_table(comm, out / name, {"machine": machine(comm), "rows": rows}, markdown)
+    tables.write_table(comm, out / name, {"machine": machine(comm), "rows": rows}, markdown)
 
 
 def run_coulomb_case(

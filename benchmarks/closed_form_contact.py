@@ -20,7 +20,7 @@ import tempfile
 import benchlib
 import numpy as np
 
-from contactqvi import io
+from contactqvi import tables
 from contactqvi.case import load_case, parse_case
 from contactqvi.problems import hertz
 from contactqvi.runner import run_case
@@ -73,7 +73,7 @@ def hertz_table(comm) -> tuple[dict, str]:
     text = ("## Hertz: rigid sphere R = 1 m pressed 1 mm into an elastic block (E = 70 GPa, nu = 0.3)\n\n"
             "Quarter model, four steps of 0.25 mm; P from the total contact force, a from the contact area "
             "(pi a^2), p0 the largest nodal pressure (normal force / lumped area). Formulas: "
-            "contactqvi/problems/hertz.py.\n\n" + io.markdown_table(header, body))
+            "contactqvi/problems/hertz.py.\n\n" + tables.markdown_table(header, body))
     return {"rows": rows}, text
 
 
@@ -100,7 +100,7 @@ def mindlin_table(comm) -> tuple[dict, str]:
                           "c": c, "c_cattaneo": c_cm})
         rows.append({"case": name, "poisson": nu, "dundurs_beta": hertz.dundurs_beta(nu), "P": P, "a": a, "steps": table})
         text.append(f"### nu = {nu} (Dundurs beta = {hertz.dundurs_beta(nu):.3f}), P = {P / 1e6:.4f} MN, a = {a * 1e3:.2f} mm\n")
-        text.append(io.markdown_table(
+        text.append(tables.markdown_table(
             ["s (um)", "status", "Newton", "Q / (mu P)", "Mindlin Q / (mu P)", "c / a", "Cattaneo c / a"],
             [[f"{r['s'] * 1e6:.0f}", r["status"], r["newton"], f"{r['Q'] / (mu * P):.3f}",
               f"{r['Q_mindlin'] / (mu * P):.3f}", f"{r['c'] / a:.3f}", f"{r['c_cattaneo'] / a:.3f}"] for r in table]))
@@ -115,7 +115,7 @@ def main() -> None:
     for name, make in (("hertz", hertz_table), ("mindlin", mindlin_table)):
         if name in args.tables:
             data, markdown = make(comm)
-            io.write_table(comm, out / ("hertz" if name == "hertz" else "cattaneo_mindlin"),
+            tables.write_table(comm, out / ("hertz" if name == "hertz" else "cattaneo_mindlin"),
                            {"machine": benchlib.machine(comm), **data}, markdown)
 
 

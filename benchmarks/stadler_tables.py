@@ -20,7 +20,7 @@ import typing
 
 from mpi4py import MPI
 
-from contactqvi import io
+from contactqvi import tables
 from contactqvi.cli import setup_logging
 from contactqvi.problems.stadler import DISCRETISATIONS, PAPER
 from contactqvi.problems.stadler_experiments import TABLES, Case
@@ -30,7 +30,7 @@ LABELS = {"q1": "Q1", "p1": "P1", "fd": "FD"}
 
 
 def table(header: typing.Sequence, rows: typing.Iterable[typing.Sequence]) -> str:
-    return io.markdown_table([str(h) for h in header], rows)
+    return tables.markdown_table([str(h) for h in header], rows)
 
 
 def words(values: typing.Iterable) -> str:
@@ -181,16 +181,16 @@ def main() -> None:
     args = parser.parse_args()
     setup_logging("WARNING")
     comm, label = MPI.COMM_WORLD, LABELS[args.discretisation]
-    out = io.prepare_output_dir(comm, args.output)
+    out = tables.prepare_output_dir(comm, args.output)
     for name in args.tables:
         start = time.perf_counter()
         data = TABLES[name](args.discretisation, args.quick)
         data.update(discretisation=args.discretisation, quick=args.quick, seconds=time.perf_counter() - start,
                     mpi_ranks=comm.size)  # fmt: skip
         title = f"## Seed 002 {'Table ' * name[0].isdigit()}{name}, {label}{' (quick)' * args.quick}"
-        io.write_table(comm, out / stem(name, args.discretisation), data, f"{title}\n\n{MARKDOWN[name](data, label)}\n")
+        tables.write_table(comm, out / stem(name, args.discretisation), data, f"{title}\n\n{MARKDOWN[name](data, label)}\n")
     Case.release()
-    with io.atomic_path(comm, out / "stadler_summary.md") as tmp:
+    with tables.atomic_path(comm, out / "stadler_summary.md") as tmp:
         if comm.rank == 0:
             tmp.write_text(summary(out))
 

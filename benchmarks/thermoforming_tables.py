@@ -15,7 +15,7 @@ import time
 
 from mpi4py import MPI
 
-from contactqvi import io
+from contactqvi import tables
 from contactqvi.problems import thermoforming as data
 from contactqvi.qvi import build, create_mesh
 
@@ -183,7 +183,7 @@ def _log(text: str) -> None:
 
 def _write(name: str, rows: list[dict], markdown: str) -> None:
     comm = MPI.COMM_WORLD
-    io.write_table(comm, RESULTS / f"thermoforming_{name}", {"mpi_size": comm.size, "rows": rows}, markdown, echo=False)
+    tables.write_table(comm, RESULTS / f"thermoforming_{name}", {"mpi_size": comm.size, "rows": rows}, markdown, echo=False)
 
 
 def main() -> None:

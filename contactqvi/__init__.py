@@ -9,7 +9,7 @@ Semismooth Newton methods for
 
 The shared core: :class:`Status` and :class:`Result` (:mod:`contactqvi.result`),
 :class:`Parameters` (:mod:`contactqvi.parameters`), the KSP presets of
-:mod:`contactqvi.linalg`, output in :mod:`contactqvi.io` (docs/architecture.md).
+:mod:`contactqvi.linalg`, output in :mod:`contactqvi.tables`, :mod:`contactqvi.paraview` (docs/architecture.md).
 """
 
 from contactqvi.case import ContactCase, load_case

@@ -23,7 +23,7 @@ from petsc4py import PETSc
 
 from dolfinx import mesh as dmesh
 
-from contactqvi import io
+from contactqvi import tables
 from contactqvi.case import ContactCase, check_groups
 from contactqvi.contact.load_path import LoadStep, solve_load_path
 from contactqvi.contact.postprocess import ContactResultsWriter, plot_contact_states
@@ -91,10 +91,10 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
             entry = {"step": index + 1, "load": step.load, "translation": list(step.translation), **result.summary()}
             if result.converged:
                 entry.update(writer.write(problem, u, result, t=index + 1))
-                io.write_solution_npz(writer.out / "solution.npz", writer.last[0])
+                tables.write_solution_npz(writer.out / "solution.npz", writer.last[0])
             summary["steps"].append(entry)
             summary["status"] = str(result.status)
-            io.write_summary(comm, writer.out / "summary.json", summary)
+            tables.write_summary(comm, writer.out / "summary.json", summary)
             logger.info("step %d: %s, %d Newton steps, %d Krylov; contact force %s N, contact area %.4g m^2",
                         index + 1, result.status, result.iterations, result.inner_iterations,
                         _vector_text(entry.get("contact_force")), entry.get("contact_area", float("nan")))
@@ -107,7 +107,7 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
             writer.close()  # keeps every converged step, also when a later one raised
     if plot and writer.last is not None:
         summary["plot"] = plot_contact_states(writer.out / "contact_states.png", writer.last[1])
-        io.write_summary(comm, writer.out / "summary.json", summary)
+        tables.write_summary(comm, writer.out / "summary.json", summary)
     return summary, 0 if results[-1].converged and len(results) == len(case.steps) else 1
 
 

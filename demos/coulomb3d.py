@@ -23,7 +23,7 @@ import sys
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from contactqvi import cli, io
+from contactqvi import cli, tables
 from contactqvi.contact.driver import solve_nested
 from contactqvi.contact.postprocess import write_contact_results
 from contactqvi.contact.scd_newton import PARAMETERS
@@ -75,7 +75,7 @@ def main(argv: list[str] | None = None) -> int:
     except ParameterError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    out = io.prepare_output_dir(comm, args.output)
+    out = tables.prepare_output_dir(comm, args.output)
     problem, u, result = solutions[-1].problem, solutions[-1].u, solutions[-1].result
     case = f"{args.geometry}/{args.load}"
     paper_data = args.law == "coulomb" and (args.friction, args.young, args.poisson) == (data.FRICTION, data.YOUNG, data.POISSON)
@@ -98,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
         norm = summary["displacement_norm"]
         if comm.rank == 0:
             print(f"||u~||_2 = {norm:.10e}  ({result.iterations} Newton steps, {result.inner_iterations} Krylov)")
-    io.write_summary(comm, out / "summary.json", summary)
+    tables.write_summary(comm, out / "summary.json", summary)
     if not result.converged:
         logger.error("not converged: status %s (see %s)", result.status, out / "summary.json")
         return 1

@@ -27,7 +27,7 @@ import sys
 
 from mpi4py import MPI
 
-from contactqvi import io
+from contactqvi import tables
 from contactqvi.cli import make_parser, parse_args
 from contactqvi.friction import methods
 from contactqvi.friction.output import plot_surface, write_solution
@@ -65,7 +65,7 @@ def main(argv: list[str] | None = None) -> int:
         if comm.rank == 0:
             print(f"error: {exc}", file=sys.stderr)
         return 2
-    out = io.prepare_output_dir(comm, output)
+    out = tables.prepare_output_dir(comm, output)
     example = stadler.stadler_example(problem_parameters["example"], problem_parameters["example2_reading"])
     logger.info(
         "Example %d (%s), g=%g, mu=%g, N=%d, %s, %d friction nodes; method %s",
@@ -106,7 +106,7 @@ def main(argv: list[str] | None = None) -> int:
             title = f"Example {example.number}, {demo['method']}, N = {problem_parameters['N']}"
             plot_surface(out / "y.png", result.y, title)
         summary["png"] = "y.png" if demo["png"] else None
-        io.write_summary(comm, out / "summary.json", summary)
+        tables.write_summary(comm, out / "summary.json", summary)
     if comm.rank == 0:
         print(f"status {result.status}; |||y||| = {y_norm:.12e}; ||lambda||_L2(Gamma_f) = {lam_norm:.12e}")
     return 0 if result.converged else 1

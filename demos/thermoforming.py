@@ -24,7 +24,7 @@ import ufl
 
 from dolfinx import fem
 
-from contactqvi import cli, io
+from contactqvi import cli, tables
 from contactqvi.parameters import Parameter, ParameterError, Parameters
 from contactqvi.problems import thermoforming as data
 from contactqvi.qvi import BUILD_PARAMETERS, FIXED_POINT_PARAMETERS, build, create_mesh, postprocess
@@ -105,7 +105,7 @@ def main(argv: list[str] | None = None) -> int:
     test, h = prm["problem"]["test"], prm["demo"]["h"]
     histories = {prm["build"]["method"]: result.residuals}
     comparisons = compare(prm, histories) if test == 3 and prm["demo"]["compare"] else {}
-    out = io.prepare_output_dir(comm, output)
+    out = tables.prepare_output_dir(comm, output)
     postprocess.write_results(out, result, setup.Phi0, histories, f"Test {test}, h = {h:g}", prm["demo"]["plots"])
     u = result.solution
     l2 = comm.allreduce(fem.assemble_scalar(fem.form(u * u * ufl.dx)), op=MPI.SUM) ** 0.5
@@ -123,7 +123,7 @@ def main(argv: list[str] | None = None) -> int:
         "comparison": comparisons,
         "parameters": prm,
     }
-    io.write_summary(comm, out / "summary.json", summary)
+    tables.write_summary(comm, out / "summary.json", summary)
     if comm.rank == 0:
         print(f"||u||_L2 = {l2:.12e}  ({result.status}, {result.iterations} outer iterations, totals {result.totals})")
     setup.destroy()

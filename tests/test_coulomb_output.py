@@ -9,10 +9,14 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 
-from contactqvi import io, meshes
+from contactqvi import meshes
 from contactqvi.contact import LoadStep, State, build_contact_problem, solve_load_path
-from contactqvi.contact.postprocess import STATE_NAMES, UNITS, contact_fields, write_contact_results
+from contactqvi.contact.postprocess import STATE_NAMES, UNITS, write_contact_results
+from contactqvi.contact.surface import ContactSurface, TributaryPatches
+from contactqvi.paraview import Dataset, write_xdmf
 from contactqvi.problems import coulomb as data
+from contactqvi.tables import to_builtin
+from output_files import read_vtx, read_xdmf_point_data
 
 LEV = 3
 FIELDS = {"contact_state", "contact_pressure", "friction_traction", "slip", "tangential_displacement", "gap",
@@ -45,9 +49,9 @@ def test_contact_surface_fields(solution, mpi_tmp_path):
     """The surface fields (XDMF, read with meshio) hold each node's state, forces, slip and gap."""
     problem, u, result = solution
     comm = problem.comm
-    surface = contact_fields(problem, u, result)
-    io.write_xdmf(mpi_tmp_path / "contact_surface.xdmf", surface.mesh, surface.functions)
-    points, fields = io.read_xdmf_point_data(mpi_tmp_path / "contact_surface.xdmf")
+    surface = ContactSurface(problem).update(u, result)
+    write_xdmf(mpi_tmp_path / "contact_surface.xdmf", surface.mesh, surface.functions)
+    points, fields = read_xdmf_point_data(mpi_tmp_path / "contact_surface.xdmf")
     assert set(fields) == FIELDS
     state, pressure, area = fields["contact_state"], fields["contact_pressure"], fields["nodal_area"]
     traction, slip, gap = fields["friction_traction"], fields["slip"], fields["gap"]
@@ -97,21 +101,31 @@ def test_contact_surface_fields(solution, mpi_tmp_path):
 
     # In memory, ghost entries (under mpirun) hold their owner's values.
     for f in surface.functions:
-        local = f.x.array.reshape(len(f.function_space.tabulate_dof_coordinates()), -1)
+        local = f.x.array.reshape(len(f.function_space.tabulate_dof_coordinates()), f.function_space.dofmap.index_map_bs)
         rows = _rows(points, f.function_space.tabulate_dof_coordinates())
         assert np.all(rows >= 0) and np.array_equal(local, fields[f.name][rows].reshape(local.shape))
 
 
-def _patch_areas(dataset: io.Dataset) -> np.ndarray:
+def _patch_areas(dataset: Dataset) -> np.ndarray:
     """Areas of planar quadrilaterals (half the cross product of the diagonals)."""
     p = dataset.points[dataset.cells]
     return 0.5 * np.linalg.norm(np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 1]), axis=1)
 
 
-def _box_volumes(dataset: io.Dataset) -> np.ndarray:
+def _box_volumes(dataset: Dataset) -> np.ndarray:
     """Volumes of box-shaped hexahedra in VTK order."""
     p = dataset.points[dataset.cells]
     return np.abs(np.linalg.det(np.stack([p[:, 1] - p[:, 0], p[:, 3] - p[:, 0], p[:, 4] - p[:, 0]], axis=1)))
+
+
+def _assert_points(dataset: Dataset, n_points: int) -> None:
+    """Every point once outside the duplicates (the copies of the ranks' shared points), copies equal."""
+    assert np.count_nonzero(~dataset.duplicate) == n_points
+    keys = np.round(dataset.points, 12)
+    assert len(np.unique(keys[~dataset.duplicate], axis=0)) == len(np.unique(keys, axis=0)) == n_points
+    first = _rows(dataset.points[~dataset.duplicate], dataset.points)
+    for name, values in dataset.point_data.items():
+        assert np.array_equal(values, values[~dataset.duplicate][first]), name
 
 
 def test_write_contact_results(solution, mpi_tmp_path):
@@ -125,23 +139,25 @@ def test_write_contact_results(solution, mpi_tmp_path):
     assert summary["contact_area"] == pytest.approx(summary["sticking_area"] + summary["sliding_area"])
     assert sum(summary["state_counts"].values()) == problem.n_contact
     assert set(summary["state_counts"]) == set(STATE_NAMES.values())
-    assert json.loads(json.dumps(io._to_builtin(summary))) is not None  # JSON-ready
+    assert json.loads(json.dumps(to_builtin(summary))) is not None  # JSON-ready
     if comm.rank != 0:
         return
     sizes = meshes.contact_body_sizes(LEV)
     nx1, nx2, nx3 = sizes["nx1"], sizes["nx2"], sizes["nx3"]
 
-    volume = io.read_vtx(mpi_tmp_path / "run" / "body.bp")
-    assert volume.points.shape == ((nx1 + 1) * (nx2 + 1) * (nx3 + 1), 3) and volume.cells.shape == (nx1 * nx2 * nx3, 8)
+    volume = read_vtx(mpi_tmp_path / "run" / "body.bp")
+    _assert_points(volume, (nx1 + 1) * (nx2 + 1) * (nx3 + 1))
+    assert volume.cells.shape == (nx1 * nx2 * nx3, 8)
     assert set(volume.point_data) == {"displacement [m]"}
     assert set(volume.cell_data) == {"stress [Pa]", "von_mises [Pa]"}
     assert volume.cell_data["stress [Pa]"].shape == (nx1 * nx2 * nx3, 9)
     assert _box_volumes(volume).sum() == pytest.approx(2.0 * 1.0 * (1.0 - 0.01), rel=1e-12)
     assert volume.cell_data["von_mises [Pa]"].max() == pytest.approx(summary["max_von_mises"], rel=1e-14)
 
-    surface = io.read_vtx(mpi_tmp_path / "run" / "contact_surface.bp")
+    surface = read_vtx(mpi_tmp_path / "run" / "contact_surface.bp")
     n_nodes, n_edges, n_facets = (nx1 + 1) * (nx2 + 1), nx1 * (nx2 + 1) + (nx1 + 1) * nx2, nx1 * nx2
-    assert surface.points.shape == (n_nodes + n_edges + n_facets, 3) and surface.cells.shape == (4 * n_facets, 4)
+    _assert_points(surface, n_nodes + n_edges + n_facets)
+    assert surface.cells.shape == (4 * n_facets, 4)
     assert set(surface.point_data) == {f"{name} [{UNITS[name]}]" for name in FIELDS - {"contact_state", "nodal_area"}}
     assert set(surface.cell_data) == {"contact_state", "is_open", "is_sliding", "is_sticking"}
     area = _patch_areas(surface)
@@ -162,7 +178,7 @@ def test_demo_writes_contact_surface(mpi_tmp_path, load_demo):
     assert load_demo("coulomb3d").main(["--lev", "1", "--output", str(out), "--no-plot"]) == 0
     sizes = meshes.contact_body_sizes(1)
     if MPI.COMM_WORLD.rank == 0:
-        surface = io.read_vtx(out / "contact_surface.bp")
+        surface = read_vtx(out / "contact_surface.bp")
         assert surface.cells.shape == (4 * sizes["nx1"] * sizes["nx2"], 4)
         assert "contact_state" in surface.cell_data
         summary = json.loads((out / "summary.json").read_text())
@@ -172,14 +188,11 @@ def test_demo_writes_contact_surface(mpi_tmp_path, load_demo):
 
 def test_tributary_patches_of_triangles():
     """Triangles are cut into three quadrilaterals of a third of their area each (the lumped P1 area)."""
-    from contactqvi.contact.postprocess import _tributary_patches
-
     points = np.array([[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 1.0, 0.0], [2.0, 1.0, 0.0]])
     cells = np.array([[0, 1, 2], [1, 3, 2]])
     state = np.array([State.STICKING, State.SLIDING, State.NO_CONTACT, State.SLIDING], dtype=float)
-    dataset = io.Dataset(points, cells, 69, {"contact_state": state, "f [m]": points[:, 0] + points[:, 1]})
-    patches = _tributary_patches(dataset)
-    assert patches.cells.shape == (6, 4) and len(patches.points) == 4 + 5 + 2
+    patches = TributaryPatches(points, cells).dataset({"f [m]": points[:, 0] + points[:, 1]}, state)
+    assert patches.cells.shape == (6, 4) and len(patches.points) == 4 + 5 + 2 and not np.any(patches.duplicate)
     area = _patch_areas(patches)
     assert np.allclose(area, 1.0 / 3.0, rtol=1e-14)  # each triangle has area 1
     assert np.allclose(patches.point_data["f [m]"], patches.points[:, 0] + patches.points[:, 1], rtol=1e-14)

@@ -19,7 +19,7 @@ import numpy as np
 from dolfinx import fem, graph
 from dolfinx import mesh as dmesh
 
-from contactqvi import io, meshes
+from contactqvi import meshes, tables
 from contactqvi.contact import LoadStep, build_contact_problem, solve_load_path
 from contactqvi.problems import coulomb as data
 
@@ -69,7 +69,7 @@ def _solve(lev: int, case: str) -> tuple[int, int, list[float], np.ndarray | Non
         (result,) = solve_load_path(problem, [LoadStep()], u, prefix="determinism_")  # default: GMRES + GAMG
         assert result.converged
         displacement = problem.physical_displacement(u, fem.Function(problem.V))
-        _, values = io.gather_vertex_values(displacement)
+        _, values = tables.gather_vertex_values(displacement)
         u.destroy()
     return result.iterations, result.inner_iterations, [h["residual"] for h in result.history], values
 

@@ -14,7 +14,7 @@ import pytest
 import dolfinx.fem.petsc
 from dolfinx import fem
 
-from contactqvi import io, meshes
+from contactqvi import meshes, paraview, tables
 from contactqvi.elasticity import elasticity_forms, lame_parameters, rigid_motions_nullspace
 from contactqvi.linalg import create_ksp, power_iteration
 from contactqvi.parameters import ParameterError
@@ -107,9 +107,9 @@ def test_elasticity_serial_equals_parallel():
     """The same solve on COMM_WORLD and on each rank alone agree to 1e-10."""
     u_world, _, _ = _uniaxial_bar(MPI.COMM_WORLD, 2)
     u_self, _, _ = _uniaxial_bar(MPI.COMM_SELF, 2)
-    x_w, v_w = io.gather_vertex_values(u_world)
+    x_w, v_w = tables.gather_vertex_values(u_world)
     if MPI.COMM_WORLD.rank == 0:
-        x_s, v_s = io.gather_vertex_values(u_self)
+        x_s, v_s = tables.gather_vertex_values(u_self)
         assert np.allclose(x_w, x_s, atol=1e-14)
         assert np.abs(v_w - v_s).max() <= 1e-10 * np.abs(v_s).max()
 
@@ -144,12 +144,12 @@ def test_gmsh_arch_block():
 def test_output_round_trip(mpi_tmp_path):
     comm = MPI.COMM_WORLD
     uh, _, _ = _uniaxial_bar(comm, 1)
-    io.write_summary(comm, mpi_tmp_path / "summary.json", {"status": "converged", "x": np.arange(3)})
-    io.write_solution_npz(mpi_tmp_path / "solution.npz", uh)
-    io.write_xdmf(mpi_tmp_path / "u.xdmf", uh.function_space.mesh, [uh])
-    io.write_vtx(mpi_tmp_path / "u.bp", [uh])
+    tables.write_summary(comm, mpi_tmp_path / "summary.json", {"status": "converged", "x": np.arange(3)})
+    tables.write_solution_npz(mpi_tmp_path / "solution.npz", uh)
+    paraview.write_xdmf(mpi_tmp_path / "u.xdmf", uh.function_space.mesh, [uh])
+    paraview.write_vtx(mpi_tmp_path / "u.bp", [uh])
     n_nodes = uh.function_space.dofmap.index_map.size_global
-    _, u_ref = io.gather_vertex_values(uh)
+    _, u_ref = tables.gather_vertex_values(uh)
     if comm.rank == 0:
         assert json.loads((mpi_tmp_path / "summary.json").read_text()) == {"status": "converged", "x": [0, 1, 2]}
         data = np.load(mpi_tmp_path / "solution.npz")
@@ -169,8 +169,8 @@ def test_paraview_files_readable(mpi_tmp_path):
     import meshio
 
     uh, _, _ = _uniaxial_bar(MPI.COMM_WORLD, 1)
-    io.write_xdmf(mpi_tmp_path / "u.xdmf", uh.function_space.mesh, [uh])
-    io.write_vtx(mpi_tmp_path / "u.bp", [uh])
+    paraview.write_xdmf(mpi_tmp_path / "u.xdmf", uh.function_space.mesh, [uh])
+    paraview.write_vtx(mpi_tmp_path / "u.bp", [uh])
     n_nodes = uh.function_space.dofmap.index_map.size_global
     reader = meshio.xdmf.TimeSeriesReader(str(mpi_tmp_path / "u.xdmf"))
     points, _ = reader.read_points_cells()
@@ -183,7 +183,7 @@ def test_paraview_files_readable(mpi_tmp_path):
 def test_atomic_path_removes_partial_file_on_error(mpi_tmp_path):
     comm = MPI.COMM_WORLD
     with pytest.raises(RuntimeError):
-        with io.atomic_path(comm, mpi_tmp_path / "result.json") as tmp:
+        with tables.atomic_path(comm, mpi_tmp_path / "result.json") as tmp:
             if comm.rank == 0:
                 tmp.write_text("{")
             raise RuntimeError("solver failed")

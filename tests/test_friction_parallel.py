@@ -7,7 +7,7 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 
-from contactqvi import io
+from contactqvi import tables
 from contactqvi.friction import FrictionActiveSetSolver, UzawaSolver, augmented_lagrangian, semismooth_newton_sigma
 from contactqvi.friction.output import boundary_function
 from contactqvi.problems.stadler import create_stadler_problem
@@ -15,8 +15,8 @@ from contactqvi.problems.stadler import create_stadler_problem
 
 def _gathered(problem, result) -> tuple:
     """y at all vertices and lambda on Gamma_f, gathered on rank 0 and sorted by coordinates (None elsewhere)."""
-    _, y = io.gather_vertex_values(result.y)
-    _, lam = io.gather_vertex_values(boundary_function(problem, result.lam, "lambda"))
+    _, y = tables.gather_vertex_values(result.y)
+    _, lam = tables.gather_vertex_values(boundary_function(problem, result.lam, "lambda"))
     return y, lam
 
 

@@ -9,7 +9,7 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 
-from contactqvi.io import gather_vertex_values
+from contactqvi.tables import gather_vertex_values
 from contactqvi.parameters import ParameterError
 from contactqvi.problems import thermoforming
 from contactqvi.qvi import build, create_mesh

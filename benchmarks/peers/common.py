@@ -11,7 +11,7 @@ and writes
 * ``DIR/result.json``: :data:`RESULT_FIELDS` (SI units: N, m, s; memory in MiB);
 * ``DIR/solution.npz``: ``x`` (N, 3) node coordinates and ``u`` (N, 3) displacement of the
   last step, rows sorted as :func:`sort_nodes` does, so files of different codes compare row
-  by row (the same sort as :func:`contactqvi.io.gather_vertex_values`).
+  by row (the same sort as :func:`contactqvi.tables.gather_vertex_values`).
 
 This module imports neither DOLFINx nor a peer: the peers' processes hold only their own
 libraries (their peak memory is theirs), and the case file is read with :mod:`tomllib`
@@ -212,7 +212,7 @@ def nodal_resultants(case: Case, mesh: Mesh, nodal: np.ndarray, contact_nodes: n
 
 
 def sort_nodes(x: np.ndarray) -> np.ndarray:
-    """The order that sorts node coordinates ``x`` (N, 3) like :func:`contactqvi.io.gather_vertex_values`."""
+    """The order that sorts node coordinates ``x`` (N, 3) like :func:`contactqvi.tables.gather_vertex_values`."""
     keys = np.round(x / max(np.abs(x).max(), 1e-300), 10)
     return np.lexsort((keys[:, 0], keys[:, 1], keys[:, 2]))
 

@@ -26,7 +26,7 @@ from dolfinx import fem
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 import common  # noqa: E402
 
-from contactqvi import io  # noqa: E402
+from contactqvi import tables  # noqa: E402
 from contactqvi.case import load_case  # noqa: E402
 from contactqvi.cli import setup_logging  # noqa: E402
 from contactqvi.contact.load_path import solve_load_path  # noqa: E402
@@ -62,7 +62,7 @@ def main() -> int:
         result = results[-1]
         displacement = problem.physical_displacement(u, fem.Function(problem.V))
         summary = contact_summary(problem, u, result, displacement=displacement)
-        x, values = io.gather_vertex_values(displacement)
+        x, values = tables.gather_vertex_values(displacement)
         n_nodes = problem.V.dofmap.index_map.size_global
         record = {
             "code": "contactqvi (SCD semismooth* Newton)",

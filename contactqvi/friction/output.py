@@ -15,7 +15,7 @@ import numpy as np
 
 from dolfinx import fem
 
-from contactqvi import io
+from contactqvi import paraview, tables
 from contactqvi.friction.problem import FrictionProblem
 
 __all__ = ["boundary_function", "write_solution", "plot_surface"]
@@ -41,24 +41,24 @@ def write_solution(out: pathlib.Path, problem: FrictionProblem, y: fem.Function,
         "active_set": boundary_function(problem, states.astype(float), "active_set"),
         "mask": boundary_function(problem, np.ones(len(lam)), "mask"),
     }
-    io.write_vtx(out / "solution.bp", [y, fields["lambda"], fields["active_set"]])
-    gathered = {name: io.gather_vertex_values(u) for name, u in fields.items()}
+    paraview.write_vtx(out / "solution.bp", [y, fields["lambda"], fields["active_set"]])
+    gathered = {name: tables.gather_vertex_values(u) for name, u in fields.items()}
     extra = {}
     if problem.comm.rank == 0:
         on_boundary = gathered["mask"][1][:, 0] == 1.0
         extra = {"boundary_x": gathered["mask"][0][on_boundary], "lam": gathered["lambda"][1][on_boundary, 0],
                  "active_set": gathered["active_set"][1][on_boundary, 0].astype(np.int8)}  # fmt: skip
-    io.write_solution_npz(out / "solution.npz", y, **extra)
+    tables.write_solution_npz(out / "solution.npz", y, **extra)
 
 
 def plot_surface(path: str | os.PathLike, y: fem.Function, title: str) -> None:
     """Surface plot of y over the unit square, like Fig. 6.1/6.2 (rendered on rank 0 with matplotlib, no display).
 
-    Collective: y is gathered on rank 0 (:func:`contactqvi.io.gather_vertex_values`).
+    Collective: y is gathered on rank 0 (:func:`contactqvi.tables.gather_vertex_values`).
     """
     comm: MPI.Comm = y.function_space.mesh.comm
-    x, values = io.gather_vertex_values(y)
-    with io.atomic_path(comm, path) as tmp:
+    x, values = tables.gather_vertex_values(y)
+    with tables.atomic_path(comm, path) as tmp:
         if comm.rank == 0:
             _render(tmp, x, values[:, 0], title)
 

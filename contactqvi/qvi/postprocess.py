@@ -1,6 +1,6 @@
 """Output of a QVI run: ParaView file, solution.npz and the figures of seed 003 (Figs. 1, 3, 4).
 
-Fields are gathered on rank 0 (:func:`contactqvi.io.gather_vertex_values`);
+Fields are gathered on rank 0 (:func:`contactqvi.tables.gather_vertex_values`);
 matplotlib runs there with the Agg backend (no display needed), never inside
 solvers. The problems of seed 003 are nondimensional: the axes name the
 quantities and say so.
@@ -14,7 +14,7 @@ import numpy as np
 
 from dolfinx import fem
 
-from contactqvi import io
+from contactqvi import paraview, tables
 from contactqvi.qvi.outer import QVIResult
 
 __all__ = ["result_fields", "write_results", "plot_surface", "plot_profile", "plot_slice", "plot_convergence"]
@@ -55,10 +55,10 @@ def write_results(
     """
     fields = result_fields(result)
     comm = Phi0.function_space.mesh.comm
-    io.write_vtx(out / "thermoforming.bp", fields)
-    gathered = {f.name: io.gather_vertex_values(f)[1] for f in fields[1:] + [Phi0]}
-    x, u = io.gather_vertex_values(fields[0])
-    io.write_solution_npz(out / "solution.npz", fields[0], **{k: v[:, 0] for k, v in gathered.items() if v is not None})
+    paraview.write_vtx(out / "thermoforming.bp", fields)
+    gathered = {f.name: tables.gather_vertex_values(f)[1] for f in fields[1:] + [Phi0]}
+    x, u = tables.gather_vertex_values(fields[0])
+    tables.write_solution_npz(out / "solution.npz", fields[0], **{k: v[:, 0] for k, v in gathered.items() if v is not None})
     if plots and comm.rank == 0:
         values = {"u": u[:, 0], **{k: v[:, 0] for k, v in gathered.items()}}
         _plot(out, x, values, Phi0.function_space.mesh.topology.dim, title)

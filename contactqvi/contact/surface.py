@@ -1,0 +1,345 @@
+"""The contact surface of a solved contact problem: its fields and tributary patches.
+
+:class:`ContactSurface` is built once per problem: a surface mesh of the contact
+facets (``dolfinx.mesh.create_submesh`` of dimension 2) with P1 spaces, the
+lumped nodal areas, and this rank's *tributary patches* (each owned facet cut
+into one quadrilateral per vertex, through the edge midpoints and the facet
+centre; the patches of a node tile the area its lumped nodal area stands for).
+:meth:`ContactSurface.update` fills the fields of each solved step in place;
+:meth:`ContactSurface.dataset` gives this rank's piece of the patches for
+``contact_surface.bp`` (see :mod:`contactqvi.contact.postprocess`).
+
+The surface's vertices are the contact nodes of
+:class:`~contactqvi.contact.problem.ContactProblem` and the nodes of the contact
+boundary that carry a Dirichlet condition; the latter have no contact law and get
+state ``NO_CONTACT``, zero forces and slip. Vectors have three global components.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+from petsc4py import PETSc
+
+import numpy as np
+import ufl
+
+from dolfinx import fem, la
+from dolfinx import mesh as dmesh
+
+from contactqvi.contact.nodal import State
+from contactqvi.contact.problem import ContactProblem
+from contactqvi.contact.scd_newton import SCDNewtonResult
+from contactqvi.paraview import Dataset, MeshPiece
+
+__all__ = [
+    "SLIDING_STATES",
+    "STATE_NAMES",
+    "STICKING_STATES",
+    "UNITS",
+    "ContactSurface",
+    "ContactSurfaceFields",
+    "TributaryPatches",
+    "labelled",
+]
+
+#: Names of the contact states (seed 000, Table 1), by :class:`State` value; "grazing":
+#: touching with zero normal force.
+STATE_NAMES = {
+    State.NO_CONTACT: "no contact",
+    State.SLIDING: "sliding",
+    State.STICKING: "sticking",
+    State.WEAK_CONTACT_SLIDING: "grazing, sliding",
+    State.WEAK_STICKING: "sticking on the cone boundary",
+    State.WEAK_CONTACT_STICKING: "grazing, at rest",
+    State.SEPARATED_STICKING: "separated, sticking (Tresca)",
+}
+#: States counted as sticking and as sliding in areas and indicators; all others are open.
+STICKING_STATES = (State.STICKING, State.WEAK_STICKING)
+SLIDING_STATES = (State.SLIDING,)
+
+#: SI units of the fields and summary entries.
+UNITS = {
+    "displacement": "m",
+    "stress": "Pa",
+    "von_mises": "Pa",
+    "contact_pressure": "Pa",
+    "friction_traction": "Pa",
+    "slip": "m",
+    "tangential_displacement": "m",
+    "gap": "m",
+    "nodal_area": "m^2",
+    "contact_force": "N",
+    "reaction_forces": "N",
+    "applied_force": "N",
+    "contact_area": "m^2",
+    "sticking_area": "m^2",
+    "sliding_area": "m^2",
+    "max_contact_pressure": "Pa",
+    "max_von_mises": "Pa",
+    "equilibrium_error": "1",
+    "displacement_norm": "m",
+}
+
+
+def labelled(name: str) -> str:
+    """Field name with its unit, as written to files: ``contact_pressure [Pa]``."""
+    return f"{name} [{UNITS[name]}]"
+
+
+@dataclasses.dataclass
+class ContactSurfaceFields:
+    """Named P1 functions on the contact surface mesh (seed 000, Sect. 7 output).
+
+    Attributes:
+        state: ``contact_state``, the :class:`~contactqvi.contact.nodal.State` value.
+        pressure: ``contact_pressure`` (Pa): normal force over the lumped nodal area.
+        traction: ``friction_traction`` (Pa, tangential vector): friction force of the
+            obstacle on the body over the lumped nodal area; opposite to the slip
+            when sliding.
+        slip: ``slip`` (m, tangential vector): slip relative to the obstacle in this
+            step (the tangential part of the shifted displacement, seed 000 (6.3))
+            where the node touches the obstacle; zero where it does not (state
+            ``NO_CONTACT``).
+        tangential_displacement: ``tangential_displacement`` (m): the displacement
+            u~ minus its component along the obstacle normal, at every node.
+        gap: ``gap`` (m): distance to the obstacle after deformation along the
+            normal of the node's frame, g + n . u~ (linearised as in the seed).
+        displacement: ``displacement`` (m): u~, for warping the surface.
+        nodal_area: ``nodal_area`` (m^2): lumped area of each surface node, so that
+            the sum of pressure * nodal_area is the total normal force.
+    """
+
+    state: fem.Function
+    pressure: fem.Function
+    traction: fem.Function
+    slip: fem.Function
+    tangential_displacement: fem.Function
+    gap: fem.Function
+    displacement: fem.Function
+    nodal_area: fem.Function
+
+    @property
+    def mesh(self) -> dmesh.Mesh:
+        """The surface mesh of the contact facets."""
+        return self.state.function_space.mesh
+
+    @property
+    def functions(self) -> list[fem.Function]:
+        """All fields, for writing to one file."""
+        return [getattr(self, field.name) for field in dataclasses.fields(self)]
+
+
+def _vertex_blocks(V: fem.FunctionSpace) -> np.ndarray:
+    """Local block (node) index of each local vertex, for a degree-1 Lagrange space.
+
+    The i-th dof of a cell of a degree-1 Lagrange space sits at the cell's i-th vertex.
+    """
+    msh = V.mesh
+    tdim = msh.topology.dim
+    msh.topology.create_connectivity(tdim, 0)
+    cell_vertices = msh.topology.connectivity(tdim, 0).array
+    index_map = msh.topology.index_map(0)
+    blocks = np.empty(index_map.size_local + index_map.num_ghosts, dtype=np.int32)
+    blocks[cell_vertices] = V.dofmap.list.ravel()
+    return blocks
+
+
+#: Columns of the nodal table :meth:`ContactSurface._fill_table` fills on the contact nodes.
+_COLUMNS = {"state": 0, "contact": 1, "pressure": 2, "traction": slice(3, 6), "slip": slice(6, 9),
+            "gap": 9, "normal": slice(10, 13)}
+_TABLE_BS = 13
+
+
+class TributaryPatches:
+    """Facets cut into one quadrilateral per vertex (through edge midpoints and centre).
+
+    Point values are interpolated to the new points (midpoint: mean of the edge's
+    ends; centre: mean of the facet's vertices, the bilinear/linear value there).
+
+    Args:
+        points: (N, 3) vertices.
+        cells: (C, k) facets, VTK order (the vertices go round each facet).
+        duplicate: (N,) True at vertices another piece owns (None: none).
+    """
+
+    def __init__(self, points: np.ndarray, cells: np.ndarray, duplicate: np.ndarray | None = None):
+        n_points, (n_cells, k) = len(points), cells.shape
+        ends = np.stack([cells, np.roll(cells, -1, axis=1)], axis=2).reshape(-1, 2)  # edge j: vertex j to j+1
+        self.edges, edge_of = np.unique(np.sort(ends, axis=1), axis=0, return_inverse=True)
+        self.edges = self.edges.reshape(-1, 2)
+        edge_of = edge_of.reshape(n_cells, k) + n_points
+        centre = n_points + len(self.edges) + np.arange(n_cells)
+        self._cells = cells
+        self.vertex = cells.ravel()  # the node whose patch each patch is
+        self.cells = np.stack([cells, edge_of, np.repeat(centre[:, None], k, axis=1), np.roll(edge_of, 1, axis=1)],
+                              axis=2).reshape(-1, 4)
+        self.points = self.extend(points)
+        self.duplicate = np.zeros(len(self.points), dtype=bool)
+        if duplicate is not None:
+            self.duplicate[:n_points] = duplicate
+
+    @classmethod
+    def of_mesh(cls, piece: MeshPiece) -> TributaryPatches:
+        """The patches of this rank's owned facets; a midpoint is a duplicate where another rank owns the edge."""
+        patches = cls(piece.points, piece.cells, piece.duplicate)
+        n_points = len(piece.points)
+        patches.duplicate[n_points : n_points + len(patches.edges)] = _edges_owned_elsewhere(piece, patches.edges)
+        return patches
+
+    def extend(self, values: np.ndarray) -> np.ndarray:
+        """Values at the vertices extended to the patches' points."""
+        return np.concatenate([values, values[self.edges].mean(axis=1), values[self._cells].mean(axis=1)])
+
+    def dataset(self, point_data: dict[str, np.ndarray], state: np.ndarray) -> Dataset:
+        """Point data (at the vertices) extended; cell data: ``state`` of each patch's vertex and 0/1 indicators."""
+        state = state[self.vertex].astype(np.int32)
+        return Dataset(
+            points=self.points,
+            cells=self.cells,
+            cell_type=9,  # VTK_QUAD
+            point_data={name: self.extend(values) for name, values in point_data.items()},
+            cell_data={
+                "contact_state": state,
+                "is_open": (~np.isin(state, STICKING_STATES + SLIDING_STATES)).astype(np.int32),
+                "is_sliding": np.isin(state, SLIDING_STATES).astype(np.int32),
+                "is_sticking": np.isin(state, STICKING_STATES).astype(np.int32),
+            },
+            duplicate=self.duplicate,
+        )
+
+
+def _edges_owned_elsewhere(piece: MeshPiece, edges: np.ndarray) -> np.ndarray:
+    """For edges given by point index pairs of ``piece``, True where another rank owns the edge."""
+    msh = piece.mesh
+    tdim = msh.topology.dim
+    msh.topology.create_entities(1)
+    msh.topology.create_connectivity(1, 0)
+    msh.topology.create_connectivity(tdim, 0)
+    vertex_of_node = np.empty(msh.geometry.x.shape[0], dtype=np.int64)
+    vertex_of_node[msh.geometry.dofmap.ravel()] = msh.topology.connectivity(tdim, 0).array  # degree 1: same order
+    n_vertices = msh.topology.index_map(0).size_local + msh.topology.index_map(0).num_ghosts
+
+    def key(pairs: np.ndarray) -> np.ndarray:
+        pairs = np.sort(pairs, axis=1)
+        return pairs[:, 0] * n_vertices + pairs[:, 1]
+
+    edge_keys = key(msh.topology.connectivity(1, 0).array.reshape(-1, 2).astype(np.int64))
+    order = np.argsort(edge_keys)
+    edge = order[np.searchsorted(edge_keys, key(vertex_of_node[piece.nodes[edges]]), sorter=order)]
+    return edge >= msh.topology.index_map(1).size_local
+
+
+class ContactSurface:
+    """The contact facets of ``problem`` as a surface mesh with its fields; built once, updated per step.
+
+    Collective. The fields (:attr:`fields`) are P1 functions allocated once;
+    :meth:`update` overwrites them with a solved step's values.
+    """
+
+    def __init__(self, problem: ContactProblem):
+        V = problem.V
+        msh = V.mesh
+        self.problem = problem
+        self.mesh, _, vertex_map, _ = dmesh.create_submesh(msh, msh.topology.dim - 1, problem.contact_facets)
+        scalars = fem.functionspace(self.mesh, ("Lagrange", 1))
+        vectors = fem.functionspace(self.mesh, ("Lagrange", 1, (3,)))
+        self._parent_blk = _vertex_blocks(V)[vertex_map]  # every local surface vertex, owned or ghost
+        self._scalar_blk, self._vector_blk = _vertex_blocks(scalars), _vertex_blocks(vectors)
+        self._x = scalars.tabulate_dof_coordinates()[self._scalar_blk]
+        self._table = la.vector(V.dofmap.index_map, bs=_TABLE_BS)
+        nodal_area = fem.Function(scalars, name="nodal_area")
+        fem.assemble_vector(nodal_area.x.array, fem.form(ufl.TestFunction(scalars) * ufl.dx))
+        nodal_area.x.scatter_reverse(la.InsertMode.add)
+        nodal_area.x.scatter_forward()
+        self.fields = ContactSurfaceFields(
+            **{key: fem.Function(vectors if vector else scalars, name=name) for key, name, vector in (
+                ("state", "contact_state", False), ("pressure", "contact_pressure", False),
+                ("traction", "friction_traction", True), ("slip", "slip", True),
+                ("tangential_displacement", "tangential_displacement", True), ("gap", "gap", False),
+                ("displacement", "displacement", True))},
+            nodal_area=nodal_area,
+        )
+        self._piece = MeshPiece(self.mesh)
+        self._patches = TributaryPatches.of_mesh(self._piece)
+
+    @property
+    def n_nodes(self) -> int:
+        """Global number of surface nodes."""
+        return self.mesh.geometry.index_map().size_global
+
+    def _fill_table(self, u: PETSc.Vec, result: SCDNewtonResult) -> np.ndarray:
+        """Per node of V (owned and ghost): state, contact flag, pressure, friction traction,
+        slip, gap and frame normal at the contact nodes, global components; zero elsewhere.
+
+        Filled on the owned contact nodes and scattered, so every rank sees the owner's
+        values at its ghost nodes.
+        """
+        problem = self.problem
+        values = self._table.array.reshape(-1, _TABLE_BS)
+        values[:] = 0.0
+        values[:, _COLUMNS["state"]] = State.NO_CONTACT
+        blk, frames, area = problem.contact_blk, problem.frames, problem.contact_area
+        shifted = u.array.reshape(-1, 3)[blk]  # nodal frames: (slip increment, gap after deformation)
+        touching = result.states != State.NO_CONTACT
+        values[blk, _COLUMNS["state"]] = result.states
+        values[blk, _COLUMNS["contact"]] = 1.0
+        values[blk, _COLUMNS["pressure"]] = result.normal_force / area
+        values[blk, _COLUMNS["traction"]] = np.einsum("ij,ijk->ik", result.friction_force, frames[:, :2]) / area[:, None]
+        values[blk, _COLUMNS["slip"]] = np.einsum("ij,ijk->ik", shifted[:, :2], frames[:, :2]) * touching[:, None]
+        values[blk, _COLUMNS["gap"]] = shifted[:, 2]
+        values[blk, _COLUMNS["normal"]] = frames[:, 2]
+        self._table.scatter_forward()
+        return values
+
+    def update(
+        self, u: PETSc.Vec, result: SCDNewtonResult, displacement: fem.Function | None = None
+    ) -> ContactSurfaceFields:
+        """Contact state, pressure, friction traction, slip, gap and displacement of a solved step.
+
+        Forces and states are those of the last approximation step's graph point
+        (``result``), divided by the problem's lumped nodal area; slip and gap come
+        from the solution ``u`` (shifted displacements in nodal frames, seed 000
+        (6.3)). Collective.
+
+        Args:
+            u: the solution (shifted displacements) of the problem at its current step.
+            result: the solver's result for ``u``.
+            displacement: the physical displacement of ``u`` if computed already.
+
+        Returns:
+            :attr:`fields`, holding this step's values.
+        """
+        problem = self.problem
+        nodal = self._fill_table(u, result)[self._parent_blk]
+        if displacement is None:
+            displacement = problem.physical_displacement(u, fem.Function(problem.V))
+        u_tilde = displacement.x.array.reshape(-1, 3)[self._parent_blk]
+        contact = nodal[:, _COLUMNS["contact"]] > 0
+        obstacle = problem.obstacle.translated(problem.translation)
+        initial_gap, normal = obstacle.distance(self._x)
+        normal[contact] = nodal[contact, _COLUMNS["normal"]]  # the nodes' (reference) frames
+        gap = np.where(contact, nodal[:, _COLUMNS["gap"]], initial_gap + np.einsum("ij,ij->i", normal, u_tilde))
+        tangential = u_tilde - np.einsum("ij,ij->i", normal, u_tilde)[:, None] * normal
+        fields = self.fields
+        for f, values in ((fields.state, nodal[:, _COLUMNS["state"]]), (fields.pressure, nodal[:, _COLUMNS["pressure"]]),
+                          (fields.traction, nodal[:, _COLUMNS["traction"]]), (fields.slip, nodal[:, _COLUMNS["slip"]]),
+                          (fields.tangential_displacement, tangential), (fields.gap, gap),
+                          (fields.displacement, u_tilde)):
+            blk = self._vector_blk if values.ndim == 2 else self._scalar_blk
+            bs = f.function_space.dofmap.index_map_bs
+            f.x.array.reshape(-1, bs)[blk] = values.reshape(-1, bs)
+        return fields
+
+    def dataset(self) -> Dataset:
+        """This rank's piece of the tributary patches with the current fields. Not collective.
+
+        Point data: every field but ``contact_state`` and ``nodal_area``, named with
+        units (``contact_pressure [Pa]``); cell data: ``contact_state`` of the patch's
+        node and the 0/1 indicators ``is_open``, ``is_sliding``, ``is_sticking``
+        (integrating one over the surface gives that area).
+        """
+        piece = self._piece
+        point_data = {labelled(f.name): piece.point_values(f) for f in self.fields.functions
+                      if f.name not in ("contact_state", "nodal_area")}
+        return self._patches.dataset(point_data, piece.point_values(self.fields.state))
