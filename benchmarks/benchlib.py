@@ -15,7 +15,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from contactqvi import tables
-from contactqvi.cli import setup_logging
+from contactqvi.cli import parse_args
 from contactqvi.contact.driver import solve_level, solve_nested
 from contactqvi.contact.scd_newton import PARAMETERS
 from contactqvi.elasticity import rigid_motions_nullspace
@@ -29,16 +29,19 @@ CASES = [f"{g}/{l}" for g in ("d1", "d2", "d3") for l in ("L1", "L2")]
 def make_parser(doc: str) -> argparse.ArgumentParser:
     """Parser of a benchmark script with the shared options ``--pc`` and ``--output``."""
     parser = argparse.ArgumentParser(description=doc.split("\n")[0],
-                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+                                     epilog="Unknown options starting with '-' are passed to PETSc, under the "
+                                            "script's options prefix (e.g. -bench_ksp_monitor).")
     PARAMETERS.add_arguments(parser, ["pc"])
     parser.add_argument("--output", default=str(pathlib.Path(__file__).parent / "results"))
     return parser
 
 
 def parse(parser: argparse.ArgumentParser) -> tuple[argparse.Namespace, MPI.Comm, pathlib.Path]:
-    """Parsed arguments, the communicator and the (created) output directory; quiet logging."""
-    args = parser.parse_args()
-    setup_logging("WARNING")
+    """Parsed arguments (unknown ``-options`` go to PETSc, as in the demos), the communicator and the
+    (created) output directory; quiet logging."""
+    parser.set_defaults(log_level="WARNING")
+    args = parse_args(parser)
     out = pathlib.Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     return args, MPI.COMM_WORLD, out

@@ -1,18 +1,18 @@
 """Reproduce the numerical results of seed 002 (Stadler 2004, Sect. 6) with contactqvi.friction.
 
-The runs are :mod:`contactqvi.problems.stadler_experiments`; this script writes them as
+The runs are those of ``stadler_runs.py`` (beside this script); this script writes them as
 ``results/stadler_<table>.json``/``.md`` for Q1 (``stadler_<table>_fd``, ``_p1`` for the
 paper's finite differences and P1), the paper's numbers beside ours, and ``stadler_summary.md``:
 the paper, Q1 and FD side by side, then every table written so far. Discretisations and why
 their numbers differ: docs/friction.md.
 
 Run: ``python benchmarks/stadler_tables.py [--discretisation q1|p1|fd] [--tables 6.1 ...] [--quick]``
-(``--quick``: small grids, a smoke test; give it another ``--output``).
+(``--quick``: small grids, a smoke test; give it another ``--output``). PETSc options of the
+solvers go on the command line under their prefixes (``-friction_ksp_view``, ``-uzawa_...``).
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import pathlib
 import time
@@ -21,9 +21,11 @@ import typing
 from mpi4py import MPI
 
 from contactqvi import tables
-from contactqvi.cli import setup_logging
-from contactqvi.problems.stadler import DISCRETISATIONS, PAPER
-from contactqvi.problems.stadler_experiments import TABLES, Case
+from contactqvi.cli import make_parser, parse_args
+from contactqvi.friction import DISCRETISATIONS
+from contactqvi.problems.stadler import PAPER
+
+from stadler_runs import TABLES, Cases
 
 RESULTS = pathlib.Path(__file__).resolve().parent / "results"
 LABELS = {"q1": "Q1", "p1": "P1", "fd": "FD"}
@@ -165,31 +167,30 @@ def summary(out: pathlib.Path) -> str:
     parts = [out / f"{stem(name, d)}.md" for name in TABLES for d in DISCRETISATIONS]
     return (
         "# Seed 002 (Stadler 2004): paper vs contactqvi\n\nQ1: bilinear finite elements with a lumped boundary mass; "
-        "FD: the paper's five-point finite differences (`contactqvi/problems/stadler_fd.py`), same solvers. Counts: "
-        "linear solves after the initialisation. Why the numbers differ: docs/friction.md.\n\n"
+        "FD: the paper's five-point finite differences (`contactqvi/friction/finite_differences.py`), same solvers. "
+        "Counts: linear solves after the initialisation. Why the numbers differ: docs/friction.md.\n\n"
         f"{table(['', 'paper', 'Q1', 'FD'], rows)}\n" + "\n".join(p.read_text() for p in parts if p.is_file())
     )
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0],
-                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)  # fmt: skip
+def main(argv: list[str] | None = None) -> None:
+    parser = make_parser(__doc__.split("\n")[0], str(RESULTS), petsc_example="-friction_ksp_view")
+    parser.set_defaults(log_level="WARNING")
     parser.add_argument("--tables", nargs="*", default=list(TABLES), choices=list(TABLES))
     parser.add_argument("--discretisation", default="q1", choices=DISCRETISATIONS, help="q1/p1 FE or the paper's FD")
     parser.add_argument("--quick", action="store_true", help="small grids (a smoke test, not the paper's N)")
-    parser.add_argument("--output", default=str(RESULTS))
-    args = parser.parse_args()
-    setup_logging("WARNING")
+    args = parse_args(parser, argv)
     comm, label = MPI.COMM_WORLD, LABELS[args.discretisation]
     out = tables.prepare_output_dir(comm, args.output)
-    for name in args.tables:
-        start = time.perf_counter()
-        data = TABLES[name](args.discretisation, args.quick)
-        data.update(discretisation=args.discretisation, quick=args.quick, seconds=time.perf_counter() - start,
-                    mpi_ranks=comm.size)  # fmt: skip
-        title = f"## Seed 002 {'Table ' * name[0].isdigit()}{name}, {label}{' (quick)' * args.quick}"
-        tables.write_table(comm, out / stem(name, args.discretisation), data, f"{title}\n\n{MARKDOWN[name](data, label)}\n")
-    Case.release()
+    with Cases(args.discretisation, args.quick) as cases:
+        for name in args.tables:
+            start = time.perf_counter()
+            data = TABLES[name](cases)
+            data.update(discretisation=args.discretisation, quick=args.quick, seconds=time.perf_counter() - start,
+                        mpi_ranks=comm.size)  # fmt: skip
+            title = f"## Seed 002 {'Table ' * name[0].isdigit()}{name}, {label}{' (quick)' * args.quick}"
+            markdown = f"{title}\n\n{MARKDOWN[name](data, label)}\n"
+            tables.write_table(comm, out / stem(name, args.discretisation), data, markdown)
     with tables.atomic_path(comm, out / "stadler_summary.md") as tmp:
         if comm.rank == 0:
             tmp.write_text(summary(out))

@@ -4,7 +4,9 @@
 positive value converged, a negative one did not, zero is still iterating, and
 every value is named. :class:`Result` holds what every iterative solver reports
 (status, iteration counts, timings, history); each family derives its result from
-it and adds its own fields, never re-declaring these.
+it and adds its own fields, never re-declaring these. :class:`InnerSolveError` is how an
+inner solver tells a nested method that it did not converge; errors (a PETSc error
+among them) are never turned into a status: they reach the caller.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ import typing
 
 from petsc4py import PETSc
 
-__all__ = ["Result", "Status", "Timings"]
+__all__ = ["InnerSolveError", "Result", "Status", "Timings"]
 
 
 class Status(enum.IntEnum):
@@ -56,6 +58,14 @@ class Status(enum.IntEnum):
 
     def __str__(self) -> str:
         return self.name.lower()
+
+
+class InnerSolveError(Exception):
+    """An inner solver stopped without converging; the nested method ends with ``DIVERGED_INNER``.
+
+    Only non-convergence raises it, with the inner solver's reason in the message. It is
+    not a ``RuntimeError``, so a handler of it never catches ``PETSc.Error``.
+    """
 
 
 class Timings(dict):

@@ -11,17 +11,18 @@ This demo illustrates how to:
   * report d_lambda = ||lambda_bar - lambda||_{L2(Gamma_f)} against lambda_bar = lambda_{1e16};
   * write summary.json (with the checked parameters), solution.npz, ParaView files and y.png.
 
-Run, e.g.::
+The options after ``--method`` are those of the method's parameter table
+(``--method alm --help`` lists ALM's). Run, e.g.::
 
     python demos/simplified_friction.py --example 2 --method pdas --gamma 1e3 --N 160
     python demos/simplified_friction.py --example 1 --method ss --gamma 1e8 --discretisation fd
-    mpirun -n 2 python demos/simplified_friction.py --example 3 --method alm --alm-inner inexact \
-        --alm-schedule power10
-    python demos/simplified_friction.py --example 1 --method uzawa --uzawa-gamma 10 -uzawa_ksp_view
+    mpirun -n 2 python demos/simplified_friction.py --example 3 --method alm --inner inexact --schedule power10
+    python demos/simplified_friction.py --example 1 --method uzawa --gamma 10 -uzawa_ksp_view
 """
 
 from __future__ import annotations
 
+import argparse
 import logging
 import sys
 
@@ -29,7 +30,7 @@ from mpi4py import MPI
 
 from contactqvi import tables
 from contactqvi.cli import make_parser, parse_args
-from contactqvi.friction import methods
+from contactqvi.friction import GRID_PARAMETERS, create_problem, methods
 from contactqvi.friction.output import plot_surface, write_solution
 from contactqvi.parameters import Parameter, ParameterError, Parameters
 from contactqvi.problems import stadler
@@ -44,29 +45,40 @@ DEMO = Parameters(
 )
 
 
-def parse(argv: list[str] | None) -> tuple[str, dict, dict, dict]:
-    """Output directory and the checked problem, demo and solver parameters; raises ParameterError."""
+def parse(argv: list[str] | None) -> tuple[str, dict, dict, dict, dict]:
+    """Output directory and the checked example, grid, demo and solver parameters; raises ParameterError.
+
+    The method is read first: its parameter table gives the solver's options.
+    """
+    argv = sys.argv[1:] if argv is None else argv
+    chosen = argparse.ArgumentParser(add_help=False, allow_abbrev=False)
+    DEMO.add_arguments(chosen, ["method"])
+    method = chosen.parse_known_args(argv)[0].method
     petsc_example = "-friction_ksp_view (PDAS/SS/ALM) or -uzawa_ksp_view"
     parser = make_parser(__doc__.split("\n")[0], "results/simplified_friction", petsc_example)
-    stadler.PARAMETERS.add_arguments(parser.add_argument_group("problem"))
+    stadler.PARAMETERS.add_arguments(parser.add_argument_group("example"))
+    GRID_PARAMETERS.add_arguments(parser.add_argument_group("grid"))
     DEMO.add_arguments(parser)
-    methods.add_arguments(parser)
+    table = methods.parameters_of(method)
+    table.add_arguments(parser.add_argument_group(f"{method} (the method chosen)"))
     args = parse_args(parser, argv)
-    problem, demo = stadler.PARAMETERS.from_namespace(args), DEMO.from_namespace(args)
-    return args.output, problem, demo, methods.checked_parameters(args, demo["method"])
+    example, grid = stadler.PARAMETERS.from_namespace(args), GRID_PARAMETERS.from_namespace(args)
+    solver = methods.checked_parameters(method, {name: getattr(args, name) for name in table})
+    return args.output, example, grid, DEMO.from_namespace(args), solver
 
 
 def main(argv: list[str] | None = None) -> int:
     comm = MPI.COMM_WORLD
     try:
-        output, problem_parameters, demo, parameters = parse(argv)
-        problem = stadler.create_stadler_problem(comm, **problem_parameters)
+        output, example_parameters, grid, demo, parameters = parse(argv)
+        example = stadler.stadler_example(**example_parameters)
+        problem = create_problem(comm, example, **grid)
     except ParameterError as exc:
         if comm.rank == 0:
             print(f"error: {exc}", file=sys.stderr)
         return 2
     out = tables.prepare_output_dir(comm, output)
-    example = stadler.stadler_example(problem_parameters["example"], problem_parameters["example2_reading"])
+    problem_parameters = {**example_parameters, **grid}
     logger.info(
         "Example %d (%s), g=%g, mu=%g, N=%d, %s, %d friction nodes; method %s",
         example.number, example.description, problem.g, problem.mu, problem_parameters["N"],
@@ -76,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
         reference = None
         if demo["reference"]:
             logger.info("reference lambda_bar = lambda_gamma, gamma = %.0e (PDAS, sigma = 1):", stadler.REFERENCE_GAMMA)
-            lambda_bar = solvers.reference()
+            lambda_bar = solvers.reference(stadler.REFERENCE_GAMMA)
             if not lambda_bar.converged:
                 raise RuntimeError(f"PDAS for lambda_bar ended with status {lambda_bar.status}")
             reference = lambda_bar.lam

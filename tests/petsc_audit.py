@@ -55,9 +55,10 @@ def assert_frees_petsc_objects(run: typing.Callable[[], list], tmp: pathlib.Path
     known = {id(o) for o in before}
     balance = _object_balance(tmp / "before.log")
     owners = run()
+    owner = None
     for owner in owners:
         owner.destroy()
-    del owner
+    del owner  # the owners stay referenced by ``owners`` until their objects are audited
     gc.collect()
     wrappers = _dolfinx_wrappers()
     alive = [o for o in _live_objects() if id(o) not in known and id(o) not in wrappers]

@@ -9,10 +9,16 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 
-from contactqvi.friction import FrictionActiveSetSolver, FrictionProblem, UzawaSolver, augmented_lagrangian
+from contactqvi.friction import (
+    FrictionActiveSetSolver,
+    FrictionProblem,
+    UzawaSolver,
+    augmented_lagrangian,
+    create_problem,
+)
 from contactqvi.meshes import create_unit_square
 from contactqvi.parameters import ParameterError
-from contactqvi.problems.stadler import create_stadler_problem, stadler_example
+from contactqvi.problems.stadler import stadler_example
 
 
 def _square(n: int = 4):
@@ -38,7 +44,7 @@ def test_problem_rejects_bad_data(kwargs, name):
 
 def test_solvers_reject_bad_parameters():
     """The parameter tables check every value before any work, with the shared error text."""
-    problem = create_stadler_problem(MPI.COMM_WORLD, example=2, N=5)
+    problem = create_problem(MPI.COMM_WORLD, stadler_example(2), N=5)
     with problem, FrictionActiveSetSolver(problem) as pdas, UzawaSolver(problem) as uzawa:
         for gamma in (0.0, -1.0, float("inf")):
             for solve in (pdas.solve, uzawa.solve, lambda **kw: augmented_lagrangian(pdas, **kw)):
@@ -65,15 +71,17 @@ def test_solvers_reject_bad_parameters():
 
 def test_examples_reject_bad_input():
     for number in (0, 4):
-        with pytest.raises(ParameterError, match="^example:"):
-            stadler_example(number)
         with pytest.raises(ParameterError, match="^example: must be in"):
-            create_stadler_problem(MPI.COMM_WORLD, example=number, N=5)
+            stadler_example(number)
+    with pytest.raises(ParameterError, match="^example2_reading: must be one of"):
+        stadler_example(2, "x2x2")
+    with pytest.raises(ParameterError, match="^g: must be > 0"):
+        stadler_example(2, g=0.0)
     for N in (2, 0, 3.5):
         with pytest.raises(ParameterError, match="^N:"):
-            create_stadler_problem(MPI.COMM_WORLD, example=1, N=N)
+            create_problem(MPI.COMM_WORLD, stadler_example(1), N=N)
     with pytest.raises(ParameterError, match="^discretisation: must be one of q1, p1, fd"):
-        create_stadler_problem(MPI.COMM_WORLD, example=1, N=5, discretisation="q2")
+        create_problem(MPI.COMM_WORLD, stadler_example(1), N=5, discretisation="q2")
 
 
 @pytest.mark.parametrize(
@@ -87,9 +95,10 @@ def test_examples_reject_bad_input():
         (["--example", "3", "--mu", "-0.5"], "mu"),
         (["--example", "3", "--mu", "0"], "mu"),
         (["--max-iterations", "0"], "max_iterations"),
-        (["--method", "alm", "--alm-max-outer", "0"], "alm_max_outer"),
-        (["--alm-residual-reduction", "2"], "alm_residual_reduction"),
-        (["--method", "uzawa", "--uzawa-tol=-1e-4"], "uzawa_tol"),
+        (["--method", "alm", "--max-outer", "0"], "max_outer"),
+        (["--method", "alm", "--residual-reduction", "2"], "residual_reduction"),
+        (["--method", "ss", "--gamma", "-1"], "gamma"),
+        (["--method", "uzawa", "--atol=-1e-4"], "atol"),
     ],
 )
 def test_demo_reports_bad_input(argv, name, capsys, mpi_tmp_path, load_demo):
@@ -100,8 +109,10 @@ def test_demo_reports_bad_input(argv, name, capsys, mpi_tmp_path, load_demo):
 
 
 @pytest.mark.parametrize(
-    "argv", [["--method", "newton"], ["--alm-inner", "maybe"], ["--example2-reading", "x2x2"], ["--discretisation", "q2"]]
-)
+    "argv",
+    [["--method", "newton"], ["--inner", "maybe", "--method", "alm"], ["--example2-reading", "x2x2"],
+     ["--discretisation", "q2"]],
+)  # fmt: skip
 def test_demo_rejects_bad_choices(argv, capsys, mpi_tmp_path, load_demo):
     """Choices are checked by argparse (exit code 2, the option and the valid values named)."""
     with pytest.raises(SystemExit) as info:
@@ -111,25 +122,28 @@ def test_demo_rejects_bad_choices(argv, capsys, mpi_tmp_path, load_demo):
         assert f"argument {argv[0]}: invalid choice" in capsys.readouterr().err
 
 
-def test_demo_help_names_its_own_petsc_prefix(capsys, load_demo):
+@pytest.mark.parametrize("method, options", [("pdas", ["--sigma", "--max-iterations"]),
+                                             ("alm", ["--inner", "--schedule", "--atol", "--max-inner"]),
+                                             ("uzawa", ["--atol", "--max-iterations"])])  # fmt: skip
+def test_demo_help_names_its_own_petsc_prefix(method, options, capsys, load_demo):
     with pytest.raises(SystemExit):
-        load_demo("simplified_friction").main(["--help"])
+        load_demo("simplified_friction").main(["--method", method, "--help"])
     text = capsys.readouterr().out
     assert "-friction_ksp_view" in text and "-uzawa_ksp_view" in text and "coulomb" not in text
-    assert "--alm-inner" in text and "--uzawa-gamma" in text and "--discretisation" in text
+    assert all(option in text for option in ["--gamma", *options, "--discretisation", "--example"]), text
 
 
 def test_demo_alm_end_to_end(mpi_tmp_path, load_demo):
     out = mpi_tmp_path / "alm"
-    argv = ["--example", "2", "--method", "alm", "--alm-inner", "inexact", "--alm-schedule", "power10",
-            "--alm-max-outer", "5", "--alm-tol", "1e-8", "--N", "9", "--output", str(out)]  # fmt: skip
+    argv = ["--example", "2", "--method", "alm", "--inner", "inexact", "--schedule", "power10",
+            "--max-outer", "5", "--atol", "1e-8", "--N", "9", "--output", str(out)]  # fmt: skip
     assert load_demo("simplified_friction").main(argv) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "converged_atol" and summary["converged"] and summary["d_lambda"] < 1e-8
     assert summary["max_abs_lambda"] <= 0.4 * (1 + 1e-14)
     assert (out / "solution.npz").is_file() and (out / "solution.bp").is_dir() and (out / "y.png").is_file()
     solver = summary["parameters"]["solver"]
-    assert solver["schedule"] == "power10" and solver["max_outer"] == 5 and solver["tol"] == 1e-8
+    assert solver["schedule"] == "power10" and solver["max_outer"] == 5 and solver["atol"] == 1e-8
     assert [h["gamma"] for h in summary["history"]] == [10.0**k for k in range(1, 6)]
     assert summary["parameters"]["problem"] == {"example": 2, "N": 9, "discretisation": "q1", "g": None, "mu": None,
                                                 "example2_reading": "x1x2"}  # fmt: skip
@@ -143,8 +157,8 @@ def test_demo_alm_passes_sigma_to_the_inner_pdas(mpi_tmp_path, load_demo):
     statuses = {}
     for sigma in ("1", "1e-3"):
         out = mpi_tmp_path / f"alm_sigma_{sigma}"
-        argv = ["--example", "2", "--method", "alm", "--alm-inner", "inexact", "--gamma", "1e2", "--sigma", sigma,
-                "--alm-max-outer", "3", "--N", "17", "--output", str(out), "--no-png"]  # fmt: skip
+        argv = ["--example", "2", "--method", "alm", "--inner", "inexact", "--gamma", "1e2", "--sigma", sigma,
+                "--max-outer", "3", "--N", "17", "--output", str(out), "--no-png"]  # fmt: skip
         rc = load_demo("simplified_friction").main(argv)
         summary = json.loads((out / "summary.json").read_text())
         assert summary["parameters"]["solver"]["sigma"] == float(sigma)
@@ -155,7 +169,7 @@ def test_demo_alm_passes_sigma_to_the_inner_pdas(mpi_tmp_path, load_demo):
 @pytest.mark.parametrize("discretisation", ["q1", "fd"])
 def test_demo_uzawa_without_reference_stops_on_the_multiplier_change(discretisation, mpi_tmp_path, load_demo):
     out = mpi_tmp_path / f"uzawa_noref_{discretisation}"
-    argv = ["--method", "uzawa", "--uzawa-gamma", "5", "--N", "9", "--discretisation", discretisation,
+    argv = ["--method", "uzawa", "--gamma", "5", "--N", "9", "--discretisation", discretisation,
             "--no-reference", "--output", str(out), "--no-png"]  # fmt: skip
     assert load_demo("simplified_friction").main(argv) == 0
     summary = json.loads((out / "summary.json").read_text())
@@ -165,7 +179,7 @@ def test_demo_uzawa_without_reference_stops_on_the_multiplier_change(discretisat
 
 def test_demo_uzawa_nonconvergence_exit_code(mpi_tmp_path, load_demo):
     out = mpi_tmp_path / "uzawa"
-    argv = ["--example", "2", "--method", "uzawa", "--uzawa-gamma", "1000", "--uzawa-max-iterations", "20",
+    argv = ["--example", "2", "--method", "uzawa", "--gamma", "1000", "--max-iterations", "20",
             "--N", "9", "--output", str(out), "--no-png"]  # fmt: skip
     assert load_demo("simplified_friction").main(argv) == 1
     summary = json.loads((out / "summary.json").read_text())

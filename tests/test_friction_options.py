@@ -7,9 +7,11 @@ from petsc4py import PETSc
 
 import pytest
 
-from contactqvi.friction import FrictionActiveSetSolver
+from contactqvi.friction import FrictionActiveSetSolver, create_problem
 from contactqvi.linalg import preset
-from contactqvi.problems.stadler import create_stadler_problem
+from contactqvi.problems.stadler import stadler_example
+
+from friction_checks import state_residual
 
 ITERATIVE = preset("cg_jacobi", ksp_rtol=1e-2)
 
@@ -25,13 +27,13 @@ def prefix():
 
 
 def _state_residual(problem, result) -> float:
-    residual = problem.state_residual(result.y.x.petsc_vec, result.lam)
+    residual = state_residual(problem, result.y.x.petsc_vec, result.lam)
     return residual / problem.F.norm(PETSc.NormType.NORM_INFINITY)
 
 
 def test_two_instances_with_one_prefix_keep_their_own_options(prefix):
     """A loose iterative solver first, then the default direct one under the same prefix."""
-    problem = create_stadler_problem(MPI.COMM_WORLD, example=3, N=21)
+    problem = create_problem(MPI.COMM_WORLD, stadler_example(3), N=21)
     with problem, FrictionActiveSetSolver(problem, prefix, ITERATIVE) as iterative:
         with FrictionActiveSetSolver(problem, prefix) as direct:
             assert (iterative.ksp.getType(), iterative.ksp.getPC().getType()) == ("cg", "jacobi")
@@ -49,7 +51,7 @@ def test_user_options_win_and_stay(prefix):
     """A value in the database (e.g. from the command line) overrides ``ksp_options`` and is not removed."""
     opts = PETSc.Options()
     opts[prefix + "ksp_type"] = "gmres"
-    problem = create_stadler_problem(MPI.COMM_WORLD, example=3, N=9)
+    problem = create_problem(MPI.COMM_WORLD, stadler_example(3), N=9)
     with problem, FrictionActiveSetSolver(problem, prefix, ITERATIVE) as pdas:
         assert pdas.ksp.getType() == "gmres" and pdas.ksp.getPC().getType() == "jacobi"
     assert opts.getString(prefix + "ksp_type") == "gmres"

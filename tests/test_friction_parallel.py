@@ -8,9 +8,15 @@ import numpy as np
 import pytest
 
 from contactqvi import tables
-from contactqvi.friction import FrictionActiveSetSolver, UzawaSolver, augmented_lagrangian, semismooth_newton_sigma
+from contactqvi.friction import (
+    FrictionActiveSetSolver,
+    UzawaSolver,
+    augmented_lagrangian,
+    create_problem,
+    semismooth_newton_sigma,
+)
 from contactqvi.friction.output import boundary_function
-from contactqvi.problems.stadler import create_stadler_problem
+from contactqvi.problems.stadler import stadler_example
 
 
 def _gathered(problem, result) -> tuple:
@@ -21,7 +27,7 @@ def _gathered(problem, result) -> tuple:
 
 
 def _run_all(comm: MPI.Comm, example: int, discretisation: str) -> dict:
-    problem = create_stadler_problem(comm, example=example, N=21, discretisation=discretisation)
+    problem = create_problem(comm, stadler_example(example), N=21, discretisation=discretisation)
     out = {}
     with problem, FrictionActiveSetSolver(problem) as pdas, UzawaSolver(problem) as uzawa:
         reference = pdas.solve(gamma=1e16)
@@ -30,7 +36,7 @@ def _run_all(comm: MPI.Comm, example: int, discretisation: str) -> dict:
             "pdas": lambda: pdas.solve(gamma=1e3, sigma=1.0, reference=reference.lam),
             "ss": lambda: pdas.solve(gamma=50.0, sigma=semismooth_newton_sigma(50.0)),
             "alm": lambda: augmented_lagrangian(pdas, schedule="power10", inner="inexact", max_outer=4),
-            "uzawa": lambda: uzawa.solve(gamma=0.2, max_iterations=15, tol=1e-12),
+            "uzawa": lambda: uzawa.solve(gamma=0.2, max_iterations=15, atol=1e-12),
         }
         for name, run in runs.items():
             result = run()

@@ -1,18 +1,21 @@
-"""scripts/paraview/pv_views.py reads what demos/coulomb3d.py writes (no ParaView needed).
+"""scripts/paraview/pv_views.py reads what contactqvi writes (no ParaView needed).
 
 The script lists its files (``SOURCES``) and fields (``FIELDS``) in one place; this
-test checks that list against a fresh demo result: for each dataset the first
-existing file holds every required field, by the script's own name matching.
+test checks that list against a fresh demo result, and the parts of the views that
+need no ParaView: the step and obstacle read from ``summary.json``, and the frame a
+contact surface is seen in (VTK only, as pyvista installs it).
 """
 
 from __future__ import annotations
 
 import importlib.util
+import json
 import pathlib
 import xml.etree.ElementTree as ET
 
 from mpi4py import MPI
 
+import numpy as np
 import pytest
 
 SCRIPT = pathlib.Path(__file__).resolve().parent.parent / "scripts" / "paraview" / "pv_views.py"
@@ -27,9 +30,7 @@ def pv_views():
 
 
 def field_names(path: pathlib.Path) -> list[str]:
-    """Names of the fields in an XDMF file or a VTX (.bp) directory."""
-    if path.suffix == ".xdmf":
-        return [a.get("Name") for a in ET.parse(path).getroot().iter("Attribute")]
+    """Names of the fields in a VTX (.bp) directory."""
     import adios2
 
     with adios2.FileReader(str(path)) as reader:
@@ -48,10 +49,9 @@ def test_demo_output_has_the_fields(pv_views, load_demo, mpi_tmp_path):
     out = mpi_tmp_path / "coulomb"
     assert load_demo("coulomb3d").main(["--lev", "1", "--output", str(out), "--no-plot"]) == 0
     MPI.COMM_WORLD.Barrier()
-    for role, candidates in pv_views.SOURCES.items():
-        files = [out / name for name in candidates if (out / name).exists()]
-        assert files, f"none of {candidates} written"
-        names = [n for path in files for n in field_names(path)]
+    for role, name in pv_views.SOURCES.items():
+        assert (out / name).exists(), f"{name} not written"
+        names = field_names(out / name)
         for field, (dataset, required, *_) in pv_views.FIELDS.items():
             if dataset == role and required:
                 assert any(pv_views.field_matches(n, field) for n in names), (field, names)
@@ -64,3 +64,40 @@ def test_state_names(pv_views):
     assert {int(state): name for state, name in STATE_NAMES.items()} == {
         state: label for state, (label, _) in pv_views.CONTACT_STATES.items()
     }
+
+
+def test_step_and_obstacle_from_the_summary(pv_views, mpi_tmp_path):
+    """A case result: its obstacle and the translation of the step shown (the last by default)."""
+    comm = MPI.COMM_WORLD
+    plane = {"type": "plane", "point": [0.0, 0.0, 0.0], "normal": [0.0, 0.0, 1.0]}
+    steps = [{"step": k, "converged": True, "translation": [0.0, 0.0, -0.1 * k]} for k in (1, 2, 3)]
+    if comm.rank == 0:
+        (mpi_tmp_path / "summary.json").write_text(json.dumps({"case": {"obstacle": plane}, "steps": steps}))
+    comm.Barrier()
+    last, first = pv_views.describe(mpi_tmp_path, -1), pv_views.describe(mpi_tmp_path, 1)
+    assert last["obstacle"] == plane and last["translation"] == steps[2]["translation"]
+    assert "step 3 of 3" in last["label"]
+    assert first["translation"] == steps[0]["translation"] and "step 1 of 3" in first["label"]
+    assert pv_views.describe(mpi_tmp_path / "nothing", -1)["obstacle"] is None  # the paper demo: no obstacle
+
+
+@pytest.mark.parametrize("normal", [(0.0, 0.0, 1.0), (np.sin(0.35), 0.0, np.cos(0.35)), (0.0, -1.0, 0.0)])
+def test_a_surface_is_seen_along_its_normal_from_its_body(pv_views, normal):
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+    from vtkmodules.vtkCommonCore import vtkPoints
+    from vtkmodules.vtkCommonDataModel import vtkPolyData
+
+    import pv_common
+
+    n = np.asarray(normal)
+    e1, e2 = pv_common.plane_basis(n)
+    s, t = np.meshgrid(np.linspace(0, 2, 5), np.linspace(0, 1, 3))
+    x = np.outer(s.ravel(), e1) + np.outer(t.ravel(), e2) + [0.3, 0.2, 0.1]
+    surface = vtkPolyData()
+    surface.SetPoints(vtkPoints())
+    surface.GetPoints().SetData(numpy_to_vtk(x, deep=True))
+    centre, f1, f2, f3 = pv_common.surface_frame(surface, x.mean(axis=0) + 0.5 * n)  # the body on the +n side
+    assert np.allclose(f3, n) and np.allclose(np.cross(f1, f2), f3) and np.isclose(np.dot(f1, f2), 0.0)
+    assert np.allclose(centre, x.mean(axis=0))
+    if normal == (0.0, 0.0, 1.0):  # seen from +x3: x1 to the right, x2 up
+        assert np.allclose(f1, [1, 0, 0]) and np.allclose(f2, [0, 1, 0])

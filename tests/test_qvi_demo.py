@@ -26,7 +26,7 @@ def test_demo_test3_writes_results(mpi_tmp_path, load_demo):
     assert summary["history"][-1]["residual"] <= 1e-12
     assert set(summary["comparison"]) == {"c1", "c2 (rho=0.01)", "c2 (rho=0.001)", "c2 (rho=0.0001)"}
     # the checked values of every parameter table, defaults filled in per test
-    assert summary["parameters"]["outer"]["tol"] == 1e-12 and summary["parameters"]["obstacle"]["rho_min"] == 1e-6
+    assert summary["parameters"]["outer"]["atol"] == 1e-12 and summary["parameters"]["obstacle"]["rho_min"] == 1e-6
     for name in ("membrane.png", "mould.png", "slice.png", "convergence.png", "thermoforming.bp"):
         assert (out / name).exists(), name
     with np.load(out / "solution.npz") as npz:

@@ -49,7 +49,7 @@ def test_ball_projection_and_its_newton_derivative():
 def _test2(R: float, method: str, n: int = 500, projection_derivative: str = "exact"):
     data = thermoforming.test2()
     msh, _ = create_mesh(MPI.COMM_WORLD, 1, 1 / n)
-    params = {"tol": 1e-13, "max_iterations": 15, "radius": R, "projection_derivative": projection_derivative}
+    params = {"atol": 1e-13, "max_iterations": 15, "radius": R, "projection_derivative": projection_derivative}
     setup = build(data, msh, method, params)
     return setup.solver.solve(setup.initial)
 
@@ -126,7 +126,7 @@ def test_c3_reports_a_failed_line_search():
     # increases the residual; C3 takes it, and says so.
     data = thermoforming.test2()
     msh, _ = create_mesh(MPI.COMM_WORLD, 1, 0.02)
-    setup = build(data, msh, "c3", {"tol": 1e-10, "radius": 4.944, "max_iterations": 4, "max_backtracks": 0})
+    setup = build(data, msh, "c3", {"atol": 1e-10, "radius": 4.944, "max_iterations": 4, "max_backtracks": 0})
     result = setup.solver.solve(setup.initial)
     assert result.taken[1:] == ["linesearch(1)", "linesearch-failed(1)"] * 2
     assert result.residuals[2] > result.residuals[1]
@@ -136,7 +136,7 @@ def test_without_projection_both_find_the_inactive_solution_u2():
     # Without localisation the iteration from u0 = 100 x (1 - x) reaches u2 = alpha1 sin(pi x) (Sect. 4.3).
     data = thermoforming.test2()
     msh, _ = create_mesh(MPI.COMM_WORLD, 1, 1 / 500)
-    setup = build(data, msh, "alg2", {"tol": 1e-13})
+    setup = build(data, msh, "alg2", {"atol": 1e-13})
     result = setup.solver.solve(setup.initial)
     assert result.converged and result.iterations <= 2
     assert result.errors[-1] == pytest.approx(math.sqrt(50) * math.pi, rel=1e-3)
@@ -146,7 +146,7 @@ def test_without_projection_both_find_the_inactive_solution_u2():
 def test_semilinear_vi_converges_and_is_feasible(method):
     data = thermoforming.test4()
     msh, _ = create_mesh(MPI.COMM_WORLD, 1, 1 / 100)
-    setup = build(data, msh, method, {"tol": 1e-10})
+    setup = build(data, msh, method, {"atol": 1e-10})
     result = setup.solver.solve(setup.initial)
     assert result.converged and result.iterations <= 6
     n = setup.fmap.n_owned

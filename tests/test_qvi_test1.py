@@ -15,7 +15,7 @@ from contactqvi.qvi import build, create_mesh
 def _solve(h: float, method: str = "alg2", parameter_set: str = "I", initial: str = "zero", max_iterations: int = 20):
     data = thermoforming.make_test(1, parameter_set, initial)
     msh, _ = create_mesh(MPI.COMM_WORLD, 1, h)
-    setup = build(data, msh, method, {"tol": 1e-12, "max_iterations": max_iterations})
+    setup = build(data, msh, method, {"atol": 1e-12, "max_iterations": max_iterations})
     return setup, setup.solver.solve(setup.initial)
 
 

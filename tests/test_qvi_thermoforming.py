@@ -18,7 +18,7 @@ from contactqvi.qvi import build, create_mesh
 def _solve(comm: MPI.Comm, h: float, method: str = "alg2", **outer):
     data = thermoforming.test3()
     msh, _ = create_mesh(comm, 2, h)
-    setup = build(data, msh, method, {"tol": 1e-12, "max_iterations": 40, **outer})
+    setup = build(data, msh, method, {"atol": 1e-12, "max_iterations": 40, **outer})
     return setup, setup.solver.solve(setup.initial)
 
 
@@ -56,7 +56,7 @@ def test_fixed_point_and_newton_reach_the_same_solution():
 def test_regularised_c2_and_linesearch_c3_converge():
     _, c3 = _solve(MPI.COMM_WORLD, 0.04, "c3")
     assert c3.converged and c3.iterations <= 6
-    _, c2 = _solve(MPI.COMM_WORLD, 0.04, "c2", tol=1e-10)
+    _, c2 = _solve(MPI.COMM_WORLD, 0.04, "c2", atol=1e-10)
     assert c2.converged
 
 
@@ -133,7 +133,7 @@ def test_newton_system_is_the_linearisation_after_reassembly(test, method, h):
     # along d there (active set and kinks of g unchanged), so the defect is round-off.
     data = thermoforming.make_test(test)
     msh, _ = create_mesh(MPI.COMM_WORLD, data.dim, h)
-    setup = build(data, msh, method, {"tol": 1e-10})
+    setup = build(data, msh, method, {"atol": 1e-10})
     assert _linearisation_defect(setup, steps=1, eps=1e-4) < 1e-6
 
 
@@ -144,7 +144,7 @@ def test_newton_system_with_varphi_nonzero_on_the_boundary():
     varphi = data.varphi
     shifted = dataclasses.replace(data, varphi=lambda x: varphi(x) + 0.5)
     msh, _ = create_mesh(MPI.COMM_WORLD, 1, 0.02)
-    setup = build(shifted, msh, "alg1", {"tol": 1e-10})
+    setup = build(shifted, msh, "alg1", {"atol": 1e-10})
     assert _linearisation_defect(setup, steps=1, eps=1e-4) < 1e-6
 
 
@@ -155,7 +155,7 @@ def test_projection_derivative_by_finite_differences():
     defects = {}
     for variant in ("exact", "scaled"):
         msh, _ = create_mesh(MPI.COMM_WORLD, 1, 0.02)
-        setup = build(data, msh, "alg1", {"tol": 1e-10, "radius": 4.944, "projection_derivative": variant})
+        setup = build(data, msh, "alg1", {"atol": 1e-10, "radius": 4.944, "projection_derivative": variant})
         defects[variant] = [_linearisation_defect(setup, 0, eps) for eps in (1e-3, 1e-4)]
     exact, scaled = defects["exact"], defects["scaled"]
     assert exact[1] < 1e-6 and exact[1] < 0.2 * exact[0], exact

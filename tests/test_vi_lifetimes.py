@@ -63,7 +63,7 @@ def test_qvi_stack_frees_its_petsc_objects(test, method, mpi_tmp_path):
     def run():
         data = thermoforming.make_test(test)
         msh, _ = create_mesh(MPI.COMM_WORLD, data.dim, 0.1 if data.dim == 2 else 0.05)
-        outer = {"tol": 1e-10, "radius": 0.01} if test == 2 else {"tol": 1e-10}
+        outer = {"atol": 1e-10, "radius": 0.01} if test == 2 else {"atol": 1e-10}
         setup = build(data, msh, method, outer)
         assert setup.solver.solve(setup.initial).converged
         return [setup]

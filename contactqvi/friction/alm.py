@@ -36,8 +36,8 @@ PARAMETERS = Parameters(
     schedule=Parameter("constant", "gamma_l: constant = gamma, power10 = 10^l", str, choices=SCHEDULES),
     inner=Parameter("exact", "inner (PDAS) solve: until the sets repeat, or inexact", str, choices=INNER_SOLVES),
     sigma=_pdas.PARAMETERS["sigma"],
-    tol=Parameter(
-        None, "stop when d_lambda < tol (with a reference) or ||lambda^l - lambda^(l-1)|| < tol; "
+    atol=Parameter(
+        None, "stop when d_lambda < atol (with a reference) or ||lambda^l - lambda^(l-1)|| < atol; "
         "none: run max_outer steps", minimum=0.0, exclusive=True, optional=True,
     ),
     max_outer=Parameter(7, "maximal number of (ALM) steps", int, minimum=1),
@@ -53,8 +53,8 @@ PARAMETERS = Parameters(
 class ALMResult(Result):
     """Outcome of (ALM).
 
-    ``status``: CONVERGED_ATOL (d_lambda < tol with a reference), CONVERGED_STEP
-    (||lambda^l - lambda^(l-1)|| < tol without), CONVERGED_ITERATIONS (no tolerance:
+    ``status``: CONVERGED_ATOL (d_lambda < atol with a reference), CONVERGED_STEP
+    (||lambda^l - lambda^(l-1)|| < atol without), CONVERGED_ITERATIONS (no tolerance:
     the requested steps were run), DIVERGED_MAX_IT (tolerance not met) or
     DIVERGED_INNER (an inner (PDAS) solve failed; its status is in the history; y
     and lam are then the last accepted iterate, or step 1's iterate).
@@ -113,7 +113,7 @@ def augmented_lagrangian(
     solves_before, timings = pdas.linear_solves, Timings()
     history: list[dict[str, typing.Any]] = []
     accepted_y: np.ndarray | None = None
-    status = Status.CONVERGED_ITERATIONS if params["tol"] is None else Status.DIVERGED_MAX_IT
+    status = Status.CONVERGED_ITERATIONS if params["atol"] is None else Status.DIVERGED_MAX_IT
     for step in range(1, params["max_outer"] + 1):
         with timings.phase("inner solves"):
             result = _inner_solve(pdas, params, step, lam, reference)
@@ -135,7 +135,7 @@ def augmented_lagrangian(
             break
         lam[:] = result.lam
         accepted_y = pdas.y.x.array.copy()
-        if params["tol"] is not None and (d_lambda if d_lambda is not None else change) < params["tol"]:
+        if params["atol"] is not None and (d_lambda if d_lambda is not None else change) < params["atol"]:
             status = Status.CONVERGED_ATOL if d_lambda is not None else Status.CONVERGED_STEP
             break
     return ALMResult(

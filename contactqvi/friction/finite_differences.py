@@ -23,8 +23,6 @@ the parallel layout are those of the Q1 problem; K is assembled row-wise in para
 
 from __future__ import annotations
 
-import typing
-
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -33,12 +31,9 @@ import scipy.sparse
 
 from dolfinx import fem
 
-from contactqvi.friction.problem import FrictionProblem
+from contactqvi.friction.problem import FrictionData, FrictionProblem
 from contactqvi.meshes import SQUARE_BOUNDARIES, create_unit_square
 from contactqvi.parameters import require
-
-if typing.TYPE_CHECKING:
-    from contactqvi.problems.stadler import StadlerExample
 
 __all__ = ["PaperFiniteDifferences"]
 
@@ -47,24 +42,21 @@ NEIGHBOURS = ((1, 0), (-1, 0), (0, 1), (0, -1))
 
 
 class PaperFiniteDifferences(FrictionProblem):
-    """An example of seed 002 in the paper's finite-difference scheme (module docstring).
+    """A problem on the unit square in the paper's finite-difference scheme (module docstring).
 
     Args:
         comm: communicator.
-        example: the example's data (:func:`contactqvi.problems.stadler.stadler_example`).
+        data: the problem's data (:class:`~contactqvi.friction.problem.FrictionData`); Gamma_f
+            and Gamma_0 must cover the boundary.
         N: grid points per direction (h = 1/(N - 1)).
-        g, mu: override the example's g and mu.
     """
 
-    def __init__(self, comm: MPI.Comm, example: StadlerExample, N: int, g: float | None = None,
-                 mu: float | None = None):  # fmt: skip
-        boundaries = set(example.friction_boundaries) | set(example.dirichlet_boundaries)
-        require(boundaries == set(SQUARE_BOUNDARIES), "example", "Gamma_f and Gamma_0 must cover the boundary")
+    def __init__(self, comm: MPI.Comm, data: FrictionData, N: int):
+        boundaries = set(data.friction_boundaries) | set(data.dirichlet_boundaries)
+        require(boundaries == set(SQUARE_BOUNDARIES), "data", "Gamma_f and Gamma_0 must cover the boundary")
         msh, facet_tags = create_unit_square(comm, N - 1)
-        super().__init__(
-            msh, facet_tags, example.friction_boundaries, example.dirichlet_boundaries, example.load,
-            example.mu if mu is None else mu, example.g if g is None else g,
-        )  # fmt: skip
+        super().__init__(msh, facet_tags, data.friction_boundaries, data.dirichlet_boundaries, data.load, data.mu,
+                         data.g)  # fmt: skip
         self.N, self.h = N, 1.0 / (N - 1)
         n_owned = self.V.dofmap.index_map.size_local
         #: Grid indices (i, j) of the owned nodes: x = (i h, j h).

@@ -19,8 +19,8 @@ exactly as sqrt(sum_i m_i v_i^2) for nodal boundary vectors.
 
 Nodes on Gamma_f that are also Dirichlet nodes (the corners of Example 1) carry
 no multiplier: y = 0 there. The paper's finite-difference scheme has the same form
-(:class:`contactqvi.problems.stadler_fd.PaperFiniteDifferences` replaces K, F and m),
-so every solver runs on both.
+(:class:`contactqvi.friction.finite_differences.PaperFiniteDifferences` replaces K, F
+and m), so every solver runs on both.
 """
 
 from __future__ import annotations
@@ -45,6 +45,7 @@ __all__ = [
     "ACTIVE_MINUS",
     "ACTIVE_PLUS",
     "INACTIVE",
+    "FrictionData",
     "FrictionProblem",
     "boundary_states",
     "complementarity_residual",
@@ -54,6 +55,25 @@ LoadFunction = typing.Callable[[ufl.SpatialCoordinate], ufl.core.expr.Expr]
 
 #: Nodal state codes of the sets of (3.3)/(PDAS step 2).
 INACTIVE, ACTIVE_MINUS, ACTIVE_PLUS = 0, -1, 1
+
+
+class FrictionData(typing.Protocol):
+    """The data of (P) on a mesh with named boundaries, as :func:`contactqvi.friction.build.create_problem`
+    reads them (e.g. :func:`contactqvi.problems.stadler.stadler_example`).
+
+    Attributes:
+        friction_boundaries, dirichlet_boundaries: the boundaries forming Gamma_f and Gamma_0.
+        load: f as a function of the spatial coordinate.
+        g, mu: the friction bound and the coefficient of (y, z) in a(y, z).
+        quadrature_degree: of the rule for (f, v).
+    """
+
+    friction_boundaries: typing.Sequence[str]
+    dirichlet_boundaries: typing.Sequence[str]
+    load: LoadFunction
+    g: float
+    mu: float
+    quadrature_degree: int
 
 
 def boundary_states(xi: np.ndarray, lam: np.ndarray, g: float, sigma: float) -> np.ndarray:
@@ -116,8 +136,6 @@ class FrictionProblem(PETScOwner):
         self._compile_forms(friction_ids, quadrature_degree)
         dirichlet_dofs = self._locate_dofs([tag_of(facet_tags, name) for name in dirichlet_boundaries])
         self.bcs = [fem.dirichletbc(PETSc.ScalarType(0.0), dirichlet_dofs, self.V)] if dirichlet_boundaries else []
-        n_owned = self.V.dofmap.index_map.size_local
-        self._dirichlet_owned = dirichlet_dofs[dirichlet_dofs < n_owned]
         self._assemble_system()
         self._lump_boundary_mass(friction_ids, dirichlet_dofs)
         self._work = self.K.createVecLeft()
@@ -199,16 +217,6 @@ class FrictionProblem(PETScOwner):
         """
         self.K.mult(y, self._work)
         return (self.F.array_r[self.boundary_dofs] - self._work.array_r[self.boundary_dofs]) / self.boundary_mass
-
-    def state_residual(self, y: PETSc.Vec, lam: np.ndarray) -> float:
-        """Max-norm of K y + M lambda - F over all free dofs, (3.2a) (global)."""
-        work = self._work
-        self.K.mult(y, work)
-        work.axpy(-1.0, self.F)
-        values = work.array
-        values[self.boundary_dofs] += self.boundary_mass * lam
-        values[self._dirichlet_owned] = 0.0
-        return float(work.norm(PETSc.NormType.NORM_INFINITY))
 
     def energy_norm(self, y: PETSc.Vec, reference: PETSc.Vec | None = None) -> float:
         """|||y - reference||| = a(y - reference, y - reference)^(1/2) for y vanishing on Gamma_0 (Sect. 6.1)."""

@@ -31,8 +31,8 @@ Monitor = typing.Callable[[int, fem.Function, np.ndarray], None]
 #: Parameters of one Uzawa run (:meth:`UzawaSolver.solve`).
 PARAMETERS = Parameters(
     gamma=Parameter(10.0, "step length gamma of Uzawa's method", minimum=0.0, exclusive=True),
-    tol=Parameter(
-        1e-4, "stop when d_lambda < tol (with a reference; Sect. 6) or ||lambda^l - lambda^(l-1)|| < tol",
+    atol=Parameter(
+        1e-4, "stop when d_lambda < atol (with a reference; Sect. 6) or ||lambda^l - lambda^(l-1)|| < atol",
         minimum=0.0, exclusive=True,
     ),
     max_iterations=Parameter(1000, "maximal number of Uzawa iterations (linear solves)", int, minimum=1),
@@ -43,8 +43,8 @@ PARAMETERS = Parameters(
 class UzawaResult(Result):
     """Outcome of the Uzawa iteration.
 
-    ``status``: CONVERGED_ATOL (d_lambda < tol with a reference), CONVERGED_STEP
-    (||lambda^(l+1) - lambda^l|| < tol without), DIVERGED_MAX_IT or
+    ``status``: CONVERGED_ATOL (d_lambda < atol with a reference), CONVERGED_STEP
+    (||lambda^(l+1) - lambda^l|| < atol without), DIVERGED_MAX_IT or
     DIVERGED_LINEAR_SOLVE. ``iterations``: linear solves (one per iteration).
 
     Attributes:
@@ -99,11 +99,11 @@ class UzawaSolver(PETScOwner):
 
         Args:
             lam0: initial multiplier at the owned friction nodes.
-            reference: lambda_bar; if given the iteration stops when d_lambda^l < tol
-                (the paper's criterion), otherwise when ||lambda^(l+1) - lambda^l|| < tol.
+            reference: lambda_bar; if given the iteration stops when d_lambda^l < atol
+                (the paper's criterion), otherwise when ||lambda^(l+1) - lambda^l|| < atol.
             monitor: called as ``monitor(l, y, lam)`` after every iteration with the
                 state y of lambda^(l-1) and the new lambda^l; must not modify them.
-            parameters: values of :data:`PARAMETERS` (gamma, tol, max_iterations).
+            parameters: values of :data:`PARAMETERS` (gamma, atol, max_iterations).
         """
         params = PARAMETERS.check(parameters)
         p = self.problem
@@ -126,7 +126,7 @@ class UzawaSolver(PETScOwner):
                 "  Uzawa l=%4d |lambda^l - lambda^(l-1)|=%.3e%s",
                 iteration, change, "" if d_lambda is None else f" d_lambda={d_lambda:.3e}",
             )  # fmt: skip
-            if (d_lambda if d_lambda is not None else change) < params["tol"]:
+            if (d_lambda if d_lambda is not None else change) < params["atol"]:
                 status = Status.CONVERGED_ATOL if d_lambda is not None else Status.CONVERGED_STEP
                 break
         return UzawaResult(

@@ -1,11 +1,11 @@
 """Data of Examples 1-3 of seed 002 (Stadler 2004, Sect. 6) on the unit square, and the paper's results.
 
 Only data lives here: friction and Dirichlet boundaries, g, mu and the load f
-of each example, the numbers of the paper's tables (:data:`PAPER`) and the gamma
-of its reference solution (:data:`REFERENCE_GAMMA`). :func:`create_stadler_problem`
-turns an example into a :class:`~contactqvi.friction.FrictionProblem` with N grid
-points per direction (N - 1 cells): Q1 or P1 finite elements, or the paper's own
-finite differences (:mod:`contactqvi.problems.stadler_fd`).
+of each example (:func:`stadler_example`), the numbers of the paper's tables
+(:data:`PAPER`) and the gamma of its reference solution (:data:`REFERENCE_GAMMA`).
+:func:`contactqvi.friction.build.create_problem` turns an example into a discrete
+problem with N grid points per direction: Q1 or P1 finite elements, or the paper's
+own finite differences.
 
 Example 2's load is printed as f(x) = 10(sin 4 pi x + cos 4 pi x) with x the
 point (x1, x2); we read it as 10(sin 4 pi x1 + cos 4 pi x2) (``load_reading="x1x2"``),
@@ -18,41 +18,26 @@ from __future__ import annotations
 import dataclasses
 import typing
 
-from mpi4py import MPI
-
 import ufl
 
-from contactqvi.friction.problem import FrictionProblem, LoadFunction
-from contactqvi.meshes import create_unit_square
-from contactqvi.parameters import Parameter, Parameters, require_choice
-from contactqvi.problems.stadler_fd import PaperFiniteDifferences
+from contactqvi.parameters import Parameter, Parameters
 
 __all__ = [
-    "DISCRETISATIONS",
     "EXAMPLE2_READINGS",
-    "EXAMPLE_NUMBERS",
     "PAPER",
     "PARAMETERS",
     "REFERENCE_GAMMA",
     "StadlerExample",
-    "create_stadler_problem",
     "stadler_example",
 ]
 
-
-EXAMPLE_NUMBERS = (1, 2, 3)
 EXAMPLE2_READINGS = ("x1x2", "x1x1")
-#: Q1 or P1 finite elements with a lumped boundary mass, or the paper's finite differences.
-DISCRETISATIONS = ("q1", "p1", "fd")
 #: lambda_bar := lambda_gamma with gamma = 1e16, the reference of d_lambda (6.1).
 REFERENCE_GAMMA = 1e16
 
-#: The problem of :func:`create_stadler_problem`: example, grid and discretisation.
+#: The arguments of :func:`stadler_example`.
 PARAMETERS = Parameters(
     example=Parameter(1, "example of Sect. 6", int, minimum=1, maximum=3),
-    N=Parameter(80, "grid points per direction (N - 1 cells)", int, minimum=3),
-    discretisation=Parameter("q1", "q1/p1 finite elements or the paper's finite differences", str,
-                             choices=DISCRETISATIONS),
     g=Parameter(None, "friction bound g; none: the example's", minimum=0.0, exclusive=True, optional=True),
     mu=Parameter(None, "coefficient mu of (y, z) in a(y, z); none: the example's", minimum=0.0, optional=True),
     example2_reading=Parameter("x1x2", "reading of f in Example 2 (module docstring)", str,
@@ -99,6 +84,10 @@ PAPER = {
               "example2_gamma0.2": "stopped after 400 iterations at d_lambda = 1.03e-2; "
                                    "no convergence for gamma > 0.2"},
 }  # fmt: skip
+
+
+#: f as a function of the spatial coordinate (a UFL expression).
+LoadFunction = typing.Callable[[ufl.SpatialCoordinate], ufl.core.expr.Expr]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -151,16 +140,24 @@ def _load_example3(x: ufl.SpatialCoordinate) -> ufl.core.expr.Expr:
     )
 
 
-def stadler_example(number: int, load_reading: str = "x1x2") -> StadlerExample:
-    """The data of Example ``number`` of seed 002, Sect. 6.
+def stadler_example(example: int, example2_reading: str = "x1x2", g: float | None = None,
+                    mu: float | None = None) -> StadlerExample:  # fmt: skip
+    """The data of Example ``example`` of seed 002, Sect. 6 (arguments: :data:`PARAMETERS`, checked).
 
     Args:
-        number: 1, 2 or 3.
-        load_reading: for Example 2 only, how the second argument of f is read
+        example: 1, 2 or 3.
+        example2_reading: for Example 2 only, how the second argument of f is read
             (see the module docstring).
+        g, mu: replace the example's friction bound and coefficient of (y, z) (None: the paper's).
     """
-    require_choice("example", number, EXAMPLE_NUMBERS)
-    require_choice("example2_reading", load_reading, EXAMPLE2_READINGS)
+    params = PARAMETERS.check({"example": example, "example2_reading": example2_reading, "g": g, "mu": mu})
+    data = _paper_example(params["example"], params["example2_reading"])
+    overrides = {name: params[name] for name in ("g", "mu") if params[name] is not None}
+    return dataclasses.replace(data, **overrides)
+
+
+def _paper_example(number: int, load_reading: str) -> StadlerExample:
+    """Example ``number`` as printed in Sect. 6."""
     whole_boundary = ("left", "right", "bottom", "top")
     if number == 1:
         # f jumps on x1 = 1/2, the centre line of the middle cell column when N is even
@@ -188,25 +185,3 @@ def stadler_example(number: int, load_reading: str = "x1x2") -> StadlerExample:
         description="f = |3 x1 - 1| + 2 sgn(2 x2 - 1) + 2 sgn(x1 - 0.75) + 5 sin(6 pi x1)",
     )  # fmt: skip
 
-
-def create_stadler_problem(comm: MPI.Comm, **parameters: typing.Any) -> FrictionProblem:
-    """The discrete problem of an example with N grid points per direction (N - 1 cells).
-
-    Args:
-        comm: communicator.
-        parameters: values of :data:`PARAMETERS` (example, N, discretisation, g and
-            mu overriding the example's, example2_reading), checked first.
-    """
-    params = PARAMETERS.check(parameters)
-    example = stadler_example(params["example"], params["example2_reading"])
-    g = example.g if params["g"] is None else params["g"]
-    mu = example.mu if params["mu"] is None else params["mu"]
-    N = params["N"]
-    if params["discretisation"] == "fd":
-        return PaperFiniteDifferences(comm, example, N, g=g, mu=mu)
-    cell_type = "quadrilateral" if params["discretisation"] == "q1" else "triangle"
-    msh, facet_tags = create_unit_square(comm, N - 1, cell_type)
-    return FrictionProblem(
-        msh, facet_tags, example.friction_boundaries, example.dirichlet_boundaries, example.load, mu=mu, g=g,
-        quadrature_degree=example.quadrature_degree,
-    )  # fmt: skip

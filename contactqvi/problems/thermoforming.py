@@ -1,34 +1,84 @@
 """Paper data of seed 003, Sect. 4: Tests 1-4 (obstacle-type QVIs (58) and the semilinear VI (48)).
 
-Only data live here; :mod:`contactqvi.qvi.build` turns them into solvers.
+Only data live here, in the containers :class:`ObstacleQVIData` and
+:class:`SemilinearVIData`; :func:`contactqvi.qvi.build.build` reads their fields and
+turns them into solvers. Every field is a function of the spatial coordinate ``x``
+(a UFL SpatialCoordinate) returning a UFL expression, so the same data serve the
+forms and the nodal interpolation of obstacles and initial guesses.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import typing
 
 import ufl
 
 from contactqvi.parameters import Parameter, Parameters, require
-from contactqvi.qvi.data import ObstacleQVIData, SemilinearVIData
-from contactqvi.qvi.temperature import ScalarNonlinearity
 
 __all__ = [
-    "TESTS",
     "TEST_PARAMETERS",
     "PARAMETER_SETS",
+    "Field",
+    "ObstacleQVIData",
+    "ScalarNonlinearity",
+    "SemilinearVIData",
     "test1",
     "test2",
     "test3",
     "test4",
     "critical_radius",
     "make_test",
-    "paper_tolerance",
 ]
+
+Field = typing.Callable[[ufl.core.expr.Expr], ufl.core.expr.Expr]
+
+
+@dataclasses.dataclass(frozen=True)
+class ScalarNonlinearity:
+    """A (possibly nonsmooth) scalar function g with a Newton derivative G_g, both on UFL expressions."""
+
+    g: Field
+    derivative: Field
+
+
+@dataclasses.dataclass(frozen=True)
+class ObstacleQVIData:
+    """(58): u <= Phi0 + varphi T, -Lap u <= f; k T - Lap T = g(Psi0 + psi T - u), dT/dn = 0.
+
+    ``initial`` None means u0 = (-Lap)^{-1} f; ``exact`` is the known solution, if any;
+    ``atol`` the paper's stopping tolerance of ||R(u)||_H1.
+    """
+
+    dim: int
+    k: float
+    g: ScalarNonlinearity
+    Phi0: Field
+    f: Field
+    varphi: Field
+    Psi0: Field
+    psi: Field
+    initial: Field | None
+    atol: float
+    exact: Field | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class SemilinearVIData:
+    """(48): u <= Phi0, -Lap u - b1(u) b2(u) - f >= 0 tested against v - u; ``atol`` as above."""
+
+    dim: int
+    b1: ScalarNonlinearity
+    b2: ScalarNonlinearity
+    f: Field
+    Phi0: Field
+    initial: Field
+    atol: float
+
 
 #: Test 1 parameter sets (alpha1, alpha2), Sect. 4.2.
 PARAMETER_SETS = {"I": (1 + 1 / math.pi, 101 / 100), "II": (1e-2, 1e-2)}
-TESTS = (1, 2, 3, 4)
 
 #: The choice of a paper test (:func:`make_test`).
 TEST_PARAMETERS = Parameters(
@@ -67,6 +117,7 @@ def test1(alpha1: float, alpha2: float, initial: str = "zero") -> ObstacleQVIDat
         Psi0=lambda x: 1.0 + 0 * x[0],
         psi=lambda x: ufl.sin(pi * x[0]) / alpha1,
         initial=(lambda x: 0 * x[0]) if initial == "zero" else None,
+        atol=1e-12,
         exact=lambda x: ufl.sin(pi * x[0]),
     )
 
@@ -92,6 +143,7 @@ def test2(alpha1: float = 10.0, alpha2: float = 1.5) -> ObstacleQVIData:
         Psi0=lambda x: 0 * x[0],
         psi=lambda x: 5 * pi**2 * ufl.sin(pi * x[0]) / (5 - ufl.cos(2 * pi * x[0])),
         initial=lambda x: 100 * (1 - x[0]) * x[0],
+        atol=1e-13,
         exact=lambda x: 0 * x[0],
     )
 
@@ -122,6 +174,7 @@ def test3() -> ObstacleQVIData:
         Psi0=Phi0,
         psi=varphi,
         initial=lambda x: 0 * x[0],
+        atol=1e-12,
     )
 
 
@@ -134,6 +187,7 @@ def test4() -> SemilinearVIData:
         f=lambda x: 50 * ufl.sin(2 * math.pi * x[0]),
         Phi0=lambda x: 1.0 + 0 * x[0],
         initial=lambda x: 0 * x[0],
+        atol=1e-10,
     )
 
 
@@ -144,7 +198,3 @@ def make_test(test: int, parameter_set: str = "I", initial: str = "zero") -> Obs
         return test1(*PARAMETER_SETS[prm["parameter_set"]], initial=prm["initial"])
     return {2: test2, 3: test3, 4: test4}[prm["test"]]()
 
-
-def paper_tolerance(test: int) -> float:
-    """Stopping tolerance of the paper: 1e-12 (Tests 1, 3), 1e-13 (Test 2), 1e-10 (Test 4)."""
-    return {1: 1e-12, 2: 1e-13, 3: 1e-12, 4: 1e-10}[test]

@@ -6,12 +6,11 @@ and the outer methods Algorithm 1, Algorithm 2, C1, C2, C3.
 """
 
 from contactqvi.qvi.build import BUILD_PARAMETERS, OUTER_METHODS, QVISetup, build, create_mesh
-from contactqvi.qvi.data import ObstacleQVIData, SemilinearVIData
 from contactqvi.qvi.maps import CompositeMap, Evaluation, ObstacleQVIMap, RegularisedQVIMap, SemilinearVIMap
 from contactqvi.qvi.newton_system import BlockNewtonSystem, diagonal_matrix
 from contactqvi.qvi.outer import FIXED_POINT_PARAMETERS, FixedPointSolver, QVIResult
 from contactqvi.qvi.projection import BallProjection
-from contactqvi.qvi.temperature import ScalarNonlinearity, TemperatureMap
+from contactqvi.qvi.temperature import Nonlinearity, TemperatureMap
 
 __all__ = [
     "BUILD_PARAMETERS",
@@ -22,13 +21,11 @@ __all__ = [
     "CompositeMap",
     "Evaluation",
     "FixedPointSolver",
-    "ObstacleQVIData",
+    "Nonlinearity",
     "ObstacleQVIMap",
     "QVIResult",
     "QVISetup",
     "RegularisedQVIMap",
-    "ScalarNonlinearity",
-    "SemilinearVIData",
     "SemilinearVIMap",
     "TemperatureMap",
     "build",

@@ -2,11 +2,23 @@
 
 ``method`` is one of ``alg1``, ``alg2``, ``c1``, ``c2``, ``c3`` (Sect. 4.1 of
 seed 003); C2 swaps S for the Moreau-Yosida map S_rho and runs Algorithm 1.
+
+The data are read by their fields (e.g. the containers of
+:mod:`contactqvi.problems.thermoforming`), each a function of the spatial coordinate
+returning a UFL expression, except ``dim``, ``k`` and ``atol``:
+
+* the QVI (58): ``dim``, ``k``, ``g`` (a :class:`~contactqvi.qvi.temperature.Nonlinearity`),
+  ``Phi0``, ``f``, ``varphi``, ``Psi0``, ``psi``, ``initial`` (None: u0 = (-Lap)^{-1} f),
+  ``atol`` (the stopping tolerance of ||R(u)||_H1 when the caller gives none) and
+  optionally ``exact``;
+* the semilinear VI (48): ``dim``, ``b1``, ``b2`` (Nonlinearities), ``f``, ``Phi0``,
+  ``initial``, ``atol``.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import typing
 
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -21,7 +33,6 @@ from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import assemble_system, create_ksp, preset
 from contactqvi.meshes import create_unit_interval, create_unit_square
 from contactqvi.parameters import Parameter, Parameters, require
-from contactqvi.qvi.data import ObstacleQVIData, SemilinearVIData
 from contactqvi.qvi.maps import CompositeMap, ObstacleQVIMap, RegularisedQVIMap, SemilinearVIMap
 from contactqvi.qvi.outer import FIXED_POINT_PARAMETERS, FixedPointSolver
 from contactqvi.qvi.temperature import TemperatureMap
@@ -105,7 +116,7 @@ def _poisson(V: fem.FunctionSpace, f: ufl.core.expr.Expr, bcs: list[fem.Dirichle
     return w
 
 
-def _semilinear_map(data: SemilinearVIData, problem_args: tuple, obstacle_parameters: dict | None, degree: int):
+def _semilinear_map(data: typing.Any, problem_args: tuple, obstacle_parameters: dict | None, degree: int):
     """Test 4: S0 with the source Phi(y) = b1(y) b2(y) + f and the coupling (50)."""
     V, x, obstacle, bcs = problem_args
     y = fem.Function(V, name="y")
@@ -117,7 +128,7 @@ def _semilinear_map(data: SemilinearVIData, problem_args: tuple, obstacle_parame
     return SemilinearVIMap(solver, y, derivative * du * q * dx)
 
 
-def _qvi_map(data: ObstacleQVIData, problem_args: tuple, obstacle_parameters: dict | None, Phi0, method, rho, degree):
+def _qvi_map(data: typing.Any, problem_args: tuple, obstacle_parameters: dict | None, Phi0, method, rho, degree):
     """(58): Phi (temperature) then S, or S_rho for C2."""
     V, x, obstacle, bcs = problem_args
     temperature = TemperatureMap(V, data.k, data.g, data.Psi0(x), data.psi(x), data.varphi(x), degree)
@@ -134,7 +145,7 @@ def _qvi_map(data: ObstacleQVIData, problem_args: tuple, obstacle_parameters: di
 
 
 def build(
-    data: ObstacleQVIData | SemilinearVIData,
+    data: typing.Any,
     msh: dmesh.Mesh,
     method: str = "alg2",
     outer_parameters: dict | None = None,
@@ -145,10 +156,11 @@ def build(
     """Build Phi, S, H = S o Phi and the outer solver for ``data`` on ``msh`` (P1/Q1).
 
     Args:
-        data: QVI (58) or semilinear VI (48) data.
+        data: QVI (58) or semilinear VI (48) data (module docstring).
         msh: the mesh; the whole boundary carries u = 0.
         method, rho, quadrature_degree: see :data:`BUILD_PARAMETERS`.
-        outer_parameters: overrides of :data:`~contactqvi.qvi.outer.FIXED_POINT_PARAMETERS` (not ``method``).
+        outer_parameters: overrides of :data:`~contactqvi.qvi.outer.FIXED_POINT_PARAMETERS` (not ``method``);
+            ``atol`` None or absent: the data's.
         obstacle_parameters: overrides of :data:`~contactqvi.vi.solver.OBSTACLE_PARAMETERS`.
     """
     prm = BUILD_PARAMETERS.check({"method": method, "rho": rho, "quadrature_degree": quadrature_degree})
@@ -156,6 +168,8 @@ def build(
     params = dict(outer_parameters or {})
     params["method"] = "alg1" if method == "c2" else method
     params.setdefault("label", method)
+    if params.get("atol") is None:
+        params["atol"] = data.atol
     FIXED_POINT_PARAMETERS.check(params)
     check_obstacle_parameters(obstacle_parameters)
     V = fem.functionspace(msh, ("Lagrange", 1))
@@ -167,7 +181,7 @@ def build(
     obstacle = fem.Function(V, name="obstacle")
     obstacle.x.array[:] = Phi0.x.array
     args = (V, x, obstacle, bcs)
-    if isinstance(data, SemilinearVIData):
+    if hasattr(data, "b1"):  # the semilinear VI (48)
         fmap: CompositeMap = _semilinear_map(data, args, obstacle_parameters, prm["quadrature_degree"])
     else:
         fmap = _qvi_map(data, args, obstacle_parameters, Phi0, method, prm["rho"], prm["quadrature_degree"])

@@ -33,6 +33,7 @@ from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import reassemble_matrix
 from contactqvi.qvi.newton_system import BlockNewtonSystem, diagonal_matrix
 from contactqvi.qvi.temperature import TemperatureMap
+from contactqvi.result import InnerSolveError
 from contactqvi.vi.moreau_yosida import PathFollowingMoreauYosida, huber_derivative
 from contactqvi.vi.problem import ObstacleProblem
 from contactqvi.vi.solver import ObstacleResult, ObstacleSolver, rho_path
@@ -62,9 +63,9 @@ class Evaluation:
 
 
 def _counts(phi_newton: int, s: ObstacleResult) -> dict[str, int]:
-    """Inner counts of one evaluation; raises if S failed (the outer method reports it)."""
+    """Inner counts of one evaluation; raises :class:`InnerSolveError` if S did not converge."""
     if not s.converged:
-        raise RuntimeError(f"S: the obstacle solver did not converge ({s.status})")
+        raise InnerSolveError(f"S: the obstacle solver did not converge ({s.status})")
     return {"phi_newton": phi_newton, "pfmy": s.pfmy_iterations, "pdas": s.pdas_iterations, "vi": s.vi_iterations}
 
 
@@ -287,7 +288,7 @@ class RegularisedQVIMap(_TemperatureCoupledMap):
         phi_its, mould = self._mould(y)
         res = self.pfmy.solve([self.rho] if self.warm else self.path, mould)
         if not res.converged:
-            raise RuntimeError(f"C2: Newton for S_rho failed at rho = {self.rho:g}")
+            raise InnerSolveError(f"C2: Newton for S_rho failed at rho = {self.rho:g} ({res.status})")
         self.warm = True
         counts = {"phi_newton": phi_its, "pfmy": res.iterations, "pdas": 0, "vi": 0}
         u, T = self._copy(self.problem.u, "membrane"), self._copy(self.temperature.T, "temperature")

@@ -25,6 +25,7 @@ import numpy as np
 
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import create_ksp, ksp_converged_reason, preset
+from contactqvi.result import InnerSolveError
 
 __all__ = ["BlockNewtonSystem", "diagonal_matrix"]
 
@@ -85,5 +86,5 @@ class BlockNewtonSystem(PETScOwner):
                 self.b.array[pos] = np.where(mask, 0.0, values)
         self.ksp.solve(self.b, self.x)
         if self.ksp.getConvergedReason() <= 0:
-            raise RuntimeError(f"Newton system: linear solve failed ({ksp_converged_reason(self.ksp)})")
+            raise InnerSolveError(f"Newton system: linear solve failed ({ksp_converged_reason(self.ksp)})")
         return [self.x.array[pos].copy() for pos in self.positions]

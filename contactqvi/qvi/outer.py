@@ -40,10 +40,10 @@ import dolfinx.fem.petsc
 from dolfinx import fem
 
 from contactqvi.lifetime import PETScOwner
-from contactqvi.parameters import Parameter, Parameters
+from contactqvi.parameters import Parameter, Parameters, require
 from contactqvi.qvi.maps import CompositeMap, Evaluation
 from contactqvi.qvi.projection import BallProjection
-from contactqvi.result import Result, Status, Timings
+from contactqvi.result import InnerSolveError, Result, Status, Timings
 
 __all__ = ["FIXED_POINT_PARAMETERS", "QVIResult", "FixedPointSolver"]
 
@@ -54,7 +54,8 @@ FIXED_POINT_PARAMETERS = Parameters(
         "alg2", "outer method (C2 = alg1 on the regularised map)", type=str, choices=("alg1", "alg2", "c1", "c3")
     ),
     label=Parameter(None, "name in progress lines and results (default: the method)", type=str, optional=True),
-    tol=Parameter(1e-12, "stop when ||R(u)||_H1 <= tol", minimum=0.0),
+    atol=Parameter(None, "stop when ||R(u)||_H1 <= atol (none: the problem data's tolerance)", minimum=0.0,
+                   optional=True),
     max_iterations=Parameter(50, "maximum number of outer iterations", type=int, minimum=0),
     radius=Parameter(
         None, "radius R of the projection ball B_R(0) of Sect. 2.3 (none: no projection)",
@@ -80,8 +81,9 @@ class QVIResult(Result):
     i = 0), ``counts`` (inner counts of the evaluations of that step; i = 0 is the initial
     evaluation) and, with an exact solution, ``error`` ||u_i - u_exact||_{H^1_0}.
 
-    ``status``: ``CONVERGED_ATOL`` (||R|| <= tol), ``DIVERGED_MAX_IT``, ``DIVERGED_DTOL``
-    (residual above ``divergence_limit`` or not finite) or ``DIVERGED_INNER`` (Phi or S failed).
+    ``status``: ``CONVERGED_ATOL`` (||R|| <= atol), ``DIVERGED_MAX_IT``, ``DIVERGED_DTOL``
+    (residual above ``divergence_limit`` or not finite) or ``DIVERGED_INNER`` (Phi, S or the Newton
+    system did not converge: :class:`~contactqvi.result.InnerSolveError`; errors, PETSc's among them, propagate).
     ``inner_iterations``: all inner steps (Phi Newton, PFMY Newton, PDAS, SNES VI).
 
     Attributes:
@@ -152,6 +154,7 @@ class FixedPointSolver(PETScOwner):
         center: np.ndarray | None = None,
     ):
         self.params = FIXED_POINT_PARAMETERS.check(parameters)
+        require(self.params["atol"] is not None, "atol", "must be a number here (build() takes the problem data's)")
         self.map = fmap
         V = fmap.V
         self.comm: MPI.Comm = V.mesh.comm
@@ -218,7 +221,7 @@ class FixedPointSolver(PETScOwner):
     def _stop(self, res: float, it: int) -> Status:
         """The status after ``it`` - 1 steps with residual ``res`` (ITERATING: take step ``it``)."""
         prm = self.params
-        if res <= prm["tol"]:
+        if res <= prm["atol"]:
             return Status.CONVERGED_ATOL
         if not math.isfinite(res) or res > prm["divergence_limit"]:
             return Status.DIVERGED_DTOL
@@ -251,7 +254,7 @@ class FixedPointSolver(PETScOwner):
             try:
                 with result.timings.phase("step"):
                     x, ev, res, choice = self._step(method, x, ev, res, step_counts)
-            except RuntimeError as exc:  # an inner solver failed: report, keep the last iterate
+            except InnerSolveError as exc:  # an inner solver did not converge: report, keep the last iterate
                 logger.warning("%s it %2d: %s", result.method, it, exc)
                 result.status = Status.DIVERGED_INNER
                 break

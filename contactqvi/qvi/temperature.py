@@ -11,7 +11,6 @@ G_Phi(u) h = I_h(varphi xi_h), xi_h solving the linearised equation (33).
 
 from __future__ import annotations
 
-import dataclasses
 import typing
 
 from petsc4py import PETSc
@@ -24,9 +23,10 @@ from dolfinx import fem
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import create_snes, preset, reassemble_matrix
 from contactqvi.parameters import require_positive
+from contactqvi.result import InnerSolveError
 from contactqvi.vi.nonlinear import NonlinearFormProblem, snes_converged_reason
 
-__all__ = ["ScalarNonlinearity", "TemperatureMap", "DEFAULT_PHI_OPTIONS"]
+__all__ = ["Nonlinearity", "TemperatureMap", "DEFAULT_PHI_OPTIONS"]
 
 UFLMap = typing.Callable[[ufl.core.expr.Expr], ufl.core.expr.Expr]
 
@@ -42,9 +42,9 @@ DEFAULT_PHI_OPTIONS = {
 }
 
 
-@dataclasses.dataclass(frozen=True)
-class ScalarNonlinearity:
-    """A (possibly nonsmooth) scalar function g with a Newton derivative G_g, both on UFL expressions."""
+class Nonlinearity(typing.Protocol):
+    """A (possibly nonsmooth) scalar function g with a Newton derivative G_g, both on UFL expressions
+    (e.g. :class:`contactqvi.problems.thermoforming.ScalarNonlinearity`)."""
 
     g: UFLMap
     derivative: UFLMap
@@ -72,7 +72,7 @@ class TemperatureMap(PETScOwner):
         self,
         V: fem.FunctionSpace,
         k: float,
-        g: ScalarNonlinearity,
+        g: Nonlinearity,
         Psi0: ufl.core.expr.Expr,
         psi: ufl.core.expr.Expr,
         varphi: ufl.core.expr.Expr,
@@ -135,7 +135,8 @@ class TemperatureMap(PETScOwner):
             self.residual_history[-1] <= self.roundoff * self.reference_norm
         )
         if reason <= 0 and not stagnated:
-            raise RuntimeError(f"Phi: semismooth Newton for the temperature failed ({snes_converged_reason(self.snes)})")
+            reason = snes_converged_reason(self.snes)
+            raise InnerSolveError(f"Phi: semismooth Newton for the temperature failed ({reason})")
         return self.snes.getIterationNumber()
 
     def restart_from(self, T: fem.Function) -> None:

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Render the standard ParaView views of a result directory (`make paraview`).
 #
-#   scripts/paraview/run.sh RESULT_DIR [IMAGE_DIR]
+#   scripts/paraview/run.sh RESULT_DIR [IMAGE_DIR [--step N]]
 #
 # Installs ParaView 5.13 from Debian (scripts/paraview/packages.txt, through
 # scripts/install-deps.sh) when missing. Its Python modules (python3-paraview)
@@ -13,9 +13,10 @@ set -euo pipefail
 
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 repo=$(cd "$here/../.." && pwd)
-[ $# -ge 1 ] || { echo "usage: $0 RESULT_DIR [IMAGE_DIR]" >&2; exit 2; }
+[ $# -ge 1 ] || { echo "usage: $0 RESULT_DIR [IMAGE_DIR [--step N]]" >&2; exit 2; }
 result_dir=$1
 image_dir=${2:-$1}
+shift $(( $# >= 2 ? 2 : 1 ))  # the rest goes to pv_views.py (--step N)
 
 bash "$repo/scripts/install-deps.sh" "$here/packages.txt"
 
@@ -41,7 +42,7 @@ echo "paraview: $(pvbatch --version 2>/dev/null | head -1), rendering $result_di
 for attempt in 1 2; do
     rc=0
     xvfb-run -a -n $((200 + $$ % 500)) -s "-screen 0 1920x1200x24" \
-        pvbatch "$here/pv_views.py" "$result_dir" --out "$image_dir" || rc=$?
+        pvbatch "$here/pv_views.py" "$result_dir" --out "$image_dir" "$@" || rc=$?
     [ $rc -eq 0 ] || [ $rc -eq 2 ] && exit $rc
     echo "paraview: pvbatch exited with $rc (attempt $attempt)" >&2
 done

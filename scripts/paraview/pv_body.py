@@ -1,0 +1,85 @@
+"""The deformed-body view of ``pv_views.py``: the body warped by the displacement, and the obstacle."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from pv_common import FIELDS, SOURCES, add_array, add_title, colour_bar, field, new_view, plane_basis, producer, save
+
+
+def obstacle_source(obstacle, translation, centre, extent):
+    """A ParaView source of the rigid obstacle (``summary.json``'s case.obstacle) moved by ``translation``."""
+    from paraview import simple
+
+    shift = np.asarray(translation or [0.0, 0.0, 0.0], dtype=float)
+    kind = obstacle["type"]
+    if kind == "sphere":
+        return simple.Sphere(Center=list(np.add(obstacle["center"], shift)), Radius=obstacle["radius"],
+                             ThetaResolution=96, PhiResolution=48)  # fmt: skip
+    if kind == "cylinder":
+        axis = np.asarray(obstacle["axis"], dtype=float) / np.linalg.norm(obstacle["axis"])
+        point = np.add(obstacle["point"], shift)
+        middle = point + np.dot(np.asarray(centre) - point, axis) * axis
+        line = simple.Line(Point1=list(middle - extent * axis), Point2=list(middle + extent * axis))
+        return simple.Tube(Input=line, Radius=obstacle["radius"], NumberofSides=96)
+    normal = np.asarray(obstacle["normal"], dtype=float) / np.linalg.norm(obstacle["normal"])
+    point = np.add(obstacle["point"], shift)
+    origin = np.asarray(centre) - np.dot(np.asarray(centre) - point, normal) * normal  # the centre on the plane
+    e1, e2 = plane_basis(normal)
+    corner = origin - 0.7 * extent * (e1 + e2)
+    return simple.Plane(Origin=list(corner), Point1=list(corner + 1.4 * extent * e1),
+                        Point2=list(corner + 1.4 * extent * e2))  # fmt: skip
+
+
+def deformed_view(result, path):
+    """The body warped by the displacement, coloured by von Mises (or |u|), with the obstacle if described."""
+    from paraview import simple
+
+    grid, case = result["volume"], result["case"]
+    _, u, u_name = field(grid, "displacement", SOURCES["volume"])
+    von_mises = field(grid, "von_mises", SOURCES["volume"])
+    u = u.reshape(len(u), -1)
+    u_max = float(np.linalg.norm(u, axis=1).max())
+    b = grid.GetBounds()
+    extent = max(b[1] - b[0], b[3] - b[2], b[5] - b[4])
+    centre = [(b[0] + b[1]) / 2, (b[2] + b[3]) / 2, (b[4] + b[5]) / 2]
+    scale = 1.0
+    if u_max > 0:  # 1, 2 or 5 times a power of ten: the largest displacement shown as about 8 % of the body
+        raw = 0.08 * extent / u_max
+        exponent = math.floor(math.log10(raw))
+        scale = next(m for m in (5, 2, 1) if m <= raw / 10**exponent) * 10**exponent
+    if von_mises is not None:
+        association, values, _ = von_mises
+        label, _, unit, factor = FIELDS["von_mises"][2:]
+        where = "cell-wise" if association == "CELLS" else "nodal"
+        shown, what = values * factor, f"colour: von Mises stress ({where})"
+    else:
+        association, label, unit = "POINTS", "displacement magnitude", FIELDS["displacement"][4]
+        shown, what = np.linalg.norm(u, axis=1) * FIELDS["displacement"][5], "colour: |u| (no von Mises stress)"
+    add_array(grid, association, "shown", shown)
+    view = new_view()
+    body = producer(grid)
+    outline = simple.Show(simple.Outline(Input=body), view)
+    outline.DiffuseColor = outline.AmbientColor = [0.45, 0.45, 0.45]
+    display = simple.Show(simple.WarpByVector(Input=body, Vectors=["POINTS", u_name], ScaleFactor=scale), view)
+    display.Representation, display.EdgeColor = "Surface With Edges", [0.25, 0.25, 0.25]
+    simple.ColorBy(display, (association, "shown"))
+    lut = simple.GetColorTransferFunction("shown")
+    lut.ApplyPreset("Turbo" if von_mises is not None else "Viridis (matplotlib)", True)
+    lut.RescaleTransferFunction(0.0, float(shown.max()) or 1.0)
+    colour_bar(view, lut, f"{label} ({unit})", shown.max(), position=(0.85, 0.2))
+    captions = [f"displacement magnified \u00d7{scale:g} (largest {u_max * 1e3:.3g} mm); {what}; grey box: undeformed"]
+    if case.get("obstacle"):
+        obstacle = simple.Show(obstacle_source(case["obstacle"], case.get("translation"), centre, extent), view)
+        obstacle.DiffuseColor = obstacle.AmbientColor = [0.55, 0.45, 0.35]
+        obstacle.Opacity = 0.5
+        captions.append(f"brown: the rigid obstacle ({case['obstacle']['type']}) at this step")
+    view.CameraFocalPoint = centre
+    view.CameraPosition = [centre[0] - 1.6 * extent, centre[1] - 2.4 * extent, centre[2] + 1.5 * extent]
+    view.CameraViewUp = [0.0, 0.0, 1.0]
+    simple.ResetCamera(view)
+    view.CameraPosition = [c + 0.8 * (p - c) for p, c in zip(view.CameraPosition, centre)]
+    add_title(view, f"Deformed body ({case['label']})", "\n".join(captions))
+    save(view, path)

@@ -1,0 +1,212 @@
+"""Shared pieces of the ParaView views (``pv_views.py``): what a result holds, reading it, drawing.
+
+Imports of ParaView and VTK are inside the functions: the tables and
+:func:`field_matches` load in any Python (``tests/test_paraview_script.py``).
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+#: The file of each dataset of a result directory.
+SOURCES = {"volume": "body.bp", "surface": "contact_surface.bp"}
+
+#: Fields: name -> (dataset, required, label, unit in the files, unit shown, factor from the
+#: file's unit to the shown one). A name also matches with a unit suffix ("von_mises [Pa]").
+FIELDS = {
+    "displacement": ("volume", True, "displacement", "m", "mm", 1e3),
+    "von_mises": ("volume", False, "von Mises stress", "Pa", "MPa", 1e-6),
+    "contact_pressure": ("surface", True, "contact pressure", "Pa", "MPa", 1e-6),
+    "friction_traction": ("surface", True, "friction traction", "Pa", "MPa", 1e-6),
+    "contact_state": ("surface", True, "contact state", "", "", 1.0),
+}
+
+#: Values of ``contact_state`` -> (label, RGB): the names of contactqvi.contact.postprocess.STATE_NAMES
+#: and the (colour-blind safe, Okabe-Ito) colours of its contact_states.png.
+CONTACT_STATES = {
+    0: ("no contact", (0.851, 0.851, 0.851)),
+    1: ("sliding", (0.902, 0.624, 0.0)),
+    2: ("sticking", (0.0, 0.447, 0.698)),
+    3: ("grazing, sliding", (0.941, 0.894, 0.259)),
+    4: ("sticking on the cone boundary", (0.337, 0.706, 0.914)),
+    5: ("grazing, at rest", (0.8, 0.475, 0.655)),
+    6: ("separated, sticking (Tresca)", (0.0, 0.62, 0.451)),
+}
+ALWAYS_IN_LEGEND = (0, 1, 2)
+#: Corner of each tributary patch (node, edge midpoint, facet centre, edge midpoint) that is its node.
+PATCH_NODE_CORNER = 0
+UNIT_SUFFIXES = ("m", "Pa", "MPa", "1")
+IMAGE_SIZE = (1600, 900)
+FONT = 22
+
+
+class ResultError(Exception):
+    """A file, field or step this script needs is not in the result directory."""
+
+
+def field_matches(found, name):
+    """Whether the array name ``found`` is field ``name``, bare or with a unit suffix
+    ("von_mises", "von_mises [Pa]", "von_mises (Pa)", "von_mises_Pa")."""
+    rest = found[len(name):] if found.startswith(name) else None
+    return rest == "" or (rest is not None and rest[:1] in " [(_" and rest.strip(" []()_") in UNIT_SUFFIXES)
+
+
+def read_grid(path, step):
+    """Step ``step`` (1-based, negative from the end) of the VTX file ``path`` as one unstructured grid."""
+    from paraview import servermanager, simple
+    from vtkmodules.vtkFiltersCore import vtkAppendFilter
+
+    if not os.path.exists(path):
+        raise ResultError(f"{path}: not found (SOURCES in {os.path.basename(__file__)})")
+    reader = simple.ADIOS2VTXReader(FileName=path)
+    times = list(getattr(reader, "TimestepValues", None) or [0.0])
+    index = step - 1 if step > 0 else step
+    if step == 0 or not -len(times) <= index < len(times):
+        raise ResultError(f"{path}: no step {step}; it holds {len(times)} (--step 1 ... {len(times)})")
+    reader.UpdatePipeline(times[index])
+    data = servermanager.Fetch(reader)
+    append = vtkAppendFilter()  # the pieces of the ranks that wrote the file
+    leaves = [data]
+    if data.IsA("vtkCompositeDataSet"):
+        leaves, it = [], data.NewIterator()
+        it.InitTraversal()
+        while not it.IsDoneWithTraversal():
+            leaves.append(it.GetCurrentDataObject())
+            it.GoToNextItem()
+    for leaf in leaves:
+        if leaf is not None and leaf.GetNumberOfPoints():
+            append.AddInputData(leaf)
+    if not append.GetNumberOfInputConnections(0):
+        raise ResultError(f"{path}: no data at step {step} (an empty or unfinished file?)")
+    append.Update()
+    simple.Delete(reader)
+    return append.GetOutput()
+
+
+def field(grid, name, where):
+    """(association, numpy array) of field ``name`` (``FIELDS``); None for a missing optional one."""
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    for association, data in (("POINTS", grid.GetPointData()), ("CELLS", grid.GetCellData())):
+        for i in range(data.GetNumberOfArrays()):
+            if field_matches(data.GetArrayName(i) or "", name):
+                return association, vtk_to_numpy(data.GetArray(i)), data.GetArrayName(i)
+    if FIELDS[name][1]:
+        raise ResultError(f"field '{name}' ({FIELDS[name][2]}) not in {where} (FIELDS in {os.path.basename(__file__)})")
+    return None
+
+
+def add_array(grid, association, name, values):
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+
+    array = numpy_to_vtk(np.ascontiguousarray(values, dtype=np.float64), deep=True)
+    array.SetName(name)
+    (grid.GetPointData() if association == "POINTS" else grid.GetCellData()).AddArray(array)
+
+
+def producer(grid):
+    from paraview import simple
+
+    source = simple.PVTrivialProducer()
+    source.GetClientSideObject().SetOutput(grid)
+    source.UpdatePipeline()
+    return source
+
+
+def points_of(grid):
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    return vtk_to_numpy(grid.GetPoints().GetData()).astype(float)
+
+
+def patch_nodes(grid):
+    """Point ids of the nodes of a tributary-patch surface (corner PATCH_NODE_CORNER of each cell)."""
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    connectivity = vtk_to_numpy(grid.GetCells().GetConnectivityArray())
+    offsets = vtk_to_numpy(grid.GetCells().GetOffsetsArray())
+    return np.unique(connectivity[offsets[:-1] + PATCH_NODE_CORNER])
+
+
+def plane_basis(n):
+    """Unit vectors e1, e2 with (e1, e2, n) right-handed; e1 = x1 and e2 = x2 for n = x3."""
+    axis = np.eye(3)[int(np.argmin(np.abs(n)))]
+    e1 = axis - np.dot(axis, n) * n
+    e1 /= np.linalg.norm(e1)
+    return e1, np.cross(n, e1)
+
+
+def surface_frame(surface, body_centre):
+    """(centre, e1, e2, n): the surface's plane of least variance, n towards the body (the camera's side)."""
+    x = points_of(surface)
+    centre = x.mean(axis=0)
+    n = np.linalg.svd(x - centre, full_matrices=False)[2][-1]
+    n = n if np.dot(np.asarray(body_centre) - centre, n) >= 0 else -n
+    return (centre, *plane_basis(n), n)
+
+
+def cell_areas(grid):
+    """Area of each (polygonal) cell of ``grid``."""
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.vtkFiltersVerdict import vtkCellSizeFilter
+
+    sizes = vtkCellSizeFilter()
+    sizes.SetInputData(grid)
+    sizes.Update()
+    return vtk_to_numpy(sizes.GetOutput().GetCellData().GetArray("Area"))
+
+
+def new_view():
+    from paraview import simple
+
+    view = simple.CreateView("RenderView")
+    view.ViewSize = list(IMAGE_SIZE)
+    view.OrientationAxesVisibility = 0
+    view.UseColorPaletteForBackground = 0
+    view.Background = [1.0, 1.0, 1.0]
+    return view
+
+
+def add_title(view, title, caption=""):
+    from paraview import simple
+
+    for text, location, size in ((title, "Upper Center", FONT + 4), (caption, "Lower Left Corner", FONT - 4)):
+        if text:
+            display = simple.Show(simple.Text(Text=text), view)
+            display.WindowLocation, display.FontSize, display.Color = location, size, [0.0, 0.0, 0.0]
+            display.Justification = "Center" if location == "Upper Center" else "Left"
+
+
+def colour_bar(view, lut, title, largest=None, position=(0.86, 0.2), length=0.6):
+    from paraview import simple
+
+    bar = simple.GetScalarBar(lut, view)
+    bar.Title, bar.ComponentTitle, bar.Orientation = title, "", "Vertical"
+    bar.WindowLocation, bar.Position, bar.ScalarBarLength = "Any Location", list(position), length
+    bar.TitleColor = bar.LabelColor = [0.0, 0.0, 0.0]
+    bar.TitleFontSize, bar.LabelFontSize, bar.TitleBold, bar.HorizontalTitle = FONT, FONT - 2, 1, 1
+    if largest is not None:  # about three digits
+        big = abs(largest)
+        fmt = "%-.0f" if big >= 100 or big == 0 else "%-.1f" if big >= 10 else "%-.2f" if big >= 1 else "%-.3f"
+        bar.AutomaticLabelFormat, bar.LabelFormat, bar.RangeLabelFormat = 0, fmt, fmt
+        bar.AddRangeLabels = bar.DrawTickMarks = 1
+    bar.Visibility = 1
+    return bar
+
+
+def flat(display):
+    """Colours exactly as mapped (no shading): for views of flat surfaces."""
+    display.Ambient, display.Diffuse, display.Specular = 1.0, 0.0, 0.0
+
+
+def save(view, path):
+    from paraview import simple
+
+    simple.Render(view)
+    simple.SaveScreenshot(path, view, ImageResolution=list(IMAGE_SIZE), TransparentBackground=0)
+    print(f"pv_views: wrote {path}")
+    for source in list(simple.GetSources().values()):  # the next view starts from nothing
+        simple.Delete(source)
+    simple.Delete(view)

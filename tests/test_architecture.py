@@ -1,0 +1,206 @@
+"""The rules of docs/architecture.md that can be read off the source: checked by static analysis (``ast``).
+
+* Data flows one way: the problem-data layer (``contactqvi/problems/``, ``case.py``,
+  ``obstacles.py``) imports no solver package (``contact``, ``friction``, ``vi``, ``qvi``).
+* No import cycle in the package (imports at module level, in functions and under
+  ``TYPE_CHECKING`` alike; ``from package import module`` counts as an import of the module).
+* One lifetime rule: every class that keeps PETSc objects it creates, or has a
+  ``destroy()``, derives from :class:`contactqvi.lifetime.PETScOwner`.
+* No function longer than 60 lines.
+
+Nothing is imported or run: the tests read the files.
+"""
+
+from __future__ import annotations
+
+import ast
+import dataclasses
+import pathlib
+
+import pytest
+
+PACKAGE = pathlib.Path(__file__).resolve().parent.parent / "contactqvi"
+SOLVER_PACKAGES = ("contactqvi.contact", "contactqvi.friction", "contactqvi.vi", "contactqvi.qvi")
+DATA_LAYER = ("contactqvi.problems", "contactqvi.case", "contactqvi.obstacles")
+MAX_FUNCTION_LINES = 60
+#: Being reworked (issue 22); remove an entry once its module keeps the limit.
+LONG_FUNCTIONS_ALLOWED = ("contactqvi.contact", "contactqvi.case", "contactqvi.runner", "contactqvi.io",
+                          "contactqvi.postprocess")  # fmt: skip
+#: Calls that create a PETSc object: petsc4py's camel-case constructors and copies, and the factories.
+CREATING_METHODS = ("duplicate", "getDiagonal", "convert", "createVecs")
+CREATING_FUNCTIONS = ("create_ksp", "create_snes", "create_vector", "create_matrix", "diagonal_matrix",
+                      "rigid_motions_nullspace")  # fmt: skip
+#: Classes outside the rule, and why.
+LIFETIME_EXCEPTIONS = {
+    "EmbeddedInactivePC": "a petsc4py Python-PC context: PETSc calls its destroy(pc) with the PC",
+}
+
+
+@dataclasses.dataclass
+class Module:
+    name: str
+    path: pathlib.Path
+    tree: ast.Module
+
+
+def _modules() -> dict[str, Module]:
+    modules = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+        name = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+        modules[name] = Module(name, path, ast.parse(path.read_text(), str(path)))
+    return modules
+
+
+MODULES = _modules()
+
+
+def _imports(module: Module) -> set[str]:
+    """The package's modules that ``module`` imports, anywhere in its source."""
+    is_package = module.path.name == "__init__.py"
+    found = set()
+    for node in ast.walk(module.tree):
+        if isinstance(node, ast.Import):
+            found.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = module.name.split(".")[: len(module.name.split(".")) - node.level + is_package]
+                base = ".".join([*anchor, *([base] if base else [])])
+            for alias in node.names:
+                found.add(f"{base}.{alias.name}" if f"{base}.{alias.name}" in MODULES else base)
+    return {name for name in found if name in MODULES and name != module.name}
+
+
+GRAPH = {name: _imports(module) for name, module in MODULES.items()}
+
+
+def _inside(name: str, packages: tuple[str, ...]) -> bool:
+    return any(name == p or name.startswith(p + ".") for p in packages)
+
+
+@pytest.mark.parametrize("name", sorted(n for n in MODULES if _inside(n, DATA_LAYER)))
+def test_problem_data_imports_no_solver(name):
+    solvers = sorted(target for target in GRAPH[name] if _inside(target, SOLVER_PACKAGES))
+    assert not solvers, f"{name} (problem data) imports the solver modules {solvers}"
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components with more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    components = []
+
+    def visit(node: str) -> None:
+        index[node] = low[node] = len(index)
+        stack.append(node)
+        for target in sorted(graph[node]):
+            if target not in index:
+                visit(target)
+                low[node] = min(low[node], low[target])
+            elif target in stack:
+                low[node] = min(low[node], index[target])
+        if low[node] == index[node]:
+            component = []
+            while not component or component[-1] != node:
+                component.append(stack.pop())
+            if len(component) > 1:
+                components.append(sorted(component))
+
+    for node in sorted(graph):
+        if node not in index:
+            visit(node)
+    return components
+
+
+def test_the_cycle_finder_finds_a_cycle():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert _cycles({"a": {"b"}, "b": set()}) == []
+
+
+def test_no_import_cycle():
+    cycles = _cycles(GRAPH)
+    details = [" <-> ".join(c) + ": " + "; ".join(f"{m} imports {sorted(GRAPH[m] & set(c))}" for m in c)
+               for c in cycles]  # fmt: skip
+    assert not cycles, "\n".join(details)
+
+
+def _classes() -> dict[str, tuple[str, ast.ClassDef]]:
+    return {node.name: (m.name, node) for m in MODULES.values() for node in ast.walk(m.tree)
+            if isinstance(node, ast.ClassDef)}  # fmt: skip
+
+
+CLASSES = _classes()
+
+
+def _base_names(node: ast.ClassDef) -> list[str]:
+    return [base.attr if isinstance(base, ast.Attribute) else getattr(base, "id", "") for base in node.bases]
+
+
+def _is_owner(name: str) -> bool:
+    if name == "PETScOwner":
+        return True
+    return name in CLASSES and any(_is_owner(base) for base in _base_names(CLASSES[name][1]))
+
+
+def _creates_petsc_object(node: ast.AST) -> bool:
+    for call in (n for n in ast.walk(node) if isinstance(n, ast.Call)):
+        name = call.func.attr if isinstance(call.func, ast.Attribute) else getattr(call.func, "id", "")
+        if name in CREATING_METHODS + CREATING_FUNCTIONS or (name.startswith("create") and name[6:7].isupper()):
+            return True
+        if name in ("assemble_matrix", "assemble_vector") and len(call.args) == 1:  # not the in-place form
+            return True
+    return False
+
+
+def _keeps_petsc_objects(node: ast.ClassDef) -> bool:
+    """Whether a method assigns a newly created PETSc object to an attribute of ``self``."""
+    for assign in (n for n in ast.walk(node) if isinstance(n, (ast.Assign, ast.AnnAssign))):
+        targets = assign.targets if isinstance(assign, ast.Assign) else [assign.target]
+        on_self = [t for target in targets for t in ast.walk(target)
+                   if isinstance(t, ast.Attribute) and getattr(t.value, "id", "") == "self"]  # fmt: skip
+        if on_self and assign.value is not None and _creates_petsc_object(assign.value):
+            return True
+    return False
+
+
+def _defines(node: ast.ClassDef, method: str) -> bool:
+    return any(isinstance(n, ast.FunctionDef) and n.name == method for n in node.body)
+
+
+def _names_its_objects(name: str) -> bool:
+    """Whether the class or a base below PETScOwner defines ``petsc_objects``."""
+    if name not in CLASSES or name == "PETScOwner":
+        return False
+    node = CLASSES[name][1]
+    return _defines(node, "petsc_objects") or any(_names_its_objects(base) for base in _base_names(node))
+
+
+def test_the_lifetime_check_sees_an_owner():
+    owner = ast.parse("class A:\n    def __init__(self, x):\n        self.v = x.createVecLeft()\n").body[0]
+    scratch = ast.parse("class B:\n    def f(self, x):\n        v = x.duplicate()\n        v.destroy()\n").body[0]
+    assert _keeps_petsc_objects(owner) and not _keeps_petsc_objects(scratch)
+
+
+@pytest.mark.parametrize("name", sorted(CLASSES))
+def test_every_owner_of_petsc_objects_follows_the_lifetime_rule(name):
+    module, node = CLASSES[name]
+    keeps = _keeps_petsc_objects(node)
+    if name in LIFETIME_EXCEPTIONS or not (keeps or _defines(node, "destroy")):
+        return
+    assert _is_owner(name), (f"{module}.{name} keeps PETSc objects or has a destroy() but does not derive from "
+                             "contactqvi.lifetime.PETScOwner (petsc_objects(), destroy(), with)")  # fmt: skip
+    assert not keeps or _names_its_objects(name), f"{module}.{name} keeps PETSc objects but has no petsc_objects()"
+
+
+def _long_functions(module: Module) -> list[str]:
+    return [f"{node.name} (line {node.lineno}): {node.end_lineno - node.lineno + 1} lines"
+            for node in ast.walk(module.tree) if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
+            and node.end_lineno - node.lineno + 1 > MAX_FUNCTION_LINES]  # fmt: skip
+
+
+@pytest.mark.parametrize("name", sorted(n for n in MODULES if not _inside(n, LONG_FUNCTIONS_ALLOWED)))
+def test_no_function_is_longer_than_60_lines(name):
+    long = _long_functions(MODULES[name])
+    assert not long, f"{name}: {', '.join(long)}"
