@@ -1,0 +1,181 @@
+"""Contact between meshed bodies: mortar geometry, the contact patch test, bad input.
+
+The patch test (Taylor-Papadopoulos, here in 3D): two unit blocks with independent
+tetrahedral meshes (h = 0.25 below, 0.16 above: non-matching at z = 1), rollers on
+the planes x = 0, y = 0 and z = 0, a uniform pressure p on top. The upper block is
+held along z by the contact alone. With one material the exact solution is the
+homogeneous stress sigma_zz = -p, so u = (nu p x / E, nu p y / E, -p z / E); with
+different moduli and no friction each block is homogeneous on its own and the
+interface slips. Both are linear fields, so a discretisation that passes the patch
+test reproduces them to round-off.
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+
+from dolfinx import fem
+
+from contactqvi.contact.interface import BodyPair
+from contactqvi.contact.mortar import clip_polygons, mortar_coupling, segment_integrals
+from contactqvi.contact.nodal import State
+from contactqvi.contact.problem import assemble_contact_problem
+from contactqvi.contact.scd_newton import SCDNewtonSolver
+from contactqvi.elasticity import body_materials
+from contactqvi.meshes import boundary_facets, read_gmsh, split_by_body
+from contactqvi.parameters import ParameterError
+
+MESH = pathlib.Path(__file__).resolve().parent.parent / "meshes" / "patch_blocks.geo"
+P = 1e6  # pressure on top (Pa)
+NU = 0.3
+ROLLERS = {"lower.bottom": {2: 0.0}, "lower.symmetry_x": {0: 0.0}, "upper.symmetry_x": {0: 0.0},
+           "lower.symmetry_y": {1: 0.0}, "upper.symmetry_y": {1: 0.0}}
+
+
+@pytest.fixture(scope="module")
+def blocks():
+    msh, facet_tags, cell_tags = read_gmsh(MESH, MPI.COMM_WORLD)
+    return msh, split_by_body(msh, facet_tags, cell_tags), cell_tags
+
+
+def test_clipping_and_segment_integrals_of_one_pair():
+    triangle = np.array([[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]])
+    polygon = np.zeros((1, 6, 2))
+    polygon[0, :3] = [[0.2, 0.2], [1.2, 0.2], [0.2, 1.2]]
+    clipped, count = clip_polygons(polygon, np.array([3]), triangle)
+    assert count[0] == 3
+    assert np.allclose(clipped[0, :3], [[0.2, 0.2], [0.8, 0.2], [0.2, 0.8]], atol=1e-15)
+    # a master triangle equal to the slave one: D = area/3, M = D (biorthogonality)
+    slave = np.array([[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]])
+    D, M = segment_integrals(slave, np.array([[0.0, 0.0, 1.0]]), slave[:, [1, 2, 0]] - [0.0, 0.0, 0.1])
+    assert np.allclose(D, 1.0 / 6.0, atol=1e-15)
+    assert np.allclose(M[0][:, [2, 0, 1]], np.eye(3) / 6.0, atol=1e-15)  # master vertex k is slave vertex (k+1) % 3
+
+
+@pytest.mark.parametrize("slave, master", [("upper", "lower"), ("lower", "upper")])
+def test_flat_non_matching_interface_is_integrated_exactly(blocks, slave, master):
+    """sum_j C_ij x_j = x_i (linear fields are reproduced), rows sum to 1, gap 0, and the
+    weights D_ii add up to the interface area."""
+    msh, tags, _ = blocks
+    V = fem.functionspace(msh, ("Lagrange", 1, (3,)))
+    coupling = mortar_coupling(V, boundary_facets(tags, f"{slave}.interface"),
+                               boundary_facets(tags, f"{master}.interface"), 0.1)
+    comm = msh.comm
+    x = V.tabulate_dof_coordinates()
+    index_map = V.dofmap.index_map
+    # master coordinates by global index (the test may gather: the surface is small)
+    owned_glob = index_map.local_to_global(np.arange(index_map.size_local, dtype=np.int32))
+    table = dict(zip(np.concatenate(comm.allgather(owned_glob)).tolist(),
+                     np.concatenate(comm.allgather(x[: index_map.size_local]))))
+    rows = np.repeat(np.arange(len(coupling.slave_blk)), np.diff(coupling.C_indptr))
+    projected = np.zeros((len(coupling.slave_blk), 3))
+    master_x = np.array([table[j] for j in coupling.C_master_glob]).reshape(-1, 3)
+    np.add.at(projected, rows, coupling.C_values[:, None] * master_x)
+    row_sums = np.zeros(len(coupling.slave_blk))
+    np.add.at(row_sums, rows, coupling.C_values)
+    assert comm.allreduce(float(np.abs(projected - x[coupling.slave_blk]).max(initial=0.0)), op=MPI.MAX) < 1e-14
+    assert comm.allreduce(float(np.abs(row_sums - 1.0).max(initial=0.0)), op=MPI.MAX) < 1e-14
+    assert comm.allreduce(float(np.abs(coupling.gap).max(initial=0.0)), op=MPI.MAX) < 1e-14
+    assert comm.allreduce(float(coupling.weight.sum()), op=MPI.SUM) == pytest.approx(1.0, rel=1e-13)
+    assert np.allclose(coupling.normal, [0.0, 0.0, 1.0 if slave == "upper" else -1.0], atol=1e-14)
+
+
+def _patch_problem(blocks, young_upper: float, friction: float):
+    msh, tags, cell_tags = blocks
+    young, poisson = body_materials(msh, cell_tags, {"lower": (1e9, NU), "upper": (young_upper, NU)})
+    return assemble_contact_problem(msh, tags, young, poisson, {"upper.top": (0.0, 0.0, -P)},
+                                    [BodyPair("upper.interface", "lower.interface", friction=friction)],
+                                    displacements=ROLLERS, cell_tags=cell_tags)
+
+
+def _solve(problem, pc: str = "gamg"):
+    u = problem.A.createVecRight()
+    problem.shift.copy(u)  # from rest
+    with SCDNewtonSolver(problem, {"pc": pc}, prefix="patch_") as solver:
+        result = solver.solve(u)
+    displacement = problem.physical_displacement(u, fem.Function(problem.V))
+    u.destroy()
+    return result, displacement
+
+
+def _homogeneous(problem, young_lower: float, young_upper: float) -> np.ndarray:
+    """Each block under sigma_zz = -P, free to expand laterally."""
+    x = problem.V.tabulate_dof_coordinates()
+    lower = problem.node_body == 0
+    young = np.where(lower, young_lower, young_upper)
+    uz = np.where(lower, -P * x[:, 2] / young_lower, -P / young_lower - P * (x[:, 2] - 1.0) / young_upper)
+    return np.column_stack([NU * P * x[:, 0] / young, NU * P * x[:, 1] / young, uz])
+
+
+@pytest.mark.parametrize("young_upper, friction", [(1e9, 0.0), (1e9, 0.3), (3e9, 0.0)])
+def test_contact_patch_test(blocks, young_upper, friction):
+    """Uniform pressure across the non-matching interface and the homogeneous solution,
+    to 1e-8 relative (with the default GAMG Newton-step solver)."""
+    with _patch_problem(blocks, young_upper, friction) as problem:
+        result, displacement = _solve(problem)
+        comm = problem.comm
+        assert result.converged
+        assert problem.n_contact > 0
+        pressure = result.normal_force / problem.contact_area
+        assert comm.allreduce(float(np.abs(pressure / P - 1.0).max(initial=0.0)), op=MPI.MAX) < 1e-8
+        n = problem.V.dofmap.index_map.size_local
+        exact = _homogeneous(problem, 1e9, young_upper)[:n]
+        error = np.abs(displacement.x.array.reshape(-1, 3)[:n] - exact).max(initial=0.0)
+        assert comm.allreduce(float(error), op=MPI.MAX) < 1e-8 * np.abs(exact).max()
+        total = comm.allreduce(float(result.normal_force.sum()), op=MPI.SUM)
+        assert total == pytest.approx(P * 1.0, rel=1e-10)  # the load, through the interface
+
+
+def test_patch_test_with_slip_meets_the_coulomb_conditions(blocks):
+    """Different moduli and F = 0.3: the blocks want to expand differently, so the rim
+    slips. At every slave node: lambda >= 0, ||g|| <= F lambda, and sliding nodes carry
+    ||g|| = F lambda against their slip (the resolvent's fixed point, checked by state)."""
+    friction = 0.3
+    with _patch_problem(blocks, 3e9, friction) as problem:
+        result, _ = _solve(problem)
+        comm = problem.comm
+        assert result.converged
+        lam, g = result.normal_force, result.friction_force
+        scale = comm.allreduce(float(lam.max(initial=0.0)), op=MPI.MAX)
+        assert comm.allreduce(float(lam.min(initial=0.0)), op=MPI.MIN) >= -1e-10 * scale
+        excess = np.linalg.norm(g, axis=1) - friction * lam
+        assert comm.allreduce(float(excess.max(initial=-np.inf)), op=MPI.MAX) <= 1e-8 * scale
+        sliding = result.states == State.SLIDING
+        assert comm.allreduce(int(np.count_nonzero(sliding)), op=MPI.SUM) > 0  # the interface slips somewhere
+        assert np.allclose(np.linalg.norm(g[sliding], axis=1), friction * lam[sliding], rtol=1e-8, atol=1e-10 * scale)
+        # equilibrium of the upper block along z: the contact carries the whole load
+        assert comm.allreduce(float(lam.sum()), op=MPI.SUM) == pytest.approx(P, rel=1e-8)
+
+
+def _shifted_blocks(blocks, dz: float):
+    """The blocks with the upper one moved by dz along z (a new mesh geometry)."""
+    msh, tags, cell_tags = blocks
+    upper = cell_tags.find(cell_tags.names["upper"])
+    nodes = np.unique(msh.geometry.dofmap[upper])
+    original = msh.geometry.x[nodes, 2].copy()
+    msh.geometry.x[nodes, 2] += dz
+    return msh, nodes, original
+
+
+@pytest.mark.parametrize("dz, message", [(-0.01, "initial penetration"), (5.0, "nowhere near")])
+def test_bad_placement_is_reported_by_pair(blocks, dz, message):
+    msh, nodes, original = _shifted_blocks(blocks, dz)
+    try:
+        with pytest.raises(ParameterError, match=message) as error:
+            _patch_problem(blocks, 1e9, 0.0)
+        assert "upper.interface/lower.interface" in str(error.value)
+    finally:
+        msh.geometry.x[nodes, 2] = original
+
+
+def test_a_node_on_a_slave_and_a_master_surface_is_rejected(blocks):
+    msh, tags, cell_tags = blocks
+    young, poisson = body_materials(msh, cell_tags, {"lower": (1e9, NU), "upper": (1e9, NU)})
+    pairs = [BodyPair("upper.interface", "lower.interface"), BodyPair("lower.interface", "upper.interface")]
+    with pytest.raises(ParameterError, match="slave"):
+        assemble_contact_problem(msh, tags, young, poisson, {}, pairs, displacements=ROLLERS, cell_tags=cell_tags)
