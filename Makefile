@@ -1,6 +1,6 @@
 # contactqvi: two commands do everything on a fresh machine.
 #   make demo   install what is missing, run the flagship under mpirun -n 2
-#   make test   install what is missing, run the test suite serially and with 2 ranks
+#   make test   install what is missing, run the test suite serially and with 2 ranks, a subset with 3 and 4
 #   make container-check   build docker/Dockerfile (docker or podman), run the flagship and the tests inside
 #   make paraview          install ParaView 5.13 from Debian, render the standard views of a fresh result
 VENV    ?= .venv
@@ -16,7 +16,7 @@ endif
 MPIENV  += OMPI_MCA_rmaps_base_oversubscribe=1 PRTE_MCA_rmaps_default_mapping_policy=:oversubscribe OMPI_MCA_btl=self,sm
 MPIRUN  := $(MPIENV) mpirun -n $(NP)
 
-.PHONY: deps venv demo test test-serial test-mpi benchmarks container-check paraview peers clean
+.PHONY: deps venv demo test test-serial test-mpi test-ranks benchmarks container-check paraview peers clean
 
 deps:
 	bash scripts/install-deps.sh
@@ -32,13 +32,19 @@ venv: $(PY)
 demo: $(PY)
 	$(MPIRUN) $(PY) demos/coulomb3d.py --output $(OUT)/coulomb3d
 
-test: test-serial test-mpi
+test: test-serial test-mpi test-ranks
 
 test-serial: $(PY)
 	$(PY) -m pytest -q --color=no -p no:cacheprovider tests
 
 test-mpi: $(PY)
 	$(MPIRUN) $(PY) -m mpi4py -m pytest -q --color=no -p no:cacheprovider tests
+
+# 1 rank against 3 and 4 (ranks without contact facets, parallel output): a small, fast subset.
+RANK_TESTS ?= tests/test_ranks.py tests/test_output_parallel.py
+test-ranks: $(PY)
+	$(MPIENV) mpirun -n 3 $(PY) -m mpi4py -m pytest -q --color=no -p no:cacheprovider $(RANK_TESTS)
+	$(MPIENV) mpirun -n 4 $(PY) -m mpi4py -m pytest -q --color=no -p no:cacheprovider $(RANK_TESTS)
 
 # Paper tables at the levels that fit a laptop; README lists the larger runs (lev 9-10, scaling).
 benchmarks: $(PY)

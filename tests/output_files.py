@@ -12,7 +12,7 @@ from contactqvi.paraview import Dataset
 
 
 def read_vtx(path: str | os.PathLike, step: int = 0) -> Dataset:
-    """Read one step of a VTX directory into one :class:`Dataset`, its blocks appended.
+    """Read one step (negative: from the end) of a VTX directory into one :class:`Dataset`, its blocks appended.
 
     The blocks (one per writing rank) are appended as ParaView's VTX reader
     appends them: point indices of a block's cells offset by the points of the
@@ -21,6 +21,7 @@ def read_vtx(path: str | os.PathLike, step: int = 0) -> Dataset:
     import adios2
 
     with adios2.FileReader(str(path)) as reader:
+        step = step % reader.num_steps()
         schema = reader.read_attribute_string("vtk.xml")
         schema = schema if isinstance(schema, str) else schema[0]
         sections = {}
