@@ -44,6 +44,34 @@ SI units throughout (m, Pa, N/m^3). Example::
     [petsc]                             # PETSc options under the solver's prefix
     ksp_monitor = true                  # true: a flag without value
 
+Several bodies: one gmsh file whose physical volumes are the bodies (sharing no
+nodes); each ``[[bodies]]`` entry names its volume, its material and its own
+boundary conditions on facet groups of that body, and ``[[contacts]]`` pairs a
+slave surface with a master surface (``"body.group"``) or with a rigid obstacle
+(then ``[material]``, ``[boundary]``, ``[contact]`` and ``[obstacle]`` are not used)::
+
+    [mesh]
+    file = "../meshes/patch_blocks.geo"
+
+    [[bodies]]
+    name = "lower"                      # physical volume group
+    material = {young = 1e9, poisson = 0.3}
+    [bodies.boundary.displacement]
+    bottom = {z = 0.0}                  # the group "bottom" where it bounds "lower"
+
+    [[bodies]]
+    name = "upper"
+    material = {young = 3e9, poisson = 0.3}
+    [bodies.boundary.traction]
+    top = [0.0, 0.0, -1e6]
+
+    [[contacts]]
+    slave = "upper.interface"           # "body.group"
+    master = "lower.interface"          # ... or obstacle = {type = "plane", ...}
+    law = "coulomb"                     # "coulomb", "tresca" or "frictionless"
+    friction = 0.3
+    # search_distance = 0.01            # m; default: each slave facet's longest edge
+
 The same case in Python (sections left out take their defaults)::
 
     ContactCase(
@@ -83,9 +111,11 @@ from contactqvi.parameters import ParameterError, require, require_choice, requi
 __all__ = [
     "LAWS",
     "OBSTACLE_KEYS",
+    "Body",
     "Boundary",
     "Contact",
     "ContactCase",
+    "ContactPair",
     "Displacement",
     "Material",
     "MeshSource",
@@ -97,8 +127,8 @@ __all__ = [
     "parse_case",
 ]
 
-#: Friction laws of ``contact.law``.
-LAWS = ("coulomb", "tresca")
+#: Friction laws of ``contact.law`` and ``contacts[i].law``.
+LAWS = ("coulomb", "tresca", "frictionless")
 #: Keys of ``[obstacle]`` besides ``type``, per obstacle type.
 OBSTACLE_KEYS: dict[str, tuple[str, ...]] = {
     "plane": ("point", "normal"),
@@ -224,6 +254,46 @@ class ObstacleShape:
 
 
 @dataclasses.dataclass(frozen=True)
+class Body:
+    """``[[bodies]]``: one body of a mesh with several.
+
+    Attributes:
+        name: its physical volume group in the mesh.
+        material: its material.
+        boundary: conditions on facet groups where they bound this body (group names
+            without the body's name; at least one body needs a support, the others
+            may be held by contact alone).
+    """
+
+    name: str
+    material: Material
+    boundary: Boundary = Boundary()
+
+
+@dataclasses.dataclass(frozen=True)
+class ContactPair:
+    """``[[contacts]]``: a slave surface and what it may touch.
+
+    Attributes:
+        slave: ``"body.group"``, the surface whose nodes carry the contact conditions.
+        master: ``"body.group"`` of another body's surface (mortar coupling), or
+        obstacle: a rigid obstacle (exactly one of ``master`` and ``obstacle``).
+        law: ``coulomb``, ``tresca`` or ``frictionless``.
+        friction, slip_bound: as in :class:`Contact`.
+        search_distance: reach of the contact search (m) > 0; None: each slave
+            facet's longest edge.
+    """
+
+    slave: str
+    master: str | None = None
+    obstacle: ObstacleShape | None = None
+    law: str = "coulomb"
+    friction: float | None = None
+    slip_bound: float | None = None
+    search_distance: float | None = None
+
+
+@dataclasses.dataclass(frozen=True)
 class ContactCase:
     """A contact problem: body, material, boundary conditions, obstacle, load path, solver.
 
@@ -240,34 +310,43 @@ class ContactCase:
     """
 
     mesh: MeshSource
-    material: Material
-    boundary: Boundary
-    contact: Contact
-    obstacle: ObstacleShape
+    material: Material | None = None
+    boundary: Boundary | None = None
+    contact: Contact | None = None
+    obstacle: ObstacleShape | None = None
     steps: tuple[Step, ...] = ()
     solver: dict[str, typing.Any] = dataclasses.field(default_factory=dict)
     petsc: dict[str, typing.Any] = dataclasses.field(default_factory=dict)
+    bodies: tuple[Body, ...] = ()
+    contacts: tuple[ContactPair, ...] = ()
 
     def __post_init__(self):
-        checked = {
-            "mesh": _check_mesh(self.mesh),
-            "material": _check_material(self.material),
-            "boundary": _check_boundary(self.boundary),
-            "contact": _check_contact(self.contact),
-            "obstacle": _check_obstacle(self.obstacle),
-            "steps": _check_steps(self.steps),
-            "solver": _check_solver(self.solver),
-            "petsc": _check_petsc(self.petsc),
-        }
+        checked = {"mesh": _check_mesh(self.mesh), "steps": _check_steps(self.steps),
+                   "solver": _check_solver(self.solver), "petsc": _check_petsc(self.petsc)}
+        if self.bodies or self.contacts:
+            for name in ("material", "boundary", "contact", "obstacle"):
+                require(getattr(self, name) is None, name, "not used with [[bodies]]: give each body its "
+                        "material and boundary, and each contact pair its obstacle")
+            require(self.mesh.file is not None, "mesh.file", "several bodies need a gmsh file with one "
+                    "physical volume per body")
+            checked["bodies"] = _check_bodies(self.bodies)
+            checked["contacts"] = _check_contacts(self.contacts, checked["bodies"])
+        else:
+            for name in ("material", "boundary", "contact", "obstacle"):
+                require(getattr(self, name) is not None, name, f"required table [{name}] missing")
+            checked.update(material=_check_material(self.material, "material"),
+                           boundary=_check_boundary(self.boundary, "boundary"),
+                           contact=_check_contact(self.contact), obstacle=_check_obstacle(self.obstacle, "obstacle"))
         for name, value in checked.items():
             object.__setattr__(self, name, value)
-        _check_consistency(self)
+        if not self.bodies:
+            _check_consistency(self)
 
     @property
     def groups(self) -> list[str]:
-        """The physical groups the case names, each once, in file order."""
-        names = [*self.boundary.clamped, *self.boundary.displacement, *self.boundary.traction, self.contact.surface]
-        return list(dict.fromkeys(names))
+        """The facet groups the case names, each once, in file order (``"body.group"``
+        with several bodies)."""
+        return list(dict.fromkeys(name for _, name in _group_uses(self)))
 
     def to_dict(self) -> dict[str, typing.Any]:
         """The case as the tables of a case file (JSON-ready: lists, strings; unset keys left out)."""
@@ -303,27 +382,60 @@ def parse_case(data: collections.abc.Mapping, base_dir: str | pathlib.Path = "."
     if mesh.get("file") is not None:
         require(isinstance(mesh["file"], str), "mesh.file", f"must be a file name, got {mesh['file']!r}")
         mesh["file"] = pathlib.Path(os.path.normpath(pathlib.Path(base_dir) / mesh["file"]))
-    boundary = _section(top, "boundary", Boundary)
+    common = {
+        "mesh": MeshSource(**mesh),
+        "steps": tuple(Step(**_table(step, f"steps[{i}]", Step)) for i, step in enumerate(_array(top, "steps"))),
+        "solver": _table(top.get("solver", {}), "solver"),
+        "petsc": _table(top.get("petsc", {}), "petsc"),
+    }
+    if top.get("bodies") or top.get("contacts"):
+        return ContactCase(**common, **{name: top[name] for name in _ONE_BODY if name in top},
+                           bodies=tuple(_parse_body(b, f"bodies[{i}]") for i, b in enumerate(_array(top, "bodies"))),
+                           contacts=tuple(_parse_pair(c, f"contacts[{i}]")
+                                          for i, c in enumerate(_array(top, "contacts"))))
+    return ContactCase(
+        **common,
+        material=Material(**_section(top, "material", Material)),
+        boundary=_parse_boundary(_section(top, "boundary", Boundary), "boundary"),
+        contact=Contact(**_section(top, "contact", Contact)),
+        obstacle=ObstacleShape(**_section(top, "obstacle", ObstacleShape)),
+    )
+
+
+_ONE_BODY = ("material", "boundary", "contact", "obstacle")
+
+
+def _array(top: dict[str, typing.Any], name: str) -> list[typing.Any]:
+    value = top.get(name, [])
+    require(_is_list(value), name, f"must be an array of tables [[{name}]], got {value!r}")
+    return list(value)
+
+
+def _parse_boundary(boundary: dict[str, typing.Any], path: str) -> Boundary:
     if "displacement" in boundary:
-        groups = _table(boundary["displacement"], "boundary.displacement")
+        groups = _table(boundary["displacement"], f"{path}.displacement")
         boundary["displacement"] = {
-            name: Displacement(**_table(value, f"boundary.displacement.{name}", Displacement))
+            name: Displacement(**_table(value, f"{path}.displacement.{name}", Displacement))
             for name, value in groups.items()
         }
     if "traction" in boundary:
-        boundary["traction"] = _table(boundary["traction"], "boundary.traction")
-    steps = top.get("steps", [])
-    require(_is_list(steps), "steps", f"must be an array of tables [[steps]], got {steps!r}")
-    return ContactCase(
-        mesh=MeshSource(**mesh),
-        material=Material(**_section(top, "material", Material)),
-        boundary=Boundary(**boundary),
-        contact=Contact(**_section(top, "contact", Contact)),
-        obstacle=ObstacleShape(**_section(top, "obstacle", ObstacleShape)),
-        steps=tuple(Step(**_table(step, f"steps[{i}]", Step)) for i, step in enumerate(steps)),
-        solver=_table(top.get("solver", {}), "solver"),
-        petsc=_table(top.get("petsc", {}), "petsc"),
-    )
+        boundary["traction"] = _table(boundary["traction"], f"{path}.traction")
+    return Boundary(**boundary)
+
+
+def _parse_body(value: typing.Any, path: str) -> Body:
+    body = _table(value, path, Body)
+    body["material"] = Material(**_table(body["material"], f"{path}.material", Material))
+    if "boundary" in body:
+        body["boundary"] = _parse_boundary(_table(body["boundary"], f"{path}.boundary", Boundary), f"{path}.boundary")
+    return Body(**body)
+
+
+def _parse_pair(value: typing.Any, path: str) -> ContactPair:
+    pair = _table(value, path, ContactPair)
+    if "obstacle" in pair:
+        pair["obstacle"] = ObstacleShape(**_table(pair["obstacle"], f"{path}.obstacle", ObstacleShape))
+    return ContactPair(**pair)
 
 
 def _join(path: str, key: str) -> str:
@@ -416,39 +528,41 @@ def _check_mesh(mesh: MeshSource) -> MeshSource:
     return dataclasses.replace(mesh, file=path)
 
 
-def _check_material(material: Material) -> Material:
-    _instance(material, Material, "material")
-    young = _number(material.young, "material.young")
-    require_positive("material.young", young)
-    poisson = _number(material.poisson, "material.poisson")
-    require(-1.0 < poisson < 0.5, "material.poisson", f"must lie in (-1, 0.5), got {material.poisson!r}")
+def _check_material(material: Material, path: str) -> Material:
+    _instance(material, Material, path)
+    young = _number(material.young, f"{path}.young")
+    require_positive(f"{path}.young", young)
+    poisson = _number(material.poisson, f"{path}.poisson")
+    require(-1.0 < poisson < 0.5, f"{path}.poisson", f"must lie in (-1, 0.5), got {material.poisson!r}")
     return Material(young, poisson)
 
 
-def _check_boundary(boundary: Boundary) -> Boundary:
-    _instance(boundary, Boundary, "boundary")
+def _check_boundary(boundary: Boundary, path: str, supported: bool = True) -> Boundary:
+    """``boundary`` checked; ``supported``: it must hold the body (a clamped group or a
+    prescribed displacement)."""
+    _instance(boundary, Boundary, path)
     clamped = boundary.clamped
-    require(_is_list(clamped), "boundary.clamped", f"must be a list of group names, got {clamped!r}")
-    clamped = tuple(_name(name, f"boundary.clamped[{i}]") for i, name in enumerate(clamped))
+    require(_is_list(clamped), f"{path}.clamped", f"must be a list of group names, got {clamped!r}")
+    clamped = tuple(_name(name, f"{path}.clamped[{i}]") for i, name in enumerate(clamped))
     for i, name in enumerate(clamped):
-        require(name not in clamped[:i], f"boundary.clamped[{i}]", f"{name!r} listed twice")
-    _instance(boundary.displacement, dict, "boundary.displacement")
+        require(name not in clamped[:i], f"{path}.clamped[{i}]", f"{name!r} listed twice")
+    _instance(boundary.displacement, dict, f"{path}.displacement")
     displacement = {}
     for name, given in boundary.displacement.items():
-        path = f"boundary.displacement.{name}"
-        _instance(given, Displacement, path)
+        key = f"{path}.displacement.{name}"
+        _instance(given, Displacement, key)
         components = {
-            axis: None if value is None else _number(value, f"{path}.{axis}")
+            axis: None if value is None else _number(value, f"{key}.{axis}")
             for axis, value in dataclasses.asdict(given).items()
         }
-        require(any(v is not None for v in components.values()), path, "give at least one of x, y, z")
-        require(name not in clamped, path, f"group {name!r} is already clamped")
-        displacement[_name(name, path)] = Displacement(**components)
-    _instance(boundary.traction, dict, "boundary.traction")
-    traction = {_name(name, f"boundary.traction.{name}"): _vector(value, f"boundary.traction.{name}")
+        require(any(v is not None for v in components.values()), key, "give at least one of x, y, z")
+        require(name not in clamped, key, f"group {name!r} is already clamped")
+        displacement[_name(name, key)] = Displacement(**components)
+    _instance(boundary.traction, dict, f"{path}.traction")
+    traction = {_name(name, f"{path}.traction.{name}"): _vector(value, f"{path}.traction.{name}")
                 for name, value in boundary.traction.items()}
-    body_force = None if boundary.body_force is None else _vector(boundary.body_force, "boundary.body_force")
-    require(clamped or displacement, "boundary",
+    body_force = None if boundary.body_force is None else _vector(boundary.body_force, f"{path}.body_force")
+    require(clamped or displacement or not supported, path,
             "needs a clamped group or a prescribed displacement (rigid motions must be fixed)")
     return Boundary(clamped, displacement, traction, body_force)
 
@@ -456,34 +570,85 @@ def _check_boundary(boundary: Boundary) -> Boundary:
 def _check_contact(contact: Contact) -> Contact:
     _instance(contact, Contact, "contact")
     surface = _name(contact.surface, "contact.surface")
-    require_choice("contact.law", contact.law, LAWS)
-    friction, slip_bound = contact.friction, contact.slip_bound
-    if contact.law == "coulomb":
-        require(slip_bound is None, "contact.slip_bound", "only used with law = 'tresca'")
-        require(friction is not None, "contact.friction", "law = 'coulomb' needs a friction coefficient >= 0")
-        friction = _number(friction, "contact.friction")
-        require_positive("contact.friction", friction, allow_zero=True)
-    else:
-        require(friction is None, "contact.friction", "only used with law = 'coulomb'")
-        require(slip_bound is not None, "contact.slip_bound", "law = 'tresca' needs a slip bound > 0 (Pa)")
-        slip_bound = _number(slip_bound, "contact.slip_bound")
-        require_positive("contact.slip_bound", slip_bound)
+    friction, slip_bound = _check_law(contact.law, contact.friction, contact.slip_bound, "contact")
     return Contact(surface, contact.law, friction, slip_bound)
 
 
-def _check_obstacle(obstacle: ObstacleShape) -> ObstacleShape:
-    _instance(obstacle, ObstacleShape, "obstacle")
-    require_choice("obstacle.type", obstacle.type, OBSTACLE_KEYS)
+def _check_law(law: str, friction: typing.Any, slip_bound: typing.Any, path: str) -> tuple[float | None, float | None]:
+    """The friction data of ``law`` checked: (F, None), (None, s) or (None, None)."""
+    require_choice(f"{path}.law", law, LAWS)
+    if law != "tresca":
+        require(slip_bound is None, f"{path}.slip_bound", "only used with law = 'tresca'")
+    if law != "coulomb":
+        require(friction is None, f"{path}.friction", "only used with law = 'coulomb'")
+    if law == "coulomb":
+        require(friction is not None, f"{path}.friction", "law = 'coulomb' needs a friction coefficient >= 0")
+        friction = _number(friction, f"{path}.friction")
+        require_positive(f"{path}.friction", friction, allow_zero=True)
+    elif law == "tresca":
+        require(slip_bound is not None, f"{path}.slip_bound", "law = 'tresca' needs a slip bound > 0 (Pa)")
+        slip_bound = _number(slip_bound, f"{path}.slip_bound")
+        require_positive(f"{path}.slip_bound", slip_bound)
+    return friction, slip_bound
+
+
+def _check_bodies(bodies: typing.Sequence[Body]) -> tuple[Body, ...]:
+    require(_is_list(bodies) and len(bodies) > 0, "bodies", "give at least one [[bodies]] entry")
+    checked = []
+    for i, body in enumerate(bodies):
+        path = f"bodies[{i}]"
+        _instance(body, Body, path)
+        name = _name(body.name, f"{path}.name")
+        require("." not in name, f"{path}.name", f"must not contain '.', got {name!r}")
+        require(name not in [b.name for b in checked], f"{path}.name", f"body {name!r} listed twice")
+        checked.append(Body(name, _check_material(body.material, f"{path}.material"),
+                            _check_boundary(body.boundary, f"{path}.boundary", supported=False)))
+    supported = any(b.boundary.clamped or b.boundary.displacement for b in checked)
+    require(supported, "bodies", "no body has a clamped group or a prescribed displacement; at least one "
+            "must be held (the others may be held by contact)")
+    return tuple(checked)
+
+
+def _check_contacts(contacts: typing.Sequence[ContactPair], bodies: tuple[Body, ...]) -> tuple[ContactPair, ...]:
+    require(_is_list(contacts) and len(contacts) > 0, "contacts", "give at least one [[contacts]] pair")
+    names = [b.name for b in bodies]
+    checked = []
+    for i, pair in enumerate(contacts):
+        path = f"contacts[{i}]"
+        _instance(pair, ContactPair, path)
+        for key in ("slave", "master") if pair.master is not None else ("slave",):
+            value = _name(getattr(pair, key), f"{path}.{key}")
+            body, _, group = value.partition(".")
+            require(group != "", f"{path}.{key}", f"must be 'body.group', got {value!r}")
+            if body not in names:
+                close = difflib.get_close_matches(body, names, n=1)
+                hint = f" (did you mean {close[0]!r}?)" if close else ""
+                raise ParameterError(f"{path}.{key}", f"unknown body {body!r}{hint}; bodies: {', '.join(names)}")
+        require((pair.master is None) != (pair.obstacle is None), path, "give exactly one of 'master' and 'obstacle'")
+        obstacle = None if pair.obstacle is None else _check_obstacle(pair.obstacle, f"{path}.obstacle")
+        require(pair.master != pair.slave, f"{path}.master", "must differ from the slave surface")
+        friction, slip_bound = _check_law(pair.law, pair.friction, pair.slip_bound, path)
+        distance = pair.search_distance
+        if distance is not None:
+            distance = _number(distance, f"{path}.search_distance")
+            require_positive(f"{path}.search_distance", distance)
+        checked.append(ContactPair(pair.slave, pair.master, obstacle, pair.law, friction, slip_bound, distance))
+    return tuple(checked)
+
+
+def _check_obstacle(obstacle: ObstacleShape, path: str) -> ObstacleShape:
+    _instance(obstacle, ObstacleShape, path)
+    require_choice(f"{path}.type", obstacle.type, OBSTACLE_KEYS)
     keys = OBSTACLE_KEYS[obstacle.type]
     given = {k: v for k, v in dataclasses.asdict(obstacle).items() if k != "type" and v is not None}
     for key in given:
-        require(key in keys, f"obstacle.{key}",
+        require(key in keys, f"{path}.{key}",
                 f"not a key of a {obstacle.type} obstacle (keys: type, {', '.join(keys)})")
     for key in keys:
-        require(key in given, f"obstacle.{key}", f"required for a {obstacle.type} obstacle")
+        require(key in given, f"{path}.{key}", f"required for a {obstacle.type} obstacle")
     checked = {}
     for key, value in given.items():
-        name = f"obstacle.{key}"
+        name = f"{path}.{key}"
         if key in ("normal", "axis"):
             checked[key] = _direction(value, name)
         elif key == "radius":
@@ -552,15 +717,30 @@ def check_groups(case: ContactCase, names_in_mesh: typing.Iterable[str]) -> None
             closest group and listing the groups the mesh has.
     """
     known = sorted(names_in_mesh)
-    uses = [(f"boundary.clamped[{i}]", name) for i, name in enumerate(case.boundary.clamped)]
-    uses += [(f"boundary.displacement.{name}", name) for name in case.boundary.displacement]
-    uses += [(f"boundary.traction.{name}", name) for name in case.boundary.traction]
-    uses += [("contact.surface", case.contact.surface)]
-    for path, name in uses:
+    for path, name in _group_uses(case):
         if name not in known:
             close = difflib.get_close_matches(name, known, n=1)
             hint = f" (did you mean {close[0]!r}?)" if close else ""
             raise ParameterError(path, f"unknown physical group {name!r}{hint}; the mesh has: {', '.join(known)}")
+
+
+def _group_uses(case: ContactCase) -> list[tuple[str, str]]:
+    """(key path, facet group) of every group the case names (``"body.group"`` for bodies)."""
+    if not case.bodies:
+        return _boundary_uses(case.boundary, "boundary") + [("contact.surface", case.contact.surface)]
+    uses = []
+    for i, body in enumerate(case.bodies):
+        uses += [(path, f"{body.name}.{name}") for path, name in _boundary_uses(body.boundary, f"bodies[{i}].boundary")]
+    for i, pair in enumerate(case.contacts):
+        uses += [(f"contacts[{i}].slave", pair.slave)]
+        uses += [(f"contacts[{i}].master", pair.master)] if pair.master is not None else []
+    return uses
+
+
+def _boundary_uses(boundary: Boundary, path: str) -> list[tuple[str, str]]:
+    uses = [(f"{path}.clamped[{i}]", name) for i, name in enumerate(boundary.clamped)]
+    uses += [(f"{path}.displacement.{name}", name) for name in boundary.displacement]
+    return uses + [(f"{path}.traction.{name}", name) for name in boundary.traction]
 
 
 def _plain(value: typing.Any) -> typing.Any:

@@ -14,6 +14,7 @@ up to the last converged step stays readable if a later step fails.
 
 from __future__ import annotations
 
+import difflib
 import logging
 import pathlib
 import typing
@@ -24,13 +25,16 @@ from petsc4py import PETSc
 from dolfinx import mesh as dmesh
 
 from contactqvi import tables
-from contactqvi.case import ContactCase, check_groups
+from contactqvi.case import Body, ContactCase, ContactPair, check_groups
 from contactqvi.contact.load_path import LoadStep, solve_load_path
 from contactqvi.contact.postprocess import ContactResultsWriter, plot_contact_states
-from contactqvi.contact.problem import ContactProblem, build_contact_problem
+from contactqvi.contact.interface import BodyPair, ObstaclePair
+from contactqvi.contact.problem import ContactProblem, assemble_contact_problem, build_contact_problem
 from contactqvi.contact.scd_newton import SCDNewtonResult
 from contactqvi.linalg import default_options
-from contactqvi.meshes import create_contact_body, read_gmsh
+from contactqvi.elasticity import body_materials
+from contactqvi.meshes import create_contact_body, read_gmsh, split_by_body
+from contactqvi.parameters import ParameterError, require
 from contactqvi.problems.coulomb import gap_function
 
 __all__ = ["PREFIX", "build_problem", "read_mesh", "run_case"]
@@ -52,7 +56,9 @@ def read_mesh(case: ContactCase, comm: MPI.Comm) -> tuple[dmesh.Mesh, dmesh.Mesh
 
 
 def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
-    """Mesh and assembled contact problem of ``case`` (load factor 1, obstacle at rest)."""
+    """Mesh and assembled contact problem of ``case`` (load factor 1, obstacles at rest)."""
+    if case.bodies:
+        return _build_bodies(case, comm)
     msh, tags = read_mesh(case, comm)
     b, c = case.boundary, case.contact
     return build_contact_problem(
@@ -61,6 +67,42 @@ def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
         obstacle=case.obstacle.create(), body_force=b.body_force,
         displacements={name: d.components() for name, d in b.displacement.items()},
     )
+
+
+def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
+    """The contact problem of a case with ``[[bodies]]`` and ``[[contacts]]``."""
+    msh, facet_tags, cell_tags = read_gmsh(case.mesh.file, comm)
+    for i, body in enumerate(case.bodies):
+        if body.name not in cell_tags.names:
+            close = difflib.get_close_matches(body.name, list(cell_tags.names), n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise ParameterError(f"bodies[{i}].name", f"no physical volume {body.name!r} in the mesh{hint}; it has: "
+                                 f"{', '.join(sorted(cell_tags.names))}")
+        require(body.boundary.body_force is None, f"bodies[{i}].boundary.body_force",
+                "body forces are supported for one body only")
+    tags = split_by_body(msh, facet_tags, cell_tags)
+    check_groups(case, tags.names)
+    young, poisson = body_materials(msh, cell_tags, {b.name: (b.material.young, b.material.poisson)
+                                                     for b in case.bodies})
+
+    def qualified(body: Body, groups: typing.Iterable[str]) -> list[str]:
+        return [f"{body.name}.{group}" for group in groups]
+
+    clamped = [name for b in case.bodies for name in qualified(b, b.boundary.clamped)]
+    displacements = {f"{b.name}.{group}": d.components() for b in case.bodies
+                     for group, d in b.boundary.displacement.items()}
+    tractions = {f"{b.name}.{group}": t for b in case.bodies for group, t in b.boundary.traction.items()}
+    pairs = [_pair(pair) for pair in case.contacts]
+    return assemble_contact_problem(msh, tags, young, poisson, tractions, pairs, clamped,
+                                    displacements=displacements, cell_tags=cell_tags)
+
+
+def _pair(pair: ContactPair) -> ObstaclePair | BodyPair:
+    """The contact pair of a ``[[contacts]]`` entry."""
+    friction, slip_bound = pair.friction or 0.0, pair.slip_bound or 0.0
+    if pair.obstacle is not None:
+        return ObstaclePair(pair.slave, pair.obstacle.create(), friction, slip_bound)
+    return BodyPair(pair.slave, pair.master, friction, slip_bound, pair.search_distance)
 
 
 def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,

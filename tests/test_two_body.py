@@ -179,3 +179,15 @@ def test_a_node_on_a_slave_and_a_master_surface_is_rejected(blocks):
     pairs = [BodyPair("upper.interface", "lower.interface"), BodyPair("lower.interface", "upper.interface")]
     with pytest.raises(ParameterError, match="slave"):
         assemble_contact_problem(msh, tags, young, poisson, {}, pairs, displacements=ROLLERS, cell_tags=cell_tags)
+
+
+def test_a_body_nothing_holds_is_named(blocks):
+    """Without the upper block's rollers and without friction nothing holds it along x, y;
+    the lower block is held by its own rollers."""
+    msh, tags, cell_tags = blocks
+    young, poisson = body_materials(msh, cell_tags, {"lower": (1e9, NU), "upper": (1e9, NU)})
+    rollers = {name: value for name, value in ROLLERS.items() if not name.startswith("upper")}
+    with pytest.raises(ParameterError, match="bodies.upper: nothing holds the body"):
+        assemble_contact_problem(msh, tags, young, poisson, {"upper.top": (0.0, 0.0, -P)},
+                                 [BodyPair("upper.interface", "lower.interface")], displacements=rollers,
+                                 cell_tags=cell_tags)

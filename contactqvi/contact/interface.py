@@ -66,8 +66,8 @@ class BodyPair:
         slave, master: facet groups (``"body.group"`` for meshes with several bodies).
         friction, slip_bound: as for :class:`ObstaclePair`.
         search_distance: master facets farther than this from a slave facet are not
-            paired with it (m); None: twice the largest facet edge of the two surfaces.
-            Nodes whose gap can close within the load path must lie within it.
+            paired with it (m); None: the slave facet's longest edge. Nodes whose gap
+            can close within the load path must lie within it.
     """
 
     slave: str
@@ -167,14 +167,13 @@ def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: Body
                     excluded_blk: np.ndarray) -> Interface:
     slave, master = boundary_facets(facet_tags, pair.slave), boundary_facets(facet_tags, pair.master)
     distance = pair.search_distance
-    if distance is None:
-        distance = 2.0 * _max_edge_length(V, np.concatenate([slave, master]))
-    require(distance > 0.0, f"{pair.name}: search_distance", f"must be > 0, got {distance!r}")
+    require(distance is None or distance > 0.0, f"{pair.name}: search_distance", f"must be > 0, got {distance!r}")
     coupling = mortar_coupling(V, slave, master, distance, excluded_blk)
     comm = V.mesh.comm
     found = comm.allreduce(len(coupling.slave_blk), op=MPI.SUM)
+    reach = "one facet size" if distance is None else f"{distance:.3g} m"
     require(found > 0, f"{pair.name}", f"no node of {pair.slave!r} has a facet of {pair.master!r} within "
-            f"{distance:.3g} m facing it: the surfaces are nowhere near each other (raise search_distance?)")
+            f"{reach} facing it: the surfaces are nowhere near each other (raise search_distance?)")
     _check_overlap(comm, V, coupling.gap, pair.name, f"nodes of {pair.slave!r} lie inside the body of {pair.master!r}")
     return Interface(pair, coupling.slave_blk, tangent_frames(coupling.normal), coupling.weight, coupling,
                      coupling.gap)
@@ -206,14 +205,6 @@ def _check_disjoint(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typ
             both = comm.allreduce(int(np.count_nonzero(slave_count[master])), op=MPI.SUM)
             require(both == 0, f"{pair.name}", f"{both} nodes of the master surface {pair.master!r} are slave "
                     "nodes of a pair; a node cannot be both")
-
-
-def _max_edge_length(V: fem.FunctionSpace, facets: np.ndarray) -> float:
-    msh = V.mesh
-    nodes = dmesh.entities_to_geometry(msh, msh.topology.dim - 1, facets)
-    x = msh.geometry.x[nodes]
-    local = float(np.linalg.norm(x - np.roll(x, 1, axis=1), axis=2).max(initial=0.0))
-    return msh.comm.allreduce(local, op=MPI.MAX)
 
 
 def _lumped_area(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, surface: str) -> np.ndarray:

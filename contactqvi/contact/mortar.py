@@ -246,14 +246,15 @@ def _exchange_master(comm: MPI.Comm, slave: SurfaceTriangles, master: SurfaceTri
 
 
 def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facets: np.ndarray,
-                    search_distance: float, excluded_blk: np.ndarray | None = None) -> MortarCoupling:
+                    search_distance: float | None = None, excluded_blk: np.ndarray | None = None) -> MortarCoupling:
     """C = D^{-1} M, nodal normals and weighted gaps of a slave and a master surface.
 
     Args:
         V: vector P1 space on a tetrahedral mesh holding both bodies.
         slave_facets, master_facets: local facet indices of the two surfaces.
         search_distance: master facets farther than this from a slave facet
-            (between bounding boxes, m) are not paired with it.
+            (between bounding boxes, m) are not paired with it; None: the slave
+            facet's longest edge.
         excluded_blk: local node indices never coupled (e.g. clamped slave nodes).
 
     Collective. Slave nodes with less than :data:`MIN_COVERAGE` of their lumped area
@@ -264,10 +265,11 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
     slave, master = surface_triangles(V, slave_facets), surface_triangles(V, master_facets)
     master_glob = index_map.local_to_global(master.blk.ravel()).reshape(-1, 3)
     diameter = max(_max_edge(slave.x, comm), _max_edge(master.x, comm))
-    mx, mglob, mnormal = _exchange_master(comm, slave, master, master_glob, search_distance + diameter)
+    reach = 2.0 * diameter + (diameter if search_distance is None else search_distance)
+    mx, mglob, mnormal = _exchange_master(comm, slave, master, master_glob, reach)
 
     # candidate pairs: centroids within reach, bounding boxes within search_distance, facing normals
-    pairs_s, pairs_m = _candidate_pairs(slave.x, mx, search_distance, diameter)
+    pairs_s, pairs_m = _candidate_pairs(slave.x, mx, search_distance)
     facing = np.einsum("ij,ij->i", slave.normal[pairs_s], mnormal[pairs_m]) < 0.0
     pairs_s, pairs_m = pairs_s[facing], pairs_m[facing]
     D_pair, M_pair = segment_integrals(slave.x[pairs_s], -slave.normal[pairs_s], mx[pairs_m])
@@ -328,20 +330,24 @@ def _max_edge(x: np.ndarray, comm: MPI.Comm) -> float:
     return comm.allreduce(local, op=MPI.MAX)
 
 
-def _candidate_pairs(slave_x: np.ndarray, master_x: np.ndarray, search_distance: float,
-                     diameter: float) -> tuple[np.ndarray, np.ndarray]:
-    """Index pairs (slave, master) whose padded bounding boxes overlap."""
+def _candidate_pairs(slave_x: np.ndarray, master_x: np.ndarray,
+                     search_distance: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """Index pairs (slave, master) whose bounding boxes are within the search distance
+    (``None``: each slave facet's own longest edge, so graded meshes pair locally)."""
     if len(slave_x) == 0 or len(master_x) == 0:
         return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
+    slave_edge = np.linalg.norm(slave_x - np.roll(slave_x, 1, axis=1), axis=2).max(axis=1)
+    master_edge = np.linalg.norm(master_x - np.roll(master_x, 1, axis=1), axis=2).max(axis=1)
+    pad = slave_edge if search_distance is None else np.full(len(slave_x), search_distance)
     tree = scipy.spatial.cKDTree(master_x.mean(axis=1))
-    reach = search_distance + 2.0 * diameter
-    candidates = tree.query_ball_point(slave_x.mean(axis=1), reach)
+    candidates = tree.query_ball_point(slave_x.mean(axis=1), slave_edge + master_edge.max() + pad)
     counts = np.fromiter((len(c) for c in candidates), dtype=np.int64, count=len(candidates))
     pairs_s = np.repeat(np.arange(len(slave_x)), counts)
     pairs_m = np.fromiter((j for c in candidates for j in c), dtype=np.int64, count=int(counts.sum()))
     lo_s, hi_s = slave_x.min(axis=1)[pairs_s], slave_x.max(axis=1)[pairs_s]
     lo_m, hi_m = master_x.min(axis=1)[pairs_m], master_x.max(axis=1)[pairs_m]
-    near = np.all((hi_m >= lo_s - search_distance) & (lo_m <= hi_s + search_distance), axis=1)
+    padding = pad[pairs_s, None]
+    near = np.all((hi_m >= lo_s - padding) & (lo_m <= hi_s + padding), axis=1)
     return pairs_s[near], pairs_m[near]
 
 

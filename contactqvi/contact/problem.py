@@ -51,7 +51,7 @@ import numpy as np
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 
-from contactqvi.contact.interface import Interface, ObstaclePair, Pair, build_interfaces
+from contactqvi.contact.interface import BodyPair, Interface, ObstaclePair, Pair, build_interfaces
 from contactqvi.contact.nodal import FrictionLaw
 from contactqvi.elasticity import elasticity_forms, orthonormalize, rigid_motions_nullspace
 from contactqvi.lifetime import PETScOwner
@@ -339,6 +339,9 @@ def assemble_contact_problem(
         T.multTranspose(applied_global, applied)
         applied_global.destroy()
 
+    node_body = None if cell_tags is None else _node_body(V, cell_tags)
+    if node_body is not None:
+        _check_held(V, facet_tags, cell_tags, node_body, constrained, interfaces)
     comm = msh.comm
     n_owned = index_map.size_local
     n_fixed_owned = int(np.count_nonzero(dirichlet_dofs_loc < 3 * n_owned))
@@ -356,7 +359,7 @@ def assemble_contact_problem(
         body=ElasticBody(young, poisson, facet_tags, supports, dict(tractions), body_force),
         rotation=rotation, coupling=coupling, transform=transform, offset=offset,
         rollers=constrained[contact_blk].any(axis=1), dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32),
-        node_body=None if cell_tags is None else _node_body(V, cell_tags),
+        node_body=node_body,
         n_contact=comm.allreduce(len(contact_blk), op=MPI.SUM),
         n_free=comm.allreduce(3 * n_owned - n_fixed_owned, op=MPI.SUM),
     )
@@ -414,6 +417,43 @@ def _change_of_variables(
     for obj in (prescribed, free, NR):
         obj.destroy()
     return transform, offset
+
+
+def _check_held(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, cell_tags: dmesh.MeshTags,
+                node_body: np.ndarray, constrained: np.ndarray, interfaces: typing.Sequence[Interface]) -> None:
+    """Raise if a body can translate freely: along no direction may a body lack both a
+    prescribed displacement component and a contact surface that resists it.
+
+    A contact pair with friction (F > 0 or a Tresca bound) resists every direction;
+    a frictionless one the directions of its normals, on both its bodies. Rotations
+    are not checked.
+    """
+    comm = V.mesh.comm
+    n_owned = V.dofmap.index_map.size_local
+    names = list(cell_tags.names)
+    held = np.zeros((len(names), 3, 3))
+    for k in range(len(names)):
+        prescribed = constrained[:n_owned][node_body[:n_owned] == k].any(axis=0)
+        held[k] += np.diag(comm.allreduce(prescribed.astype(float), op=MPI.SUM) > 0).astype(float)
+    for interface in interfaces:
+        pair = interface.pair
+        frictional = pair.friction > 0.0 or pair.slip_bound > 0.0
+        normals = interface.frames[:, 2]
+        spread = comm.allreduce(np.einsum("ij,ik->jk", normals, normals), op=MPI.SUM)
+        spread = np.eye(3) if frictional else spread / max(np.trace(spread), 1e-300)
+        surfaces = [_slave_surface(pair)] + ([pair.master] if isinstance(pair, BodyPair) else [])
+        for surface in surfaces:
+            nodes = fem.locate_dofs_topological(V, V.mesh.topology.dim - 1, boundary_facets(facet_tags, surface))
+            bodies = set().union(*comm.allgather(set(np.unique(node_body[nodes]).tolist())))
+            for k in bodies - {-1}:
+                held[k] += spread
+    for k, name in enumerate(names):
+        values, vectors = np.linalg.eigh(held[k])
+        if values[0] < 1e-6:
+            direction = np.array2string(vectors[:, 0], precision=3)
+            require(False, f"bodies.{name}", f"nothing holds the body along {direction}: no prescribed "
+                    "displacement component and no contact surface resists a translation that way "
+                    "(add a support, or friction)")
 
 
 def _node_body(V: fem.FunctionSpace, cell_tags: dmesh.MeshTags) -> np.ndarray:
