@@ -1,0 +1,236 @@
+"""The same answer on any number of ranks: the rank table and the per-rank peak memory (issue 24).
+
+Runs the programs a user runs, under ``mpirun -n N`` (oversubscribed where N is
+above the number of cores), each with its output directory, and compares them
+with the run on 1 rank:
+
+* ``demos/coulomb3d.py --lev L --geometry d1 --load L1`` (default solver: GAMG,
+  tol 0.1) for each ``--levels``;
+* ``python -m contactqvi run cases/hertz.toml`` on ``meshes/hertz_coarse.geo``
+  (a sphere, four load steps), with its default solver and with exact
+  Newton-step solves (``pc = "lu"``).
+
+Per run: Newton and Krylov iterations (summed over load steps), the largest
+difference of Newton steps in a load step from 1 rank, the relative difference of
+the solution (``solution.npz``, max |u_N - u_1| / max |u_1|), whether every output
+file was written, and how many ranks wrote a block of ``contact_surface.bp`` (the
+others own no contact facet).
+
+``--memory-lev 10``: each rank's peak resident memory (VmHWM of
+/proc/self/status) after the demo at that level, d1/L1, on 2 ranks, output
+included. Run by ``mpirun -n 2 python benchmarks/ranks.py --worker memory ...``.
+
+Writes ``ranks.json`` and ``ranks.md``; a part not run keeps its old numbers.
+Run with ``nice`` on a shared machine: it starts up to 8 ranks.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import pathlib
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+PYTHON = sys.executable
+MPIENV = {"OMPI_MCA_rmaps_base_oversubscribe": "1", "PRTE_MCA_rmaps_default_mapping_policy": ":oversubscribe",
+          "OMPI_MCA_btl": "self,sm"}
+if os.getuid() == 0:
+    MPIENV |= {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1"}
+
+
+def parse() -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser.add_argument("--ranks", type=int, nargs="*", default=[1, 2, 3, 4, 8], help="numbers of ranks (1 first)")
+    parser.add_argument("--levels", type=int, nargs="*", default=[5, 6], help="levels of the demo")
+    parser.add_argument("--no-hertz", action="store_true", help="skip cases/hertz.toml")
+    parser.add_argument("--memory-lev", type=int, default=None, help="level of the 2-rank memory run (e.g. 10)")
+    parser.add_argument("--output", default=str(ROOT / "benchmarks" / "results"))
+    parser.add_argument("--worker", choices=["memory"], help=argparse.SUPPRESS)
+    parser.add_argument("--worker-output", help=argparse.SUPPRESS)
+    return parser.parse_args()
+
+
+def mpirun(n: int, argv: list[str], log: pathlib.Path) -> tuple[int, float]:
+    """Run ``argv`` on ``n`` ranks; exit code and wall seconds."""
+    t0 = time.perf_counter()
+    with log.open("w") as fh:
+        code = subprocess.call(["mpirun", "-n", str(n), *argv], cwd=ROOT, env=os.environ | MPIENV,
+                               stdout=fh, stderr=subprocess.STDOUT)
+    return code, time.perf_counter() - t0
+
+
+def hertz_case(directory: pathlib.Path, lu: bool) -> pathlib.Path:
+    """cases/hertz.toml on the coarse mesh (and with ``pc = "lu"``), written to ``directory``."""
+    text = (ROOT / "cases" / "hertz.toml").read_text()
+    line = 'file = "../meshes/hertz_medium.geo"'
+    assert line in text, "cases/hertz.toml: mesh line changed"
+    text = text.replace(line, f'file = "{ROOT / "meshes" / "hertz_coarse.geo"}"')
+    if lu:
+        text = text.replace("[solver]\n", '[solver]\npc = "lu"\n')
+    path = directory / ("hertz_coarse_lu.toml" if lu else "hertz_coarse.toml")
+    path.write_text(text)
+    return path
+
+
+def programs(args: argparse.Namespace, work: pathlib.Path) -> dict[str, tuple[list[str], list[str]]]:
+    """Case name -> (command after ``python``, the files it must write)."""
+    demo_files = ["body.bp", "contact_surface.bp", "solution.npz", "contact_states.png", "summary.json"]
+    case_files = ["body.bp", "contact_surface.bp", "solution.npz", "contact_states.png", "summary.json"]
+    runs = {f"demo lev {lev} d1/L1": (["demos/coulomb3d.py", "--lev", str(lev), "--geometry", "d1", "--load", "L1"],
+                                      demo_files) for lev in args.levels}
+    if not args.no_hertz:
+        for lu, label in ((False, "hertz coarse"), (True, "hertz coarse, pc lu")):
+            runs[label] = (["-m", "contactqvi", "run", str(hertz_case(work, lu))], case_files)
+    return runs
+
+
+def surface_blocks(path: pathlib.Path) -> int:
+    """Ranks that wrote a block of the last step of ``contact_surface.bp``."""
+    import adios2
+
+    with adios2.FileReader(str(path)) as reader:
+        return len(reader.all_blocks_info("geometry")[reader.num_steps() - 1])
+
+
+def record(out: pathlib.Path, files: list[str]) -> dict:
+    summary = json.loads((out / "summary.json").read_text()) if (out / "summary.json").is_file() else {}
+    steps = summary.get("steps") or [summary]  # a case file has steps, the demo one solve
+    return {
+        "status": summary.get("status"),
+        "newton_steps": [s.get("iterations") for s in steps],
+        "newton": sum(s.get("iterations") or 0 for s in steps),
+        "krylov": sum(s.get("inner_iterations") or 0 for s in steps),
+        "written": all((out / f).exists() for f in files),
+        "missing": [f for f in files if not (out / f).exists()],
+        "surface_blocks": surface_blocks(out / "contact_surface.bp") if (out / "contact_surface.bp").is_dir() else 0,
+    }
+
+
+def rank_table(args: argparse.Namespace, work: pathlib.Path) -> list[dict]:
+    rows = []
+    for case, (command, files) in programs(args, work).items():
+        reference = None
+        for n in args.ranks:
+            out = work / f"{case.replace(' ', '_').replace('/', '').replace(',', '')}_np{n}"
+            code, seconds = mpirun(n, ["nice", PYTHON, *command, "--output", str(out)], out.with_suffix(".log"))
+            row = {"case": case, "ranks": n, "exit_code": code, "seconds": round(seconds, 1), **record(out, files)}
+            if (out / "solution.npz").is_file():
+                u = np.load(out / "solution.npz")["u"]
+                if reference is None:
+                    reference = row | {"u": u}
+                else:
+                    row["relative_difference"] = float(np.abs(u - reference["u"]).max() / np.abs(reference["u"]).max())
+                    row["max_newton_difference"] = int(np.abs(np.subtract(row["newton_steps"],
+                                                                           reference["newton_steps"])).max())
+            print(json.dumps(row), flush=True)
+            if code != 0:
+                print(out.with_suffix(".log").read_text()[-3000:], file=sys.stderr, flush=True)
+            rows.append(row)
+    return rows
+
+
+def memory_worker(lev: int, output: str) -> None:
+    """In ``mpirun -n 2``: the demo at ``lev`` d1/L1 with its output, then each rank's VmHWM (MiB)."""
+    import importlib.util
+
+    from mpi4py import MPI
+
+    spec = importlib.util.spec_from_file_location("coulomb3d_demo", ROOT / "demos" / "coulomb3d.py")
+    demo = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(demo)
+    code = demo.main(["--lev", str(lev), "--geometry", "d1", "--load", "L1", "--output", output])
+    status = pathlib.Path("/proc/self/status").read_text().split("\n")
+    hwm_mib = next(int(line.split()[1]) for line in status if line.startswith("VmHWM:")) / 1024
+    comm = MPI.COMM_WORLD
+    peaks = comm.allgather(hwm_mib)
+    if comm.rank == 0:
+        summary = json.loads((pathlib.Path(output) / "summary.json").read_text())
+        result = {"lev": lev, "case": "d1/L1", "ranks": comm.size, "exit_code": code, "vmhwm_mib": peaks,
+                  "newton": summary["iterations"], "krylov": summary["inner_iterations"], "n": summary["n"],
+                  "files": summary.get("files", [])}
+        (pathlib.Path(output) / "memory.json").write_text(json.dumps(result))
+
+
+def memory(lev: int, work: pathlib.Path) -> dict:
+    out = work / f"memory_lev{lev}"
+    code, seconds = mpirun(2, ["nice", PYTHON, __file__, "--worker", "memory", "--memory-lev", str(lev),
+                               "--worker-output", str(out)], work / f"memory_lev{lev}.log")
+    result = json.loads((out / "memory.json").read_text()) if (out / "memory.json").is_file() else {"exit_code": code}
+    peaks = result.get("vmhwm_mib", [])
+    if len(peaks) == 2:
+        result["rank0_over_rank1"] = peaks[0] / peaks[1]
+    result["seconds"] = round(seconds, 1)
+    return result
+
+
+def markdown(data: dict) -> str:
+    from contactqvi.tables import markdown_table
+
+    text = ["## The same answer on any number of ranks (issue 24)\n",
+            "Each program as a user runs it, under `mpirun -n N` on this machine's "
+            f"{data['machine']['cores']} cores (oversubscribed above), against its run on 1 rank "
+            "(benchmarks/ranks.py). Newton / Krylov: summed over the load steps (Hertz: four); "
+            "dNewton: largest difference in a step's Newton count from 1 rank; rel. diff: "
+            "max |u_N - u_1| / max |u_1| of `solution.npz`; written: every output file (body.bp, "
+            "contact_surface.bp, solution.npz, contact_states.png, summary.json); surface ranks: ranks "
+            "that own contact facets (the others write no block of contact_surface.bp).\n"]
+    rows = [[r["case"], r["ranks"], r["status"], r["newton"], r["krylov"], r.get("max_newton_difference"),
+             r.get("relative_difference"), "yes" if r["written"] and r["exit_code"] == 0 else "no",
+             r["surface_blocks"], r["seconds"]] for r in data.get("rows", [])]
+    text.append(markdown_table(["case", "ranks", "status", "Newton", "Krylov", "dNewton", "rel. diff", "written",
+                                "surface ranks", "wall s"], rows))
+    text.append("\nThe Hertz case with its default inexact Newton-step solves (GAMG, tol 0.1) stops, as its "
+                "test says, at a residual that leaves the solution about 1e-7 from the exact one on its graded "
+                "mesh; the runs agree to that. With exact Newton-step solves (pc lu) they agree to round-off.\n")
+    mem = data.get("memory")
+    if mem and mem.get("vmhwm_mib"):
+        peaks = mem["vmhwm_mib"]
+        text.append(f"\n## Peak memory per rank, lev {mem['lev']} d1/L1 on {mem['ranks']} ranks\n\n"
+                    f"VmHWM of /proc/self/status after the demo with its output ({', '.join(mem['files'])}; "
+                    f"solution.npz is not gathered above {data.get('gather_max_nodes')} nodes), n = {mem['n']} "
+                    f"free dofs, {mem['newton']} Newton / {mem['krylov']} Krylov, {mem['seconds']} s.\n\n")
+        text.append(markdown_table(["rank", "peak MiB"], [[i, round(p)] for i, p in enumerate(peaks)]))
+        text.append(f"\nRank 0 / rank 1: {mem['rank0_over_rank1']:.3f}.\n")
+    return "".join(text)
+
+
+def main() -> None:
+    args = parse()
+    if args.worker == "memory":
+        memory_worker(args.memory_lev, args.worker_output)
+        return
+    assert args.ranks and args.ranks[0] == 1, "--ranks must start with 1 (the reference)"
+    out = pathlib.Path(args.output)
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "ranks.json"
+    data = json.loads(path.read_text()) if path.is_file() else {}
+    work = pathlib.Path(tempfile.mkdtemp(prefix="contactqvi-ranks-"))
+    try:
+        if args.levels or not args.no_hertz:
+            data["rows"] = rank_table(args, work)
+        if args.memory_lev is not None:
+            data["memory"] = memory(args.memory_lev, work)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+    from mpi4py import MPI
+
+    from benchlib import machine
+    from contactqvi.tables import GATHER_MAX_NODES, write_table
+
+    data["machine"] = machine(MPI.COMM_SELF)
+    data["gather_max_nodes"] = GATHER_MAX_NODES
+    write_table(MPI.COMM_SELF, out / "ranks", data, markdown(data))
+
+
+if __name__ == "__main__":
+    main()
