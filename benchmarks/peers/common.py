@@ -42,6 +42,7 @@ RESULT_FIELDS = {
     "newton_per_step": "Newton iterations per load step",
     "wall_time": "seconds from the start of the process to the solution in memory (read, set-up, solve)",
     "solve_time": "seconds of the load path's solves only (set-up of the solver included, assembly of A not)",
+    "solve_cpu_time": "CPU seconds (user + system, summed over ranks) of the same",
     "peak_memory_mib": "VmHWM of the process (MiB) after the solve",
     "contact_force": "total force of the obstacle on the body (N, global components), code's own multipliers",
     "reactions": "reaction force of each clamped / displacement group (N)",

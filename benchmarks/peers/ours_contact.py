@@ -35,6 +35,16 @@ from contactqvi.linalg import default_options  # noqa: E402
 from contactqvi.runner import PREFIX, build_problem  # noqa: E402
 
 
+def _gather(u: fem.Function) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Owned node coordinates (N, 3) and values (N, 3) of a P1/Q1 vector function on rank 0."""
+    V = u.function_space
+    n_owned = V.dofmap.index_map.size_local
+    x = V.tabulate_dof_coordinates()[:n_owned]
+    values = u.x.array[: 3 * n_owned].reshape(n_owned, 3)
+    xs, vs = V.mesh.comm.gather(x, root=0), V.mesh.comm.gather(values, root=0)
+    return (np.vstack(xs), np.vstack(vs)) if V.mesh.comm.rank == 0 else (None, None)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("case")
@@ -54,9 +64,10 @@ def main() -> int:
     with default_options(PREFIX, case.petsc), build_problem(case, comm) as problem:
         u = problem.A.createVecRight()
         comm.Barrier()
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         results = solve_load_path(problem, case.steps, u, parameters, PREFIX, from_rest=from_rest)
         solve_time = comm.allreduce(time.perf_counter() - t0, op=MPI.MAX)
+        solve_cpu = comm.allreduce(time.process_time() - c0, op=MPI.SUM)
         wall_time = comm.allreduce(common.clock(), op=MPI.MAX)
         peak = comm.allreduce(common.peak_memory_mib(), op=MPI.SUM)
         result = results[-1]
@@ -73,7 +84,7 @@ def main() -> int:
             "newton_iterations": sum(r.iterations for r in results),
             "newton_per_step": [r.iterations for r in results],
             "krylov_iterations": sum(r.inner_iterations for r in results),
-            "wall_time": wall_time, "solve_time": solve_time, "peak_memory_mib": peak,
+            "wall_time": wall_time, "solve_time": solve_time, "solve_cpu_time": solve_cpu, "peak_memory_mib": peak,
             "contact_force": summary["contact_force"], "reactions": summary["reaction_forces"],
             "equilibrium_error": summary["equilibrium_error"],
             "settings": {"solver": {**parameters, "start": "rest" if from_rest else "contact"},

@@ -1,0 +1,427 @@
+"""Our SCD semismooth* Newton solver beside GetFEM 5.4 and Kratos 10.4 on the same meshes and cases.
+
+Problems (``--problems``):
+  * ``d1_L1``, ``d3_L2``: the body Omega(d) of seed 000, Sect. 7 (F = 0.23, loads L1/L2) at the
+    levels ``--levels``, exported as gmsh meshes (:mod:`peers.export`);
+  * ``hertz``: cases/hertz.toml (rigid sphere, frictionless, quarter model) on the meshes
+    ``--hertz-meshes`` (meshes/hertz_*.geo), at the final depth delta = 1 mm in one step
+    (frictionless contact is path-independent), against the closed form of
+    :mod:`contactqvi.problems.hertz`.
+
+For each problem and size: (1) the reference, our solver with exact Newton steps (``pc = lu``) to
+||y^|| <= 1e-12 ||y^0||; (2) each code from its loosest tolerance down (``TOLERANCES``) until its
+total contact force and its displacement agree with the reference to ``--accuracy`` (1e-6)
+relative; that run is the one timed. Every code runs in its own process on one core
+(``OMP_NUM_THREADS=1``), ours also on 2 ranks. Writes ``peers_real.json`` / ``.md`` to
+``--output``; the load average of the machine is recorded with every run.
+
+    python benchmarks/peers_real.py --problems d1_L1 d3_L2 --levels 3 4 5 6 7 --hertz-meshes coarse medium
+    python benchmarks/peers_real.py --peers getfem --problems d1_L1 --levels 3     # a quick check
+
+Needs ``make peers`` (GetFEM from Debian, Kratos in build/kratos-venv); a peer that is not
+installed is skipped. Our solver runs from a snapshot of a commit (``--ours-commit``, default
+HEAD) exported to ``--work``, so that edits in the working tree do not change a running benchmark.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import pathlib
+import platform
+import resource
+import shutil
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+HERE = pathlib.Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(HERE / "peers"))
+import common  # noqa: E402
+import export  # noqa: E402
+
+#: Tolerance ladders, loosest first: ours ``rtol`` (||y^|| <= rtol ||y^0||), GetFEM ``max_res``
+#: (residual in GPa units), Kratos' relative tolerances.
+TOLERANCES = {
+    "ours": [1e-4, 1e-6, 1e-8, 1e-10, 1e-12],
+    "getfem": [1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12],
+    "kratos": [1e-4, 1e-6, 1e-8],
+}
+#: Linear solvers of GetFEM's Newton (``Model.solve(..., 'lsolver', ...)``) compared at ``--settings-case``.
+#: Debian's GetFEM 5.4 has no SuperLU ("SuperLU is not interfaced"): MUMPS or GetFEM's own GMRES + ILU.
+GETFEM_LSOLVERS = ["mumps", "gmres/ilu"]
+#: Alart-Curnier augmentation r of GetFEM as multiples of E (GPa); GetFEM advises r close to E.
+GETFEM_R = [0.1, 1.0, 10.0]
+
+PYTHON = {"ours": str(ROOT / ".venv/bin/python"), "getfem": "/usr/bin/python3",
+          "kratos": str(ROOT / "build/kratos-venv/bin/python")}
+DRIVER = {name: str(HERE / "peers" / f"{name}_contact.py") for name in ("ours", "getfem", "kratos")}
+MPIENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+          "OMPI_MCA_rmaps_base_oversubscribe": "1", "PRTE_MCA_rmaps_default_mapping_policy": ":oversubscribe",
+          "OMPI_MCA_btl": "self,sm"}
+ONE_THREAD = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+
+def installed(peer: str) -> bool:
+    """Whether ``make peers`` installed the peer."""
+    probe = {"getfem": "import getfem", "kratos": "import KratosMultiphysics.ContactStructuralMechanicsApplication",
+             "ours": "import dolfinx"}[peer]
+    if not pathlib.Path(PYTHON[peer]).exists():
+        return False
+    return subprocess.run([PYTHON[peer], "-c", probe], capture_output=True).returncode == 0
+
+
+def snapshot(work: pathlib.Path, commit: str) -> tuple[pathlib.Path, str]:
+    """Export ``contactqvi/`` of ``commit`` to ``work/ours-src`` (PYTHONPATH of our runs); its hash."""
+    sha = subprocess.run(["git", "-C", str(ROOT), "rev-parse", commit], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    target = work / "ours-src"
+    stamp = target / "COMMIT"
+    if not (stamp.exists() and stamp.read_text() == sha):
+        shutil.rmtree(target, ignore_errors=True)
+        target.mkdir(parents=True)
+        archive = subprocess.run(["git", "-C", str(ROOT), "archive", sha, "contactqvi"], capture_output=True, check=True)
+        subprocess.run(["tar", "-x", "-C", str(target)], input=archive.stdout, check=True)
+        stamp.write_text(sha)
+    return target, sha
+
+
+class Runner:
+    """Runs the drivers in subprocesses and keeps every run."""
+
+    def __init__(self, work: pathlib.Path, ours_src: pathlib.Path, timeout: float):
+        self.work, self.ours_src, self.timeout = work, ours_src, timeout
+        self.count = 0
+
+    def run(self, code: str, case: pathlib.Path, options: list[str], ranks: int = 1) -> dict:
+        """Run ``code``'s driver on ``case``; its result.json plus ``process_seconds``, ``load_average``."""
+        self.count += 1
+        out = self.work / "runs" / f"{case.stem}-{code}-{self.count:03d}"
+        shutil.rmtree(out, ignore_errors=True)
+        command = [PYTHON[code], DRIVER[code], str(case), "--output", str(out), *options]
+        env = {**os.environ, **ONE_THREAD}
+        if code == "ours":
+            env["PYTHONPATH"] = str(self.ours_src)
+            if ranks > 1:
+                env.update(MPIENV)
+                command = ["mpirun", "-n", str(ranks), *command]
+        load = os.getloadavg()[0]
+        cpu0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        t0 = time.perf_counter()
+        try:
+            proc = subprocess.run(command, env=env, capture_output=True, text=True, timeout=self.timeout)
+            failure = None if proc.returncode == 0 else (proc.stdout[-2000:] + proc.stderr[-2000:])
+        except subprocess.TimeoutExpired:
+            failure = f"timeout after {self.timeout:g} s"
+        seconds = time.perf_counter() - t0
+        cpu1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = (cpu1.ru_utime - cpu0.ru_utime) + (cpu1.ru_stime - cpu0.ru_stime)
+        record = {"process_seconds": seconds, "process_cpu_seconds": cpu, "load_average": load, "options": options, "ranks": ranks,
+                  "output": str(out)}
+        if (out / "result.json").exists():
+            record.update(json.loads((out / "result.json").read_text()))
+        else:
+            record["status"] = f"failed: {failure}"
+        if failure and "status" in record and record["status"] == "converged":
+            record["status"] = f"failed: {failure}"
+        print(f"  {code:6s} {' '.join(options):45s} ranks {ranks}: {record['status'][:60]}, "
+              f"{record.get('newton_iterations', '-')} Newton, solve {record.get('solve_time', float('nan')):.2f} s, "
+              f"process {seconds:.1f} s (load {load:.1f})", flush=True)
+        return record
+
+
+def errors(record: dict, reference: dict) -> dict:
+    """Relative contact-force and displacement differences of a run to the reference (None if it failed)."""
+    if not str(record.get("status")).startswith("converged"):
+        return {"force_error": None, "displacement_error": None, "displacement_error_max": None}
+    a = np.load(pathlib.Path(record["output"]) / "solution.npz")
+    b = np.load(pathlib.Path(reference["output"]) / "solution.npz")
+    if a["x"].shape != b["x"].shape or np.abs(a["x"] - b["x"]).max() > 1e-9 * np.abs(b["x"]).max():
+        raise RuntimeError(f"{record['output']}: nodes differ from the reference's")
+    du = a["u"] - b["u"]
+    force = np.asarray(record["contact_force"]) - np.asarray(reference["contact_force"])
+    return {"force_error": float(np.linalg.norm(force) / np.linalg.norm(reference["contact_force"])),
+            "displacement_error": float(np.linalg.norm(du) / np.linalg.norm(b["u"])),
+            "displacement_error_max": float(np.abs(du).max() / np.abs(b["u"]).max())}
+
+
+def accurate(entry: dict, accuracy: float) -> bool:
+    return (entry.get("force_error") is not None and entry["force_error"] <= accuracy
+            and entry["displacement_error"] <= accuracy)
+
+
+def ladder(runner: Runner, code: str, case: pathlib.Path, reference: dict, options: list[str], flag: str,
+           accuracy: float, start: float | None = None) -> tuple[dict | None, list[dict]]:
+    """Run ``code`` from its loosest tolerance (or ``start``, the one that sufficed on the size
+    before) down; the first run within ``accuracy`` and all runs."""
+    runs = []
+    tolerances = TOLERANCES[code]
+    if start is not None:
+        tolerances = [t for t in tolerances if t <= start]
+    for tol in tolerances:
+        record = runner.run(code, case, [*options, flag, f"{tol:g}"])
+        record.update(errors(record, reference), tolerance=tol)
+        runs.append(record)
+        if accurate(record, accuracy):
+            return record, runs
+        if record["status"].startswith("failed: timeout"):
+            break
+    return None, runs
+
+
+def hertz_closed_form(case: common.Case) -> dict:
+    """Hertz force (quarter model) and contact radius at the case's final depth."""
+    sys.path.insert(0, str(ROOT))
+    e_star = case.young / (1 - case.poisson**2)
+    radius = float(case.obstacle["radius"])
+    depth = -float(case.steps[-1][1][2])
+    quarter = 4.0 / 3.0 * e_star * math.sqrt(radius) * depth**1.5 / 4.0
+    return {"force_z": quarter, "radius": math.sqrt(radius * depth), "depth": depth}
+
+
+def machine() -> dict:
+    cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if line.startswith("model name")), "")
+    return {"cpu": cpu, "cores": os.cpu_count(), "memory_gib": round(os.sysconf("SC_PAGE_SIZE")
+            * os.sysconf("SC_PHYS_PAGES") / 2**30, 1), "machine": platform.machine(), "python": platform.python_version()}
+
+
+def getfem_settings(runner: Runner, case: pathlib.Path, reference: dict, accuracy: float) -> tuple[list[str], list[dict]]:
+    """GetFEM's fastest linear solver and augmentation r at one case (tight tolerance, 1 core)."""
+    trials = []
+    young = common.load_case(case).young / 1e9
+    for lsolver in GETFEM_LSOLVERS:
+        for factor in GETFEM_R:
+            options = ["--lsolver", lsolver, "--r", f"{factor * young:g}"]
+            record = runner.run("getfem", case, [*options, "--max-res", "1e-10"])
+            record.update(errors(record, reference), r_over_E=factor)
+            trials.append(record)
+    good = [t for t in trials if accurate(t, accuracy)]
+    if not good:
+        return ["--lsolver", "mumps"], trials
+    best = min(good, key=lambda t: t["solve_time"])
+    return ["--lsolver", best["settings"]["lsolver"], "--r", f"{best['settings']['r']:g}"], trials
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser.add_argument("--problems", nargs="+", default=["d1_L1", "d3_L2", "hertz"])
+    parser.add_argument("--levels", nargs="+", type=int, default=[3, 4, 5, 6, 7])
+    parser.add_argument("--hertz-meshes", nargs="+", default=["coarse", "medium"])
+    parser.add_argument("--peers", nargs="+", default=["getfem", "kratos"])
+    parser.add_argument("--peer-max-dofs", type=int, default=10**9,
+                        help="skip a peer above this many dofs (its time is extrapolated instead)")
+    parser.add_argument("--kratos-max-dofs", type=int, default=10_000,
+                        help="Kratos runs only up to this size (it does not converge here, see docs/peers.md)")
+    parser.add_argument("--accuracy", type=float, default=1e-6)
+    parser.add_argument("--no-np2", action="store_true", help="skip our 2-rank runs")
+    parser.add_argument("--settings-case", default="d1_L1:5", help="problem:level of the GetFEM settings sweep")
+    parser.add_argument("--timeout", type=float, default=900.0, help="seconds before a run is stopped")
+    parser.add_argument("--ours-commit", default="HEAD")
+    parser.add_argument("--work", default=str(ROOT / "build/peers"))
+    parser.add_argument("--output", default=str(HERE / "results"))
+    args = parser.parse_args()
+
+    work = pathlib.Path(args.work)
+    work.mkdir(parents=True, exist_ok=True)
+    ours_src, sha = snapshot(work, args.ours_commit)
+    runner = Runner(work, ours_src, args.timeout)
+    peers = [p for p in args.peers if installed(p)]
+    skipped = sorted(set(args.peers) - set(peers))
+    if skipped:
+        print(f"not installed (make peers): {', '.join(skipped)}")
+
+    cases: list[tuple[str, str, pathlib.Path]] = []
+    for problem in args.problems:
+        if problem == "hertz":
+            for size in args.hertz_meshes:
+                case = export.export_case(work / "cases", ROOT / "cases/hertz.toml", f"hertz_{size}",
+                                          mesh=ROOT / f"meshes/hertz_{size}.geo",
+                                          steps=[{"translation": [0.0, 0.0, -1e-3]}])
+                cases.append((problem, size, case))
+        else:
+            geometry, load = problem.split("_")
+            for lev in args.levels:
+                cases.append((problem, f"lev {lev}", export.export_box(work / "cases", lev, geometry, load)))
+
+    rows, settings_trials = [], []
+    sufficed: dict[tuple[str, str], float] = {}  # (code, problem) -> tolerance that sufficed on the last size
+
+    def timed(code: str, case: pathlib.Path, reference: dict, options: list[str], flag: str, problem: str):
+        best, runs = ladder(runner, code, case, reference, options, flag, args.accuracy, sufficed.get((code, problem)))
+        if best is not None:
+            sufficed[(code, problem)] = best["tolerance"]
+        return best, runs
+
+    getfem_options = ["--lsolver", "mumps"]
+    settings_problem, settings_level = args.settings_case.split(":")
+    for problem, size, case in cases:
+        print(f"{problem} {size}: {case}", flush=True)
+        reference = runner.run("ours", case, ["--pc", "lu", "--rtol", "1e-12"])
+        if reference["status"] != "converged":
+            rows.append({"problem": problem, "size": size, **reference, "code": "reference"})
+            continue
+        base = {"problem": problem, "size": size, "case": str(case), "dofs": reference["dofs"],
+                "contact_nodes": reference["contact_nodes"]}
+        closed = hertz_closed_form(common.load_case(case)) if problem == "hertz" else None
+        rows.append({**base, **reference, **errors(reference, reference), "closed_form": closed, "code": "reference"})
+        best, runs = timed("ours", case, reference, [], "--rtol", problem)
+        rows.append({**base, "code": "ours", "best": best, "runs": runs, "closed_form": closed})
+        if best is not None and not args.no_np2:
+            np2 = runner.run("ours", case, ["--rtol", f"{best['tolerance']:g}"], ranks=2)
+            np2.update(errors(np2, reference), tolerance=best["tolerance"])
+            rows.append({**base, "code": "ours np2", "best": np2 if accurate(np2, args.accuracy) else None,
+                         "runs": [np2], "closed_form": closed})
+        if "getfem" in peers and reference["dofs"] <= args.peer_max_dofs:
+            if problem == settings_problem and size == f"lev {settings_level}" and not settings_trials:
+                getfem_options, settings_trials = getfem_settings(runner, case, reference, args.accuracy)
+                print(f"  GetFEM settings: {' '.join(getfem_options)}", flush=True)
+            best, runs = timed("getfem", case, reference, getfem_options, "--max-res", problem)
+            rows.append({**base, "code": "getfem", "best": best, "runs": runs, "closed_form": closed})
+        if "kratos" in peers and reference["dofs"] <= args.kratos_max_dofs and problem != "hertz":
+            record = runner.run("kratos", case, ["--move-mesh", "--substeps", "10", "--max-iter", "30", "--tol", "1e-6"])
+            record.update(errors(record, reference) if record["status"] == "converged" else {}, tolerance=1e-6)
+            rows.append({**base, "code": "kratos", "best": record if accurate(record, args.accuracy) else None,
+                         "runs": [record], "closed_form": closed})
+
+    out = pathlib.Path(args.output)
+    out.mkdir(parents=True, exist_ok=True)
+    data = {"machine": machine(), "ours_commit": sha, "accuracy": args.accuracy, "tolerances": TOLERANCES,
+            "getfem_options": getfem_options, "getfem_settings_trials": settings_trials, "rows": rows,
+            "load_average_end": os.getloadavg()}
+    previous = out / "peers_real.json"
+    if previous.exists():  # keep rows of other problems/sizes measured before
+        old = json.loads(previous.read_text())
+        keys = {(r["problem"], r["size"], r["code"]) for r in rows}
+        data["rows"] = [r for r in old.get("rows", []) if (r["problem"], r["size"], r["code"]) not in keys] + rows
+        if not settings_trials:
+            data["getfem_options"] = old.get("getfem_options", getfem_options)
+            data["getfem_settings_trials"] = old.get("getfem_settings_trials", [])
+    data["limits"] = limits(data)
+    previous.write_text(json.dumps(data, indent=1) + "\n")
+    (out / "peers_real.md").write_text(markdown(data))
+    print(markdown(data))
+    return 0
+
+
+def _fmt(value, spec: str = ".3g") -> str:
+    if value is None:
+        return "\u2013"
+    if isinstance(value, float):
+        return format(value, spec)
+    return str(value)
+
+
+def _timed_run(row: dict) -> dict | None:
+    return row if row["code"] == "reference" else row.get("best")
+
+
+def limits(data: dict, seconds: float = 600.0, memory_mib: float = 20 * 1024) -> list[dict]:
+    """Largest size each code solves within ``seconds`` (process CPU time) and ``memory_mib``,
+    extrapolated by a power law through each code's two largest measured sizes per problem."""
+    series: dict = {}
+    for row in data["rows"]:
+        run = _timed_run(row)
+        if run is None or row["code"] == "reference":
+            continue
+        series.setdefault((row["problem"], row["code"]), []).append(
+            (row["dofs"], run.get("process_cpu_seconds") or run["wall_time"], run["peak_memory_mib"]))
+    out = []
+    for (problem, code), points in series.items():
+        points.sort()
+        if len(points) < 2:
+            continue
+        (n0, t0, m0), (n1, t1, m1) = points[-2], points[-1]
+        alpha = math.log(t1 / t0) / math.log(n1 / n0)
+        beta = math.log(m1 / m0) / math.log(n1 / n0)
+        n_time = n1 * (seconds / t1) ** (1 / alpha) if alpha > 0 else math.inf
+        n_memory = n1 * (memory_mib / m1) ** (1 / beta) if beta > 0 else math.inf
+        out.append({"problem": problem, "code": code, "largest_measured": n1, "time_exponent": alpha,
+                    "memory_exponent": beta, "dofs_at_time_limit": n_time, "dofs_at_memory_limit": n_memory,
+                    "largest": min(n_time, n_memory), "measured_within": t1 <= seconds and m1 <= memory_mib})
+    return out
+
+
+def markdown(data: dict) -> str:
+    """The tables of ``peers_real.md``: per problem and size, each code's timed run; ratios; limits."""
+    lines = [
+        "# Our SCD Newton solver beside GetFEM and Kratos (benchmarks/peers_real.py)",
+        "",
+        f"Same gmsh meshes and case data for every code; the reference is ours with exact Newton steps "
+        f"(pc = lu, rtol 1e-12). Each code's timed run is its loosest tolerance whose total contact force and "
+        f"displacement agree with the reference to {data['accuracy']:g} relative (ladders: "
+        + "; ".join(f"{k} {', '.join(f'{t:g}' for t in v)}" for k, v in data["tolerances"].items())
+        + "). 1 core each (OMP_NUM_THREADS=1), ours also on 2 MPI ranks. *solve*: the load path's solves "
+        "(wall and CPU seconds; CPU summed over ranks); *process*: the whole process (start-up, mesh, assembly, "
+        "solve, output), CPU seconds. Memory: VmHWM (summed over ranks). The machine was shared with other jobs: "
+        "the 1-minute load average at the start of each run is listed (2 cores: above 2, wall times are "
+        f"stretched; CPU times much less). Our code at commit {data['ours_commit'][:10]}; "
+        f"GetFEM options {' '.join(data['getfem_options'])}.",
+        "",
+        "| problem | size | dofs | code | tol | Newton | solve s | solve CPU s | process CPU s | peak MiB "
+        "| contact force z (N) | force err | u err | vs closed form | load |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for row in data["rows"]:
+        run = _timed_run(row)
+        if run is None:
+            last = (row.get("runs") or [{}])[-1]
+            lines.append(f"| {row['problem']} | {row['size']} | {row['dofs']} | {row['code']} | "
+                         f"{_fmt(last.get('tolerance'))} | {_fmt(last.get('newton_iterations'))} | "
+                         f"{_fmt(last.get('solve_time'))} | {_fmt(last.get('solve_cpu_time'))} | "
+                         f"{_fmt(last.get('process_cpu_seconds'))} | – | – | "
+                         f"{_fmt(last.get('force_error'))} | {_fmt(last.get('displacement_error'))} | – | "
+                         f"{_fmt(last.get('load_average'), '.1f')} |")
+            lines.append(f"| | | | | **{row['code']} not within accuracy: {str(last.get('status', ''))[:70]}** "
+                         "| | | | | | | | | | |")
+            continue
+        closed = row.get("closed_form")
+        force_z = run["contact_force"][2]
+        versus = None if closed is None else (abs(force_z) - closed["force_z"]) / closed["force_z"]
+        lines.append(
+            f"| {row['problem']} | {row['size']} | {row['dofs']} | {row['code']} | {_fmt(run.get('tolerance'))} | "
+            f"{run['newton_iterations']} | {_fmt(run['solve_time'])} | {_fmt(run.get('solve_cpu_time'))} | "
+            f"{_fmt(run.get('process_cpu_seconds'))} | {_fmt(run['peak_memory_mib'], '.0f')} | {force_z:.7g} | "
+            f"{_fmt(run.get('force_error'))} | {_fmt(run.get('displacement_error'))} | {_fmt(versus, '+.3g')} | "
+            f"{_fmt(run.get('load_average'), '.1f')} |")
+    lines += ["", "Ratios at equal accuracy, peer / ours on 1 core (solve wall, solve CPU, process CPU):", "",
+              "| problem | size | dofs | peer | solve | solve CPU | process CPU |", "|---|---|---|---|---|---|---|"]
+    by_key: dict = {}
+    for row in data["rows"]:
+        by_key.setdefault((row["problem"], row["size"]), {})[row["code"]] = row
+    for (problem, size), codes in by_key.items():
+        ours = (codes.get("ours") or {}).get("best")
+        for peer in ("getfem", "kratos"):
+            other = (codes.get(peer) or {}).get("best")
+            if ours and other:
+                def ratio(key):
+                    return _fmt(other[key] / ours[key], ".1f") if other.get(key) and ours.get(key) else "–"
+                lines.append(f"| {problem} | {size} | {codes['ours']['dofs']} | {peer} | {ratio('solve_time')} | "
+                             f"{ratio('solve_cpu_time')} | {ratio('process_cpu_seconds')} |")
+    lines += ["", "Largest size within 10 minutes (process CPU time) and 20 GiB, **extrapolated** by a power law "
+              "through each code's two largest measured sizes (t ~ n^a, memory ~ n^b):", "",
+              "| problem | code | largest measured dofs | a | b | dofs at 600 s | dofs at 20 GiB |",
+              "|---|---|---|---|---|---|---|"]
+    for lim in limits(data):
+        lines.append(f"| {lim['problem']} | {lim['code']} | {lim['largest_measured']} | {lim['time_exponent']:.2f} | "
+                     f"{lim['memory_exponent']:.2f} | {lim['dofs_at_time_limit']:.3g} | {lim['dofs_at_memory_limit']:.3g} |")
+    if data.get("getfem_settings_trials"):
+        lines += ["", "GetFEM settings sweep (max_res 1e-10; the fastest accurate one is used above):", "",
+                  "| lsolver | r / E | Newton | solve s | solve CPU s | status |", "|---|---|---|---|---|---|"]
+        for t in data["getfem_settings_trials"]:
+            lines.append(f"| {t['options'][1]} | {_fmt(t.get('r_over_E'))} | {_fmt(t.get('newton_iterations'))} | "
+                         f"{_fmt(t.get('solve_time'))} | {_fmt(t.get('solve_cpu_time'))} | "
+                         f"{str(t.get('status')).splitlines()[0][:60]} |")
+    lines += ["", f"Machine: {data['machine']['cpu']}, {data['machine']['cores']} cores, "
+              f"{data['machine']['memory_gib']} GiB, shared with other jobs; 1-minute load average at the end "
+              f"{data['load_average_end'][0]:.1f}."]
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":
+    sys.exit(main())
