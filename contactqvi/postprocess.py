@@ -2,8 +2,8 @@
 
 Units are SI as everywhere in contactqvi: stresses in Pa, forces in N.
 
-* :func:`stress_fields`: the Cauchy stress tensor and the von Mises stress as
-  cell-wise constant (DG0) fields, the cell averages of sigma(u).
+* :class:`StressFields`, :func:`stress_fields`: the Cauchy stress tensor and the
+  von Mises stress as cell-wise constant (DG0) fields, the cell averages of sigma(u).
 * :func:`reaction_forces`: the force each supported boundary exerts on the body,
   from the residual r(v) = a(u, v) - l(v) assembled without boundary conditions
   (independent of any assembled, constrained or rotated matrix): at the dofs of a
@@ -31,7 +31,7 @@ from contactqvi.elasticity import lame_parameters, strain, stress
 from contactqvi.meshes import boundary_facets, tag_of
 from contactqvi.parameters import require
 
-__all__ = ["ElasticBody", "applied_force", "reaction_forces", "stress_fields", "von_mises"]
+__all__ = ["ElasticBody", "StressFields", "applied_force", "reaction_forces", "stress_fields", "von_mises"]
 
 Vector3 = tuple[float, float, float]
 
@@ -63,33 +63,46 @@ def von_mises(sigma: np.ndarray) -> np.ndarray:
     return np.sqrt(1.5 * np.einsum("...ij,...ij->...", s, s))
 
 
-def stress_fields(u: fem.Function, young: float, poisson: float) -> tuple[fem.Function, fem.Function]:
+class StressFields:
     """Cell averages of the Cauchy stress and the von Mises stress of ``u`` (3D, DG0).
 
     The tensor is the L2 projection of sigma(u) onto cell-wise constants (the
     average over each cell, exact where the stress is constant); von Mises is taken
-    of that average. Collective.
+    of that average. Spaces, forms and cell volumes are made once; :meth:`update`
+    recomputes both fields from the current values of ``u``. Collective.
 
-    Returns:
-        ``(stress, von_mises)``: DG0 functions named ``stress`` (3 x 3, Pa) and
-        ``von_mises`` (Pa).
+    Attributes:
+        stress: DG0 function named ``stress`` (3 x 3, Pa).
+        von_mises: DG0 function named ``von_mises`` (Pa).
     """
-    msh = u.function_space.mesh
-    require(msh.geometry.dim == 3, "mesh", "stress_fields: three-dimensional bodies only")
-    mu, lmbda = lame_parameters(young, poisson)
-    W = fem.functionspace(msh, ("DG", 0, (3, 3)))
-    Q = fem.functionspace(msh, ("DG", 0))
-    volume = fem.assemble_vector(fem.form(ufl.TestFunction(Q) * ufl.dx))
-    integral = fem.assemble_vector(fem.form(ufl.inner(stress(u, mu, lmbda), ufl.TestFunction(W)) * ufl.dx))
-    n_cells = msh.topology.index_map(msh.topology.dim).size_local
-    sigma = fem.Function(W, name="stress")
-    owned = integral.array[: 9 * n_cells].reshape(n_cells, 9) / volume.array[:n_cells, None]
-    sigma.x.array[: 9 * n_cells] = owned.ravel()
-    sigma.x.scatter_forward()
-    equivalent = fem.Function(Q, name="von_mises")
-    equivalent.x.array[:n_cells] = von_mises(owned.reshape(n_cells, 3, 3))
-    equivalent.x.scatter_forward()
-    return sigma, equivalent
+
+    def __init__(self, u: fem.Function, young: float, poisson: float):
+        msh = u.function_space.mesh
+        require(msh.geometry.dim == 3, "mesh", "stress_fields: three-dimensional bodies only")
+        mu, lmbda = lame_parameters(young, poisson)
+        W = fem.functionspace(msh, ("DG", 0, (3, 3)))
+        Q = fem.functionspace(msh, ("DG", 0))
+        self._n_cells = msh.topology.index_map(msh.topology.dim).size_local
+        self._volume = fem.assemble_vector(fem.form(ufl.TestFunction(Q) * ufl.dx)).array[: self._n_cells]
+        self._integral = fem.form(ufl.inner(stress(u, mu, lmbda), ufl.TestFunction(W)) * ufl.dx)
+        self.stress = fem.Function(W, name="stress")
+        self.von_mises = fem.Function(Q, name="von_mises")
+
+    def update(self) -> tuple[fem.Function, fem.Function]:
+        """Both fields of the current ``u``: ``(stress, von_mises)``."""
+        n_cells = self._n_cells
+        integral = fem.assemble_vector(self._integral)
+        owned = integral.array[: 9 * n_cells].reshape(n_cells, 9) / self._volume[:, None]
+        self.stress.x.array[: 9 * n_cells] = owned.ravel()
+        self.stress.x.scatter_forward()
+        self.von_mises.x.array[:n_cells] = von_mises(owned.reshape(n_cells, 3, 3))
+        self.von_mises.x.scatter_forward()
+        return self.stress, self.von_mises
+
+
+def stress_fields(u: fem.Function, young: float, poisson: float) -> tuple[fem.Function, fem.Function]:
+    """The :class:`StressFields` of ``u`` once: ``(stress, von_mises)``. Collective."""
+    return StressFields(u, young, poisson).update()
 
 
 def _load_form(msh: dmesh.Mesh, v: ufl.core.expr.Expr, body: ElasticBody, load_factor: float) -> ufl.Form:

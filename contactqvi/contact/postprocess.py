@@ -46,7 +46,7 @@ from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult
 from contactqvi.contact.surface import STATE_NAMES, UNITS, ContactSurface, labelled
 from contactqvi.paraview import MeshPiece, VTXDatasetWriter
-from contactqvi.postprocess import applied_force, reaction_forces, stress_fields
+from contactqvi.postprocess import StressFields, applied_force, reaction_forces
 from contactqvi.tables import prepare_output_dir, write_solution_npz
 
 __all__ = [
@@ -107,9 +107,9 @@ class ContactResultsWriter:
     """Writes the steps of a contact solve to ``body.bp`` and ``contact_surface.bp``.
 
     One call of :meth:`write` per (load) step, each a time step of both files
-    (time = step number unless given). The body's piece and the contact surface
-    (:class:`~contactqvi.contact.surface.ContactSurface`) are made at the first
-    step and kept. Collective; use in a ``with`` block or call :meth:`close`.
+    (time = step number unless given). The body's piece, its stress fields and
+    the contact surface (:class:`~contactqvi.contact.surface.ContactSurface`) are
+    made at the first step and kept. Collective; use in a ``with`` block or call :meth:`close`.
 
     Args:
         out: output directory (created if needed).
@@ -124,19 +124,26 @@ class ContactResultsWriter:
         self._body_file = VTXDatasetWriter(comm, self.out / "body.bp")
         self._surface_file = VTXDatasetWriter(comm, self.out / "contact_surface.bp")
         self._steps = 0
-        self._body: MeshPiece | None = None
-        self._surface: ContactSurface | None = None
+        self._problem: ContactProblem | None = None
         self.last: tuple[fem.Function, ContactSurface] | None = None
+
+    def _start(self, problem: ContactProblem) -> None:
+        """What every step of ``problem`` writes into: made once."""
+        self._problem = problem
+        self._displacement = fem.Function(problem.V, name="displacement")
+        self._stress = StressFields(self._displacement, problem.body.young, problem.body.poisson)
+        self._body = MeshPiece(problem.V.mesh)
+        self._surface = ContactSurface(problem)
 
     def write(
         self, problem: ContactProblem, u: PETSc.Vec, result: SCDNewtonResult, t: float | None = None
     ) -> dict[str, typing.Any]:
         """Write one step; returns its :func:`contact_summary` entries."""
         t = float(self._steps if t is None else t)
-        if self._surface is None or self._surface.problem is not problem:
-            self._body, self._surface = MeshPiece(problem.V.mesh), ContactSurface(problem)
-        displacement = problem.physical_displacement(u, fem.Function(problem.V, name="displacement"))
-        stress, von_mises = stress_fields(displacement, problem.body.young, problem.body.poisson)
+        if problem is not self._problem:
+            self._start(problem)
+        displacement = problem.physical_displacement(u, self._displacement)
+        stress, von_mises = self._stress.update()
         volume = self._body.dataset(
             {labelled("displacement"): displacement}, {labelled("stress"): stress, labelled("von_mises"): von_mises}
         )

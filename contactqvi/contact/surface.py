@@ -104,7 +104,8 @@ class ContactSurfaceFields:
         tangential_displacement: ``tangential_displacement`` (m): the displacement
             u~ minus its component along the obstacle normal, at every node.
         gap: ``gap`` (m): distance to the obstacle after deformation along the
-            normal of the node's frame, g + n . u~ (linearised as in the seed).
+            normal of the node's frame, g + n . u~ (linearised as in the seed); at a
+            slave node without contact law of a body pair, NaN.
         displacement: ``displacement`` (m): u~, for warping the surface.
         nodal_area: ``nodal_area`` (m^2): lumped area of each surface node, so that
             the sum of pressure * nodal_area is the total normal force.
@@ -316,8 +317,10 @@ class ContactSurface:
             displacement = problem.physical_displacement(u, fem.Function(problem.V))
         u_tilde = displacement.x.array.reshape(-1, 3)[self._parent_blk]
         contact = nodal[:, _COLUMNS["contact"]] > 0
-        obstacle = problem.obstacle.translated(problem.translation)
-        initial_gap, normal = obstacle.distance(self._x)
+        if problem.obstacle is not None:  # the surface's other nodes: gap and normal to the obstacle
+            initial_gap, normal = problem.obstacle.translated(problem.translation).distance(self._x)
+        else:  # a body pair: no gap where there is no contact law
+            initial_gap, normal = np.full(len(self._x), np.nan), np.zeros_like(self._x)
         normal[contact] = nodal[contact, _COLUMNS["normal"]]  # the nodes' (reference) frames
         gap = np.where(contact, nodal[:, _COLUMNS["gap"]], initial_gap + np.einsum("ij,ij->i", normal, u_tilde))
         tangential = u_tilde - np.einsum("ij,ij->i", normal, u_tilde)[:, None] * normal
