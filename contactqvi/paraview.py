@@ -123,6 +123,7 @@ class MeshPiece:
 
     @property
     def points(self) -> np.ndarray:
+        """(N, 3) coordinates of the points."""
         return self.mesh.geometry.x[self.nodes]
 
     def point_values(self, f: fem.Function) -> np.ndarray:

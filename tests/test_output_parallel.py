@@ -162,3 +162,20 @@ def test_vtx_arrays_must_agree(mpi_tmp_path):
             writer.write(piece.dataset({"f": f}), t=0.0)
             writer.write(piece.dataset({name: f}), t=1.0)
     assert not (mpi_tmp_path / "bad.bp").exists() and not list(mpi_tmp_path.glob(".*partial*"))
+
+
+def test_solution_npz_only_below_the_size_limit(mpi_tmp_path, monkeypatch):
+    """solution.npz gathers the field on rank 0: skipped above GATHER_MAX_NODES unless forced."""
+    from contactqvi import tables
+
+    f, _, _ = _fields(_box(dmesh.GhostMode.none))
+    monkeypatch.setattr(tables, "GATHER_MAX_NODES", N_POINTS - 1)
+    assert not tables.write_solution_npz(mpi_tmp_path / "skipped.npz", f)
+    assert tables.write_solution_npz(mpi_tmp_path / "forced.npz", f, force=True)
+    monkeypatch.setattr(tables, "GATHER_MAX_NODES", N_POINTS)
+    assert tables.write_solution_npz(mpi_tmp_path / "small.npz", f)
+    if MPI.COMM_WORLD.rank == 0:
+        assert not (mpi_tmp_path / "skipped.npz").exists()
+        for name in ("forced.npz", "small.npz"):
+            data = np.load(mpi_tmp_path / name)
+            assert data["x"].shape == (N_POINTS, 3) and np.allclose(data["u"], data["x"] @ [1.0, 2.0, 3.0])
