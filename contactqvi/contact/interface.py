@@ -119,7 +119,7 @@ class Interface:
 
 
 def build_interfaces(
-    V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typing.Sequence[Pair], excluded_blk: np.ndarray,
+    V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typing.Sequence[Pair], constrained: np.ndarray,
 ) -> list[Interface]:
     """The interfaces of ``pairs`` (collective).
 
@@ -127,7 +127,8 @@ def build_interfaces(
         V: vector P1 space of all bodies.
         facet_tags: named facet groups.
         pairs: the contact pairs.
-        excluded_blk: local node indices that cannot be slave nodes (all components prescribed).
+        constrained: (local nodes, 3) mask of prescribed components; nodes with all
+            three prescribed cannot be slave nodes.
 
     Raises:
         ParameterError: a bad friction value, a node on two slave surfaces or on a
@@ -140,16 +141,17 @@ def build_interfaces(
         require_positive(f"{pair.name}: friction", pair.friction, allow_zero=True)
         require_positive(f"{pair.name}: slip_bound", pair.slip_bound, allow_zero=True)
         if isinstance(pair, ObstaclePair):
-            interfaces.append(_obstacle_interface(V, facet_tags, pair, excluded_blk))
+            interfaces.append(_obstacle_interface(V, facet_tags, pair, constrained))
         else:
-            interfaces.append(_body_interface(V, facet_tags, pair, excluded_blk))
+            interfaces.append(_body_interface(V, facet_tags, pair, constrained))
     _check_disjoint(V, facet_tags, pairs, interfaces)
     return interfaces
 
 
 def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: ObstaclePair,
-                        excluded_blk: np.ndarray) -> Interface:
+                        constrained: np.ndarray) -> Interface:
     n_owned = V.dofmap.index_map.size_local
+    excluded_blk = np.flatnonzero(constrained.all(axis=1))
     blk = fem.locate_dofs_topological(V, V.mesh.topology.dim - 1, boundary_facets(facet_tags, pair.surface))
     blk = np.setdiff1d(blk[blk < n_owned], excluded_blk).astype(np.int32)
     x = V.tabulate_dof_coordinates()[blk]
@@ -164,19 +166,22 @@ def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: 
 
 
 def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: BodyPair,
-                    excluded_blk: np.ndarray) -> Interface:
+                    constrained: np.ndarray) -> Interface:
     slave, master = boundary_facets(facet_tags, pair.slave), boundary_facets(facet_tags, pair.master)
     distance = pair.search_distance
     require(distance is None or distance > 0.0, f"{pair.name}: search_distance", f"must be > 0, got {distance!r}")
-    coupling = mortar_coupling(V, slave, master, distance, excluded_blk)
+    coupling = mortar_coupling(V, slave, master, distance, np.flatnonzero(constrained.all(axis=1)))
     comm = V.mesh.comm
     found = comm.allreduce(len(coupling.slave_blk), op=MPI.SUM)
     reach = "one facet size" if distance is None else f"{distance:.3g} m"
     require(found > 0, f"{pair.name}", f"no node of {pair.slave!r} has a facet of {pair.master!r} within "
             f"{reach} facing it: the surfaces are nowhere near each other (raise search_distance?)")
-    _check_overlap(comm, V, coupling.gap, pair.name, f"nodes of {pair.slave!r} lie inside the body of {pair.master!r}")
-    return Interface(pair, coupling.slave_blk, tangent_frames(coupling.normal), coupling.weight, coupling,
-                     coupling.gap)
+    # on a symmetry plane through the interface (prescribed components) the normal lies in the plane
+    normal = coupling.normal * ~constrained[coupling.slave_blk]
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    gap = np.einsum("ij,ij->i", normal, coupling.separation)
+    _check_overlap(comm, V, gap, pair.name, f"nodes of {pair.slave!r} lie inside the body of {pair.master!r}")
+    return Interface(pair, coupling.slave_blk, tangent_frames(normal), coupling.weight, coupling, gap)
 
 
 def _check_overlap(comm: MPI.Comm, V: fem.FunctionSpace, gap: np.ndarray, name: str, what: str) -> None:

@@ -214,8 +214,10 @@ class MortarCoupling:
         weight: (m,) D_ii (m^2), the lumped area of the node's mortar segments.
         C_indptr, C_master_glob, C_values: CSR rows of C = D^{-1} M for ``slave_blk``,
             columns the global node indices of master nodes; every row sums to 1.
-        normal: (m, 3) unit nodal normals pointing from the master into the slave body.
-        gap: (m,) weighted initial gap n_i . (x_i - sum_j C_ij x_j) (m).
+        normal: (m, 3) unit nodal normals pointing from the master into the slave body
+            (area-weighted averages of the slave facets' normals).
+        separation: (m, 3) weighted initial separation x_i - sum_j C_ij x_j (m);
+            the gap is its normal component.
     """
 
     slave_blk: np.ndarray
@@ -224,7 +226,12 @@ class MortarCoupling:
     C_master_glob: np.ndarray
     C_values: np.ndarray
     normal: np.ndarray
-    gap: np.ndarray
+    separation: np.ndarray
+
+    @property
+    def gap(self) -> np.ndarray:
+        """(m,) weighted initial gap n_i . (x_i - sum_j C_ij x_j) (m)."""
+        return np.einsum("ij,ij->i", self.normal, self.separation)
 
 
 def _exchange_master(comm: MPI.Comm, slave: SurfaceTriangles, master: SurfaceTriangles,
@@ -258,7 +265,8 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
         excluded_blk: local node indices never coupled (e.g. clamped slave nodes).
 
     Collective. Slave nodes with less than :data:`MIN_COVERAGE` of their lumped area
-    in the master's shadow are left out.
+    in the master's shadow are left out, and so are nodes whose weighted gap exceeds
+    ``search_distance`` (default: the node's own size sqrt(2 x lumped area)).
     """
     comm = V.mesh.comm
     index_map = V.dofmap.index_map
@@ -321,8 +329,20 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
     master_x = _master_coordinates(comm, index_map, x, cols)
     projected = np.zeros((len(slave_blk), 3))
     np.add.at(projected, position, values[:, None] * master_x)
-    gap = np.einsum("ij,ij->i", n, x[slave_blk] - projected)
-    return MortarCoupling(slave_blk, weight[slave_blk], indptr, cols.astype(np.int64), values, n, gap)
+    coupling = MortarCoupling(slave_blk, weight[slave_blk], indptr, cols.astype(np.int64), values, n,
+                              x[slave_blk] - projected)
+    # a node farther than the search distance (default: its own size) cannot touch in this step
+    reach = np.sqrt(2.0 * lumped_area[slave_blk]) if search_distance is None else search_distance
+    return _restricted(coupling, coupling.gap <= reach)
+
+
+def _restricted(coupling: MortarCoupling, keep: np.ndarray) -> MortarCoupling:
+    """The rows ``keep`` of ``coupling``."""
+    lengths = np.diff(coupling.C_indptr)
+    entries = np.repeat(keep, lengths)
+    indptr = np.concatenate([[0], np.cumsum(lengths[keep])]).astype(np.int64)
+    return MortarCoupling(coupling.slave_blk[keep], coupling.weight[keep], indptr, coupling.C_master_glob[entries],
+                          coupling.C_values[entries], coupling.normal[keep], coupling.separation[keep])
 
 
 def _max_edge(x: np.ndarray, comm: MPI.Comm) -> float:

@@ -308,7 +308,7 @@ def assemble_contact_problem(
     constrained = np.zeros((index_map.size_local + index_map.num_ghosts) * 3, dtype=bool)
     constrained[dirichlet_dofs_loc] = True
     constrained = constrained.reshape(-1, 3)
-    interfaces = build_interfaces(V, facet_tags, pairs, np.flatnonzero(constrained.all(axis=1)))
+    interfaces = build_interfaces(V, facet_tags, pairs, constrained)
     contact_blk = np.concatenate([i.blk for i in interfaces]).astype(np.int32)
     order = np.argsort(contact_blk, kind="stable")
     contact_blk = contact_blk[order]

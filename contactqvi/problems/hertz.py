@@ -27,6 +27,7 @@ __all__ = [
     "peak_pressure",
     "pressure",
     "shear_modulus",
+    "combined_modulus",
     "sliding_displacement",
     "stick_radius",
 ]
@@ -38,6 +39,15 @@ def effective_modulus(young: float, poisson: float) -> float:
     Johnson, Sect. 4.2: 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2, with E2 -> infinity.
     """
     return young / (1.0 - poisson**2)
+
+
+def combined_modulus(young1: float, poisson1: float, young2: float, poisson2: float) -> float:
+    """E* of two elastic bodies: 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 (Johnson, Sect. 4.2).
+
+    The formulas below take (young, poisson) of a body against a rigid one; for two
+    elastic bodies pass ``young = combined_modulus(...)`` and ``poisson = 0``.
+    """
+    return 1.0 / (1.0 / effective_modulus(young1, poisson1) + 1.0 / effective_modulus(young2, poisson2))
 
 
 def shear_modulus(young: float, poisson: float) -> float:
