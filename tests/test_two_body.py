@@ -191,3 +191,60 @@ def test_a_body_nothing_holds_is_named(blocks):
         assemble_contact_problem(msh, tags, young, poisson, {"upper.top": (0.0, 0.0, -P)},
                                  [BodyPair("upper.interface", "lower.interface")], displacements=rollers,
                                  cell_tags=cell_tags)
+
+
+def _stack_problem(msh, tags, cell_tags, rotation: np.ndarray):
+    """The blocks without rollers: the lower one clamped at the bottom, the upper one held
+    by friction (F = 0.5) under a pressure with a small shear, all rotated by ``rotation``."""
+    young, poisson = body_materials(msh, cell_tags, {"lower": (1e9, NU), "upper": (3e9, 0.2)})
+    traction = rotation @ np.array([0.1 * P, 0.05 * P, -P])
+    return assemble_contact_problem(msh, tags, young, poisson, {"upper.top": tuple(traction)},
+                                    [BodyPair("upper.interface", "lower.interface", friction=0.5)],
+                                    clamped=["lower.bottom"], cell_tags=cell_tags)
+
+
+def test_two_body_solution_is_frame_invariant(blocks):
+    """The stack rotated by a rotation Q gives the rotated solution Q u(x) at the rotated
+    nodes Q x, to 1e-8 (exact inner solves; the tangential frames differ, the law is isotropic)."""
+    msh, tags, cell_tags = blocks
+    axis = np.array([1.0, 2.0, 2.0]) / 3.0
+    angle = 0.7
+    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    Q = np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+    displacements = []
+    original = msh.geometry.x.copy()
+    try:
+        for rotation in (np.eye(3), Q):
+            msh.geometry.x[:] = original @ rotation.T
+            with _stack_problem(msh, tags, cell_tags, rotation) as problem:
+                result, displacement = _solve(problem, pc="lu")
+                assert result.converged
+                displacements.append(displacement.x.array.reshape(-1, 3).copy())
+    finally:
+        msh.geometry.x[:] = original
+    scale = MPI.COMM_WORLD.allreduce(float(np.abs(displacements[0]).max()), op=MPI.MAX)
+    error = np.abs(displacements[1] - displacements[0] @ Q.T).max()
+    assert MPI.COMM_WORLD.allreduce(float(error), op=MPI.MAX) < 1e-8 * scale
+
+
+@pytest.mark.skipif(MPI.COMM_WORLD.size == 1, reason="compares a parallel run with a serial one")
+def test_two_body_parallel_equals_serial():
+    """The patch blocks with slip (F = 0.3, different moduli) on all ranks and on each rank
+    alone: the same displacement at every node to 1e-10 and Newton counts within 1."""
+    runs = {}
+    for name, comm in (("parallel", MPI.COMM_WORLD), ("serial", MPI.COMM_SELF)):
+        msh, facet_tags, cell_tags = read_gmsh(MESH, comm)
+        problem = _patch_problem((msh, split_by_body(msh, facet_tags, cell_tags), cell_tags), 3e9, 0.3)
+        with problem:
+            result, displacement = _solve(problem)
+            n = problem.V.dofmap.index_map.size_local
+            # a node is its position and its body (the blocks' corners coincide at z = 1)
+            x = np.column_stack([problem.V.tabulate_dof_coordinates()[:n], problem.node_body[:n]])
+            runs[name] = (result.iterations, x, displacement.x.array.reshape(-1, 3)[:n].copy())
+    iterations, x, u = runs["serial"]
+    assert abs(runs["parallel"][0] - iterations) <= 1
+    x_par, u_par = runs["parallel"][1:]
+    lookup = {tuple(p): k for k, p in enumerate(np.round(x, 12))}
+    position = np.array([lookup[tuple(p)] for p in np.round(x_par, 12)], dtype=np.int64)
+    scale = np.abs(u).max()
+    assert MPI.COMM_WORLD.allreduce(float(np.abs(u_par - u[position]).max(initial=0.0)), op=MPI.MAX) < 1e-10 * scale
