@@ -54,9 +54,16 @@ def parse() -> argparse.Namespace:
     parser.add_argument("--no-hertz", action="store_true", help="skip cases/hertz.toml")
     parser.add_argument("--memory-lev", type=int, default=None, help="level of the 2-rank memory run (e.g. 10)")
     parser.add_argument("--output", default=str(ROOT / "benchmarks" / "results"))
+    parser.add_argument("--commit", default=_commit(), help="the code's commit, recorded with the numbers")
     parser.add_argument("--worker", choices=["memory"], help=argparse.SUPPRESS)
     parser.add_argument("--worker-output", help=argparse.SUPPRESS)
     return parser.parse_args()
+
+
+def _commit() -> str | None:
+    """The checkout's commit (None outside a git checkout, e.g. a `git archive` copy)."""
+    done = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True)
+    return done.stdout.strip() or None
 
 
 def mpirun(n: int, argv: list[str], log: pathlib.Path) -> tuple[int, float]:
@@ -175,29 +182,27 @@ def memory(lev: int, work: pathlib.Path) -> dict:
 def markdown(data: dict) -> str:
     from contactqvi.tables import markdown_table
 
-    text = ["## The same answer on any number of ranks (issue 24)\n",
+    text = [f"## The same answer on any number of ranks (issue 24), at {data.get('rows_commit')}\n\n",
             "Each program as a user runs it, under `mpirun -n N` on this machine's "
             f"{data['machine']['cores']} cores (oversubscribed above), against its run on 1 rank "
             "(benchmarks/ranks.py). Newton / Krylov: summed over the load steps (Hertz: four); "
             "dNewton: largest difference in a step's Newton count from 1 rank; rel. diff: "
             "max |u_N - u_1| / max |u_1| of `solution.npz`; written: every output file (body.bp, "
             "contact_surface.bp, solution.npz, contact_states.png, summary.json); surface ranks: ranks "
-            "that own contact facets (the others write no block of contact_surface.bp).\n"]
+            "that own contact facets (the others write no block of contact_surface.bp); wall s: on a "
+            "machine shared with other jobs.\n\n"]
     rows = [[r["case"], r["ranks"], r["status"], r["newton"], r["krylov"], r.get("max_newton_difference"),
              r.get("relative_difference"), "yes" if r["written"] and r["exit_code"] == 0 else "no",
              r["surface_blocks"], r["seconds"]] for r in data.get("rows", [])]
     text.append(markdown_table(["case", "ranks", "status", "Newton", "Krylov", "dNewton", "rel. diff", "written",
                                 "surface ranks", "wall s"], rows))
-    text.append("\nThe Hertz case with its default inexact Newton-step solves (GAMG, tol 0.1) stops, as its "
-                "test says, at a residual that leaves the solution about 1e-7 from the exact one on its graded "
-                "mesh; the runs agree to that. With exact Newton-step solves (pc lu) they agree to round-off.\n")
     mem = data.get("memory")
     if mem and mem.get("vmhwm_mib"):
         peaks = mem["vmhwm_mib"]
-        text.append(f"\n## Peak memory per rank, lev {mem['lev']} d1/L1 on {mem['ranks']} ranks\n\n"
+        text.append(f"\n## Peak memory per rank, lev {mem['lev']} d1/L1 on {mem['ranks']} ranks, at {mem['commit']}\n\n"
                     f"VmHWM of /proc/self/status after the demo with its output ({', '.join(mem['files'])}; "
                     f"solution.npz is not gathered above {data.get('gather_max_nodes')} nodes), n = {mem['n']} "
-                    f"free dofs, {mem['newton']} Newton / {mem['krylov']} Krylov, {mem['seconds']} s.\n\n")
+                    f"free dofs, {mem['newton']} Newton / {mem['krylov']} Krylov, {mem['seconds']} s wall.\n\n")
         text.append(markdown_table(["rank", "peak MiB"], [[i, round(p)] for i, p in enumerate(peaks)]))
         text.append(f"\nRank 0 / rank 1: {mem['rank0_over_rank1']:.3f}.\n")
     return "".join(text)
@@ -217,8 +222,9 @@ def main() -> None:
     try:
         if args.levels or not args.no_hertz:
             data["rows"] = rank_table(args, work)
+            data["rows_commit"] = args.commit
         if args.memory_lev is not None:
-            data["memory"] = memory(args.memory_lev, work)
+            data["memory"] = memory(args.memory_lev, work) | {"commit": args.commit}
     finally:
         shutil.rmtree(work, ignore_errors=True)
 

@@ -325,10 +325,10 @@ class ContactSurface:
         gap = np.where(contact, nodal[:, _COLUMNS["gap"]], initial_gap + np.einsum("ij,ij->i", normal, u_tilde))
         tangential = u_tilde - np.einsum("ij,ij->i", normal, u_tilde)[:, None] * normal
         fields = self.fields
-        for f, values in ((fields.state, nodal[:, _COLUMNS["state"]]), (fields.pressure, nodal[:, _COLUMNS["pressure"]]),
-                          (fields.traction, nodal[:, _COLUMNS["traction"]]), (fields.slip, nodal[:, _COLUMNS["slip"]]),
-                          (fields.tangential_displacement, tangential), (fields.gap, gap),
-                          (fields.displacement, u_tilde)):
+        columns = {f: nodal[:, _COLUMNS[name]] for f, name in ((fields.state, "state"), (fields.pressure, "pressure"),
+                                                               (fields.traction, "traction"), (fields.slip, "slip"))}
+        computed = {fields.tangential_displacement: tangential, fields.gap: gap, fields.displacement: u_tilde}
+        for f, values in (columns | computed).items():
             blk = self._vector_blk if values.ndim == 2 else self._scalar_blk
             bs = f.function_space.dofmap.index_map_bs
             f.x.array.reshape(-1, bs)[blk] = values.reshape(-1, bs)
