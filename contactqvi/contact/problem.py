@@ -48,6 +48,7 @@ from petsc4py import PETSc
 
 import numpy as np
 
+import dolfinx.fem.petsc
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 
@@ -95,6 +96,9 @@ class ContactProblem(PETScOwner):
         transform: T = (I + N) R, or None (then T = R).
         offset: c = N g, the slave displacement due to prescribed master dofs at load
             factor 1, or None.
+        translated: loads l~_c of a unit translation e_c (c = x, y, z) of the moved
+            groups (empty without them); a step adds sum_c t_c l~_c.
+        translated_offset: their offsets c_c (None without body pairs).
         rollers: (m,) mask of contact nodes whose t1 component is prescribed (zero).
         dirichlet_dofs_loc: local unrolled indices of Dirichlet dofs (incl. ghosts).
         node_body: body index of each local node (ghosts included), or None for one body.
@@ -120,6 +124,8 @@ class ContactProblem(PETScOwner):
     coupling: PETSc.Mat | None
     transform: PETSc.Mat | None
     offset: PETSc.Vec | None
+    translated: tuple[PETSc.Vec, ...]
+    translated_offset: tuple[PETSc.Vec | None, ...]
     rollers: np.ndarray
     dirichlet_dofs_loc: np.ndarray
     node_body: np.ndarray | None
@@ -140,7 +146,7 @@ class ContactProblem(PETScOwner):
     def petsc_objects(self) -> list[typing.Any]:
         """A, the load vectors, R, N, T and c (copies by ``dataclasses.replace`` share them)."""
         objects = (self.A, self.applied, self.load, self.shift, self.rotation, self.coupling, self.transform,
-                   self.offset)
+                   self.offset, *self.translated, *self.translated_offset)
         return [obj for obj in objects if obj is not None]
 
     def gap(self, translation: typing.Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
@@ -182,11 +188,14 @@ class ContactProblem(PETScOwner):
         self.shift.array.reshape(-1, 3)[self.contact_blk] = nodal
         self.applied.copy(self.load)
         self.load.scale(load_factor)
-        self.A.multAdd(self.shift, self.load, self.load)  # l = lambda l~ + A d
+        for t, b in zip(translation, self.translated):  # moved groups follow the translation
+            self.load.axpy(t, b)
+        self.A.multAdd(self.shift, self.load, self.load)  # l = lambda l~ + sum_c t_c l~_c + A d
         self.load_factor, self.translation = float(load_factor), translation
 
     def physical_displacement(self, u: PETSc.Vec, out: fem.Function) -> fem.Function:
-        """u~ = T (u - d) + lambda c in global components, written into ``out`` (ghosts updated)."""
+        """u~ = T (u - d) + lambda c + sum_c t_c c_c in global components, written into
+        ``out`` (ghosts updated)."""
         transform = self.transform if self.transform is not None else self.rotation
         if transform is None:
             out.x.petsc_vec.waxpy(-1.0, self.shift, u)
@@ -197,6 +206,9 @@ class ContactProblem(PETScOwner):
             local.destroy()
         if self.offset is not None:
             out.x.petsc_vec.axpy(self.load_factor, self.offset)
+        for t, c in zip(self.translation, self.translated_offset):
+            if c is not None:
+                out.x.petsc_vec.axpy(t, c)
         out.x.scatter_forward()
         return out
 
@@ -281,6 +293,7 @@ def assemble_contact_problem(
     body_force: Vector3 | None = None,
     displacements: dict[str, dict[int, float]] | None = None,
     cell_tags: dmesh.MeshTags | None = None,
+    moved: typing.Sequence[str] = (),
 ) -> ContactProblem:
     """Assemble the GE (6.3) of one or several bodies with contact pairs, at load factor 1.
 
@@ -292,6 +305,9 @@ def assemble_contact_problem(
             :class:`~contactqvi.contact.interface.BodyPair`).
         cell_tags: named cell groups, one per body, when there are several bodies
             (each gets its own rigid-body modes for AMG).
+        moved: facet groups whose displacement is the load step's translation (moved
+            rigidly like the obstacles, e.g. the loaded face of a body that is slid
+            along another), not scaled by the load factor.
 
     Raises:
         ParameterError: see :func:`~contactqvi.contact.interface.build_interfaces`,
@@ -301,9 +317,10 @@ def assemble_contact_problem(
     V = fem.functionspace(msh, ("Lagrange", 1, (3,)))
     a, L = elasticity_forms(V, young, poisson, facet_tags, tractions, body_force)
     msh.topology.create_connectivity(msh.topology.dim - 1, msh.topology.dim)
-    bcs = _dirichlet_conditions(V, facet_tags, clamped, displacements or {})
+    bcs, moved_bc = _dirichlet_conditions(V, facet_tags, clamped, displacements or {}, moved)
     dirichlet_dofs_loc = np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs] + [np.empty(0, np.int32)]))
     A, applied = assemble_system(a, L, bcs)
+    loads = [applied, *_unit_translations(a, A, moved_bc, dirichlet_dofs_loc)]
     index_map = V.dofmap.index_map
     constrained = np.zeros((index_map.size_local + index_map.num_ghosts) * 3, dtype=bool)
     constrained[dirichlet_dofs_loc] = True
@@ -313,31 +330,22 @@ def assemble_contact_problem(
     order = np.argsort(contact_blk, kind="stable")
     contact_blk = contact_blk[order]
     interface_of_node = np.repeat(np.arange(len(interfaces)), [len(i.blk) for i in interfaces])[order]
-    frames = np.concatenate([i.frames for i in interfaces])[order]
-    contact_area = np.concatenate([i.area for i in interfaces])[order]
-    nonzero = msh.comm.allreduce(int(np.count_nonzero(applied.array.reshape(-1, 3)[contact_blk][constrained[contact_blk]])))
-    require(nonzero == 0, "boundary.displacement", f"{nonzero} components prescribed on contact nodes are not "
-            "zero; on the contact surface only rollers (zero tangential components) are supported")
-    frames = _align_frames(frames, constrained[contact_blk], msh.comm)
+    _check_prescribed_on_contact(loads, contact_blk, constrained[contact_blk], msh.comm)
+    frames = _align_frames(np.concatenate([i.frames for i in interfaces])[order], constrained[contact_blk], msh.comm)
     mortar = any(i.coupling is not None for i in interfaces)
     rotation = _nodal_rotation(A, contact_blk, frames, always=mortar)
-    coupling = transform = offset = None
+    coupling = transform = None
+    offsets: list[PETSc.Vec | None] = [None] * len(loads)
     if mortar:
         coupling = _mortar_rows(A, interfaces, constrained)
-        transform, offset = _change_of_variables(coupling, rotation, applied, dirichlet_dofs_loc, index_map.size_local)
+        owned = dirichlet_dofs_loc[dirichlet_dofs_loc < 3 * index_map.size_local]
+        offsets = [_prescribed_offset(coupling, b, owned) for b in loads]
+        transform = _change_of_variables(coupling, rotation, owned)
     if rotation is not None:  # A = T^T A_K T, l~ = T^T (l~_K - A_K c)
         T = transform if transform is not None else rotation
-        if offset is not None:
-            lifted = applied.duplicate()
-            A.mult(offset, lifted)
-            lifted.aypx(-1.0, applied)
-            applied.destroy()
-            applied = lifted
+        loads = [_in_solver_variables(A, T, b, c) for b, c in zip(loads, offsets)]
         A_global, A = A, A.PtAP(T)
         A_global.destroy()
-        applied_global, applied = applied, applied.duplicate()
-        T.multTranspose(applied_global, applied)
-        applied_global.destroy()
 
     node_body = None if cell_tags is None else _node_body(V, cell_tags)
     if node_body is not None:
@@ -345,11 +353,12 @@ def assemble_contact_problem(
     comm = msh.comm
     n_owned = index_map.size_local
     n_fixed_owned = int(np.count_nonzero(dirichlet_dofs_loc < 3 * n_owned))
+    contact_area = np.concatenate([i.area for i in interfaces])[order]
     slip_bound = np.array([i.pair.slip_bound for i in interfaces])[interface_of_node] * contact_area
     friction = np.array([i.pair.friction for i in interfaces])
-    supports = tuple(dict.fromkeys([*clamped, *(displacements or {})]))
+    supports = tuple(dict.fromkeys([*clamped, *(displacements or {}), *moved]))
     problem = ContactProblem(
-        V=V, A=A, applied=applied, load=applied.duplicate(), shift=applied.duplicate(),
+        V=V, A=A, applied=loads[0], load=loads[0].duplicate(), shift=loads[0].duplicate(),
         contact_blk=contact_blk, contact_facets=np.unique(np.concatenate(
             [boundary_facets(facet_tags, _slave_surface(i.pair)) for i in interfaces])).astype(np.int32),
         contact_area=contact_area,
@@ -357,7 +366,8 @@ def assemble_contact_problem(
                         slip_bound),
         frames=frames, interfaces=tuple(interfaces), interface_of_node=interface_of_node,
         body=ElasticBody(young, poisson, facet_tags, supports, dict(tractions), body_force),
-        rotation=rotation, coupling=coupling, transform=transform, offset=offset,
+        rotation=rotation, coupling=coupling, transform=transform, offset=offsets[0],
+        translated=tuple(loads[1:]), translated_offset=tuple(offsets[1:]),
         rollers=constrained[contact_blk].any(axis=1), dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32),
         node_body=node_body,
         n_contact=comm.allreduce(len(contact_blk), op=MPI.SUM),
@@ -365,6 +375,52 @@ def assemble_contact_problem(
     )
     problem.set_step()
     return problem
+
+
+def _unit_translations(a: fem.Form, A: PETSc.Mat, moved_bc: fem.DirichletBC | None,
+                       dirichlet_dofs_loc: np.ndarray) -> list[PETSc.Vec]:
+    """The lifted loads of a unit translation e_c (c = x, y, z) of the moved groups, all
+    other prescribed values zero: -A_K e_c at free dofs, e_c at the moved ones."""
+    if moved_bc is None:
+        return []
+    value = moved_bc.g
+    loads = []
+    n_owned = A.getLocalSize()[0]
+    for c in range(3):
+        value.value[:] = np.eye(3)[c]
+        b = A.createVecLeft()
+        b.set(0.0)
+        dolfinx.fem.petsc.apply_lifting(b, [a], bcs=[[moved_bc]])
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        b.array[dirichlet_dofs_loc[dirichlet_dofs_loc < n_owned]] = 0.0
+        dolfinx.fem.petsc.set_bc(b, [moved_bc])
+        loads.append(b)
+    value.value[:] = 0.0
+    return loads
+
+
+def _check_prescribed_on_contact(loads: list[PETSc.Vec], contact_blk: np.ndarray, constrained: np.ndarray,
+                                 comm: MPI.Comm) -> None:
+    """Only zero (roller) components may be prescribed on contact nodes."""
+    nonzero = sum(comm.allreduce(int(np.count_nonzero(b.array.reshape(-1, 3)[contact_blk][constrained])))
+                  for b in loads)
+    require(nonzero == 0, "boundary.displacement", f"{nonzero} components prescribed on contact nodes are not "
+            "zero (or move with the steps); on the contact surface only rollers (zero tangential components) "
+            "are supported")
+
+
+def _in_solver_variables(A_K: PETSc.Mat, T: PETSc.Mat, b: PETSc.Vec, offset: PETSc.Vec | None) -> PETSc.Vec:
+    """T^T (b - A_K c) for a lifted load b (``b`` is destroyed)."""
+    if offset is not None:
+        lifted = b.duplicate()
+        A_K.mult(offset, lifted)
+        lifted.aypx(-1.0, b)
+        b.destroy()
+        b = lifted
+    out = b.duplicate()
+    T.multTranspose(b, out)
+    b.destroy()
+    return out
 
 
 def _slave_surface(pair: Pair) -> str:
@@ -396,27 +452,30 @@ def _mortar_rows(A: PETSc.Mat, interfaces: typing.Sequence[Interface], constrain
     return N
 
 
-def _change_of_variables(
-    N: PETSc.Mat, rotation: PETSc.Mat, applied: PETSc.Vec, dirichlet_dofs_loc: np.ndarray, n_owned: int,
-) -> tuple[PETSc.Mat, PETSc.Vec]:
-    """T = (I + N_f) R and c = N g: N_f has no columns at prescribed dofs, whose
-    values g (at load factor 1) are those of the assembled load there. ``N`` becomes N_f."""
-    prescribed = applied.duplicate()
+def _prescribed_offset(N: PETSc.Mat, b: PETSc.Vec, owned_dirichlet: np.ndarray) -> PETSc.Vec:
+    """c = N g: the slave displacement of the prescribed values g of a lifted load ``b``
+    (its entries at the prescribed dofs ``owned_dirichlet``)."""
+    prescribed = b.duplicate()
     prescribed.set(0.0)
-    owned = dirichlet_dofs_loc[dirichlet_dofs_loc < 3 * n_owned]
-    prescribed.array[owned] = applied.array[owned]
-    offset = applied.duplicate()
+    prescribed.array[owned_dirichlet] = b.array[owned_dirichlet]
+    offset = b.duplicate()
     N.mult(prescribed, offset)
-    free = applied.duplicate()
+    prescribed.destroy()
+    return offset
+
+
+def _change_of_variables(N: PETSc.Mat, rotation: PETSc.Mat, owned_dirichlet: np.ndarray) -> PETSc.Mat:
+    """T = (I + N_f) R, N_f without the columns of prescribed dofs (``N`` becomes N_f)."""
+    free = N.createVecRight()
     free.set(1.0)
-    free.array[owned] = 0.0
+    free.array[owned_dirichlet] = 0.0
     N.diagonalScale(None, free)
     NR = N.matMult(rotation)
     transform = rotation.copy()
     transform.axpy(1.0, NR, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
-    for obj in (prescribed, free, NR):
+    for obj in (free, NR):
         obj.destroy()
-    return transform, offset
+    return transform
 
 
 def _check_held(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, cell_tags: dmesh.MeshTags,
@@ -468,9 +527,10 @@ def _node_body(V: fem.FunctionSpace, cell_tags: dmesh.MeshTags) -> np.ndarray:
 
 def _dirichlet_conditions(
     V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, clamped: typing.Sequence[str],
-    displacements: dict[str, dict[int, float]],
-) -> list[fem.DirichletBC]:
-    """Boundary conditions u = 0 on ``clamped`` and u_i = value on ``displacements``."""
+    displacements: dict[str, dict[int, float]], moved: typing.Sequence[str],
+) -> tuple[list[fem.DirichletBC], fem.DirichletBC | None]:
+    """Boundary conditions u = 0 on ``clamped``, u_i = value on ``displacements`` and
+    u = (a translation, zero here) on ``moved``; the last also returned on its own."""
     fdim = V.mesh.topology.dim - 1
     bcs = []
     for name in clamped:
@@ -482,7 +542,13 @@ def _dirichlet_conditions(
             require(component in (0, 1, 2), f"boundary.displacement.{name}", f"component must be 0, 1 or 2, got {component!r}")
             dofs = fem.locate_dofs_topological(V.sub(component), fdim, facets)
             bcs.append(fem.dirichletbc(PETSc.ScalarType(value), dofs, V.sub(component)))
-    return bcs
+    moved_bc = None
+    if moved:
+        facets = np.unique(np.concatenate([boundary_facets(facet_tags, name) for name in moved]))
+        blk = fem.locate_dofs_topological(V, fdim, facets)
+        moved_bc = fem.dirichletbc(fem.Constant(V.mesh, np.zeros(3, dtype=PETSc.ScalarType)), blk, V)
+        bcs.append(moved_bc)
+    return bcs, moved_bc
 
 
 def _align_frames(frames: np.ndarray, constrained: np.ndarray, comm: MPI.Comm) -> np.ndarray:
