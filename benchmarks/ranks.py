@@ -81,8 +81,10 @@ def hertz_case(directory: pathlib.Path, lu: bool) -> pathlib.Path:
     line = 'file = "../meshes/hertz_medium.geo"'
     assert line in text, "cases/hertz.toml: mesh line changed"
     text = text.replace(line, f'file = "{ROOT / "meshes" / "hertz_coarse.geo"}"')
-    if lu:
-        text = text.replace("[solver]\n", '[solver]\npc = "lu"\n')
+    if lu and "\n[solver]\n" in text:
+        text = text.replace("\n[solver]\n", '\n[solver]\npc = "lu"\n')
+    elif lu:
+        text += '\n[solver]\npc = "lu"\n'
     path = directory / ("hertz_coarse_lu.toml" if lu else "hertz_coarse.toml")
     path.write_text(text)
     return path

@@ -109,7 +109,7 @@ def test_hertz_case_on_any_number_of_ranks(mpi_tmp_path):
     comm = MPI.COMM_WORLD
     raw = load_case(CASES / "hertz.toml").to_dict()
     raw["mesh"] = {"file": str(CASES.parent / "meshes" / "hertz_coarse.geo")}
-    raw["solver"]["pc"] = "lu"
+    raw.setdefault("solver", {})["pc"] = "lu"
     case = parse_case(raw, CASES)
     summary, code = run_case(case, mpi_tmp_path / "many", comm, plot=False)
     assert code == 0 and summary["mpi_size"] == comm.size
