@@ -143,23 +143,31 @@ def _is_owner(name: str) -> bool:
     return name in CLASSES and any(_is_owner(base) for base in _base_names(CLASSES[name][1]))
 
 
-def _creates_petsc_object(node: ast.AST) -> bool:
+def _petsc_assemblers(module: Module) -> set[str]:
+    """Names bound to dolfinx.fem.petsc's assemble_matrix/assemble_vector by ``from ... import``."""
+    return {alias.asname or alias.name for node in ast.walk(module.tree) if isinstance(node, ast.ImportFrom)
+            and node.module == "dolfinx.fem.petsc" for alias in node.names}  # fmt: skip
+
+
+def _creates_petsc_object(node: ast.AST, assemblers: set[str] = frozenset()) -> bool:
     for call in (n for n in ast.walk(node) if isinstance(n, ast.Call)):
-        name = call.func.attr if isinstance(call.func, ast.Attribute) else getattr(call.func, "id", "")
+        func = call.func
+        name = func.attr if isinstance(func, ast.Attribute) else getattr(func, "id", "")
         if name in CREATING_METHODS + CREATING_FUNCTIONS or (name.startswith("create") and name[6:7].isupper()):
             return True
-        if name in ("assemble_matrix", "assemble_vector") and len(call.args) == 1:  # not the in-place form
+        petsc = name in assemblers if isinstance(func, ast.Name) else "petsc" in ast.unparse(func.value)
+        if name in ("assemble_matrix", "assemble_vector") and petsc and len(call.args) == 1:  # not in place
             return True
     return False
 
 
-def _keeps_petsc_objects(node: ast.ClassDef) -> bool:
+def _keeps_petsc_objects(node: ast.ClassDef, assemblers: set[str] = frozenset()) -> bool:
     """Whether a method assigns a newly created PETSc object to an attribute of ``self``."""
     for assign in (n for n in ast.walk(node) if isinstance(n, (ast.Assign, ast.AnnAssign))):
         targets = assign.targets if isinstance(assign, ast.Assign) else [assign.target]
         on_self = [t for target in targets for t in ast.walk(target)
                    if isinstance(t, ast.Attribute) and getattr(t.value, "id", "") == "self"]  # fmt: skip
-        if on_self and assign.value is not None and _creates_petsc_object(assign.value):
+        if on_self and assign.value is not None and _creates_petsc_object(assign.value, assemblers):
             return True
     return False
 
@@ -179,13 +187,16 @@ def _names_its_objects(name: str) -> bool:
 def test_the_lifetime_check_sees_an_owner():
     owner = ast.parse("class A:\n    def __init__(self, x):\n        self.v = x.createVecLeft()\n").body[0]
     scratch = ast.parse("class B:\n    def f(self, x):\n        v = x.duplicate()\n        v.destroy()\n").body[0]
+    assembled = ast.parse("class C:\n    def f(self, a):\n        self.A = dolfinx.fem.petsc.assemble_matrix(a)\n")
+    not_petsc = ast.parse("class D:\n    def f(self, a):\n        self.b = fem.assemble_vector(a).array\n")
     assert _keeps_petsc_objects(owner) and not _keeps_petsc_objects(scratch)
+    assert _keeps_petsc_objects(assembled.body[0]) and not _keeps_petsc_objects(not_petsc.body[0])
 
 
 @pytest.mark.parametrize("name", sorted(CLASSES))
 def test_every_owner_of_petsc_objects_follows_the_lifetime_rule(name):
     module, node = CLASSES[name]
-    keeps = _keeps_petsc_objects(node)
+    keeps = _keeps_petsc_objects(node, _petsc_assemblers(MODULES[module]))
     if name in LIFETIME_EXCEPTIONS or not (keeps or _defines(node, "destroy")):
         return
     assert _is_owner(name), (f"{module}.{name} keeps PETSc objects or has a destroy() but does not derive from "
