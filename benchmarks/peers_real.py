@@ -53,10 +53,10 @@ TOLERANCES = {
     "kratos": [1e-4, 1e-6, 1e-8],
 }
 #: Linear solvers of GetFEM's Newton (``Model.solve(..., 'lsolver', ...)``) compared at ``--settings-case``.
-#: Debian's GetFEM 5.4 has no SuperLU ("SuperLU is not interfaced"): MUMPS or GetFEM's own GMRES + ILU.
-GETFEM_LSOLVERS = ["mumps", "gmres/ilu"]
-#: Alart-Curnier augmentation r of GetFEM as multiples of E (GPa); GetFEM advises r close to E.
-GETFEM_R = [0.1, 1.0, 10.0]
+#: GetFEM settings compared at ``--settings-case``: (linear solver, Alart-Curnier r as a multiple
+#: of E in GPa; GetFEM advises r close to E). Debian's GetFEM 5.4 has no SuperLU ("SuperLU is not
+#: interfaced"): MUMPS (its ordering is not settable from Python) or GetFEM's GMRES + ILU.
+GETFEM_TRIALS = [("mumps", 0.1), ("mumps", 1.0), ("mumps", 10.0), ("gmres/ilu", 1.0)]
 
 PYTHON = {"ours": str(ROOT / ".venv/bin/python"), "getfem": "/usr/bin/python3",
           "kratos": str(ROOT / "build/kratos-venv/bin/python")}
@@ -194,12 +194,11 @@ def getfem_settings(runner: Runner, case: pathlib.Path, reference: dict, accurac
     """GetFEM's fastest linear solver and augmentation r at one case (tight tolerance, 1 core)."""
     trials = []
     young = common.load_case(case).young / 1e9
-    for lsolver in GETFEM_LSOLVERS:
-        for factor in GETFEM_R:
-            options = ["--lsolver", lsolver, "--r", f"{factor * young:g}"]
-            record = runner.run("getfem", case, [*options, "--max-res", "1e-10"])
-            record.update(errors(record, reference), r_over_E=factor)
-            trials.append(record)
+    for lsolver, factor in GETFEM_TRIALS:
+        options = ["--lsolver", lsolver, "--r", f"{factor * young:g}"]
+        record = runner.run("getfem", case, [*options, "--max-res", "1e-10"])
+        record.update(errors(record, reference), r_over_E=factor)
+        trials.append(record)
     good = [t for t in trials if accurate(t, accuracy)]
     if not good:
         return ["--lsolver", "mumps"], trials
@@ -219,6 +218,9 @@ def main() -> int:
     parser.add_argument("--kratos-max-dofs", type=int, default=10_000,
                         help="Kratos runs only up to this size (it does not converge here, see docs/peers.md)")
     parser.add_argument("--accuracy", type=float, default=1e-6)
+    parser.add_argument("--reference-pc", default="lu",
+                        help="Newton-step solver of the reference (gamg: for sizes where LU is too costly; "
+                             "then the reference is ours to rtol 1e-12 with inexact steps)")
     parser.add_argument("--no-np2", action="store_true", help="skip our 2-rank runs")
     parser.add_argument("--settings-case", default="d1_L1:5", help="problem:level of the GetFEM settings sweep")
     parser.add_argument("--timeout", type=float, default=900.0, help="seconds before a run is stopped")
@@ -231,8 +233,8 @@ def main() -> int:
     work.mkdir(parents=True, exist_ok=True)
     ours_src, sha = snapshot(work, args.ours_commit)
     runner = Runner(work, ours_src, args.timeout)
-    peers = [p for p in args.peers if installed(p)]
-    skipped = sorted(set(args.peers) - set(peers))
+    peers = [p for p in args.peers if p != "none" and installed(p)]
+    skipped = sorted(set(args.peers) - set(peers) - {"none"})
     if skipped:
         print(f"not installed (make peers): {', '.join(skipped)}")
 
@@ -250,6 +252,9 @@ def main() -> int:
                 cases.append((problem, f"lev {lev}", export.export_box(work / "cases", lev, geometry, load)))
 
     rows, settings_trials = [], []
+    previous = pathlib.Path(args.output) / "peers_real.json"
+    old_rows = json.loads(previous.read_text()) if previous.exists() else {}
+    getfem_options = old_rows.get("getfem_options", ["--lsolver", "mumps"])  # a sweep of an earlier run
     sufficed: dict[tuple[str, str], float] = {}  # (code, problem) -> tolerance that sufficed on the last size
 
     def timed(code: str, case: pathlib.Path, reference: dict, options: list[str], flag: str, problem: str):
@@ -258,18 +263,18 @@ def main() -> int:
             sufficed[(code, problem)] = best["tolerance"]
         return best, runs
 
-    getfem_options = ["--lsolver", "mumps"]
     settings_problem, settings_level = args.settings_case.split(":")
     for problem, size, case in cases:
         print(f"{problem} {size}: {case}", flush=True)
-        reference = runner.run("ours", case, ["--pc", "lu", "--rtol", "1e-12"])
+        reference = runner.run("ours", case, ["--pc", args.reference_pc, "--rtol", "1e-12"])
         if reference["status"] != "converged":
             rows.append({"problem": problem, "size": size, **reference, "code": "reference"})
             continue
         base = {"problem": problem, "size": size, "case": str(case), "dofs": reference["dofs"],
                 "contact_nodes": reference["contact_nodes"]}
         closed = hertz_closed_form(common.load_case(case)) if problem == "hertz" else None
-        rows.append({**base, **reference, **errors(reference, reference), "closed_form": closed, "code": "reference"})
+        rows.append({**base, **reference, **errors(reference, reference), "closed_form": closed, "code": "reference",
+                     "reference_pc": args.reference_pc})
         best, runs = timed("ours", case, reference, [], "--rtol", problem)
         rows.append({**base, "code": "ours", "best": best, "runs": runs, "closed_form": closed})
         if best is not None and not args.no_np2:
@@ -288,25 +293,28 @@ def main() -> int:
             record.update(errors(record, reference) if record["status"] == "converged" else {}, tolerance=1e-6)
             rows.append({**base, "code": "kratos", "best": record if accurate(record, args.accuracy) else None,
                          "runs": [record], "closed_form": closed})
+        save(pathlib.Path(args.output), sha, args.accuracy, getfem_options, settings_trials, rows, old_rows)
 
-    out = pathlib.Path(args.output)
-    out.mkdir(parents=True, exist_ok=True)
-    data = {"machine": machine(), "ours_commit": sha, "accuracy": args.accuracy, "tolerances": TOLERANCES,
-            "getfem_options": getfem_options, "getfem_settings_trials": settings_trials, "rows": rows,
-            "load_average_end": os.getloadavg()}
-    previous = out / "peers_real.json"
-    if previous.exists():  # keep rows of other problems/sizes measured before
-        old = json.loads(previous.read_text())
-        keys = {(r["problem"], r["size"], r["code"]) for r in rows}
-        data["rows"] = [r for r in old.get("rows", []) if (r["problem"], r["size"], r["code"]) not in keys] + rows
-        if not settings_trials:
-            data["getfem_options"] = old.get("getfem_options", getfem_options)
-            data["getfem_settings_trials"] = old.get("getfem_settings_trials", [])
-    data["limits"] = limits(data)
-    previous.write_text(json.dumps(data, indent=1) + "\n")
-    (out / "peers_real.md").write_text(markdown(data))
-    print(markdown(data))
+    print(save(pathlib.Path(args.output), sha, args.accuracy, getfem_options, settings_trials, rows, old_rows))
     return 0
+
+
+def save(out: pathlib.Path, sha: str, accuracy: float, getfem_options: list[str], settings_trials: list[dict],
+         rows: list[dict], old: dict) -> str:
+    """Write ``peers_real.json`` and ``.md``: this run's rows and the rows of earlier runs for other
+    problems and sizes (``old``, the file as it was when this run started); the markdown."""
+    out.mkdir(parents=True, exist_ok=True)
+    keys = {(r["problem"], r["size"], r["code"]) for r in rows}
+    data = {"machine": machine(), "ours_commit": sha, "accuracy": accuracy, "tolerances": TOLERANCES,
+            "getfem_options": getfem_options if settings_trials else old.get("getfem_options", getfem_options),
+            "getfem_settings_trials": settings_trials or old.get("getfem_settings_trials", []),
+            "rows": [r for r in old.get("rows", []) if (r["problem"], r["size"], r["code"]) not in keys] + rows,
+            "load_average_end": os.getloadavg()}
+    data["limits"] = limits(data)
+    (out / "peers_real.json").write_text(json.dumps(data, indent=1) + "\n")
+    text = markdown(data)
+    (out / "peers_real.md").write_text(text)
+    return text
 
 
 def _fmt(value, spec: str = ".3g") -> str:
@@ -339,8 +347,15 @@ def limits(data: dict, seconds: float = 600.0, memory_mib: float = 20 * 1024) ->
         (n0, t0, m0), (n1, t1, m1) = points[-2], points[-1]
         alpha = math.log(t1 / t0) / math.log(n1 / n0)
         beta = math.log(m1 / m0) / math.log(n1 / n0)
-        n_time = n1 * (seconds / t1) ** (1 / alpha) if alpha > 0 else math.inf
-        n_memory = n1 * (memory_mib / m1) ** (1 / beta) if beta > 0 else math.inf
+
+        def reach(limit: float, value: float, exponent: float) -> float:
+            """n where value (n / n1)^exponent = limit; inf when growth is too slow to tell."""
+            return n1 * math.exp(math.log(limit / value) / exponent) if exponent > 0.05 else math.inf
+
+        try:
+            n_time, n_memory = reach(seconds, t1, alpha), reach(memory_mib, m1, beta)
+        except OverflowError:
+            n_time = n_memory = math.inf
         out.append({"problem": problem, "code": code, "largest_measured": n1, "time_exponent": alpha,
                     "memory_exponent": beta, "dofs_at_time_limit": n_time, "dofs_at_memory_limit": n_memory,
                     "largest": min(n_time, n_memory), "measured_within": t1 <= seconds and m1 <= memory_mib})
