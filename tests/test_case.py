@@ -97,8 +97,6 @@ def test_case_built_in_python_equals_the_file():
         contact=Contact("contact", friction=0),
         obstacle=ObstacleShape("sphere", center=[0, 0, 1], radius=1),
         steps=[Step(translation=(0, 0, -depth)) for depth in (0.25e-3, 0.5e-3, 0.75e-3, 1e-3)],
-        solver={"gamma_rule": "nodal_diagonal", "state_tol": 0.0},
-        petsc={"ksp_converged_use_initial_residual_norm": True},
     )
     assert case == load_case(ROOT / "cases" / "hertz.toml")
     assert case.groups == ["bottom", "symmetry_x", "symmetry_y", "contact"]

@@ -19,7 +19,6 @@ from contactqvi.meshes import create_contact_body
 from contactqvi.obstacles import Cylinder, Plane, Sphere, tangent_frames
 from contactqvi.parameters import ParameterError
 from contactqvi.problems import coulomb as data
-from contactqvi.problems import hertz
 from contactqvi.runner import run_case
 
 from petsc_audit import assert_frees_petsc_objects
@@ -69,14 +68,17 @@ def _solve(problem, steps=(LoadStep(),), parameters=None):
 
 
 @pytest.mark.serial
-def test_foundation_plane_reproduces_the_paper_solver():
-    """The plane x3 = 0 with frames (e1, e2, e3) needs no rotation; lev 3 d1/L1 gives the
-    counts and norm of the solver before obstacles of any shape (GAMG default, 1 rank)."""
+def test_foundation_plane_reproduces_the_paper_solver_regression_guard():
+    """The plane x3 = 0 with frames (e1, e2, e3) needs no rotation; lev 3 d1/L1 (GAMG default,
+    1 rank) gives the counts and the norm of the solver before obstacles of any shape: a
+    regression guard of our own numbers (the paper's Table 2 has 13 / 774 here, GMRES + ILU),
+    and within the paper's Newton count."""
     problem = _paper_problem(3)
     assert problem.rotation is None and np.array_equal(problem.frames[0], np.eye(3))
     u, (result,) = _solve(problem, parameters={})
     displacement = problem.physical_displacement(u, fem.Function(problem.V))
-    assert (result.iterations, result.inner_iterations) == (8, 26)  # Table 2, lev 3 d1/L1
+    assert result.iterations <= data.PAPER_TABLE2[3]["d1/L1"][0]
+    assert (result.iterations, result.inner_iterations) == (8, 26)  # ours, benchmarks/results/coulomb_table2.md
     assert displacement.x.petsc_vec.norm() == pytest.approx(3.7224231279e-01, rel=1e-10)
 
 
@@ -167,24 +169,6 @@ def test_case_runner_serial_equals_parallel(mpi_tmp_path):
     assert parallel["iterations"] == serial["iterations"]
     assert np.allclose(parallel["contact_force"], serial["contact_force"], rtol=1e-9)
     assert parallel["contact_area"] == pytest.approx(serial["contact_area"], rel=1e-12)
-
-
-def test_hertz_coarse_mesh_meets_the_closed_form(mpi_tmp_path):
-    """Rigid sphere (R = 1 m) pressed 1 mm into the quarter block, h = a/8 at the contact, in one
-    step: force, contact radius and peak pressure against Hertz (the benchmark has finer meshes:
-    benchmarks/results/hertz.md, +5.4 % / 0.01 h / +7.6 % at this mesh)."""
-    raw = load_case(CASES / "hertz.toml").to_dict()
-    raw["mesh"] = {"file": str(CASES.parent / "meshes" / "hertz_coarse.geo")}
-    raw["steps"] = [{"translation": [0.0, 0.0, -1e-3]}]
-    summary, code = run_case(parse_case(raw, CASES), mpi_tmp_path / "hertz", plot=False)
-    assert code == 0
-    last = summary["steps"][-1]
-    a = hertz.contact_radius(1.0, 1e-3)
-    force = 4 * abs(last["contact_force"][2])
-    assert force == pytest.approx(hertz.contact_force(70e9, 0.3, 1.0, 1e-3), rel=0.07)
-    assert abs(np.sqrt(4 * last["contact_area"] / np.pi) - a) <= 0.5 * a / 8
-    assert last["max_contact_pressure"] == pytest.approx(hertz.peak_pressure(70e9, 0.3, 1.0, 1e-3), rel=0.10)
-    assert last["equilibrium_error"] < 1e-8
 
 
 def test_contact_objects_free_their_petsc_objects(mpi_tmp_path):

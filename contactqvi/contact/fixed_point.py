@@ -10,8 +10,9 @@ Each Tresca problem is solved by the same SCD semismooth* Newton method
 are inexact: each stops when its own residual is below ``forcing`` times the
 current Coulomb residual (or the final target), which keeps the outer iteration
 convergent while not over-solving early Tresca problems. The method stops on
-the Coulomb residual ||y^|| of (6.17), the measure the SCD Newton method uses, so
-both reach the same accuracy.
+the Coulomb residual ||y^|| of (6.17) with the test of the SCD Newton method
+(:meth:`~contactqvi.contact.scd_newton.SCDNewtonSolver.solve`), so both reach the
+same accuracy.
 """
 
 from __future__ import annotations
@@ -71,8 +72,8 @@ def solve_tresca_fixed_point(
     Args:
         problem: Coulomb contact problem (``problem.law.friction`` = F > 0).
         u: initial guess (shifted displacements), overwritten by the solution.
-        parameters: SCD Newton parameters of the Tresca solves; ``rtol`` and ``atol``
-            are the final accuracy of the Coulomb residual.
+        parameters: SCD Newton parameters of the Tresca solves; ``rtol``, ``floor`` and
+            ``atol`` are the final accuracy of the Coulomb residual.
         max_iterations: Tresca problems before giving up (status ``DIVERGED_MAX_IT``).
         forcing: each Tresca solve stops at ``forcing`` times the Coulomb residual
             at its start (and never below the final target).
@@ -89,29 +90,27 @@ def solve_tresca_fixed_point(
     tresca = dataclasses.replace(problem, law=FrictionLaw(slip_bound=slip_bound))
     with result.timings.phase("solve"), SCDNewtonSolver(tresca, p, prefix=prefix) as solver:
         slip_bound[:] = law.slip_bound - friction * solver.residual(u).z[:, 2]  # theta does not depend on s
-        point = solver.residual(u)  # the Coulomb graph point (6.17) at u
-        norm0 = point.norm
-        target = max(p["rtol"] * norm0, p["atol"])
+        norm = norm0 = solver.residual(u).norm  # of the Coulomb graph point (6.17) at u
+        target = max(p["rtol"] * norm0, p["floor"] * problem.load.norm(), p["atol"])
         for j in range(max_iterations + 1):
-            entry = {"j": j, "residual": point.norm, "relative_residual": point.norm / norm0 if norm0 else 0.0}
+            entry = {"j": j, "residual": norm, "relative_residual": norm / norm0 if norm0 else 0.0}
             result.history.append(entry)
-            if point.norm <= target:
-                result.status = Status.CONVERGED_ATOL if point.norm <= p["atol"] else Status.CONVERGED_RTOL
+            if norm <= target:
+                result.status = Status.CONVERGED_RTOL if norm <= p["rtol"] * norm0 else Status.CONVERGED_ATOL
                 break
             if j == max_iterations:
                 break
-            solver.parameters["atol"] = max(forcing * point.norm, target)
-            inner = solver.solve(u)
+            inner = solver.solve(u, atol=max(forcing * norm, target))
             result.newton_iterations += inner.iterations
             result.inner_iterations += inner.inner_iterations
             entry.update(tresca_status=str(inner.status), newton_iterations=inner.iterations,
                          krylov_iterations=inner.inner_iterations)
             logger.info("  fixed point %3d  |y^| %.3e  rel %.2e  Tresca: %s after %d Newton steps",
-                        j, point.norm, entry["relative_residual"], inner.status, inner.iterations)
+                        j, norm, entry["relative_residual"], inner.status, inner.iterations)
             if not inner.converged:
                 result.status = Status.DIVERGED_INNER
                 break
             slip_bound[:] = law.slip_bound + friction * inner.normal_force
-            point = solver.residual(u)
+            norm = solver.residual(u).norm
     result.iterations = len(result.history) - 1
     return result
