@@ -33,7 +33,7 @@ SI units throughout (m, Pa, N/m^3). Example::
 
     [[steps]]                           # load path; none = one step, load 1, no translation
     load = 0.5                          # factor on tractions, body force, prescribed displacements
-    translation = [0.0, 0.0, 0.0]       # obstacle translation (m) from its initial position
+    translation = [0.0, 0.0, 0.0]       # translation (m) of the obstacle and of boundary.moved groups
     [[steps]]
     load = 1.0
 
@@ -205,12 +205,15 @@ class Boundary:
         displacement: group -> prescribed components of u (m).
         traction: group -> surface traction [tx, ty, tz] (Pa), scaled by the step's load.
         body_force: [fx, fy, fz] (N/m^3), scaled by the step's load; ``None``: none.
+        moved: groups whose displacement is the step's ``translation`` (all three
+            components, moved rigidly with the obstacles; not scaled by ``load``).
     """
 
     clamped: tuple[str, ...] = ()
     displacement: dict[str, Displacement] = dataclasses.field(default_factory=dict)
     traction: dict[str, Vector] = dataclasses.field(default_factory=dict)
     body_force: Vector | None = None
+    moved: tuple[str, ...] = ()
 
 
 @dataclasses.dataclass(frozen=True)
@@ -562,9 +565,15 @@ def _check_boundary(boundary: Boundary, path: str, supported: bool = True) -> Bo
     traction = {_name(name, f"{path}.traction.{name}"): _vector(value, f"{path}.traction.{name}")
                 for name, value in boundary.traction.items()}
     body_force = None if boundary.body_force is None else _vector(boundary.body_force, f"{path}.body_force")
-    require(clamped or displacement or not supported, path,
+    moved = boundary.moved
+    require(_is_list(moved), f"{path}.moved", f"must be a list of group names, got {moved!r}")
+    moved = tuple(_name(name, f"{path}.moved[{i}]") for i, name in enumerate(moved))
+    for i, name in enumerate(moved):
+        require(name not in (*clamped, *displacement, *moved[:i]), f"{path}.moved[{i}]",
+                f"group {name!r} already has a prescribed displacement")
+    require(clamped or displacement or moved or not supported, path,
             "needs a clamped group or a prescribed displacement (rigid motions must be fixed)")
-    return Boundary(clamped, displacement, traction, body_force)
+    return Boundary(clamped, displacement, traction, body_force, moved)
 
 
 def _check_contact(contact: Contact) -> Contact:
@@ -603,7 +612,7 @@ def _check_bodies(bodies: typing.Sequence[Body]) -> tuple[Body, ...]:
         require(name not in [b.name for b in checked], f"{path}.name", f"body {name!r} listed twice")
         checked.append(Body(name, _check_material(body.material, f"{path}.material"),
                             _check_boundary(body.boundary, f"{path}.boundary", supported=False)))
-    supported = any(b.boundary.clamped or b.boundary.displacement for b in checked)
+    supported = any(b.boundary.clamped or b.boundary.displacement or b.boundary.moved for b in checked)
     require(supported, "bodies", "no body has a clamped group or a prescribed displacement; at least one "
             "must be held (the others may be held by contact)")
     return tuple(checked)
@@ -740,6 +749,7 @@ def _group_uses(case: ContactCase) -> list[tuple[str, str]]:
 def _boundary_uses(boundary: Boundary, path: str) -> list[tuple[str, str]]:
     uses = [(f"{path}.clamped[{i}]", name) for i, name in enumerate(boundary.clamped)]
     uses += [(f"{path}.displacement.{name}", name) for name in boundary.displacement]
+    uses += [(f"{path}.moved[{i}]", name) for i, name in enumerate(boundary.moved)]
     return uses + [(f"{path}.traction.{name}", name) for name in boundary.traction]
 
 

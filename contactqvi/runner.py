@@ -65,7 +65,7 @@ def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
         msh, tags, case.material.young, case.material.poisson, dict(b.traction),
         friction=c.friction or 0.0, slip_bound=c.slip_bound or 0.0, clamped=b.clamped, contact=c.surface,
         obstacle=case.obstacle.create(), body_force=b.body_force,
-        displacements={name: d.components() for name, d in b.displacement.items()},
+        displacements={name: d.components() for name, d in b.displacement.items()}, moved=b.moved,
     )
 
 
@@ -92,9 +92,10 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
     displacements = {f"{b.name}.{group}": d.components() for b in case.bodies
                      for group, d in b.boundary.displacement.items()}
     tractions = {f"{b.name}.{group}": t for b in case.bodies for group, t in b.boundary.traction.items()}
+    moved = [name for b in case.bodies for name in qualified(b, b.boundary.moved)]
     pairs = [_pair(pair) for pair in case.contacts]
     return assemble_contact_problem(msh, tags, young, poisson, tractions, pairs, clamped,
-                                    displacements=displacements, cell_tags=cell_tags)
+                                    displacements=displacements, cell_tags=cell_tags, moved=moved)
 
 
 def _pair(pair: ContactPair) -> ObstaclePair | BodyPair:

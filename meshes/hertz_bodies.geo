@@ -1,41 +1,51 @@
-// Hertz between two elastic bodies: a ball of radius R resting on a block, both
-// meshed (quarter model x, y >= 0, rollers on x = 0 and y = 0). The ball's lower
+// Hertz and Cattaneo-Mindlin between two elastic bodies: a ball of radius R resting
+// on a block, both meshed (symmetry_planes = 2: quarter model x, y >= 0, rollers on
+// x = 0 and y = 0; 1: half model y >= 0, rollers on y = 0). The ball's lower
 // half touches the block's top face z = 0 at the origin; the bodies share no nodes
 // and are meshed independently, finer on the ball (h_ball = 0.7 h) so that the
 // interface is non-matching. Tetrahedra of size h = a / refinement within 1.5 a
 // of the contact point, growing with slope 2 / refinement away from it; a is the
 // contact radius the mesh is made for.
-// Physical volumes: "block" ([0, L]^2 x [-L, 0], L = extent a), "ball" (the quarter
-// of the lower half-ball, centre (0, 0, R)).
+// Physical volumes: "block" ([0, L]^2 x [-L, 0], L = extent a; [-L, L] x [0, L] x
+// [-L, 0] for the half model), "ball" (the quarter or half of the lower half-ball,
+// centre (0, 0, R)).
 // Physical surfaces: "top" (block, z = 0), "bottom" (block, z = -L), "sphere" (the
 // ball's curved surface), "load" (the ball's flat face z = R), "symmetry_x"
-// (x = 0, both bodies), "symmetry_y" (y = 0, both bodies), "sides" (block, x = L, y = L).
+// (x = 0, both bodies; quarter model), "symmetry_y" (y = 0, both bodies), "sides"
+// (block, x = +-L, y = L).
 // Wrappers set `refinement` and include this file (hertz_bodies_*.geo).
 SetFactory("OpenCASCADE");
 DefineConstant[
   R = {1.0, Name "ball radius R (m)"},
   a = {0.0316, Name "contact radius the mesh is made for (m)"},
   refinement = {6, Name "a / h at the contact (block)"},
-  extent = {160, Name "block size / a"}
+  extent = {160, Name "block size / a"},
+  symmetry_planes = {2, Name "2: quarter model, 1: half model"}
 ];
 L = extent * a;
 h = a / refinement;
 grade = 2 / refinement;
-Box(1) = {0, 0, -L, L, L, L};
+xmin = (symmetry_planes == 2) ? 0 : -1;
+Box(1) = {xmin * L, 0, -L, (1 - xmin) * L, L, L};
 Sphere(2) = {0, 0, R, R};
-Box(3) = {0, 0, 0, R, R, R};
+Box(3) = {xmin * R, 0, 0, (1 - xmin) * R, R, R};
 BooleanIntersection(4) = { Volume{2}; Delete; }{ Volume{3}; Delete; };
 eps = 1e-6 * L;
 Physical Volume("block") = {1};
 Physical Volume("ball") = {4};
-Physical Surface("top") = Surface In BoundingBox{-eps, -eps, -eps, L + eps, L + eps, eps};
-Physical Surface("bottom") = Surface In BoundingBox{-eps, -eps, -L - eps, L + eps, L + eps, -L + eps};
-Physical Surface("load") = Surface In BoundingBox{-eps, -eps, R - eps, R + eps, R + eps, R + eps};
+Physical Surface("top") = Surface In BoundingBox{xmin * L - eps, -eps, -eps, L + eps, L + eps, eps};
+Physical Surface("bottom") = Surface In BoundingBox{xmin * L - eps, -eps, -L - eps, L + eps, L + eps, -L + eps};
+Physical Surface("load") = Surface In BoundingBox{xmin * R - eps, -eps, R - eps, R + eps, R + eps, R + eps};
 sides[] = Surface In BoundingBox{L - eps, -eps, -L - eps, L + eps, L + eps, eps};
-sides[] += Surface In BoundingBox{-eps, L - eps, -L - eps, L + eps, L + eps, eps};
+sides[] += Surface In BoundingBox{xmin * L - eps, L - eps, -L - eps, L + eps, L + eps, eps};
+If (symmetry_planes == 1)
+  sides[] += Surface In BoundingBox{-L - eps, -eps, -L - eps, -L + eps, L + eps, eps};
+EndIf
 Physical Surface("sides") = sides[];
-Physical Surface("symmetry_x") = Surface In BoundingBox{-eps, -eps, -L - eps, eps, L + eps, R + eps};
-Physical Surface("symmetry_y") = Surface In BoundingBox{-eps, -eps, -L - eps, L + eps, eps, R + eps};
+If (symmetry_planes == 2)
+  Physical Surface("symmetry_x") = Surface In BoundingBox{-eps, -eps, -L - eps, eps, L + eps, R + eps};
+EndIf
+Physical Surface("symmetry_y") = Surface In BoundingBox{xmin * L - eps, -eps, -L - eps, L + eps, eps, R + eps};
 ball_faces[] = Boundary{ Volume{4}; };
 Physical Surface("sphere") = {};
 For i In {0 : #ball_faces[] - 1}

@@ -250,6 +250,7 @@ def build_contact_problem(
     obstacle: Obstacle | None = None,
     body_force: Vector3 | None = None,
     displacements: dict[str, dict[int, float]] | None = None,
+    moved: typing.Sequence[str] = (),
 ) -> ContactProblem:
     """Assemble the GE (6.3) for a body against a rigid obstacle, at load factor 1.
 
@@ -269,6 +270,7 @@ def build_contact_problem(
         obstacle: the rigid obstacle; default the foundation {x3 <= 0} of seed 000.
         body_force: volume force density (N/m^3).
         displacements: prescribed components per boundary name, ``{name: {component: value (m)}}``.
+        moved: boundaries moved rigidly with the obstacle's translation.
 
     Raises:
         ParameterError: bad values, unknown boundary names, or a contact node inside
@@ -279,7 +281,7 @@ def build_contact_problem(
     obstacle = Plane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)) if obstacle is None else obstacle
     pair = ObstaclePair(contact, obstacle, float(friction), float(slip_bound))
     return assemble_contact_problem(msh, facet_tags, young, poisson, tractions, [pair], clamped, body_force,
-                                    displacements)
+                                    displacements, moved=moved)
 
 
 def assemble_contact_problem(
