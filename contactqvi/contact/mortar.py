@@ -359,16 +359,40 @@ def _candidate_pairs(slave_x: np.ndarray, master_x: np.ndarray,
     slave_edge = np.linalg.norm(slave_x - np.roll(slave_x, 1, axis=1), axis=2).max(axis=1)
     master_edge = np.linalg.norm(master_x - np.roll(master_x, 1, axis=1), axis=2).max(axis=1)
     pad = slave_edge if search_distance is None else np.full(len(slave_x), search_distance)
-    tree = scipy.spatial.cKDTree(master_x.mean(axis=1))
-    candidates = tree.query_ball_point(slave_x.mean(axis=1), slave_edge + master_edge.max() + pad)
-    counts = np.fromiter((len(c) for c in candidates), dtype=np.int64, count=len(candidates))
-    pairs_s = np.repeat(np.arange(len(slave_x)), counts)
-    pairs_m = np.fromiter((j for c in candidates for j in c), dtype=np.int64, count=int(counts.sum()))
+    pairs_s, pairs_m = _near_centroids(slave_x.mean(axis=1), slave_edge + pad, master_x.mean(axis=1), master_edge)
     lo_s, hi_s = slave_x.min(axis=1)[pairs_s], slave_x.max(axis=1)[pairs_s]
     lo_m, hi_m = master_x.min(axis=1)[pairs_m], master_x.max(axis=1)[pairs_m]
     padding = pad[pairs_s, None]
     near = np.all((hi_m >= lo_s - padding) & (lo_m <= hi_s + padding), axis=1)
     return pairs_s[near], pairs_m[near]
+
+
+def _near_centroids(slave_c: np.ndarray, slave_r: np.ndarray, master_c: np.ndarray,
+                    master_r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Index pairs (i, j) with |slave_c[i] - master_c[j]| <= slave_r[i] + master_r[j].
+
+    Facets are binned by size (powers of two) and each pair of bins queried with its
+    largest radius, so a graded mesh's large facets do not widen the small ones' search.
+    """
+    def bins(r: np.ndarray) -> np.ndarray:
+        return np.floor(np.log2(np.maximum(r, 1e-300))).astype(np.int64)
+
+    slave_bin, master_bin = bins(slave_r), bins(master_r)
+    master_sets = []
+    for b in np.unique(master_bin):
+        idx = np.flatnonzero(master_bin == b)
+        master_sets.append((idx, scipy.spatial.cKDTree(master_c[idx]), master_r[idx].max()))
+    found_s, found_m = [np.empty(0, dtype=np.int64)], [np.empty(0, dtype=np.int64)]
+    for b in np.unique(slave_bin):
+        s_idx = np.flatnonzero(slave_bin == b)
+        tree = scipy.spatial.cKDTree(slave_c[s_idx])
+        for m_idx, master_tree, m_reach in master_sets:
+            near = tree.sparse_distance_matrix(master_tree, float(slave_r[s_idx].max() + m_reach), output_type="ndarray")
+            i, j = s_idx[near["i"]], m_idx[near["j"]]
+            keep = near["v"] <= slave_r[i] + master_r[j]
+            found_s.append(i[keep])
+            found_m.append(j[keep])
+    return np.concatenate(found_s), np.concatenate(found_m)
 
 
 def _owners(comm: MPI.Comm, index_map) -> np.ndarray:
