@@ -86,10 +86,12 @@ The same case in Python (sections left out take their defaults)::
 ``case.obstacle.create()`` is the :mod:`contactqvi.obstacles` object, and
 ``case.to_dict()`` the tables again (for ``summary.json``).
 
-:func:`load_case` validates everything that needs no mesh before any expensive
-work; errors are :class:`~contactqvi.parameters.ParameterError` named by the key
-path (``obstacle.normal``, ``steps[2].translation``), unknown keys name the
-closest valid one. Checks that need the mesh belong to the problem builder;
+:func:`load_case` validates everything that needs no mesh and no solver before any
+expensive work; errors are :class:`~contactqvi.parameters.ParameterError` named by
+the key path (``obstacle.normal``, ``steps[2].translation``), unknown keys name the
+closest valid one. The case layer imports no solver: :func:`check_solver` checks
+``[solver]`` against the table the program passes (the runner: the SCD solver's),
+before the mesh is read. Checks that need the mesh belong to the problem builder;
 :func:`check_groups` does the physical-group part of them.
 """
 
@@ -105,8 +107,8 @@ import tomllib
 import typing
 
 from contactqvi import obstacles
-from contactqvi.contact.load_path import LoadStep as Step
-from contactqvi.parameters import ParameterError, require, require_choice, require_positive
+from contactqvi.load_steps import LoadStep as Step
+from contactqvi.parameters import ParameterError, Parameters, require, require_choice, require_positive
 
 __all__ = [
     "LAWS",
@@ -123,6 +125,7 @@ __all__ = [
     "PaperBody",
     "Step",
     "check_groups",
+    "check_solver",
     "load_case",
     "parse_case",
 ]
@@ -685,19 +688,23 @@ STARTS = ("rest", "contact")
 
 
 def _check_solver(solver: dict[str, typing.Any]) -> dict[str, typing.Any]:
-    """The given SCD Newton parameters, checked by the solver's table (defaults not added),
-    and ``start`` (:data:`STARTS`)."""
-    from contactqvi.contact import scd_newton  # here: the contact package may read cases itself
-
+    """``[solver]`` as a table with ``start`` checked (:data:`STARTS`); the solver's own
+    parameters are checked against its table by :func:`check_solver`."""
     _instance(solver, dict, "solver")
-    newton = {name: value for name, value in solver.items() if name != "start"}
     if "start" in solver:
         require_choice("solver.start", solver["start"], STARTS)
+    return dict(solver)
+
+
+def check_solver(case: ContactCase, table: Parameters) -> dict[str, typing.Any]:
+    """The case's ``[solver]`` parameters checked by the solver's ``table`` (errors named
+    ``solver.NAME``), without ``start`` and without the defaults added."""
+    given = {name: value for name, value in case.solver.items() if name != "start"}
     try:
-        merged = scd_newton.PARAMETERS.check(newton)
+        merged = table.check(given)
     except ParameterError as exc:
         raise ParameterError(f"solver.{exc.name}", str(exc).removeprefix(f"{exc.name}: ")) from None
-    return {**{name: merged[name] for name in newton}, **({"start": solver["start"]} if "start" in solver else {})}
+    return {name: merged[name] for name in given}
 
 
 def _check_petsc(petsc: dict[str, typing.Any]) -> dict[str, typing.Any]:

@@ -25,11 +25,12 @@ from petsc4py import PETSc
 from dolfinx import mesh as dmesh
 
 from contactqvi import tables
-from contactqvi.case import Body, ContactCase, ContactPair, check_groups
+from contactqvi.case import Body, ContactCase, ContactPair, check_groups, check_solver
 from contactqvi.contact.load_path import LoadStep, solve_load_path
 from contactqvi.contact.postprocess import ContactResultsWriter, plot_contact_states
 from contactqvi.contact.interface import BodyPair, ObstaclePair
 from contactqvi.contact.problem import ContactProblem, assemble_contact_problem, build_contact_problem
+from contactqvi.contact import scd_newton
 from contactqvi.contact.scd_newton import SCDNewtonResult
 from contactqvi.linalg import default_options
 from contactqvi.elasticity import body_materials
@@ -119,8 +120,8 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
         The summary (also in ``output/summary.json``) and the exit code: 0 when every
         step converged, 1 when one did not.
     """
-    parameters = dict(case.solver)
-    from_rest = parameters.pop("start", "rest") == "rest"
+    parameters = check_solver(case, scd_newton.PARAMETERS)
+    from_rest = case.solver.get("start", "rest") == "rest"
     with default_options(PREFIX, case.petsc), build_problem(case, comm) as problem:
         logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks",
                     problem.n_contact, problem.n_free, len(case.steps), comm.size)

@@ -15,6 +15,7 @@ from dolfinx import fem
 from contactqvi.contact.load_path import LoadStep, solve_load_path
 from contactqvi.contact.problem import ContactProblem, build_contact_problem
 from contactqvi.contact.scd_newton import SCDNewtonResult
+from contactqvi.lifetime import PETScOwner
 from contactqvi.meshes import GapFunction, create_contact_body
 from contactqvi.transfer import interpolate_nonmatching
 
@@ -24,7 +25,7 @@ logger = logging.getLogger(__name__)
 
 
 @dataclasses.dataclass
-class LevelSolution:
+class LevelSolution(PETScOwner):
     """Problem, shifted solution u = u~ + d and solver result of one level."""
 
     lev: int
@@ -35,10 +36,9 @@ class LevelSolution:
     def physical_displacement(self) -> fem.Function:
         return self.problem.physical_displacement(self.u, fem.Function(self.problem.V, name="displacement"))
 
-    def destroy(self) -> None:
-        """Free the PETSc objects of the problem and of u (collective)."""
-        self.problem.destroy()
-        self.u.destroy()
+    def petsc_objects(self) -> list[typing.Any]:
+        """The problem and u."""
+        return [self.problem, self.u]
 
 
 def solve_level(

@@ -12,7 +12,6 @@ first step starts from the given guess.
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import typing
 
@@ -24,35 +23,13 @@ import numpy as np
 from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult, SCDNewtonSolver
-from contactqvi.parameters import require, require_positive
+from contactqvi.load_steps import LoadStep, check_steps
 
 __all__ = ["LoadStep", "check_steps", "contact_resultants", "solve_load_path"]
 
 logger = logging.getLogger(__name__)
 
 StepCallback = typing.Callable[[int, "LoadStep", PETSc.Vec, SCDNewtonResult], None]
-
-
-@dataclasses.dataclass(frozen=True)
-class LoadStep:
-    """One step of a load path.
-
-    Attributes:
-        load: factor on tractions, body force and prescribed displacements.
-        translation: total rigid translation of the obstacle from its initial position (m).
-    """
-
-    load: float = 1.0
-    translation: tuple[float, float, float] = (0.0, 0.0, 0.0)
-
-
-def check_steps(steps: typing.Sequence[LoadStep]) -> None:
-    """Raise :class:`~contactqvi.parameters.ParameterError` for a negative load or a bad translation."""
-    for i, step in enumerate(steps):
-        require_positive(f"steps[{i}].load", step.load, allow_zero=True)
-        array = np.asarray(step.translation, dtype=float)
-        require(array.shape == (3,) and bool(np.all(np.isfinite(array))), f"steps[{i}].translation",
-                f"must be 3 finite numbers (m), got {step.translation!r}")
 
 
 def solve_load_path(
