@@ -110,6 +110,11 @@ class Interface:
     def obstacle(self) -> Obstacle | None:
         return self.pair.obstacle if isinstance(self.pair, ObstaclePair) else None
 
+    @property
+    def slave_surface(self) -> str:
+        """The facet group of the slave nodes."""
+        return self.pair.surface if isinstance(self.pair, ObstaclePair) else self.pair.slave
+
     def gap(self, x: np.ndarray, translation: np.ndarray) -> np.ndarray:
         """Gap of each slave node (m) with the obstacle translated by ``translation``;
         a body pair's weighted gap does not depend on it."""

@@ -89,10 +89,22 @@ def solve_load_path(
 
 
 def contact_resultants(problem: ContactProblem, result: SCDNewtonResult) -> dict[str, typing.Any]:
-    """Total contact force of the obstacle on the body (N, global components), contact,
-    sticking and sliding areas (m^2, lumped nodal areas by state) of a solved step."""
+    """Contact forces (N, global components) and contact, sticking and sliding areas (m^2,
+    lumped nodal areas by state) of a solved step.
+
+    ``pair_forces``: per contact pair, the force of the master side (obstacle or body) on
+    the slave body; ``contact_force``: the total force of the rigid obstacles on the
+    bodies (forces between bodies cancel in the global balance).
+    """
     forces = np.column_stack([result.friction_force, result.normal_force])  # nodal frames
-    total = np.einsum("ij,ijk->k", forces, problem.frames) if len(forces) else np.zeros(3)
+    nodal = np.einsum("ij,ijk->ik", forces, problem.frames) if len(forces) else np.zeros((0, 3))
+    pair_forces = {}
+    total = np.zeros(3)
+    for k, interface in enumerate(problem.interfaces):
+        force = problem.comm.allreduce(nodal[problem.interface_of_node == k].sum(axis=0), op=MPI.SUM)
+        pair_forces[interface.pair.name] = force.tolist()
+        if interface.obstacle is not None:
+            total += force
     area = problem.contact_area
     sticking = np.isin(result.states, (State.STICKING, State.WEAK_STICKING))
     sliding = result.states == State.SLIDING
@@ -102,9 +114,11 @@ def contact_resultants(problem: ContactProblem, result: SCDNewtonResult) -> dict
         return comm.allreduce(float(area[mask].sum()), op=MPI.SUM)
 
     return {
-        "contact_force": comm.allreduce(total, op=MPI.SUM).tolist(),
+        "contact_force": total.tolist(),
+        "pair_forces": pair_forces,
         "contact_area": total_area(sticking | sliding),
         "sticking_area": total_area(sticking),
         "sliding_area": total_area(sliding),
-        "units": {"contact_force": "N", "contact_area": "m^2", "sticking_area": "m^2", "sliding_area": "m^2"},
+        "units": {"contact_force": "N", "pair_forces": "N", "contact_area": "m^2", "sticking_area": "m^2",
+                  "sliding_area": "m^2"},
     }

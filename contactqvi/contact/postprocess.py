@@ -29,6 +29,8 @@ the global l2 norm of u~ (m; the number demos print to compare runs).
 
 from __future__ import annotations
 
+import dataclasses
+
 import os
 import typing
 
@@ -86,6 +88,7 @@ def contact_summary(
     pressure = result.normal_force / problem.contact_area
     summary = {
         "contact_force": contact_force.tolist(),
+        "pair_forces": resultants["pair_forces"],
         "reaction_forces": {name: r.tolist() for name, r in reactions.items()},
         "applied_force": applied.tolist(),
         "equilibrium_error": float(np.linalg.norm(total) / scale) if scale > 0 else 0.0,
@@ -96,11 +99,40 @@ def contact_summary(
         "max_contact_pressure": comm.allreduce(float(pressure.max(initial=0.0)), op=MPI.MAX),
         "displacement_norm": displacement.x.petsc_vec.norm(),
     }
+    if problem.node_body is not None:
+        summary["body_equilibrium_errors"] = _body_equilibrium(problem, reactions, resultants["pair_forces"])
     if von_mises is not None:
         n_cells = von_mises.function_space.mesh.topology.index_map(3).size_local
         summary["max_von_mises"] = comm.allreduce(float(von_mises.x.array[:n_cells].max(initial=0.0)), op=MPI.MAX)
     summary["units"] = {name: UNITS[name] for name in summary if name in UNITS}
     return summary
+
+
+def _body_equilibrium(problem: ContactProblem, reactions: dict[str, np.ndarray],
+                      pair_forces: dict[str, list[float]]) -> dict[str, float]:
+    """Relative force balance of each body (groups named ``"body.group"``): its tractions,
+    the reactions of its supports and the contact forces on it (a pair's force acts on
+    its slave body and, opposite, on its master body)."""
+    def body_of(group: str) -> str:
+        return group.split(".", 1)[0]
+
+    totals: dict[str, list[np.ndarray]] = {}
+    msh, body = problem.V.mesh, problem.body
+    for group, traction in body.tractions.items():
+        alone = dataclasses.replace(body, tractions={group: traction}, body_force=None)
+        totals.setdefault(body_of(group), []).append(applied_force(msh, alone, problem.load_factor))
+    for group, reaction in reactions.items():
+        totals.setdefault(body_of(group), []).append(np.asarray(reaction))
+    for interface in problem.interfaces:
+        force = np.asarray(pair_forces[interface.pair.name])
+        totals.setdefault(body_of(interface.slave_surface), []).append(force)
+        if interface.coupling is not None:
+            totals.setdefault(body_of(interface.pair.master), []).append(-force)
+    errors = {}
+    for name, forces in totals.items():
+        scale = max(np.linalg.norm(f) for f in forces)
+        errors[name] = float(np.linalg.norm(np.sum(forces, axis=0)) / scale) if scale > 0 else 0.0
+    return errors
 
 
 class ContactResultsWriter:

@@ -362,7 +362,7 @@ def assemble_contact_problem(
     problem = ContactProblem(
         V=V, A=A, applied=loads[0], load=loads[0].duplicate(), shift=loads[0].duplicate(),
         contact_blk=contact_blk, contact_facets=np.unique(np.concatenate(
-            [boundary_facets(facet_tags, _slave_surface(i.pair)) for i in interfaces])).astype(np.int32),
+            [boundary_facets(facet_tags, i.slave_surface) for i in interfaces])).astype(np.int32),
         contact_area=contact_area,
         law=FrictionLaw(float(friction[0]) if np.all(friction == friction[0]) else friction[interface_of_node],
                         slip_bound),
@@ -423,10 +423,6 @@ def _in_solver_variables(A_K: PETSc.Mat, T: PETSc.Mat, b: PETSc.Vec, offset: PET
     T.multTranspose(b, out)
     b.destroy()
     return out
-
-
-def _slave_surface(pair: Pair) -> str:
-    return pair.surface if isinstance(pair, ObstaclePair) else pair.slave
 
 
 def _mortar_rows(A: PETSc.Mat, interfaces: typing.Sequence[Interface], constrained: np.ndarray) -> PETSc.Mat:
@@ -502,7 +498,7 @@ def _check_held(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, cell_tags: dme
         normals = interface.frames[:, 2]
         spread = comm.allreduce(np.einsum("ij,ik->jk", normals, normals), op=MPI.SUM)
         spread = np.eye(3) if frictional else spread / max(np.trace(spread), 1e-300)
-        surfaces = [_slave_surface(pair)] + ([pair.master] if isinstance(pair, BodyPair) else [])
+        surfaces = [interface.slave_surface] + ([pair.master] if isinstance(pair, BodyPair) else [])
         for surface in surfaces:
             nodes = fem.locate_dofs_topological(V, V.mesh.topology.dim - 1, boundary_facets(facet_tags, surface))
             bodies = set().union(*comm.allgather(set(np.unique(node_body[nodes]).tolist())))
