@@ -21,6 +21,7 @@ import pytest
 
 from dolfinx import fem
 
+from contactqvi.case import load_case
 from contactqvi.contact.interface import BodyPair
 from contactqvi.contact.mortar import clip_polygons, mortar_coupling, segment_integrals
 from contactqvi.contact.nodal import State
@@ -29,8 +30,10 @@ from contactqvi.contact.scd_newton import SCDNewtonSolver
 from contactqvi.elasticity import body_materials
 from contactqvi.meshes import boundary_facets, read_gmsh, split_by_body
 from contactqvi.parameters import ParameterError
+from contactqvi.runner import run_case
 
-MESH = pathlib.Path(__file__).resolve().parent.parent / "meshes" / "patch_blocks.geo"
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+MESH = ROOT / "meshes" / "patch_blocks.geo"
 P = 1e6  # pressure on top (Pa)
 NU = 0.3
 ROLLERS = {"lower.bottom": {2: 0.0}, "lower.symmetry_x": {0: 0.0}, "upper.symmetry_x": {0: 0.0},
@@ -248,3 +251,16 @@ def test_two_body_parallel_equals_serial():
     position = np.array([lookup[tuple(p)] for p in np.round(x_par, 12)], dtype=np.int64)
     scale = np.abs(u).max()
     assert MPI.COMM_WORLD.allreduce(float(np.abs(u_par - u[position]).max(initial=0.0)), op=MPI.MAX) < 1e-10 * scale
+
+
+def test_patch_case_file_reports_each_body_in_balance(mpi_tmp_path):
+    """cases/patch_test.toml through the runner: the pair carries the load, every body and
+    the whole are in balance, and the results are written."""
+    summary, code = run_case(load_case(ROOT / "cases" / "patch_test.toml"), mpi_tmp_path / "patch", plot=False)
+    assert code == 0
+    step = summary["steps"][-1]
+    assert step["pair_forces"]["upper.interface/lower.interface"] == pytest.approx([0.0, 0.0, P], abs=1e-6 * P)
+    assert step["equilibrium_error"] < 1e-10
+    assert set(step["body_equilibrium_errors"]) == {"lower", "upper"}
+    assert max(step["body_equilibrium_errors"].values()) < 1e-10
+    assert (mpi_tmp_path / "patch" / "body.bp").is_dir() and (mpi_tmp_path / "patch" / "contact_surface.bp").is_dir()
