@@ -282,58 +282,57 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
     pairs_s, pairs_m = pairs_s[facing], pairs_m[facing]
     D_pair, M_pair = segment_integrals(slave.x[pairs_s], -slave.normal[pairs_s], mx[pairs_m])
 
-    # slave rows: global node index; contributions of ghost rows go to their owners
-    slave_glob = index_map.local_to_global(slave.blk.ravel()).reshape(-1, 3)
-    rows_D = slave_glob[pairs_s].ravel()
-    rows_M = np.repeat(slave_glob[pairs_s], 3, axis=1).ravel()
-    cols_M = np.tile(mglob[pairs_m], (1, 3)).ravel()
-    lumped_rows = slave_glob.ravel()
-    lumped = np.repeat(slave.area / 3.0, 3)
-    normal_rows = slave_glob.ravel()
-    normal_values = np.repeat(slave.area[:, None] * -slave.normal, 3, axis=0)
-
-    owners = _owners(comm, index_map)
-    D = _sum_to_owners(comm, owners, rows_D, np.zeros_like(rows_D), D_pair.ravel())
-    M = _sum_to_owners(comm, owners, rows_M, cols_M, M_pair.ravel())
-    area = _sum_to_owners(comm, owners, lumped_rows, np.zeros_like(lumped_rows), lumped)
-    normals = [_sum_to_owners(comm, owners, normal_rows, np.zeros_like(normal_rows), normal_values[:, k])
-               for k in range(3)]
-
-    start = index_map.local_range[0]
-    n_owned = index_map.size_local
-    weight = np.zeros(n_owned)
-    weight[D[0] - start] = D[2]
-    lumped_area = np.zeros(n_owned)
-    lumped_area[area[0] - start] = area[2]
-    normal = np.zeros((n_owned, 3))
-    for k in range(3):
-        normal[normals[k][0] - start, k] = normals[k][2]
+    weight, lumped_area, normal, M = _owned_sums(comm, index_map, slave, pairs_s, mglob[pairs_m], D_pair, M_pair)
     coupled = (lumped_area > 0.0) & (weight >= MIN_COVERAGE * lumped_area)
     if excluded_blk is not None:
-        coupled[excluded_blk[excluded_blk < n_owned]] = False
+        coupled[excluded_blk[excluded_blk < index_map.size_local]] = False
     slave_blk = np.flatnonzero(coupled).astype(np.int32)
 
-    rows_loc = M[0] - start
+    rows_loc = M[0] - index_map.local_range[0]
     keep = coupled[rows_loc]
     order = np.lexsort((M[1][keep], rows_loc[keep]))
     rows_loc, cols, values = rows_loc[keep][order], M[1][keep][order], M[2][keep][order]
     values = values / weight[rows_loc]
     position = np.searchsorted(slave_blk, rows_loc)
-    indptr = np.zeros(len(slave_blk) + 1, dtype=np.int64)
-    np.add.at(indptr, position + 1, 1)
-    indptr = np.cumsum(indptr)
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(position, minlength=len(slave_blk)))]).astype(np.int64)
 
     n = normal[slave_blk]
     n /= np.linalg.norm(n, axis=1)[:, None]
     x = V.tabulate_dof_coordinates()
-    master_x = _master_coordinates(comm, index_map, x, cols)
     projected = np.zeros((len(slave_blk), 3))
-    np.add.at(projected, position, values[:, None] * master_x)
+    np.add.at(projected, position, values[:, None] * _master_coordinates(comm, index_map, x, cols))
     coupling = MortarCoupling(slave_blk, weight[slave_blk], indptr, cols.astype(np.int64), values, n,
                               x[slave_blk] - projected)
     # a node farther than the search distance (default: its own size) cannot touch in this step
     reach = np.sqrt(2.0 * lumped_area[slave_blk]) if search_distance is None else search_distance
     return _restricted(coupling, coupling.gap <= reach)
+
+
+def _owned_sums(comm: MPI.Comm, index_map, slave: SurfaceTriangles, pairs_s: np.ndarray, master_glob: np.ndarray,
+                D_pair: np.ndarray, M_pair: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple]:
+    """Sum the pairs' contributions on the owners of the slave nodes.
+
+    Returns, over the owned nodes: D_ii, the lumped slave area, the area-weighted
+    normal sum (pointing into the slave body), and the owned entries (rows, cols,
+    values) of M with global node indices.
+    """
+    slave_glob = index_map.local_to_global(slave.blk.ravel()).reshape(-1, 3)
+    owners = _owners(comm, index_map)
+    rows = slave_glob[pairs_s].ravel()
+    D = _sum_to_owners(comm, owners, rows, np.zeros_like(rows), D_pair.ravel())
+    M = _sum_to_owners(comm, owners, np.repeat(slave_glob[pairs_s], 3, axis=1).ravel(),
+                       np.tile(master_glob, (1, 3)).ravel(), M_pair.ravel())
+    nodes = slave_glob.ravel()
+    area = _sum_to_owners(comm, owners, nodes, np.zeros_like(nodes), np.repeat(slave.area / 3.0, 3))
+    normal_values = np.repeat(slave.area[:, None] * -slave.normal, 3, axis=0)
+    start, n_owned = index_map.local_range[0], index_map.size_local
+    weight, lumped_area, normal = np.zeros(n_owned), np.zeros(n_owned), np.zeros((n_owned, 3))
+    weight[D[0] - start] = D[2]
+    lumped_area[area[0] - start] = area[2]
+    for k in range(3):
+        summed = _sum_to_owners(comm, owners, nodes, np.zeros_like(nodes), normal_values[:, k])
+        normal[summed[0] - start, k] = summed[2]
+    return weight, lumped_area, normal, M
 
 
 def _restricted(coupling: MortarCoupling, keep: np.ndarray) -> MortarCoupling:

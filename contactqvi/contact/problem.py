@@ -299,84 +299,92 @@ def assemble_contact_problem(
 ) -> ContactProblem:
     """Assemble the GE (6.3) of one or several bodies with contact pairs, at load factor 1.
 
-    Args:
-        msh, facet_tags: mesh of all bodies with named facet groups.
-        young, poisson: E (Pa) and nu, numbers or cell-wise (DG0) functions.
-        tractions, clamped, body_force, displacements: as in :func:`build_contact_problem`.
-        pairs: contact pairs (:class:`~contactqvi.contact.interface.ObstaclePair`,
-            :class:`~contactqvi.contact.interface.BodyPair`).
-        cell_tags: named cell groups, one per body, when there are several bodies
-            (each gets its own rigid-body modes for AMG).
-        moved: facet groups whose displacement is the load step's translation (moved
-            rigidly like the obstacles, e.g. the loaded face of a body that is slid
-            along another), not scaled by the load factor.
+    Args as in :func:`build_contact_problem`, and: ``young``, ``poisson`` numbers or DG0
+    functions; ``pairs`` the contact pairs (:mod:`contactqvi.contact.interface`);
+    ``cell_tags`` one named cell group per body (each gets its own rigid-body modes);
+    ``moved`` groups whose displacement is the step's translation (not scaled).
 
-    Raises:
-        ParameterError: see :func:`~contactqvi.contact.interface.build_interfaces`,
-            and nonzero prescribed normal components on contact nodes.
+    Raises ``ParameterError`` as :func:`~contactqvi.contact.interface.build_interfaces`,
+    and for nonzero prescribed components on contact nodes or a body nothing holds.
     """
     require(msh.geometry.dim == 3, "mesh", "the contact problem is three-dimensional")
     V = fem.functionspace(msh, ("Lagrange", 1, (3,)))
     a, L = elasticity_forms(V, young, poisson, facet_tags, tractions, body_force)
-    msh.topology.create_connectivity(msh.topology.dim - 1, msh.topology.dim)
+    msh.topology.create_connectivity(msh.topology.dim - 1, msh.topology.dim)  # for the facet dofs
     bcs, moved_bc = _dirichlet_conditions(V, facet_tags, clamped, displacements or {}, moved)
     dirichlet_dofs_loc = np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs] + [np.empty(0, np.int32)]))
     A, applied = assemble_system(a, L, bcs)
     loads = [applied, *_unit_translations(a, A, moved_bc, dirichlet_dofs_loc)]
     index_map = V.dofmap.index_map
-    constrained = np.zeros((index_map.size_local + index_map.num_ghosts) * 3, dtype=bool)
-    constrained[dirichlet_dofs_loc] = True
-    constrained = constrained.reshape(-1, 3)
+    constrained = np.isin(np.arange(3 * (index_map.size_local + index_map.num_ghosts)), dirichlet_dofs_loc).reshape(-1, 3)
     interfaces = build_interfaces(V, facet_tags, pairs, constrained)
+    contact_blk, interface_of_node, frames, contact_area = _merged(interfaces)
+    _check_prescribed_on_contact(loads, contact_blk, constrained[contact_blk], msh.comm)
+    frames = _align_frames(frames, constrained[contact_blk], msh.comm)
+    owned_dirichlet = dirichlet_dofs_loc[dirichlet_dofs_loc < 3 * index_map.size_local]
+    A, loads, rotation, coupling, transform, offsets = _solver_variables(
+        A, loads, interfaces, constrained, contact_blk, frames, owned_dirichlet)
+    node_body = None if cell_tags is None else _node_body(V, cell_tags)
+    if node_body is not None:
+        _check_held(V, facet_tags, cell_tags, node_body, constrained, interfaces)
+    comm = msh.comm
+    supports = tuple(dict.fromkeys([*clamped, *(displacements or {}), *moved]))
+    problem = ContactProblem(
+        V=V, A=A, applied=loads[0], load=loads[0].duplicate(), shift=loads[0].duplicate(),
+        contact_blk=contact_blk, contact_facets=np.unique(np.concatenate(
+            [boundary_facets(facet_tags, i.slave_surface) for i in interfaces])).astype(np.int32),
+        contact_area=contact_area, law=_friction_law(interfaces, interface_of_node, contact_area),
+        frames=frames, interfaces=tuple(interfaces), interface_of_node=interface_of_node,
+        body=ElasticBody(young, poisson, facet_tags, supports, dict(tractions), body_force),
+        rotation=rotation, coupling=coupling, transform=transform, offset=offsets[0],
+        translated=tuple(loads[1:]), translated_offset=tuple(offsets[1:]),
+        rollers=constrained[contact_blk].any(axis=1), dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32),
+        node_body=node_body, n_contact=comm.allreduce(len(contact_blk), op=MPI.SUM),
+        n_free=comm.allreduce(3 * index_map.size_local - len(owned_dirichlet), op=MPI.SUM),
+    )
+    problem.set_step()
+    return problem
+
+
+def _merged(interfaces: typing.Sequence[Interface]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The interfaces' slave nodes sorted, with their interface index, frames and areas."""
     contact_blk = np.concatenate([i.blk for i in interfaces]).astype(np.int32)
     order = np.argsort(contact_blk, kind="stable")
-    contact_blk = contact_blk[order]
     interface_of_node = np.repeat(np.arange(len(interfaces)), [len(i.blk) for i in interfaces])[order]
-    _check_prescribed_on_contact(loads, contact_blk, constrained[contact_blk], msh.comm)
-    frames = _align_frames(np.concatenate([i.frames for i in interfaces])[order], constrained[contact_blk], msh.comm)
+    frames = np.concatenate([i.frames for i in interfaces])[order]
+    return contact_blk[order], interface_of_node, frames, np.concatenate([i.area for i in interfaces])[order]
+
+
+def _friction_law(interfaces: typing.Sequence[Interface], interface_of_node: np.ndarray,
+                  contact_area: np.ndarray) -> FrictionLaw:
+    """The pairs' friction data per node: one F if all pairs share it, the Tresca bound
+    lumped to s_i = slip_bound x area_i (N)."""
+    friction = np.array([i.pair.friction for i in interfaces])
+    slip_bound = np.array([i.pair.slip_bound for i in interfaces])[interface_of_node] * contact_area
+    return FrictionLaw(float(friction[0]) if np.all(friction == friction[0]) else friction[interface_of_node],
+                       slip_bound)
+
+
+def _solver_variables(
+    A: PETSc.Mat, loads: list[PETSc.Vec], interfaces: typing.Sequence[Interface], constrained: np.ndarray,
+    contact_blk: np.ndarray, frames: np.ndarray, owned_dirichlet: np.ndarray,
+) -> tuple[PETSc.Mat, list[PETSc.Vec], PETSc.Mat | None, PETSc.Mat | None, PETSc.Mat | None, list[PETSc.Vec | None]]:
+    """A = T^T A_K T and l~ = T^T (l~_K - A_K c) for each load (``A`` and ``loads`` are
+    replaced), with R, N, T and the offsets c of the change of variables."""
     mortar = any(i.coupling is not None for i in interfaces)
     rotation = _nodal_rotation(A, contact_blk, frames, always=mortar)
     coupling = transform = None
     offsets: list[PETSc.Vec | None] = [None] * len(loads)
     if mortar:
         coupling = _mortar_rows(A, interfaces, constrained)
-        owned = dirichlet_dofs_loc[dirichlet_dofs_loc < 3 * index_map.size_local]
-        offsets = [_prescribed_offset(coupling, b, owned) for b in loads]
-        transform = _change_of_variables(coupling, rotation, owned)
-    if rotation is not None:  # A = T^T A_K T, l~ = T^T (l~_K - A_K c)
+        offsets = [_prescribed_offset(coupling, b, owned_dirichlet) for b in loads]
+        transform = _change_of_variables(coupling, rotation, owned_dirichlet)
+    if rotation is not None:
         T = transform if transform is not None else rotation
         loads = [_in_solver_variables(A, T, b, c) for b, c in zip(loads, offsets)]
         A_global, A = A, A.PtAP(T)
         A_global.destroy()
-
-    node_body = None if cell_tags is None else _node_body(V, cell_tags)
-    if node_body is not None:
-        _check_held(V, facet_tags, cell_tags, node_body, constrained, interfaces)
-    comm = msh.comm
-    n_owned = index_map.size_local
-    n_fixed_owned = int(np.count_nonzero(dirichlet_dofs_loc < 3 * n_owned))
-    contact_area = np.concatenate([i.area for i in interfaces])[order]
-    slip_bound = np.array([i.pair.slip_bound for i in interfaces])[interface_of_node] * contact_area
-    friction = np.array([i.pair.friction for i in interfaces])
-    supports = tuple(dict.fromkeys([*clamped, *(displacements or {}), *moved]))
-    problem = ContactProblem(
-        V=V, A=A, applied=loads[0], load=loads[0].duplicate(), shift=loads[0].duplicate(),
-        contact_blk=contact_blk, contact_facets=np.unique(np.concatenate(
-            [boundary_facets(facet_tags, i.slave_surface) for i in interfaces])).astype(np.int32),
-        contact_area=contact_area,
-        law=FrictionLaw(float(friction[0]) if np.all(friction == friction[0]) else friction[interface_of_node],
-                        slip_bound),
-        frames=frames, interfaces=tuple(interfaces), interface_of_node=interface_of_node,
-        body=ElasticBody(young, poisson, facet_tags, supports, dict(tractions), body_force),
-        rotation=rotation, coupling=coupling, transform=transform, offset=offsets[0],
-        translated=tuple(loads[1:]), translated_offset=tuple(offsets[1:]),
-        rollers=constrained[contact_blk].any(axis=1), dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32),
-        node_body=node_body,
-        n_contact=comm.allreduce(len(contact_blk), op=MPI.SUM),
-        n_free=comm.allreduce(3 * n_owned - n_fixed_owned, op=MPI.SUM),
-    )
-    problem.set_step()
-    return problem
+    return A, loads, rotation, coupling, transform, offsets
 
 
 def _unit_translations(a: fem.Form, A: PETSc.Mat, moved_bc: fem.DirichletBC | None,
