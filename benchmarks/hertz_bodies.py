@@ -1,15 +1,20 @@
-"""Hertz between two elastic bodies on non-matching meshes, against the closed form.
+"""Hertz and Cattaneo-Mindlin between two elastic bodies on non-matching meshes.
 
-Runs ``cases/hertz_bodies.toml`` (a steel ball pressed into an aluminium block,
-both meshed, mortar contact) on three meshes and puts the force P, the contact
-radius a and the peak pressure p0 of the last step beside Hertz's formulas with
-1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 (:mod:`contactqvi.problems.hertz`)::
+``--tables hertz``: ``cases/hertz_bodies.toml`` (a steel ball pressed into an
+aluminium block, both meshed, mortar contact) on three meshes; the force P, the
+contact radius a and the peak pressure p0 of the last step beside Hertz's formulas
+with 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 (:mod:`contactqvi.problems.hertz`). P is
+the total contact force (four times the quarter model's), a = sqrt(4 A / pi) from the
+contact area A (the sum of the D_ii of the nodes in contact), p0 the largest nodal
+pressure lambda_i / D_ii. Writes ``hertz_bodies.{json,md}``.
 
-    python benchmarks/hertz_bodies.py [--meshes coarse medium fine] [--output DIR]
+``--tables mindlin``: ``cases/cattaneo_mindlin_bodies.toml`` (one material, Dundurs'
+beta = 0) on ``--mindlin-mesh``; per step Q/(mu P) beside Mindlin's law at the
+ball's displacement s (two identical bodies: twice a rigid ball's compliance) and
+the stick radius beside Cattaneo's c = a (1 - Q/(mu P))^(1/3). Writes
+``mindlin_bodies.{json,md}``::
 
-P is the total contact force (four times the quarter model's), a = sqrt(4 A / pi)
-from the contact area A (the sum of the D_ii of the nodes in contact), p0 the
-largest nodal pressure lambda_i / D_ii. Writes ``hertz_bodies.{json,md}``.
+    python benchmarks/hertz_bodies.py [--tables hertz mindlin] [--meshes coarse medium fine]
 """
 
 from __future__ import annotations
@@ -26,11 +31,13 @@ import numpy as np
 from contactqvi import tables
 from contactqvi.case import load_case
 from contactqvi.contact.load_path import solve_load_path
+from contactqvi.contact.nodal import State
 from contactqvi.problems import hertz
 from contactqvi.runner import build_problem
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 CASE = ROOT / "cases" / "hertz_bodies.toml"
+MINDLIN_CASE = ROOT / "cases" / "cattaneo_mindlin_bodies.toml"
 MESHES = {"coarse": 6, "medium": 10, "fine": 16}  # h at the contact = a / value (block; the ball 0.7 of it)
 
 
@@ -69,15 +76,73 @@ def closed_form() -> dict:
             "a": hertz.contact_radius(1.0, depth), "p0": hertz.peak_pressure(e_star, 0.0, 1.0, depth)}
 
 
+def mindlin(mesh: str, comm: MPI.Comm) -> list[dict]:
+    """The Cattaneo-Mindlin path on ``meshes/mindlin_bodies_{mesh}.geo``: per step P, Q, a, c
+    and the closed forms (half model: forces and areas doubled)."""
+    case = load_case(MINDLIN_CASE)
+    case = dataclasses.replace(case, mesh=dataclasses.replace(case.mesh, file=ROOT / "meshes" / f"mindlin_bodies_{mesh}.geo"))
+    (young, poisson), friction = (case.bodies[0].material.young, case.bodies[0].material.poisson), case.contacts[0].friction
+    shear = hertz.shear_modulus(young, poisson)
+    rows = []
+    with build_problem(case, comm) as problem:
+
+        def record(index, step, u, result) -> None:
+            force = np.einsum("ij,ijk->k", np.column_stack([result.friction_force, result.normal_force]), problem.frames)
+            force = 2.0 * comm.allreduce(force, op=MPI.SUM)
+            sticking = np.isin(result.states, (State.STICKING, State.WEAK_STICKING))
+            area = 2.0 * comm.allreduce(float(problem.contact_area[result.normal_force > 0.0].sum()), op=MPI.SUM)
+            stick = 2.0 * comm.allreduce(float(problem.contact_area[sticking].sum()), op=MPI.SUM)
+            P, Q, s = force[2], -force[0], step.translation[0]
+            a = float(np.sqrt(area / np.pi))
+            rows.append({"step": index + 1, "status": str(result.status), "newton": result.iterations,
+                         "krylov": result.inner_iterations, "s": s, "P": P, "Q": Q, "a": a,
+                         "Q_muP": Q / (friction * P),  # identical bodies: s* twice a rigid ball's
+                         "Q_muP_mindlin": hertz.mindlin_force(s / 2.0, friction, P, shear, poisson, a) / (friction * P),
+                         "c": float(np.sqrt(stick / np.pi)), "c_cattaneo": float(hertz.stick_radius(a, Q, friction, P))})
+
+        u = problem.A.createVecRight()
+        solve_load_path(problem, case.steps, u, dict(case.solver), "mindlin_bodies_", record, from_rest=True)
+        u.destroy()
+    return rows
+
+
+def _mindlin_table(rows: list[dict], mesh: str, comm: MPI.Comm, output: pathlib.Path) -> None:
+    header = ["step", "s (mm)", "Newton / Krylov", "P (MN)", "Q/(mu P)", "Mindlin", "difference",
+              "c (mm)", "Cattaneo (mm)", "|c - c_C| / (0.05 a + h)"]
+    h = 0.0316 / {"coarse": 6, "medium": 10}[mesh]
+    table = [[r["step"], f"{r['s'] * 1e3:.2f}", f"{r['newton']} / {r['krylov']}", f"{r['P'] / 1e6:.4f}",
+              f"{r['Q_muP']:.3f}", f"{r['Q_muP_mindlin']:.3f}", f"{r['Q_muP'] - r['Q_muP_mindlin']:+.3f}",
+              f"{r['c'] * 1e3:.2f}", f"{r['c_cattaneo'] * 1e3:.2f}",
+              f"{abs(r['c'] - r['c_cattaneo']) / (0.05 * r['a'] + h):.2f}"] for r in rows]
+    title = ("## Cattaneo-Mindlin between two elastic bodies of one material (E = 70 GPa, nu = 0.3, mu = 0.3; "
+             f"Dundurs' beta = 0), mesh {mesh} (h = {h * 1e3:.1f} mm at the contact), {comm.size} rank(s)\n\n"
+             "A ball (R = 1 m) pressed 1 mm into a block, then its flat face moved along x by s. Q/(mu P) from the "
+             "contact forces beside Mindlin's Q(s) for two identical bodies (twice a rigid ball's compliance); the "
+             "stick radius from the sticking area (pi c^2 / 2, half model) beside Cattaneo's c = a (1 - Q/(mu P))^(1/3) "
+             "at the measured Q.")
+    tables.write_table(comm, output / "mindlin_bodies", {"mesh": mesh, "rows": rows},
+                       title + "\n\n" + tables.markdown_table(header, table))
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
                                      formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser.add_argument("--tables", nargs="+", choices=("hertz", "mindlin"), default=["hertz", "mindlin"])
     parser.add_argument("--meshes", nargs="+", choices=tuple(MESHES), default=list(MESHES))
+    parser.add_argument("--mindlin-mesh", choices=("coarse", "medium"), default="coarse")
     parser.add_argument("--output", type=pathlib.Path, default=ROOT / "benchmarks" / "results")
     args, _ = parser.parse_known_args(argv)
     comm = MPI.COMM_WORLD
+    args.output.mkdir(parents=True, exist_ok=True)
+    if "mindlin" in args.tables:
+        _mindlin_table(mindlin(args.mindlin_mesh, comm), args.mindlin_mesh, comm, args.output)
+    if "hertz" in args.tables:
+        _hertz_table(args.meshes, comm, args.output)
+
+
+def _hertz_table(meshes: list[str], comm: MPI.Comm, output: pathlib.Path) -> None:
     reference = closed_form()
-    rows = [run(mesh, comm) for mesh in args.meshes]
+    rows = [run(mesh, comm) for mesh in meshes]
     header = ["mesh (h at contact)", "dofs", "Newton per step", "Krylov per step", "P (MN) / Hertz", "error P",
               "a (mm) / Hertz", "|a - a_H| / h", "p0 (GPa) / Hertz", "error p0", "solve (s)"]
     table = []
@@ -95,8 +160,7 @@ def main(argv: list[str] | None = None) -> None:
              f"{comm.size} rank(s); P the total contact force, a from the contact area (pi a^2 = sum of D_ii in "
              "contact), p0 the largest nodal pressure lambda_i / D_ii. The ball's own compliance between its "
              "loaded face (R = 32 a from the contact) and the contact is not in the half-space formula.")
-    args.output.mkdir(parents=True, exist_ok=True)
-    tables.write_table(comm, args.output / "hertz_bodies", {"closed_form": reference, "runs": rows},
+    tables.write_table(comm, output / "hertz_bodies", {"closed_form": reference, "runs": rows},
                        title + "\n\n" + tables.markdown_table(header, table))
 
 
