@@ -166,6 +166,11 @@ class ContactResultsWriter:
         self._stress = StressFields(self._displacement, problem.body.young, problem.body.poisson)
         self._body = MeshPiece(problem.V.mesh)
         self._surface = ContactSurface(problem)
+        self._cell_data = {}
+        if problem.node_body is not None:  # several bodies: each cell's body index (0, 1, ...)
+            body = fem.Function(fem.functionspace(problem.V.mesh, ("DG", 0)), name="body")
+            body.x.array[:] = problem.node_body[problem.V.dofmap.list[:, 0]]
+            self._cell_data[labelled("body")] = body
 
     def write(
         self, problem: ContactProblem, u: PETSc.Vec, result: SCDNewtonResult, t: float | None = None
@@ -177,7 +182,8 @@ class ContactResultsWriter:
         displacement = problem.physical_displacement(u, self._displacement)
         stress, von_mises = self._stress.update()
         volume = self._body.dataset(
-            {labelled("displacement"): displacement}, {labelled("stress"): stress, labelled("von_mises"): von_mises}
+            {labelled("displacement"): displacement},
+            {labelled("stress"): stress, labelled("von_mises"): von_mises, **self._cell_data},
         )
         self._body_file.write(volume, t)
         self._surface.update(u, result, displacement)

@@ -60,6 +60,7 @@ SLIDING_STATES = (State.SLIDING,)
 
 #: SI units of the fields and summary entries.
 UNITS = {
+    "body": "1",
     "displacement": "m",
     "stress": "Pa",
     "von_mises": "Pa",
