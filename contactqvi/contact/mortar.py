@@ -415,10 +415,10 @@ def _sum_to_owners(comm: MPI.Comm, owners: np.ndarray, rows: np.ndarray, cols: n
     rows = np.concatenate([part[0] for part in received])
     cols = np.concatenate([part[1] for part in received])
     values = np.concatenate([part[2] for part in received])
-    keys, inverse = np.unique(np.stack([rows, cols], axis=1), axis=0, return_inverse=True)
-    summed = np.zeros(len(keys))
-    np.add.at(summed, inverse.ravel(), values)
-    return keys[:, 0], keys[:, 1], summed
+    width = owners[-1] + 1  # global node indices are < width: one int64 key per (row, col)
+    keys, inverse = np.unique(rows * width + cols, return_inverse=True)
+    summed = np.bincount(inverse.ravel(), weights=values, minlength=len(keys))
+    return keys // width, keys % width, summed
 
 
 def _master_coordinates(comm: MPI.Comm, index_map, x: np.ndarray, glob: np.ndarray) -> np.ndarray:
