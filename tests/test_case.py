@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 import pathlib
+import re
 
 from mpi4py import MPI
 
@@ -28,6 +29,7 @@ from contactqvi.case import (
 from contactqvi.contact import scd_newton
 from contactqvi.parameters import ParameterError
 from contactqvi.problems import coulomb as data
+from contactqvi.runner import build_problem
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 CASES = sorted((ROOT / "cases").glob("*.toml"))
@@ -327,3 +329,53 @@ def test_solver_start_is_checked():
     assert parse_case(_with(BASE, ("solver", {"start": "contact"}))).solver == {"start": "contact"}
     with pytest.raises(ParameterError, match=r"^solver.start: must be one of rest, contact, got 'zero'"):
         parse_case(_with(BASE, ("solver", {"start": "zero"})))
+
+
+BODIES = {
+    "mesh": {"file": "../meshes/patch_blocks.geo"},
+    "bodies": [
+        {"name": "lower", "material": {"young": 1e9, "poisson": 0.3},
+         "boundary": {"displacement": {"bottom": {"z": 0.0}, "symmetry_x": {"x": 0.0}, "symmetry_y": {"y": 0.0}}}},
+        {"name": "upper", "material": {"young": 1e9, "poisson": 0.3},
+         "boundary": {"displacement": {"symmetry_x": {"x": 0.0}, "symmetry_y": {"y": 0.0}},
+                      "traction": {"top": [0.0, 0.0, -1e6]}}},
+    ],
+    "contacts": [{"slave": "upper.interface", "master": "lower.interface", "law": "frictionless"}],
+}
+
+
+@pytest.mark.parametrize("change, name, text", [
+    (lambda d: d["contacts"][0].update(slave="uper.interface"), "contacts[0].slave", "unknown body 'uper'"),
+    (lambda d: d["contacts"][0].update(master="lower"), "contacts[0].master", "must be 'body.group'"),
+    (lambda d: d["contacts"][0].update(obstacle={"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 1]}),
+     "contacts[0]", "exactly one of 'master' and 'obstacle'"),
+    (lambda d: d["contacts"][0].update(law="coulomb"), "contacts[0].friction", "needs a friction coefficient"),
+    (lambda d: d["bodies"][1].update(name="lower"), "bodies[1].name", "listed twice"),
+    (lambda d: d.update(material={"young": 1e9, "poisson": 0.3}), "material", "not used with [[bodies]]"),
+    (lambda d: [b.pop("boundary") for b in d["bodies"]], "bodies", "at least one must be held"),
+])
+def test_bad_several_body_case_is_named(change, name, text):
+    data = copy.deepcopy(BODIES)
+    change(data)
+    with pytest.raises(ParameterError, match=re.escape(text)) as info:
+        parse_case(data, ROOT / "cases")
+    assert info.value.name == name
+
+
+def test_several_body_case_names_unknown_groups_and_volumes():
+    """Against the mesh: a group a body does not have, a body the mesh does not have."""
+    case = parse_case(BODIES, ROOT / "cases")
+    msh, facet_tags, cell_tags = meshes.read_gmsh(case.mesh.file, MPI.COMM_WORLD)
+    names = meshes.split_by_body(msh, facet_tags, cell_tags).names
+    check_groups(case, names)
+    data = copy.deepcopy(BODIES)
+    data["bodies"][0]["boundary"]["displacement"]["top"] = {"z": 0.0}  # "top" bounds the upper body only
+    with pytest.raises(ParameterError, match="unknown physical group 'lower.top'") as info:
+        check_groups(parse_case(data, ROOT / "cases"), names)
+    assert info.value.name == "bodies[0].boundary.displacement.top"
+    data = copy.deepcopy(BODIES)
+    data["bodies"][1]["name"] = "uper"
+    data["contacts"][0]["slave"] = "uper.interface"
+    with pytest.raises(ParameterError, match="no physical volume 'uper'") as info:
+        build_problem(parse_case(data, ROOT / "cases"), MPI.COMM_WORLD)
+    assert info.value.name == "bodies[1].name"
