@@ -8,10 +8,10 @@ file written, and the datasets ParaView sees (cells, points outside the
 duplicates, volume, the surface integral of the contact pressure) to 1e-9.
 
 The Hertz case runs with exact Newton-step solves (``pc = "lu"``): on its graded
-mesh a solution that meets the Newton stopping test with the default inexact
-solves (GAMG, tol 0.1) is only about 1e-7 from the exact one (measured, 1 vs 3
-ranks: 1.1e-7; tol 1e-6: 5.8e-10 on 3 ranks, 1.1e-9 on 4; LU: 4.6e-12), so two
-runs agree to 1e-9 only when both solve exactly (benchmarks/results/ranks.md).
+mesh two solutions that meet the Newton stopping test with the default inexact
+solves (GAMG, tol 0.1) differ by about 1e-8 between 1 and N ranks, with LU by
+about 5e-12 (benchmarks/results/ranks.md), so they agree to 1e-9 only when both
+solve exactly.
 """
 
 from __future__ import annotations
