@@ -256,6 +256,9 @@ def main() -> int:
     old_rows = json.loads(previous.read_text()) if previous.exists() else {}
     getfem_options = old_rows.get("getfem_options", ["--lsolver", "mumps"])  # a sweep of an earlier run
     sufficed: dict[tuple[str, str], float] = {}  # (code, problem) -> tolerance that sufficed on the last size
+    for row in sorted(old_rows.get("rows", []), key=lambda r: r["dofs"]):  # earlier runs' largest sizes
+        if row.get("best") and row["code"] in TOLERANCES:
+            sufficed[(row["code"], row["problem"])] = row["best"]["tolerance"]
 
     def timed(code: str, case: pathlib.Path, reference: dict, options: list[str], flag: str, problem: str):
         best, runs = ladder(runner, code, case, reference, options, flag, args.accuracy, sufficed.get((code, problem)))
@@ -271,7 +274,7 @@ def main() -> int:
             rows.append({"problem": problem, "size": size, **reference, "code": "reference"})
             continue
         base = {"problem": problem, "size": size, "case": str(case), "dofs": reference["dofs"],
-                "contact_nodes": reference["contact_nodes"]}
+                "contact_nodes": reference["contact_nodes"], "ours_commit": sha}
         closed = hertz_closed_form(common.load_case(case)) if problem == "hertz" else None
         rows.append({**base, **reference, **errors(reference, reference), "closed_form": closed, "code": "reference",
                      "reference_pc": args.reference_pc})
