@@ -52,11 +52,12 @@ TOLERANCES = {
     "getfem": [1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12],
     "kratos": [1e-4, 1e-6, 1e-8],
 }
-#: Linear solvers of GetFEM's Newton (``Model.solve(..., 'lsolver', ...)``) compared at ``--settings-case``.
 #: GetFEM settings compared at ``--settings-case``: (linear solver, Alart-Curnier r as a multiple
 #: of E in GPa; GetFEM advises r close to E). Debian's GetFEM 5.4 has no SuperLU ("SuperLU is not
 #: interfaced"): MUMPS (its ordering is not settable from Python) or GetFEM's GMRES + ILU.
 GETFEM_TRIALS = [("mumps", 0.1), ("mumps", 1.0), ("mumps", 10.0), ("gmres/ilu", 1.0)]
+#: Kratos' options in the table: the one configuration that came closest (docs/peers.md, Kratos).
+KRATOS_OPTIONS = ["--move-mesh", "--substeps", "10", "--max-iter", "30", "--tol", "1e-6"]
 
 PYTHON = {"ours": str(ROOT / ".venv/bin/python"), "getfem": "/usr/bin/python3",
           "kratos": str(ROOT / "build/kratos-venv/bin/python")}
@@ -85,7 +86,8 @@ def snapshot(work: pathlib.Path, commit: str) -> tuple[pathlib.Path, str]:
     if not (stamp.exists() and stamp.read_text() == sha):
         shutil.rmtree(target, ignore_errors=True)
         target.mkdir(parents=True)
-        archive = subprocess.run(["git", "-C", str(ROOT), "archive", sha, "contactqvi"], capture_output=True, check=True)
+        archive = subprocess.run(["git", "-C", str(ROOT), "archive", sha, "contactqvi"],
+                                 capture_output=True, check=True)
         subprocess.run(["tar", "-x", "-C", str(target)], input=archive.stdout, check=True)
         stamp.write_text(sha)
     return target, sha
@@ -121,7 +123,8 @@ class Runner:
         seconds = time.perf_counter() - t0
         cpu1 = resource.getrusage(resource.RUSAGE_CHILDREN)
         cpu = (cpu1.ru_utime - cpu0.ru_utime) + (cpu1.ru_stime - cpu0.ru_stime)
-        record = {"process_seconds": seconds, "process_cpu_seconds": cpu, "load_average": load, "options": options, "ranks": ranks,
+        record = {"process_seconds": seconds, "process_cpu_seconds": cpu, "load_average": load,
+                  "options": options, "ranks": ranks,
                   "output": str(out)}
         if (out / "result.json").exists():
             record.update(json.loads((out / "result.json").read_text()))
@@ -176,7 +179,6 @@ def ladder(runner: Runner, code: str, case: pathlib.Path, reference: dict, optio
 
 def hertz_closed_form(case: common.Case) -> dict:
     """Hertz force (quarter model) and contact radius at the case's final depth."""
-    sys.path.insert(0, str(ROOT))
     e_star = case.young / (1 - case.poisson**2)
     radius = float(case.obstacle["radius"])
     depth = -float(case.steps[-1][1][2])
@@ -186,11 +188,13 @@ def hertz_closed_form(case: common.Case) -> dict:
 
 def machine() -> dict:
     cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if line.startswith("model name")), "")
-    return {"cpu": cpu, "cores": os.cpu_count(), "memory_gib": round(os.sysconf("SC_PAGE_SIZE")
-            * os.sysconf("SC_PHYS_PAGES") / 2**30, 1), "machine": platform.machine(), "python": platform.python_version()}
+    memory_gib = round(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30, 1)
+    return {"cpu": cpu, "cores": os.cpu_count(), "memory_gib": memory_gib, "machine": platform.machine(),
+            "python": platform.python_version()}
 
 
-def getfem_settings(runner: Runner, case: pathlib.Path, reference: dict, accuracy: float) -> tuple[list[str], list[dict]]:
+def getfem_settings(runner: Runner, case: pathlib.Path, reference: dict,
+                    accuracy: float) -> tuple[list[str], list[dict]]:
     """GetFEM's fastest linear solver and augmentation r at one case (tight tolerance, 1 core)."""
     trials = []
     young = common.load_case(case).young / 1e9
@@ -292,7 +296,7 @@ def main() -> int:
             best, runs = timed("getfem", case, reference, getfem_options, "--max-res", problem)
             rows.append({**base, "code": "getfem", "best": best, "runs": runs, "closed_form": closed})
         if "kratos" in peers and reference["dofs"] <= args.kratos_max_dofs and problem != "hertz":
-            record = runner.run("kratos", case, ["--move-mesh", "--substeps", "10", "--max-iter", "30", "--tol", "1e-6"])
+            record = runner.run("kratos", case, KRATOS_OPTIONS)
             record.update(errors(record, reference) if record["status"] == "converged" else {}, tolerance=1e-6)
             rows.append({**base, "code": "kratos", "best": record if accurate(record, args.accuracy) else None,
                          "runs": [record], "closed_form": closed})
@@ -427,7 +431,8 @@ def markdown(data: dict) -> str:
               "|---|---|---|---|---|---|---|"]
     for lim in limits(data):
         lines.append(f"| {lim['problem']} | {lim['code']} | {lim['largest_measured']} | {lim['time_exponent']:.2f} | "
-                     f"{lim['memory_exponent']:.2f} | {lim['dofs_at_time_limit']:.3g} | {lim['dofs_at_memory_limit']:.3g} |")
+                     f"{lim['memory_exponent']:.2f} | {lim['dofs_at_time_limit']:.3g} | "
+                     f"{lim['dofs_at_memory_limit']:.3g} |")
     if data.get("getfem_settings_trials"):
         lines += ["", "GetFEM settings sweep (max_res 1e-10; the fastest accurate one is used above):", "",
                   "| lsolver | r / E | Newton | solve s | solve CPU s | status |", "|---|---|---|---|---|---|"]

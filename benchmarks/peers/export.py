@@ -67,8 +67,8 @@ def export_box(out: pathlib.Path, lev: int, geometry: str, load: str) -> pathlib
 
     a, b, c = (g.ravel() for g in np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij"))
     # gmsh hexahedron: bottom face 0-1-2-3 counter-clockwise, top face 4-7 above it.
-    cells = np.column_stack([node(a, b, c), node(a + 1, b, c), node(a + 1, b + 1, c), node(a, b + 1, c),
-                             node(a, b, c + 1), node(a + 1, b, c + 1), node(a + 1, b + 1, c + 1), node(a, b + 1, c + 1)])
+    corners = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
+    cells = np.column_stack([node(a + i, b + j, c + k) for i, j, k in corners])
 
     def quads(fixed_axis: int, value: int) -> np.ndarray:
         ranges = [np.arange(nx), np.arange(ny), np.arange(nz)]
@@ -85,7 +85,8 @@ def export_box(out: pathlib.Path, lev: int, geometry: str, load: str) -> pathlib
         _write_msh(mesh, points, cells, 5, {name: (BOX_GROUPS[name], faces[name]) for name in BOX_GROUPS}, 3)
     traction = data.tractions(load)
     case = out / f"box_{geometry}_{load}_{lev}.toml"
-    case.write_text(f"""# Seed 000, Sect. 7: body {geometry} at lev {lev}, load {load}, F = {data.FRICTION} (written by peers_real.py).
+    case.write_text(f"""# Seed 000, Sect. 7: body {geometry} at lev {lev}, load {load}, F = {data.FRICTION}
+# (written by benchmarks/peers_real.py).
 [mesh]
 file = "{mesh.name}"
 

@@ -269,7 +269,8 @@ def main() -> int:
         "contact_force_multipliers_normal": float(-np.sum(lambda_n)) * STRESS_UNIT,
         "reactions": reactions,
         "settings": {"lsolver": args.lsolver, "lsearch": args.lsearch, "max_res": args.max_res, "r": r,
-                     "option": args.option, "brick": brick, "stress_unit": STRESS_UNIT, "integration": [volume, boundary]},
+                     "option": args.option, "brick": brick, "stress_unit": STRESS_UNIT,
+                     "integration": [volume, boundary]},
         "threads": args.threads,
     }
     common.write_result(args.output, record, mesh.points, u_nodes)

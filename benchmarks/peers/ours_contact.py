@@ -50,7 +50,8 @@ def main() -> int:
     parser.add_argument("case")
     parser.add_argument("--output", required=True)
     parser.add_argument("--pc", default=None, help="Newton-step solver (default: the case's, else gamg)")
-    parser.add_argument("--rtol", type=float, default=None, help="||y^|| <= rtol ||y^0|| (default: the case's, else 1e-12)")
+    parser.add_argument("--rtol", type=float, default=None,
+                        help="||y^|| <= rtol ||y^0|| (default: the case's, else 1e-12)")
     parser.add_argument("--tol", type=float, default=None, help="Krylov tolerance of a Newton step (default 0.1)")
     args = parser.parse_args()
     setup_logging("WARNING")
