@@ -131,8 +131,8 @@ PARAMETERS = Parameters(
 #:   for up to 30 steps, the line search taking steps 1/32 and 1/128: its trial residuals
 #:   are round-off noise, not a bug of the step (the states no longer change, and a
 #:   full step from 2.3e-4 N cannot be told from noise). With GAMG, on the medium mesh,
-#:   issue 23 reports 53, 31 and 100 (failed) Newton steps; now 7 per step, equilibrium
-#:   of the forces to 5e-8 (coarse mesh; 1e-14 ||l|| = 0.01 N of a 0.85 MN contact force);
+#:   issue 23 reports 53, 31 and 100 (failed) Newton steps; now 7-8 per step, the forces
+#:   balanced to 1e-8 - 6e-8 (1e-14 ||l|| = 0.01 N of a 0.83 MN contact force);
 #: * a step in which nothing touches and nothing is loaded (the obstacle moved away):
 #:   y^(0) = 7e-7 N is round-off of A d - l, 1e-12 of it is never reached (100 steps);
 #:   now it converges at k = 0. A plane 100 m below the paper's loaded body: 100 steps
@@ -472,8 +472,8 @@ class SCDNewtonSolver(PETScOwner):
                 self._pc_kinds = kinds
             self.ksp.setOperators(J)
             pc.setReusePreconditioner(reuse)
-        initial = PETSc.Options().getBool(self.ksp.getOptionsPrefix() + "ksp_converged_use_initial_residual_norm", False)
-        self.ksp.setTolerances(rtol=tol if initial else tol * self._rhs_ratio)
+        option = self.ksp.getOptionsPrefix() + "ksp_converged_use_initial_residual_norm"
+        self.ksp.setTolerances(rtol=tol if PETSc.Options().getBool(option, False) else tol * self._rhs_ratio)
         # The eliminated rows carry their exact values in the initial guess (direct solvers need none).
         self.ksp.setInitialGuessNonzero(self.parameters["eliminate_fixed_rows"] and self.ksp.getType() != "preonly")
         # Options read at set-up (GAMG: multigrid options; block Jacobi: sub_*) come from the preset.
