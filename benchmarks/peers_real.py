@@ -381,7 +381,8 @@ def markdown(data: dict) -> str:
         "",
         f"Same gmsh meshes and case data for every code; the reference is ours with exact Newton steps "
         f"(pc = lu, rtol 1e-12; 'reference (gamg)': GAMG steps to rtol 1e-12 where LU costs too much). "
-        f"Each code's timed run is its loosest tolerance whose total contact force and displacement agree with the reference to {data['accuracy']:g} relative (ladders: "
+        f"Each code's timed run is its loosest tolerance whose total contact force and displacement agree "
+        f"with the reference to {data['accuracy']:g} relative (ladders: "
         + "; ".join(f"{k} {', '.join(f'{t:g}' for t in v)}" for k, v in data["tolerances"].items())
         + "). 1 core each (OMP_NUM_THREADS=1), ours also on 2 MPI ranks. *solve*: the load path's solves "
         "(wall and CPU seconds; CPU summed over ranks); *process*: the whole process (start-up, mesh, assembly, "
