@@ -9,7 +9,8 @@ converged step as one time step (time = step number) of
 ``OUTPUT/summary.json`` after each step (status, Newton and Krylov counts, contact
 force, reactions, equilibrium error, contact/sticking/sliding areas), so everything
 up to the last converged step stays readable if a later step fails.
-``OUTPUT/solution.npz`` holds ``x`` and ``u`` of the last converged step.
+``OUTPUT/solution.npz`` holds ``x`` and ``u`` of the last converged step (up to
+:data:`~contactqvi.tables.GATHER_MAX_NODES` nodes: it is gathered on rank 0).
 """
 
 from __future__ import annotations
