@@ -163,7 +163,7 @@ def test_output_round_trip(mpi_tmp_path):
 def test_paraview_files_readable(mpi_tmp_path):
     """XDMF (meshio) and VTX/BP4 (ADIOS2) files open with third-party readers.
 
-    Serial only: Debian's ADIOS2 Python binding is the serial build.
+    Serial only: on N ranks a VTX variable has one block per rank (tests/test_output_parallel.py).
     """
     import adios2
     import meshio
