@@ -49,6 +49,7 @@ from petsc4py import PETSc
 import numpy as np
 
 import dolfinx.fem.petsc
+import dolfinx.la
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 
@@ -396,9 +397,10 @@ def _unit_translations(a: fem.Form, A: PETSc.Mat, moved_bc: fem.DirichletBC | No
     value = moved_bc.g
     loads = []
     n_owned = A.getLocalSize()[0]
+    V = a.function_spaces[0]
     for c in range(3):
         value.value[:] = np.eye(3)[c]
-        b = A.createVecLeft()
+        b = dolfinx.la.create_petsc_vector(V.dofmap.index_map, V.dofmap.index_map_bs)  # ghosted, for the lifting
         b.set(0.0)
         dolfinx.fem.petsc.apply_lifting(b, [a], bcs=[[moved_bc]])
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
