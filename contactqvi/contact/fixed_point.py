@@ -80,8 +80,7 @@ def solve_tresca_fixed_point(
         prefix: PETSc options prefix of the Newton-step KSP of the Tresca solves.
     """
     p = PARAMETERS.check(parameters)
-    law = problem.law
-    friction = law.friction
+    law, friction = problem.law, problem.law.friction
     require(friction > 0.0, "friction", "the fixed-point method needs a Coulomb problem with F > 0")
     require(0.0 < forcing < 1.0, "forcing", f"must lie in (0, 1), got {forcing!r}")
     require(max_iterations >= 1, "max_iterations", f"must be >= 1, got {max_iterations!r}")
