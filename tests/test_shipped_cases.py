@@ -88,16 +88,29 @@ IMBALANCE = {"hertz_bodies": 3e-3, "cattaneo_mindlin_bodies": 3e-3}
 
 @pytest.fixture(scope="module")
 def summaries(tmp_path_factory) -> dict[str, dict]:
-    """Summaries of every shipped case (or its variant), each run once for the whole module."""
+    """Summaries of every shipped case (or its variant), each run once for the whole module;
+    a case that raises is recorded, so that only its own tests fail."""
     comm = MPI.COMM_WORLD
     base = pathlib.Path(comm.bcast(str(tmp_path_factory.mktemp("shipped")) if comm.rank == 0 else None, root=0))
     runs = {}
     for path in sorted((ROOT / "cases").glob("*.toml")):
         case = COARSE.get(path.stem, Variant()).of(load_case(path))
-        summary, code = run_case(case, base / path.stem, comm, plot=False)
-        runs[path.stem] = {"summary": summary, "code": code}
-    comm.Barrier()
+        try:
+            summary, code = run_case(case, base / path.stem, comm, plot=False)
+            runs[path.stem] = {"summary": summary, "code": code}
+        except Exception as exc:  # reported by that case's tests; the others still run
+            runs[path.stem] = {"error": f"{type(exc).__name__}: {exc}"}
+        comm.Barrier()
     return runs
+
+
+def _steps(summaries: dict[str, dict], name: str) -> list[dict]:
+    """The step summaries of a case run without error (exit code 0)."""
+    run = summaries[name]
+    if "error" in run:
+        pytest.fail(f"{name} raised {run['error']}")
+    assert run["code"] == 0, [step["status"] for step in run["summary"]["steps"]]
+    return run["summary"]["steps"]
 
 
 def test_every_shipped_case_is_guarded():
@@ -116,9 +129,8 @@ def test_shipped_case_needs_no_expert_settings(name):
 def test_shipped_case_converges_in_equilibrium(summaries, name):
     """Every load step of the variant converges within its Newton budget, and the forces
     balance: reactions, applied load and the obstacles' contact forces (:data:`IMBALANCE`)."""
-    steps = summaries[name]["summary"]["steps"]
-    assert summaries[name]["code"] == 0 and len(steps) == len(COARSE.get(name, Variant()).of(
-        load_case(ROOT / "cases" / f"{name}.toml")).steps)
+    steps = _steps(summaries, name)
+    assert len(steps) == len(COARSE.get(name, Variant()).of(load_case(ROOT / "cases" / f"{name}.toml")).steps)
     assert all(step["converged"] for step in steps)
     assert max(step["iterations"] for step in steps) <= MAX_NEWTON.get(name, 25)
     assert max(step["equilibrium_error"] for step in steps) < IMBALANCE.get(name, 1e-7)
@@ -130,12 +142,12 @@ def test_shipped_case_newton_counts_regression_guard(summaries, name):
     expected = NEWTON_STEPS[name].get(MPI.COMM_WORLD.size)
     if expected is None:
         pytest.skip(f"no counts recorded for {MPI.COMM_WORLD.size} ranks")
-    assert [step["iterations"] for step in summaries[name]["summary"]["steps"]] == expected
+    assert [step["iterations"] for step in _steps(summaries, name)] == expected
 
 
 def test_paper_case_within_the_paper_count(summaries):
     """Seed 000, Table 2, d3/L2 at lev 3: the paper needs 13 Newton steps from u0 = 0."""
-    (step,) = summaries["paper_d3_L2"]["summary"]["steps"]
+    (step,) = _steps(summaries, "paper_d3_L2")
     assert step["iterations"] <= data.PAPER_TABLE2[3]["d3/L2"][0]
 
 
@@ -144,7 +156,7 @@ def test_hertz_case_meets_the_closed_form(summaries):
     pressure against Hertz at the last step, and P ~ delta^(3/2) along the path (within 4 %)."""
     case = load_case(ROOT / "cases" / "hertz.toml")
     E, nu, R = case.material.young, case.material.poisson, case.obstacle.radius
-    steps = summaries["hertz"]["summary"]["steps"]
+    steps = _steps(summaries, "hertz")
     depths = np.array([-step.translation[2] for step in case.steps])
     forces = np.array([4 * abs(step["contact_force"][2]) for step in steps])
     delta, a = depths[-1], hertz.contact_radius(R, depths[-1])
@@ -163,7 +175,7 @@ def test_mindlin_case_follows_the_coulomb_bound(summaries, name):
     benchmarks/results/cattaneo_mindlin.md)."""
     case = load_case(ROOT / "cases" / f"{name}.toml")
     mu, E, nu = case.contact.friction, case.material.young, case.material.poisson
-    steps = summaries[name]["summary"]["steps"]
+    steps = _steps(summaries, name)
     P = 2 * abs(steps[0]["contact_force"][2])
     a = np.sqrt(2 * steps[0]["contact_area"] / np.pi)
     s = np.array([step.translation[0] for step in case.steps[1:]])
