@@ -1,7 +1,10 @@
-"""Contact of an elastic body with a rigid obstacle: Coulomb friction by the SCD
-semismooth* Newton method (seed 000), its Tresca variant, and quasi-static load paths."""
+"""Contact of elastic bodies with rigid obstacles and with each other: Coulomb friction
+by the SCD semismooth* Newton method (seed 000), its Tresca variant, mortar coupling of
+non-matching surfaces, and quasi-static load paths."""
 
+from contactqvi.contact.interface import BodyPair, Interface, ObstaclePair
 from contactqvi.contact.load_path import LoadStep, contact_resultants, solve_load_path
+from contactqvi.contact.mortar import MortarCoupling, mortar_coupling
 from contactqvi.contact.nodal import (
     FrictionLaw,
     Normal,
@@ -13,25 +16,31 @@ from contactqvi.contact.nodal import (
     resolvent,
     scd_adjoint_blocks,
 )
-from contactqvi.contact.problem import ContactProblem, build_contact_problem
+from contactqvi.contact.problem import ContactProblem, assemble_contact_problem, build_contact_problem
 from contactqvi.contact.scd_newton import NEWTON_STEP_SOLVERS, PARAMETERS, SCDNewtonResult, SCDNewtonSolver
 
 __all__ = [
     "NEWTON_STEP_SOLVERS",
     "PARAMETERS",
+    "BodyPair",
     "ContactProblem",
     "FrictionLaw",
+    "Interface",
     "LoadStep",
+    "MortarCoupling",
     "Normal",
+    "ObstaclePair",
     "SCDNewtonResult",
     "SCDNewtonSolver",
     "State",
     "Tangential",
+    "assemble_contact_problem",
     "build_contact_problem",
     "classify",
     "contact_resultants",
     "contact_states",
     "lipschitz_constant",
+    "mortar_coupling",
     "resolvent",
     "scd_adjoint_blocks",
     "solve_load_path",
