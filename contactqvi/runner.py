@@ -28,7 +28,8 @@ from dolfinx import mesh as dmesh
 from contactqvi import tables
 from contactqvi.case import Body, ContactCase, ContactPair, check_groups, check_solver
 from contactqvi.contact.load_path import LoadStep, solve_load_path
-from contactqvi.contact.postprocess import ContactResultsWriter, plot_contact_states
+from contactqvi.contact.figures import plot_contact_states
+from contactqvi.contact.postprocess import ContactResultsWriter
 from contactqvi.contact.interface import BodyPair, ObstaclePair
 from contactqvi.contact.problem import ContactProblem, assemble_contact_problem, build_contact_problem
 from contactqvi.contact import scd_newton
