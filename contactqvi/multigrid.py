@@ -10,7 +10,12 @@ the coarse operators change by
     Delta_{l-1} = P_l^T Delta_l P_l,    C_{l-1} <- C_{l-1} + Delta_{l-1},
 
 products whose cost scales with the changed rows (and one pass over P_l), while the
-interpolations are kept. The updated operators are exactly the Galerkin operators
+interpolations are kept. Only the rows whose values changed enter the products: the
+change matrix keeps a fixed pattern (all rows J may change, with explicit zeros on the
+rows that did not), and on a mortar interface those rows are dense (378 nonzeros per
+row on the two-body Hertz medium mesh, 1.8 M nonzeros in all, against 2.9 M in J), so a
+product over the pattern cost more than a new set-up (0.33 s against 1.1 s per update
+there); over the changed rows it costs 0.04 s, with the same operators. The updated operators are exactly the Galerkin operators
 of the new J with the old interpolations, i.e. what ``-pc_gamg_reuse_interpolation``
 gives after a full set-up, at the cost of the change only. Each level's smoother
 (and the coarse solver) is set up again on its updated operator.
@@ -21,6 +26,8 @@ from __future__ import annotations
 import typing
 
 from petsc4py import PETSc
+
+import numpy as np
 
 from contactqvi.lifetime import PETScOwner
 
@@ -52,21 +59,33 @@ class GalerkinUpdate(PETScOwner):
         self._operators = [pc.getMGSmoother(level).getOperators()[0] for level in range(levels)]
         for operator in self._operators[:-1]:  # the coarse ones, changed here row by row by their owners
             operator.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)
-        self._changes: list[PETSc.Mat | None] = [None] * (levels - 1)
         self.updates = 0  # updates since the set-up
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [*(change for change in self._changes if change is not None), *self._interpolations, *self._operators,
-                self._pc]
+        return [*self._interpolations, *self._operators, self._pc]
 
     def update(self, change: PETSc.Mat) -> None:
         """Add ``change`` (already added to the fine operator) to every coarse level and
         set up the smoothers again; the preconditioner is then to be reused."""
-        for level in reversed(range(len(self._changes))):
-            self._changes[level] = change.PtAP(self._interpolations[level], result=self._changes[level])
-            self._operators[level].axpy(1.0, self._changes[level], _SUBSET)
-            change = self._changes[level]
+        change = _nonzero_entries(change)
+        for level in reversed(range(len(self._interpolations))):
+            coarse = change.PtAP(self._interpolations[level])
+            self._operators[level].axpy(1.0, coarse, _SUBSET)
+            change.destroy()
+            change = coarse
+        change.destroy()
         for level, operator in enumerate(self._operators):
             self._pc.getMGSmoother(level).setOperators(operator, operator)
         self._pc.setReusePreconditioner(True)
         self.updates += 1
+
+
+def _nonzero_entries(M: PETSc.Mat) -> PETSc.Mat:
+    """A new AIJ matrix with the nonzero values of ``M`` only (owned rows, global columns)."""
+    indptr, indices, values = M.getValuesCSR()
+    kept = values != 0.0
+    counts = np.concatenate([[0], np.cumsum(kept)])
+    compact = PETSc.Mat().createAIJ(size=M.getSizes(), comm=M.getComm(), csr=(
+        (counts[indptr] - counts[indptr[0]]).astype(PETSc.IntType), indices[kept].astype(PETSc.IntType), values[kept]))
+    compact.assemble()
+    return compact
