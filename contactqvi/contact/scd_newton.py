@@ -265,6 +265,8 @@ class SCDNewtonSolver(PETScOwner):
         self._newton.J.setNearNullSpace(self._near_nullspace)
         self._galerkin: GalerkinUpdate | None = None
         self._ksp_options = preset(NEWTON_STEP_SOLVERS[p["pc"]])
+        if self._ksp_options.get("pc_type") == "gamg":
+            self._ksp_options.update(problem.multigrid_options)
         self.ksp = create_ksp(problem.comm, prefix, self._ksp_options, rtol=p["tol"])
         self._steps = line_search_steps(p["max_line_search"])
         self._gamma = p["gamma"]
