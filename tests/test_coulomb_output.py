@@ -19,7 +19,7 @@ from contactqvi.tables import to_builtin
 from output_files import read_vtx, read_xdmf_point_data
 
 LEV = 3
-FIELDS = {"contact_state", "contact_pressure", "friction_traction", "slip", "tangential_displacement", "gap",
+FIELDS = {"contact_state", "contact_pair", "contact_pressure", "friction_traction", "slip", "tangential_displacement", "gap",
           "displacement", "nodal_area"}
 STICKING = (State.STICKING, State.WEAK_STICKING)
 
@@ -133,7 +133,7 @@ def test_write_contact_results(solution, mpi_tmp_path):
     problem, u, result = solution
     comm = problem.comm
     summary = write_contact_results(mpi_tmp_path / "run", problem, u, result, plot=True)
-    assert summary["files"] == ["body.bp", "contact_surface.bp", "solution.npz", "contact_states.png"]
+    assert summary["files"] == ["body.bp", "contact_surface.bp", "solution.npz", "contact_states.png", "bodies.png"]
     assert summary["equilibrium_error"] < 1e-8
     assert set(summary["units"]) <= set(UNITS) and summary["units"]["contact_force"] == "N"
     assert summary["contact_area"] == pytest.approx(summary["sticking_area"] + summary["sliding_area"])
@@ -158,8 +158,9 @@ def test_write_contact_results(solution, mpi_tmp_path):
     n_nodes, n_edges, n_facets = (nx1 + 1) * (nx2 + 1), nx1 * (nx2 + 1) + (nx1 + 1) * nx2, nx1 * nx2
     _assert_points(surface, n_nodes + n_edges + n_facets)
     assert surface.cells.shape == (4 * n_facets, 4)
-    assert set(surface.point_data) == {f"{name} [{UNITS[name]}]" for name in FIELDS - {"contact_state", "nodal_area"}}
-    assert set(surface.cell_data) == {"contact_state", "is_open", "is_sliding", "is_sticking"}
+    assert set(surface.point_data) == {f"{name} [{UNITS[name]}]"
+                                       for name in FIELDS - {"contact_state", "contact_pair", "nodal_area"}}
+    assert set(surface.cell_data) == {"contact_state", "contact_pair", "is_open", "is_sliding", "is_sticking"}
     area = _patch_areas(surface)
     assert area.sum() == pytest.approx(2.0, rel=1e-12)
     cells = surface.cell_data
@@ -186,18 +187,36 @@ def test_demo_writes_contact_surface(mpi_tmp_path, load_demo):
     assert not (out / "contact_states.png").exists()
 
 
+def test_bodies_picture(solution, mpi_tmp_path):
+    """The 3D picture of the deformed body: a 1600 x 1200 PNG whose drawn part is coloured by
+    von Mises stress (many colours, not a blank or single-colour image)."""
+    import matplotlib.image
+
+    problem, u, result = solution
+    write_contact_results(mpi_tmp_path / "picture", problem, u, result, plot=True, solution_npz=False)
+    if problem.comm.rank == 0:
+        image = matplotlib.image.imread(mpi_tmp_path / "picture" / "bodies.png")
+        assert image.shape[:2] == (1200, 1600)
+        background = image[0, -1, :3]
+        drawn = image[..., :3][np.any(np.abs(image[..., :3] - background) > 0.05, axis=-1)]
+        assert len(drawn) > 0.1 * 1600 * 1200  # the body fills a good part of the picture
+        assert len(np.unique(np.round(drawn * 32), axis=0)) > 20  # a colour map, not one colour
+
+
 def test_tributary_patches_of_triangles():
     """Triangles are cut into three quadrilaterals of a third of their area each (the lumped P1 area)."""
     points = np.array([[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 1.0, 0.0], [2.0, 1.0, 0.0]])
     cells = np.array([[0, 1, 2], [1, 3, 2]])
     state = np.array([State.STICKING, State.SLIDING, State.NO_CONTACT, State.SLIDING], dtype=float)
-    patches = TributaryPatches(points, cells).dataset({"f [m]": points[:, 0] + points[:, 1]}, state)
+    pair = np.array([0, 1, -1, 1], dtype=float)
+    patches = TributaryPatches(points, cells).dataset({"f [m]": points[:, 0] + points[:, 1]}, state, pair)
     assert patches.cells.shape == (6, 4) and len(patches.points) == 4 + 5 + 2 and not np.any(patches.duplicate)
     area = _patch_areas(patches)
     assert np.allclose(area, 1.0 / 3.0, rtol=1e-14)  # each triangle has area 1
     assert np.allclose(patches.point_data["f [m]"], patches.points[:, 0] + patches.points[:, 1], rtol=1e-14)
     owner = patches.cells[:, 0]
     assert np.array_equal(patches.cell_data["contact_state"], state[owner])
+    assert np.array_equal(patches.cell_data["contact_pair"], pair[owner])
     assert area @ patches.cell_data["is_sliding"] == pytest.approx(1.0)  # node 1: 2/3, node 3: 1/3
     assert area @ patches.cell_data["is_sticking"] == pytest.approx(1.0 / 3.0)
     normals = np.cross(*np.moveaxis(patches.points[patches.cells[:, [1, 3]]] - patches.points[owner][:, None], 1, 0))

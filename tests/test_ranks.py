@@ -98,7 +98,7 @@ def test_demo_on_any_number_of_ranks(lev, mpi_tmp_path, load_demo):
 
     _on_rank_0(comm, serial)
     if comm.rank == 0:
-        files = ["body.bp", "contact_surface.bp", "solution.npz", "contact_states.png"]
+        files = ["body.bp", "contact_surface.bp", "solution.npz", "contact_states.png", "bodies.png"]
         one, many = _compare(mpi_tmp_path / "one", mpi_tmp_path / "many", files)
         assert abs(one["iterations"] - many["iterations"]) <= 1
         assert many["mpi_size"] == comm.size and many["files"] == files

@@ -1,26 +1,37 @@
-"""Figure of a solved contact problem: the contact states on the surface (seed 000, Fig. 2).
+"""Figures of a solved contact problem, drawn on rank 0 from small gathered surfaces.
 
-Drawn with matplotlib (Agg, no display) on rank 0 from the tributary patches of
-every rank, gathered there; so only surfaces of at most
-:data:`contactqvi.tables.GATHER_MAX_NODES` nodes are drawn.
+* :func:`plot_contact_states`: the contact states on each pair's surface (seed 000,
+  Fig. 2), with matplotlib (Agg, no display) from the tributary patches of every rank;
+* :func:`plot_deformed_bodies`: a 3D view of the deformed bodies coloured by von Mises
+  stress, with pyvista (off screen, on a virtual X display made for the drawing when
+  there is none), from the owned boundary facets of every rank.
+
+Only surfaces of at most :data:`contactqvi.tables.GATHER_MAX_NODES` nodes are drawn.
+A figure never ends a run: a failure is logged and the figure skipped.
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import pathlib
+import subprocess
+import typing
 
 from mpi4py import MPI
 
 import numpy as np
 
+from dolfinx import fem
+from dolfinx import mesh as dmesh
+
 from contactqvi.contact.nodal import State
-from contactqvi.contact.surface import STATE_NAMES, ContactSurface
+from contactqvi.contact.surface import STATE_NAMES, ContactSurface, vertex_blocks
 from contactqvi.paraview import Dataset, gather_pieces
 from contactqvi.tables import GATHER_MAX_NODES, atomic_path
 
-__all__ = ["plot_contact_states"]
+__all__ = ["plot_contact_states", "plot_deformed_bodies"]
 
 logger = logging.getLogger(__name__)
 
@@ -29,41 +40,135 @@ _STATE_COLOURS = ["#d9d9d9", "#e69f00", "#0072b2", "#f0e442", "#56b4e9", "#cc79a
 
 
 def plot_contact_states(path: str | os.PathLike, surface: ContactSurface) -> bool:
-    """PNG of the contact surface coloured by contact state (seed 000, Fig. 2).
+    """PNG of the contact surfaces coloured by contact state (seed 000, Fig. 2), one panel per pair.
 
     The tributary patch of each node (:class:`~contactqvi.contact.surface.TributaryPatches`)
-    gets its state's colour. The surface is seen along its mean normal, with axes
-    in m (global x1, x2 ... when the normal is a coordinate axis). Returns whether
-    the PNG was written: not for surfaces of more than ``GATHER_MAX_NODES`` nodes,
-    nor when matplotlib fails (a figure never ends a run). Collective.
+    gets its state's colour. Each contact pair's slave surface is seen along its mean
+    normal, with axes in m (global x1, x2 ... when the normal is a coordinate axis).
+    Returns whether the PNG was written: not for surfaces of more than
+    ``GATHER_MAX_NODES`` nodes, nor when matplotlib fails (a figure never ends a run).
+    Collective.
     """
     comm = surface.mesh.comm
     if surface.n_nodes > GATHER_MAX_NODES:
         logger.info("%s is skipped: %d surface nodes > %d (drawn on one rank)", path, surface.n_nodes, GATHER_MAX_NODES)
         return False
     dataset = gather_pieces(comm, surface.dataset())
+    names = [interface.pair.name for interface in surface.problem.interfaces]
+    vertices = 4 if surface.mesh.topology.cell_type == dmesh.CellType.quadrilateral else 3
+    return _draw_on_rank_0(comm, path, lambda tmp: _draw_states(
+        tmp, dataset, _facet_pair(dataset.cell_data["contact_pair"], vertices), names))
+
+
+def plot_deformed_bodies(path: str | os.PathLike, displacement: fem.Function, von_mises: fem.Function) -> bool:
+    """PNG of the bodies' boundary, deformed (magnified) and coloured by the von Mises stress.
+
+    ``displacement``: P1 displacement (m); ``von_mises``: DG0 von Mises stress (Pa), each
+    boundary facet coloured by its cell's value. The displacement is magnified so that the
+    largest one is a tenth of the bodies' size (the factor is in the title). Returns whether
+    the PNG was written (not above ``GATHER_MAX_NODES`` boundary points). Collective.
+    """
+    comm = displacement.function_space.mesh.comm
+    piece = _boundary_piece(displacement, von_mises)
+    points = comm.allreduce(len(piece.points), op=MPI.SUM)
+    if points > GATHER_MAX_NODES:
+        logger.info("%s is skipped: %d boundary points > %d (drawn on one rank)", path, points, GATHER_MAX_NODES)
+        return False
+    dataset = gather_pieces(comm, piece)
+    return _draw_on_rank_0(comm, path, lambda tmp: _draw_bodies(tmp, dataset))
+
+
+def _draw_on_rank_0(comm: MPI.Comm, path: str | os.PathLike, draw: typing.Callable[[pathlib.Path], None]) -> bool:
+    """Call ``draw`` with a temporary file on rank 0, moved to ``path`` when it succeeded."""
     ok = False
     if comm.rank == 0:
         try:
             with atomic_path(MPI.COMM_SELF, path) as tmp:
-                _draw_states(tmp, dataset)
+                draw(tmp)
             ok = True
         except Exception as exc:  # a figure must never end a solve (nor leave the other ranks waiting)
             logger.warning("%s is skipped: %s", path, exc)
     return bool(comm.bcast(ok, root=0))
 
 
-def _draw_states(path: pathlib.Path, dataset: Dataset) -> None:
-    import matplotlib
+def _boundary_piece(displacement: fem.Function, von_mises: fem.Function) -> Dataset:
+    """This rank's owned boundary facets with the displacement at their nodes and von Mises per facet."""
+    V = displacement.function_space
+    msh = V.mesh
+    fdim = msh.topology.dim - 1
+    msh.topology.create_connectivity(fdim, msh.topology.dim)
+    msh.topology.create_connectivity(fdim, 0)
+    facets = dmesh.exterior_facet_indices(msh.topology)
+    facets = facets[facets < msh.topology.index_map(fdim).size_local]
+    quadrilateral = msh.topology.cell_type == dmesh.CellType.hexahedron
+    facet_vertices = msh.topology.connectivity(fdim, 0).array.reshape(-1, 4 if quadrilateral else 3)[facets]
+    if quadrilateral:  # DOLFINx's tensor-product order to VTK's order round the quadrilateral
+        facet_vertices = facet_vertices[:, [0, 1, 3, 2]]
+    nodes, cells = np.unique(vertex_blocks(V)[facet_vertices], return_inverse=True)
+    facet_cells = msh.topology.connectivity(fdim, msh.topology.dim)
+    cell = facet_cells.array[facet_cells.offsets[facets]]  # a boundary facet has one cell
+    return Dataset(
+        points=V.tabulate_dof_coordinates()[nodes], cells=cells.reshape(len(facets), -1), cell_type=9 if quadrilateral else 5,
+        point_data={"displacement": displacement.x.array.reshape(-1, 3)[nodes]},
+        cell_data={"von_mises": von_mises.x.array[von_mises.function_space.dofmap.list[cell, 0]]},
+    )
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.collections import PolyCollection
-    from matplotlib.colors import BoundaryNorm, ListedColormap
 
+@contextlib.contextmanager
+def _display() -> typing.Iterator[None]:
+    """An X display for VTK: the user's, or a virtual one (Xvfb) for the duration of the block."""
+    if os.environ.get("DISPLAY"):
+        yield
+        return
+    read, write = os.pipe()
+    server = subprocess.Popen(["Xvfb", "-displayfd", str(write), "-screen", "0", "1600x1200x24", "-nolisten", "tcp"],
+                              pass_fds=(write,), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    os.close(write)
+    with os.fdopen(read) as pipe:
+        number = pipe.readline().strip()
+    os.environ["DISPLAY"] = f":{number}"
+    try:
+        yield
+    finally:
+        del os.environ["DISPLAY"]
+        server.terminate()
+        server.wait(10)
+
+
+def _draw_bodies(path: pathlib.Path, dataset: Dataset) -> None:
+    import pyvista
+
+    points, u = dataset.points, dataset.point_data["displacement"]
+    largest = float(np.linalg.norm(u, axis=1).max(initial=0.0))
+    scale = 0.1 * float(np.ptp(points, axis=0).max()) / largest if largest > 0.0 else 1.0
+    grid = pyvista.UnstructuredGrid({dataset.cell_type: dataset.cells}, points + scale * u)
+    grid.cell_data["von Mises stress [Pa]"] = dataset.cell_data["von_mises"]
+    with _display():
+        plotter = pyvista.Plotter(off_screen=True, window_size=(1600, 1200))
+        try:
+            plotter.add_mesh(grid, scalars="von Mises stress [Pa]", cmap="viridis", show_edges=True,
+                             edge_color="#404040", line_width=0.3, scalar_bar_args={"vertical": True, "fmt": "%.3g"})
+            plotter.add_text(f"deformed bodies, displacement x {scale:.3g}; von Mises stress per cell", font_size=12)
+            plotter.view_isometric()
+            plotter.show_axes()
+            image = plotter.screenshot(None, return_img=True)
+        finally:
+            plotter.close()
+    import matplotlib.image
+
+    matplotlib.image.imsave(path, image, format="png")
+
+
+def _facet_pair(pair: np.ndarray, vertices: int) -> np.ndarray:
+    """The pair of each patch's facet: patches come in runs of ``vertices`` per facet, and a
+    node without a contact law (-1, a supported node) takes the pair of its facet's other nodes."""
+    return np.repeat(pair.reshape(-1, vertices).max(axis=1), vertices)
+
+
+def _plan_view(polygons: np.ndarray) -> tuple[np.ndarray, list[str]]:
+    """In-plane coordinates of ``polygons`` (n, 4, 3) seen along their mean normal, and axis labels."""
     from contactqvi.obstacles import tangent_frames
 
-    polygons = dataset.points[dataset.cells]  # (patches, 4, 3)
     areas = np.cross(polygons[:, 2] - polygons[:, 0], polygons[:, 3] - polygons[:, 1])
     mean_normal = areas.sum(axis=0)
     mean_normal /= np.linalg.norm(mean_normal)
@@ -75,24 +180,40 @@ def _draw_states(path: pathlib.Path, dataset: Dataset) -> None:
     else:
         frame = tangent_frames(mean_normal[None])[0, :2]
         labels = [f"t{i + 1} = ({', '.join(f'{c:.2f}' for c in t)}) [m]" for i, t in enumerate(frame)]
-    plane = polygons @ frame.T
+    return polygons @ frame.T, labels
+
+
+def _draw_states(path: pathlib.Path, dataset: Dataset, pair: np.ndarray, names: list[str]) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import PolyCollection
+    from matplotlib.colors import BoundaryNorm, ListedColormap
 
     state = dataset.cell_data["contact_state"]
     n_states = len(State)
     present = np.isin(np.arange(n_states), state)
     cmap = ListedColormap(_STATE_COLOURS[:n_states])
     norm = BoundaryNorm(np.arange(n_states + 1) - 0.5, n_states)
-    extent = np.ptp(plane.reshape(-1, 2), axis=0)
-    height = float(np.clip(6.5 * extent[1] / max(extent[0], 1e-300), 2.0, 8.0)) + 1.3  # axes 6.5 in wide
-    fig, ax = plt.subplots(figsize=(10.5, height), layout="constrained")
-    patches = PolyCollection(plane, array=state, cmap=cmap, norm=norm, edgecolors="face", linewidths=0.3)
-    ax.add_collection(patches)
-    ax.autoscale_view()
-    ax.set_aspect("equal")
-    ax.set_xlabel(labels[0])
-    ax.set_ylabel(labels[1])
-    ax.set_title("Contact states (seed 000, Table 1): one colour per node's tributary area")
-    bar = fig.colorbar(patches, ax=ax, ticks=np.arange(n_states), fraction=0.05, pad=0.02)
+    shown = [k for k in range(len(names)) if np.any(pair == k)]
+    columns = 1 if len(shown) == 1 else 2
+    rows = -(-len(shown) // columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(10.5 if columns == 1 else 14.0, 1.3 + 5.0 * rows),
+                             layout="constrained", squeeze=False)
+    for ax, k in zip(axes.ravel(), shown):
+        plane, labels = _plan_view(dataset.points[dataset.cells[pair == k]])
+        patches = PolyCollection(plane, array=state[pair == k], cmap=cmap, norm=norm, edgecolors="face", linewidths=0.3)
+        ax.add_collection(patches)
+        ax.autoscale_view()
+        ax.set_aspect("equal")
+        ax.set_xlabel(labels[0])
+        ax.set_ylabel(labels[1])
+        ax.set_title(f"contact {names[k]}" if len(names) > 1 else "one colour per node's tributary area")
+    for ax in axes.ravel()[len(shown):]:
+        ax.set_axis_off()
+    fig.suptitle("Contact states (seed 000, Table 1)")
+    bar = fig.colorbar(patches, ax=axes.ravel().tolist(), ticks=np.arange(n_states), fraction=0.05, pad=0.02)
     bar.ax.set_yticklabels([f"{s.value} {STATE_NAMES[s]}" + ("" if present[s] else " (none)") for s in State])
     bar.ax.tick_params(length=0)
     fig.savefig(path, dpi=150, format="png")

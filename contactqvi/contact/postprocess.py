@@ -41,7 +41,7 @@ import numpy as np
 
 from dolfinx import fem
 
-from contactqvi.contact.figures import plot_contact_states
+from contactqvi.contact.figures import plot_contact_states, plot_deformed_bodies
 from contactqvi.contact.load_path import contact_resultants
 from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
@@ -135,6 +135,14 @@ def _body_equilibrium(problem: ContactProblem, reactions: dict[str, np.ndarray],
     return errors
 
 
+class LastStep(typing.NamedTuple):
+    """The fields of the last step a :class:`ContactResultsWriter` wrote (kept by it)."""
+
+    displacement: fem.Function
+    surface: ContactSurface
+    von_mises: fem.Function
+
+
 class ContactResultsWriter:
     """Writes the steps of a contact solve to ``body.bp`` and ``contact_surface.bp``.
 
@@ -147,7 +155,8 @@ class ContactResultsWriter:
         out: output directory (created if needed).
 
     Attributes:
-        last: the displacement (u~) and the contact surface of the last step written.
+        last: the displacement (u~), the contact surface and the von Mises stress of the
+            last step written (:class:`LastStep`).
     """
 
     def __init__(self, out: str | os.PathLike, comm: MPI.Comm = MPI.COMM_WORLD):
@@ -157,7 +166,7 @@ class ContactResultsWriter:
         self._surface_file = VTXDatasetWriter(comm, self.out / "contact_surface.bp")
         self._steps = 0
         self._problem: ContactProblem | None = None
-        self.last: tuple[fem.Function, ContactSurface] | None = None
+        self.last: LastStep | None = None
 
     def _start(self, problem: ContactProblem) -> None:
         """What every step of ``problem`` writes into: made once."""
@@ -189,7 +198,7 @@ class ContactResultsWriter:
         self._surface.update(u, result, displacement)
         self._surface_file.write(self._surface.dataset(), t)
         self._steps += 1
-        self.last = (displacement, self._surface)
+        self.last = LastStep(displacement, self._surface, von_mises)
         return contact_summary(problem, u, result, von_mises, displacement)
 
     def close(self, ok: bool = True) -> None:
@@ -212,12 +221,12 @@ def write_contact_results(
     plot: bool = True,
     solution_npz: bool | None = None,
 ) -> dict[str, typing.Any]:
-    """Write ``body.bp``, ``contact_surface.bp``, ``solution.npz`` and ``contact_states.png``.
+    """Write ``body.bp``, ``contact_surface.bp``, ``solution.npz``, ``contact_states.png`` and ``bodies.png``.
 
     Collective. ``solution.npz`` (gathered on rank 0) is written for at most
     :data:`~contactqvi.tables.GATHER_MAX_NODES` nodes when ``solution_npz`` is None,
-    always when True, never when False; the PNG (``plot``) for surfaces of at most
-    as many nodes.
+    always when True, never when False; the PNGs (``plot``) for surfaces of at most
+    as many nodes (:mod:`contactqvi.contact.figures`).
 
     Returns:
         The :func:`contact_summary` entries, with ``files`` (names written) and
@@ -225,7 +234,7 @@ def write_contact_results(
     """
     with ContactResultsWriter(out, problem.comm) as writer:
         summary = writer.write(problem, u, result)
-    displacement, surface = writer.last
+    displacement, surface, von_mises = writer.last
     files = ["body.bp", "contact_surface.bp"]
     if solution_npz is not False and write_solution_npz(writer.out / "solution.npz", displacement, bool(solution_npz)):
         files.append("solution.npz")
@@ -233,5 +242,7 @@ def write_contact_results(
         summary["plot"] = plot_contact_states(writer.out / "contact_states.png", surface)
         if summary["plot"]:
             files.append("contact_states.png")
+        if plot_deformed_bodies(writer.out / "bodies.png", displacement, von_mises):
+            files.append("bodies.png")
     summary["files"] = files
     return summary

@@ -41,6 +41,7 @@ __all__ = [
     "ContactSurfaceFields",
     "TributaryPatches",
     "labelled",
+    "vertex_blocks",
 ]
 
 #: Names of the contact states (seed 000, Table 1), by :class:`State` value; "grazing":
@@ -94,6 +95,9 @@ class ContactSurfaceFields:
 
     Attributes:
         state: ``contact_state``, the :class:`~contactqvi.contact.nodal.State` value.
+        pair: ``contact_pair``, the index of the node's contact pair in
+            ``problem.interfaces`` (the order of ``[[contacts]]``); -1 at nodes without
+            a contact law.
         pressure: ``contact_pressure`` (Pa): normal force over the lumped nodal area.
         traction: ``friction_traction`` (Pa, tangential vector): friction force of the
             obstacle on the body over the lumped nodal area; opposite to the slip
@@ -113,6 +117,7 @@ class ContactSurfaceFields:
     """
 
     state: fem.Function
+    pair: fem.Function
     pressure: fem.Function
     traction: fem.Function
     slip: fem.Function
@@ -132,7 +137,7 @@ class ContactSurfaceFields:
         return [getattr(self, field.name) for field in dataclasses.fields(self)]
 
 
-def _vertex_blocks(V: fem.FunctionSpace) -> np.ndarray:
+def vertex_blocks(V: fem.FunctionSpace) -> np.ndarray:
     """Local block (node) index of each local vertex, for a degree-1 Lagrange space.
 
     The i-th dof of a cell of a degree-1 Lagrange space sits at the cell's i-th vertex.
@@ -149,8 +154,8 @@ def _vertex_blocks(V: fem.FunctionSpace) -> np.ndarray:
 
 #: Columns of the nodal table :meth:`ContactSurface._fill_table` fills on the contact nodes.
 _COLUMNS = {"state": 0, "contact": 1, "pressure": 2, "traction": slice(3, 6), "slip": slice(6, 9),
-            "gap": 9, "normal": slice(10, 13)}
-_TABLE_BS = 13
+            "gap": 9, "normal": slice(10, 13), "pair": 13}
+_TABLE_BS = 14
 
 
 class TributaryPatches:
@@ -193,8 +198,9 @@ class TributaryPatches:
         """Values at the vertices extended to the patches' points."""
         return np.concatenate([values, values[self.edges].mean(axis=1), values[self._cells].mean(axis=1)])
 
-    def dataset(self, point_data: dict[str, np.ndarray], state: np.ndarray) -> Dataset:
-        """Point data (at the vertices) extended; cell data: ``state`` of each patch's vertex and 0/1 indicators."""
+    def dataset(self, point_data: dict[str, np.ndarray], state: np.ndarray, pair: np.ndarray) -> Dataset:
+        """Point data (at the vertices) extended; cell data: ``state`` and ``pair`` of each patch's
+        vertex and 0/1 indicators."""
         state = state[self.vertex].astype(np.int32)
         return Dataset(
             points=self.points,
@@ -203,6 +209,7 @@ class TributaryPatches:
             point_data={name: self.extend(values) for name, values in point_data.items()},
             cell_data={
                 "contact_state": state,
+                "contact_pair": np.rint(pair[self.vertex]).astype(np.int32),
                 "is_open": (~np.isin(state, STICKING_STATES + SLIDING_STATES)).astype(np.int32),
                 "is_sliding": np.isin(state, SLIDING_STATES).astype(np.int32),
                 "is_sticking": np.isin(state, STICKING_STATES).astype(np.int32),
@@ -246,8 +253,8 @@ class ContactSurface:
         self.mesh, _, vertex_map, _ = dmesh.create_submesh(msh, msh.topology.dim - 1, problem.contact_facets)
         scalars = fem.functionspace(self.mesh, ("Lagrange", 1))
         vectors = fem.functionspace(self.mesh, ("Lagrange", 1, (3,)))
-        self._parent_blk = _vertex_blocks(V)[vertex_map]  # every local surface vertex, owned or ghost
-        self._scalar_blk, self._vector_blk = _vertex_blocks(scalars), _vertex_blocks(vectors)
+        self._parent_blk = vertex_blocks(V)[vertex_map]  # every local surface vertex, owned or ghost
+        self._scalar_blk, self._vector_blk = vertex_blocks(scalars), vertex_blocks(vectors)
         self._x = scalars.tabulate_dof_coordinates()[self._scalar_blk]
         self._table = la.vector(V.dofmap.index_map, bs=_TABLE_BS)
         nodal_area = fem.Function(scalars, name="nodal_area")
@@ -256,7 +263,8 @@ class ContactSurface:
         nodal_area.x.scatter_forward()
         self.fields = ContactSurfaceFields(
             **{key: fem.Function(vectors if vector else scalars, name=name) for key, name, vector in (
-                ("state", "contact_state", False), ("pressure", "contact_pressure", False),
+                ("state", "contact_state", False), ("pair", "contact_pair", False),
+                ("pressure", "contact_pressure", False),
                 ("traction", "friction_traction", True), ("slip", "slip", True),
                 ("tangential_displacement", "tangential_displacement", True), ("gap", "gap", False),
                 ("displacement", "displacement", True))},
@@ -281,6 +289,7 @@ class ContactSurface:
         values = self._table.array.reshape(-1, _TABLE_BS)
         values[:] = 0.0
         values[:, _COLUMNS["state"]] = State.NO_CONTACT
+        values[:, _COLUMNS["pair"]] = -1
         blk, frames, area = problem.contact_blk, problem.frames, problem.contact_area
         shifted = u.array.reshape(-1, 3)[blk]  # nodal frames: (slip increment, gap after deformation)
         touching = result.states != State.NO_CONTACT
@@ -291,6 +300,7 @@ class ContactSurface:
         values[blk, _COLUMNS["slip"]] = np.einsum("ij,ijk->ik", shifted[:, :2], frames[:, :2]) * touching[:, None]
         values[blk, _COLUMNS["gap"]] = shifted[:, 2]
         values[blk, _COLUMNS["normal"]] = frames[:, 2]
+        values[blk, _COLUMNS["pair"]] = problem.interface_of_node
         self._table.scatter_forward()
         return values
 
@@ -326,7 +336,8 @@ class ContactSurface:
         gap = np.where(contact, nodal[:, _COLUMNS["gap"]], initial_gap + np.einsum("ij,ij->i", normal, u_tilde))
         tangential = u_tilde - np.einsum("ij,ij->i", normal, u_tilde)[:, None] * normal
         fields = self.fields
-        columns = {f: nodal[:, _COLUMNS[name]] for f, name in ((fields.state, "state"), (fields.pressure, "pressure"),
+        columns = {f: nodal[:, _COLUMNS[name]] for f, name in ((fields.state, "state"), (fields.pair, "pair"),
+                                                               (fields.pressure, "pressure"),
                                                                (fields.traction, "traction"), (fields.slip, "slip"))}
         computed = {fields.tangential_displacement: tangential, fields.gap: gap, fields.displacement: u_tilde}
         for f, values in (columns | computed).items():
@@ -338,12 +349,13 @@ class ContactSurface:
     def dataset(self) -> Dataset:
         """This rank's piece of the tributary patches with the current fields. Not collective.
 
-        Point data: every field but ``contact_state`` and ``nodal_area``, named with
-        units (``contact_pressure [Pa]``); cell data: ``contact_state`` of the patch's
-        node and the 0/1 indicators ``is_open``, ``is_sliding``, ``is_sticking``
-        (integrating one over the surface gives that area).
+        Point data: every field but ``contact_state``, ``contact_pair`` and ``nodal_area``,
+        named with units (``contact_pressure [Pa]``); cell data: ``contact_state`` and
+        ``contact_pair`` of the patch's node and the 0/1 indicators ``is_open``,
+        ``is_sliding``, ``is_sticking`` (integrating one over the surface gives that area).
         """
         piece = self._piece
         point_data = {labelled(f.name): piece.point_values(f) for f in self.fields.functions
-                      if f.name not in ("contact_state", "nodal_area")}
-        return self._patches.dataset(point_data, piece.point_values(self.fields.state))
+                      if f.name not in ("contact_state", "contact_pair", "nodal_area")}
+        return self._patches.dataset(point_data, piece.point_values(self.fields.state),
+                                     piece.point_values(self.fields.pair))
