@@ -18,7 +18,6 @@ from contactqvi import tables
 from contactqvi.cli import parse_args
 from contactqvi.contact.driver import solve_level, solve_nested
 from contactqvi.contact.scd_newton import PARAMETERS
-from contactqvi.elasticity import rigid_motions_nullspace
 from contactqvi.linalg import create_ksp, preset
 from contactqvi.problems import coulomb as data
 
@@ -106,11 +105,12 @@ def run_coulomb_case(
 
 def elastic_solve(problem, prefix: str) -> dict[str, float]:
     """The floor of a contact solve: one elastic solve A u = l of ``problem`` by CG + GAMG with
-    the rigid-body near-nullspace to 1e-12, set-up included; Krylov iterations and wall seconds
-    (largest rank). Leaves the near-nullspace on ``problem.A``."""
-    nullspace = rigid_motions_nullspace(problem.V)
+    the problem's near-nullspace (rigid-body modes of each body) and multigrid options to 1e-12,
+    set-up included; Krylov iterations and wall seconds (largest rank). Leaves the
+    near-nullspace on ``problem.A``."""
+    nullspace = problem.near_nullspace()
     problem.A.setNearNullSpace(nullspace)
-    ksp = create_ksp(problem.comm, prefix, preset("cg_gamg"), A=problem.A, rtol=1e-12)
+    ksp = create_ksp(problem.comm, prefix, preset("cg_gamg", **problem.multigrid_options), A=problem.A, rtol=1e-12)
     x = problem.A.createVecRight()
     problem.comm.Barrier()
     t0 = time.perf_counter()

@@ -120,7 +120,8 @@ def _load_form(msh: dmesh.Mesh, v: ufl.core.expr.Expr, body: ElasticBody, load_f
 
 
 def reaction_forces(
-    u: fem.Function, body: ElasticBody, load_factor: float = 1.0, dirichlet_dofs_loc: np.ndarray | None = None
+    u: fem.Function, body: ElasticBody, load_factor: float = 1.0, dirichlet_dofs_loc: np.ndarray | None = None,
+    nodal_forces: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
     """Reaction force (N, global components) of each support of ``body`` on it.
 
@@ -137,6 +138,10 @@ def reaction_forces(
             components, e.g. ``ContactProblem.dirichlet_dofs_loc``); the free
             components of a support node (a roller) carry other forces, such as
             contact. None: every component of the supports' nodes.
+        nodal_forces: (owned nodes, 3) other forces on the nodes (N, global components),
+            taken off the residual: what of them acts on a constrained component goes
+            straight into the support (a contact force on a prescribed component of a
+            master node, which the discrete problem does not see).
     """
     V = u.function_space
     msh = V.mesh
@@ -147,6 +152,8 @@ def reaction_forces(
     residual.scatter_reverse(la.InsertMode.add)
     n_owned = V.dofmap.index_map.size_local
     values = residual.array[: 3 * n_owned].reshape(n_owned, 3)
+    if nodal_forces is not None:
+        values = values - nodal_forces
     if dirichlet_dofs_loc is not None:
         constrained = np.zeros(residual.array.size, dtype=bool)
         constrained[dirichlet_dofs_loc] = True

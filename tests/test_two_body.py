@@ -231,21 +231,27 @@ def test_two_body_solution_is_frame_invariant(blocks):
 
 
 @pytest.mark.skipif(MPI.COMM_WORLD.size == 1, reason="compares a parallel run with a serial one")
-def test_two_body_parallel_equals_serial():
+@pytest.mark.parametrize("pc", ["lu", "gamg"])
+def test_two_body_parallel_equals_serial(pc):
     """The patch blocks with slip (F = 0.3, different moduli) on all ranks and on each rank
-    alone: the same displacement at every node to 1e-10 and Newton counts within 1."""
+    alone: the same displacement at every node to 1e-10, and with exact Newton-step solves
+    the same Newton counts within 1. With GAMG (tol 0.1) the inexact steps depend on the
+    partition through the aggregates: 6 against 8 Newton steps on 2 ranks (measured), so
+    there only the solution is compared."""
     runs = {}
     for name, comm in (("parallel", MPI.COMM_WORLD), ("serial", MPI.COMM_SELF)):
         msh, facet_tags, cell_tags = read_gmsh(MESH, comm)
         problem = _patch_problem((msh, split_by_body(msh, facet_tags, cell_tags), cell_tags), 3e9, 0.3)
         with problem:
-            result, displacement = _solve(problem)
+            result, displacement = _solve(problem, pc)
+            assert result.converged
             n = problem.V.dofmap.index_map.size_local
             # a node is its position and its body (the blocks' corners coincide at z = 1)
             x = np.column_stack([problem.V.tabulate_dof_coordinates()[:n], problem.node_body[:n]])
             runs[name] = (result.iterations, x, displacement.x.array.reshape(-1, 3)[:n].copy())
     iterations, x, u = runs["serial"]
-    assert abs(runs["parallel"][0] - iterations) <= 1
+    if pc == "lu":
+        assert abs(runs["parallel"][0] - iterations) <= 1
     x_par, u_par = runs["parallel"][1:]
     lookup = {tuple(p): k for k, p in enumerate(np.round(x, 12))}
     position = np.array([lookup[tuple(p)] for p in np.round(x_par, 12)], dtype=np.int64)

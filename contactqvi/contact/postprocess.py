@@ -78,7 +78,8 @@ def contact_summary(
     comm = problem.comm
     if displacement is None:
         displacement = problem.physical_displacement(u, fem.Function(problem.V))
-    reactions = reaction_forces(displacement, problem.body, problem.load_factor, problem.dirichlet_dofs_loc)
+    reactions = reaction_forces(displacement, problem.body, problem.load_factor, problem.dirichlet_dofs_loc,
+                                problem.nodal_contact_forces(result.normal_force, result.friction_force))
     applied = applied_force(problem.V.mesh, problem.body, problem.load_factor)
     resultants = contact_resultants(problem, result)
     contact_force = np.asarray(resultants["contact_force"])
