@@ -41,6 +41,7 @@ using A = A^T. Hence l = l~ + A d.
 from __future__ import annotations
 
 import dataclasses
+import time
 import typing
 
 from mpi4py import MPI
@@ -106,6 +107,9 @@ class ContactProblem(PETScOwner):
         n_contact: global number p of contact nodes.
         n_free: global number n of free dofs.
         load_factor, translation: the current step (:meth:`set_step`).
+        setup_seconds: wall seconds (largest rank) of the contact search with the nodal
+            frames and mortar integration (``contact_search``) and of A = T^T A_K T with the
+            loads (``change_of_variables``).
     """
 
     V: fem.FunctionSpace
@@ -134,6 +138,7 @@ class ContactProblem(PETScOwner):
     n_free: int
     load_factor: float = 1.0
     translation: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
+    setup_seconds: dict[str, float] = dataclasses.field(default_factory=dict)
 
     @property
     def comm(self) -> MPI.Comm:
@@ -373,18 +378,17 @@ def assemble_contact_problem(
     loads = [applied, *_unit_translations(a, A, moved_bc, dirichlet_dofs_loc)]
     index_map = V.dofmap.index_map
     constrained = np.isin(np.arange(3 * (index_map.size_local + index_map.num_ghosts)), dirichlet_dofs_loc).reshape(-1, 3)
-    interfaces = build_interfaces(V, facet_tags, pairs, constrained)
+    interfaces, search_seconds = _timed(msh.comm, build_interfaces, V, facet_tags, pairs, constrained)
     contact_blk, interface_of_node, frames, contact_area = _merged(interfaces)
     _check_prescribed_on_contact(loads, contact_blk, constrained[contact_blk], msh.comm)
     frames = _align_frames(frames, constrained[contact_blk], msh.comm)
     owned_dirichlet = dirichlet_dofs_loc[dirichlet_dofs_loc < 3 * index_map.size_local]
-    A, loads, rotation, coupling, transform, offsets = _solver_variables(
-        A, loads, interfaces, constrained, contact_blk, frames, owned_dirichlet)
+    (A, loads, rotation, coupling, transform, offsets), variables_seconds = _timed(
+        msh.comm, _solver_variables, A, loads, interfaces, constrained, contact_blk, frames, owned_dirichlet)
     node_body = None if cell_tags is None else _node_body(V, cell_tags)
     if node_body is not None:
         _check_held(V, facet_tags, cell_tags, node_body, constrained, interfaces)
-    comm = msh.comm
-    supports = tuple(dict.fromkeys([*clamped, *(displacements or {}), *moved]))
+    supports, comm = tuple(dict.fromkeys([*clamped, *(displacements or {}), *moved])), msh.comm
     problem = ContactProblem(
         V=V, A=A, applied=loads[0], load=loads[0].duplicate(), shift=loads[0].duplicate(),
         contact_blk=contact_blk, contact_facets=np.unique(np.concatenate(
@@ -397,9 +401,17 @@ def assemble_contact_problem(
         rollers=constrained[contact_blk].any(axis=1), dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32),
         node_body=node_body, n_contact=comm.allreduce(len(contact_blk), op=MPI.SUM),
         n_free=comm.allreduce(3 * index_map.size_local - len(owned_dirichlet), op=MPI.SUM),
+        setup_seconds={"contact_search": search_seconds, "change_of_variables": variables_seconds},
     )
     problem.set_step()
     return problem
+
+
+def _timed(comm: MPI.Comm, function: typing.Callable[..., typing.Any], *args: typing.Any) -> tuple[typing.Any, float]:
+    """``function(*args)`` and its wall seconds (largest rank). Collective."""
+    start = time.perf_counter()
+    value = function(*args)
+    return value, comm.allreduce(time.perf_counter() - start, op=MPI.MAX)
 
 
 def _merged(interfaces: typing.Sequence[Interface]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
