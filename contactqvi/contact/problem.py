@@ -259,19 +259,20 @@ class ContactProblem(PETScOwner):
 
         With several bodies the near-nullspace has six modes per body, and GAMG gives every
         aggregate as many coarse unknowns as there are modes: 12 for two bodies, half of
-        them zero columns (an aggregate lies in one body). With its default aggregates
-        (square graph, about 25 nodes) the first coarse operator of the two-body Hertz
-        medium mesh had 5124 rows and 2.6 M nonzeros, as many as the fine one, and a
-        set-up took 4.8 s against 1.2 s with six modes. Aggregates grown by a distance-3
-        maximal independent set instead of the squared graph (about 100 nodes) give 1068
-        rows and 0.25 M nonzeros: set-up 1.0 s, the load path 117 -> 24 s, Newton steps
-        9/21/13/17 -> 10/9/8/7 (benchmarks/results/hertz_bodies.md). One body: none.
+        them zero columns (an aggregate lies in one body). With smoothed aggregation the
+        first coarse operator of the two-body Hertz medium mesh then had 5124 rows and
+        2.6 M nonzeros, as many as the fine one, and a set-up took 4.8 s (1.2 s with six
+        modes). Unsmoothed aggregation (plain aggregates as interpolation) keeps the
+        coarse operators to neighbouring aggregates: set-up 0.8 s, the load path 117 -> 25 s,
+        Newton steps 9/21/13/17 -> 8/8/9/8. Larger aggregates (a distance-3 maximal
+        independent set) did as well on small meshes but fail at a million dofs on 2 ranks:
+        PETSc 3.22 preallocates local rows times the largest aggregate (160189 x 17994,
+        beyond 32-bit indices; the dense mortar rows make aggregates of thousands of nodes).
+        One body: none (PETSc's defaults; the paper's tables).
         """
         bodies = 0 if self.node_body is None else self.comm.allreduce(int(self.node_body.max(initial=-1)) + 1,
                                                                       op=MPI.MAX)
-        if bodies <= 1:
-            return {}
-        return {"pc_gamg_aggressive_square_graph": False, "pc_gamg_aggressive_mis_k": 3}
+        return {"pc_gamg_agg_nsmooths": 0} if bodies > 1 else {}
 
     def near_nullspace(self) -> PETSc.NullSpace:
         """Rigid-body modes of each body in the solver's variables, T^-1 = R^T (I - N) of
