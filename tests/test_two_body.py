@@ -234,10 +234,9 @@ def test_two_body_solution_is_frame_invariant(blocks):
 @pytest.mark.parametrize("pc", ["lu", "gamg"])
 def test_two_body_parallel_equals_serial(pc):
     """The patch blocks with slip (F = 0.3, different moduli) on all ranks and on each rank
-    alone: the same displacement at every node to 1e-10, and with exact Newton-step solves
-    the same Newton counts within 1. With GAMG (tol 0.1) the inexact steps depend on the
-    partition through the aggregates: 6 against 8 Newton steps on 2 ranks (measured), so
-    there only the solution is compared."""
+    alone: the same displacement at every node to 1e-10 and Newton counts within 1, with
+    exact and with GAMG Newton-step solves (the inexact ones depend on the partition through
+    the aggregates: 6 and 7 on 1 and 2 ranks, measured)."""
     runs = {}
     for name, comm in (("parallel", MPI.COMM_WORLD), ("serial", MPI.COMM_SELF)):
         msh, facet_tags, cell_tags = read_gmsh(MESH, comm)
@@ -250,8 +249,7 @@ def test_two_body_parallel_equals_serial(pc):
             x = np.column_stack([problem.V.tabulate_dof_coordinates()[:n], problem.node_body[:n]])
             runs[name] = (result.iterations, x, displacement.x.array.reshape(-1, 3)[:n].copy())
     iterations, x, u = runs["serial"]
-    if pc == "lu":
-        assert abs(runs["parallel"][0] - iterations) <= 1
+    assert abs(runs["parallel"][0] - iterations) <= 1
     x_par, u_par = runs["parallel"][1:]
     lookup = {tuple(p): k for k, p in enumerate(np.round(x, 12))}
     position = np.array([lookup[tuple(p)] for p in np.round(x_par, 12)], dtype=np.int64)
