@@ -15,7 +15,7 @@ the stick radius beside Cattaneo's c = a (1 - Q/(mu P))^(1/3). Writes
 ``mindlin_bodies.{json,md}``::
 
     python benchmarks/hertz_bodies.py [--tables hertz mindlin] [--meshes coarse medium fine xfine]
-    mpirun -n 2 python benchmarks/hertz_bodies.py --tables hertz --meshes xxfine --name hertz_bodies_1m
+    mpirun -n 2 python benchmarks/hertz_bodies.py --tables hertz --meshes xxfine --name hertz_bodies_xxfine
 """
 
 from __future__ import annotations
