@@ -40,7 +40,7 @@ def run(argv: list[str]) -> int:
     from contactqvi import cli
     from contactqvi.case import load_case
     from contactqvi.parameters import ParameterError
-    from contactqvi.runner import PREFIX, run_case
+    from contactqvi.runner import EXIT_CODES, PREFIX, run_case
 
     parser = cli.make_parser("Solve a contact case file (TOML) along its load path.", "results/case",
                              f"-{PREFIX}ksp_monitor")
@@ -53,7 +53,7 @@ def run(argv: list[str]) -> int:
         _, code = run_case(case, args.output, MPI.COMM_WORLD, plot=not args.no_plot)
     except ParameterError as exc:
         print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_CODES["bad input"]
     return code
 
 

@@ -15,9 +15,12 @@ up to the last converged step stays readable if a later step fails.
 
 from __future__ import annotations
 
+import contextlib
 import difflib
 import logging
 import pathlib
+import signal
+import threading
 import typing
 
 from mpi4py import MPI
@@ -28,7 +31,7 @@ from dolfinx import mesh as dmesh
 from contactqvi import tables
 from contactqvi.case import Body, ContactCase, ContactPair, check_groups, check_solver
 from contactqvi.contact.load_path import LoadStep, solve_load_path
-from contactqvi.contact.figures import plot_contact_states
+from contactqvi.contact.figures import plot_contact_states, plot_deformed_bodies
 from contactqvi.contact.postprocess import ContactResultsWriter
 from contactqvi.contact.interface import BodyPair, ObstaclePair
 from contactqvi.contact.problem import ContactProblem, assemble_contact_problem, build_contact_problem
@@ -40,12 +43,19 @@ from contactqvi.meshes import create_contact_body, read_gmsh, split_by_body
 from contactqvi.parameters import ParameterError, require
 from contactqvi.problems.coulomb import gap_function
 
-__all__ = ["PREFIX", "build_problem", "read_mesh", "run_case"]
+__all__ = ["EXIT_CODES", "PREFIX", "Interrupted", "build_problem", "read_mesh", "run_case"]
 
 logger = logging.getLogger(__name__)
 
 #: PETSc options prefix of the case's Newton-step solver (``[petsc]`` options go under it).
 PREFIX = "case_"
+
+#: Exit codes of ``python -m contactqvi run``.
+EXIT_CODES = {"converged": 0, "not converged": 1, "bad input": 2, "interrupted": 3}
+
+
+class Interrupted(Exception):
+    """SIGTERM or SIGINT arrived: the run stops after the load step being solved."""
 
 
 def read_mesh(case: ContactCase, comm: MPI.Comm) -> tuple[dmesh.Mesh, dmesh.MeshTags]:
@@ -118,13 +128,18 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
     (``"contact"``: every contact node on the obstacle). The case's ``[petsc]``
     options are in the options database only while it runs.
 
+    SIGTERM and SIGINT (a batch system's time limit, Ctrl-C) stop the run after the load
+    step being solved: its results and the summary are written, with ``status =
+    "interrupted"``. The output directory is checked to be writable before the mesh is read.
+
     Returns:
-        The summary (also in ``output/summary.json``) and the exit code: 0 when every
-        step converged, 1 when one did not.
+        The summary (also in ``output/summary.json``) and the exit code (:data:`EXIT_CODES`):
+        0 when every step converged, 1 when one did not, 3 when interrupted.
     """
     parameters = check_solver(case, scd_newton.PARAMETERS)
+    _check_output(comm, output)
     from_rest = case.solver.get("start", "rest") == "rest"
-    with default_options(PREFIX, case.petsc), build_problem(case, comm) as problem:
+    with default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, _stop_signals() as stop:
         logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks",
                     problem.n_contact, problem.n_free, len(case.steps), comm.size)
         summary: dict[str, typing.Any] = {
@@ -137,24 +152,85 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
             entry = {"step": index + 1, "load": step.load, "translation": list(step.translation), **result.summary()}
             if result.converged:
                 entry.update(writer.write(problem, u, result, t=index + 1))
-                tables.write_solution_npz(writer.out / "solution.npz", writer.last[0])
+                tables.write_solution_npz(writer.out / "solution.npz", writer.last.displacement)
             summary["steps"].append(entry)
             summary["status"] = str(result.status)
+            stopped = comm.allreduce(stop.is_set(), op=MPI.LOR) and index + 1 < len(case.steps)
+            if stopped:
+                summary["status"] = "interrupted"
             tables.write_summary(comm, writer.out / "summary.json", summary)
-            logger.info("step %d: %s, %d Newton steps, %d Krylov; contact force %s N, contact area %.4g m^2",
-                        index + 1, result.status, result.iterations, result.inner_iterations,
-                        _vector_text(entry.get("contact_force")), entry.get("contact_area", float("nan")))
+            _log_step(index, result, entry)
+            if stopped:
+                raise Interrupted(f"stopped by a signal after step {index + 1} of {len(case.steps)}")
 
         u = problem.A.createVecRight()
         try:
             results = solve_load_path(problem, case.steps, u, parameters, PREFIX, record, from_rest)
+            code = EXIT_CODES["converged" if results[-1].converged and len(results) == len(case.steps)
+                              else "not converged"]
+        except Interrupted as exc:
+            logger.warning("%s; the results of the steps solved are written", exc)
+            code = EXIT_CODES["interrupted"]
         finally:
             u.destroy()
             writer.close()  # keeps every converged step, also when a later one raised
     if plot and writer.last is not None:
-        summary["plot"] = plot_contact_states(writer.out / "contact_states.png", writer.last[1])
-        tables.write_summary(comm, writer.out / "summary.json", summary)
-    return summary, 0 if results[-1].converged and len(results) == len(case.steps) else 1
+        _draw_figures(writer, summary, comm)
+    return summary, code
+
+
+def _draw_figures(writer: ContactResultsWriter, summary: dict[str, typing.Any], comm: MPI.Comm) -> None:
+    """``contact_states.png`` and ``bodies.png`` of the last step written, and whether each
+    was drawn in the summary."""
+    last = writer.last
+    summary["plot"] = plot_contact_states(writer.out / "contact_states.png", last.surface)
+    summary["bodies_plot"] = plot_deformed_bodies(writer.out / "bodies.png", last.displacement, last.von_mises)
+    tables.write_summary(comm, writer.out / "summary.json", summary)
+
+
+def _log_step(index: int, result: SCDNewtonResult, entry: dict[str, typing.Any]) -> None:
+    logger.info("step %d: %s, %d Newton steps, %d Krylov; contact force %s N, contact area %.4g m^2",
+                index + 1, result.status, result.iterations, result.inner_iterations,
+                _vector_text(entry.get("contact_force")), entry.get("contact_area", float("nan")))
+
+
+def _check_output(comm: MPI.Comm, output: str | pathlib.Path) -> None:
+    """Raise :class:`ParameterError` (``output``) unless the output directory can be made and written."""
+    error = None
+    if comm.rank == 0:
+        probe = pathlib.Path(output) / ".contactqvi-write-test"
+        try:
+            pathlib.Path(output).mkdir(parents=True, exist_ok=True)
+            probe.write_bytes(b"")
+            probe.unlink()
+        except OSError as exc:
+            error = f"cannot write to the output directory {str(output)!r}: {exc.strerror or exc}"
+    error = comm.bcast(error, root=0)
+    if error is not None:
+        raise ParameterError("output", error)
+
+
+@contextlib.contextmanager
+def _stop_signals() -> typing.Iterator[threading.Event]:
+    """An event that SIGTERM and SIGINT set, instead of ending the process, while the block runs.
+
+    Only the main thread can handle signals; elsewhere the event is never set.
+    """
+    stop = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def handler(signum: int, frame: typing.Any) -> None:
+        logger.warning("signal %d: stopping after the load step being solved", signum)
+        stop.set()
+
+    previous = {number: signal.signal(number, handler) for number in (signal.SIGTERM, signal.SIGINT)}
+    try:
+        yield stop
+    finally:
+        for number, action in previous.items():
+            signal.signal(number, action)
 
 
 def _vector_text(vector: typing.Sequence[float] | None) -> str:
