@@ -22,12 +22,13 @@ __all__ = ["assert_frees_petsc_objects"]
 
 
 def _live_objects() -> list[PETSc.Object]:
-    return [o for o in gc.get_objects() if isinstance(o, PETSc.Object) and o.handle]
+    # ``type()``, not ``isinstance``: the latter raises on dead weak proxies (pyvista keeps some)
+    return [o for o in gc.get_objects() if issubclass(type(o), PETSc.Object) and o.handle]
 
 
 def _dolfinx_wrappers() -> set[int]:
     """ids of the PETSc vectors DOLFINx created around Function arrays (freed with the Function)."""
-    vectors = (v for v in gc.get_objects() if isinstance(v, dolfinx.la.Vector))
+    vectors = (v for v in gc.get_objects() if issubclass(type(v), dolfinx.la.Vector))
     return {id(v._petsc_x) for v in vectors if v._petsc_x is not None}
 
 
