@@ -50,6 +50,8 @@ class Status(enum.IntEnum):
     DIVERGED_CYCLING = -7
     #: the residual exceeded the divergence limit or is not finite
     DIVERGED_DTOL = -8
+    #: stopped from outside (SIGTERM, SIGINT) before the stopping test held
+    INTERRUPTED = -9
 
     @property
     def converged(self) -> bool:

@@ -506,7 +506,7 @@ class SCDNewtonSolver(PETScOwner):
         return None, None
 
     # -- the method ----------------------------------------------------------------------
-    def solve(self, u: PETSc.Vec, atol: float = 0.0) -> SCDNewtonResult:
+    def solve(self, u: PETSc.Vec, atol: float = 0.0, stop: typing.Callable[[], bool] | None = None) -> SCDNewtonResult:
         """Run Algorithm 1 from the initial guess ``u`` (shifted displacements), in place.
 
         Stops at ||y^|| <= max(rtol ||y^(0)||, floor ||l||, atol) (the stopping test above),
@@ -514,13 +514,15 @@ class SCDNewtonSolver(PETScOwner):
         load step, or of an outer iteration (the Tresca fixed point). The Newton matrices are
         written into the storage of ``problem.A``
         (:class:`~contactqvi.contact.newton_matrix.NewtonMatrix`); it holds A again on return.
+        ``stop()`` (collective, the same answer on every rank) is asked before each Newton
+        step; when it is true the solve ends with status ``interrupted``.
         """
         try:
-            return self._algorithm_1(u, atol)
+            return self._algorithm_1(u, atol, stop)
         finally:
             self._newton.restore()
 
-    def _algorithm_1(self, u: PETSc.Vec, atol: float) -> SCDNewtonResult:
+    def _algorithm_1(self, u: PETSc.Vec, atol: float, stop: typing.Callable[[], bool] | None) -> SCDNewtonResult:
         p, w, comm = self.parameters, self._work, self.problem.comm
         result = SCDNewtonResult(status=Status.DIVERGED_MAX_IT, iterations=0, gamma=0.0, target=0.0,
                                  states=np.empty(0, np.int8), normal_force=np.empty(0), friction_force=np.empty((0, 2)))
@@ -545,6 +547,10 @@ class SCDNewtonSolver(PETScOwner):
             if point.norm <= target or k == p["max_iterations"]:
                 if point.norm <= target:
                     result.status = Status.CONVERGED_RTOL if point.norm <= p["rtol"] * norm0 else Status.CONVERGED_ATOL
+                _log_iteration(entry)
+                break
+            if stop is not None and stop():
+                result.status = Status.INTERRUPTED
                 _log_iteration(entry)
                 break
             with result.timings.phase("newton_matrix"):
