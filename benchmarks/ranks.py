@@ -8,19 +8,29 @@ with the run on 1 rank:
   tol 0.1) for each ``--levels``;
 * ``python -m contactqvi run cases/hertz.toml`` on ``meshes/hertz_coarse.geo``
   (a sphere, four load steps), with its default solver and with exact
-  Newton-step solves (``pc = "lu"``).
+  Newton-step solves (``pc = "lu"``);
+* several bodies (``--bodies``): ``cases/vice.toml`` as shipped (three bodies, two
+  Coulomb joints, two load steps) and ``cases/hertz_bodies.toml`` on
+  ``meshes/hertz_bodies_coarse.geo`` (ball on block, four load steps), each with its
+  default solver and with ``pc = "lu"``.
 
 Per run: Newton and Krylov iterations (summed over load steps), the largest
 difference of Newton steps in a load step from 1 rank, the relative difference of
 the solution (``solution.npz``, max |u_N - u_1| / max |u_1|), whether every output
-file was written, and how many ranks wrote a block of ``contact_surface.bp`` (the
-others own no contact facet).
+file was written, how many ranks wrote a block of ``contact_surface.bp`` (the
+others own no contact facet) and, for several bodies, how many ranks own cells of
+each body (the blocks of ``body.bp``; the others own none of its cells).
 
 ``--memory-lev 10``: each rank's peak resident memory (VmHWM of
 /proc/self/status) after the demo at that level, d1/L1, on 2 ranks, output
 included. Run by ``mpirun -n 2 python benchmarks/ranks.py --worker memory ...``.
 
-Writes ``ranks.json`` and ``ranks.md``; a part not run keeps its old numbers.
+Writes ``ranks.json`` and ``ranks.md``; a part not run keeps its old numbers (rows are
+replaced by case and number of ranks, each row records the commit it was measured
+at). Only the several-body rows, for example::
+
+    nice python benchmarks/ranks.py --levels --no-hertz --bodies vice hertz_bodies
+
 Run with ``nice`` on a shared machine: it starts up to 8 ranks.
 """
 
@@ -30,6 +40,7 @@ import argparse
 import json
 import os
 import pathlib
+import re
 import shutil
 import subprocess
 import sys
@@ -52,6 +63,8 @@ def parse() -> argparse.Namespace:
     parser.add_argument("--ranks", type=int, nargs="*", default=[1, 2, 3, 4, 8], help="numbers of ranks (1 first)")
     parser.add_argument("--levels", type=int, nargs="*", default=[5, 6], help="levels of the demo")
     parser.add_argument("--no-hertz", action="store_true", help="skip cases/hertz.toml")
+    parser.add_argument("--bodies", nargs="*", choices=sorted(BODY_CASES), default=sorted(BODY_CASES),
+                        help="several-body case files to run (none: skip them)")
     parser.add_argument("--memory-lev", type=int, default=None, help="level of the 2-rank memory run (e.g. 10)")
     parser.add_argument("--output", default=str(ROOT / "benchmarks" / "results"))
     parser.add_argument("--commit", default=_commit(), help="the code's commit, recorded with the numbers")
@@ -75,19 +88,28 @@ def mpirun(n: int, argv: list[str], log: pathlib.Path) -> tuple[int, float]:
     return code, time.perf_counter() - t0
 
 
-def hertz_case(directory: pathlib.Path, lu: bool) -> pathlib.Path:
-    """cases/hertz.toml on the coarse mesh (and with ``pc = "lu"``), written to ``directory``."""
-    text = (ROOT / "cases" / "hertz.toml").read_text()
-    line = 'file = "../meshes/hertz_medium.geo"'
-    assert line in text, "cases/hertz.toml: mesh line changed"
-    text = text.replace(line, f'file = "{ROOT / "meshes" / "hertz_coarse.geo"}"')
+#: Several-body case files (``cases/<name>.toml``) -> the mesh they run on here: the
+#: coarsest mesh file the case lists, as tests/test_shipped_cases.py's COARSE (None: as shipped).
+BODY_CASES: dict[str, str | None] = {"vice": None, "hertz_bodies": "hertz_bodies_coarse.geo"}
+
+
+def case_variant(directory: pathlib.Path, name: str, mesh: str | None, lu: bool) -> pathlib.Path:
+    """``cases/<name>.toml`` written to ``directory`` with its mesh file as an absolute path
+    (``meshes/<mesh>`` if given, else the case's own), and with ``pc = "lu"`` if ``lu``."""
+    source = ROOT / "cases" / f"{name}.toml"
+    text = source.read_text()
+    pattern = re.compile(r'^file = "([^"]+)"$', re.MULTILINE)
+    (found,) = pattern.findall(text)  # the [mesh] table's file, relative to the case file
+    path = ROOT / "meshes" / mesh if mesh else (source.parent / found).resolve()
+    assert path.is_file(), f"{source}: mesh file {path} not found"
+    text = pattern.sub(f'file = "{path}"', text)
     if lu and "\n[solver]\n" in text:
         text = text.replace("\n[solver]\n", '\n[solver]\npc = "lu"\n')
     elif lu:
         text += '\n[solver]\npc = "lu"\n'
-    path = directory / ("hertz_coarse_lu.toml" if lu else "hertz_coarse.toml")
-    path.write_text(text)
-    return path
+    case = directory / f"{name}{'_' + pathlib.Path(mesh).stem if mesh else ''}{'_lu' if lu else ''}.toml"
+    case.write_text(text)
+    return case
 
 
 def programs(args: argparse.Namespace, work: pathlib.Path) -> dict[str, tuple[list[str], list[str]]]:
@@ -98,7 +120,14 @@ def programs(args: argparse.Namespace, work: pathlib.Path) -> dict[str, tuple[li
                                       demo_files) for lev in args.levels}
     if not args.no_hertz:
         for lu, label in ((False, "hertz coarse"), (True, "hertz coarse, pc lu")):
-            runs[label] = (["-m", "contactqvi", "run", str(hertz_case(work, lu))], case_files)
+            runs[label] = (["-m", "contactqvi", "run", str(case_variant(work, "hertz", "hertz_coarse.geo", lu))],
+                           case_files)
+    for name in args.bodies:
+        mesh = BODY_CASES[name]
+        for lu in (False, True):
+            label = f"{name}{' coarse' if mesh else ''}{', pc lu' if lu else ''}"
+            runs[label] = (["-m", "contactqvi", "run", str(case_variant(work, name, mesh, lu))],
+                           [*case_files, "bodies.png"])
     return runs
 
 
@@ -110,9 +139,24 @@ def surface_blocks(path: pathlib.Path) -> int:
         return len(reader.all_blocks_info("geometry")[reader.num_steps() - 1])
 
 
+def body_ranks(path: pathlib.Path) -> list[int]:
+    """Per body (``body`` cell field of the last step of ``body.bp``), how many ranks own
+    cells of it: each rank writes its owned cells as one block."""
+    import adios2
+
+    with adios2.FileReader(str(path)) as reader:
+        step = reader.num_steps() - 1
+        blocks = [np.unique(reader.read("body [1]", block_id=int(info["BlockID"]), step_selection=[step, 1]))
+                  for info in reader.all_blocks_info("body [1]")[step]]
+    bodies = np.unique(np.concatenate(blocks)) if blocks else []
+    return [sum(int(b in block) for block in blocks) for b in bodies]
+
+
 def record(out: pathlib.Path, files: list[str]) -> dict:
+    """Counts, files written and the ranks owning contact facets (and bodies) of the run in ``out``."""
     summary = json.loads((out / "summary.json").read_text()) if (out / "summary.json").is_file() else {}
     steps = summary.get("steps") or [summary]  # a case file has steps, the demo one solve
+    several = "bodies.png" in files and (out / "body.bp").is_dir()
     return {
         "status": summary.get("status"),
         "newton_steps": [s.get("iterations") for s in steps],
@@ -121,17 +165,20 @@ def record(out: pathlib.Path, files: list[str]) -> dict:
         "written": all((out / f).exists() for f in files),
         "missing": [f for f in files if not (out / f).exists()],
         "surface_blocks": surface_blocks(out / "contact_surface.bp") if (out / "contact_surface.bp").is_dir() else 0,
+        **({"body_ranks": body_ranks(out / "body.bp")} if several else {}),
     }
 
 
 def rank_table(args: argparse.Namespace, work: pathlib.Path) -> list[dict]:
+    """One row per program and number of ranks, compared with its run on 1 rank."""
     rows = []
     for case, (command, files) in programs(args, work).items():
         reference = None
         for n in args.ranks:
             out = work / f"{case.replace(' ', '_').replace('/', '').replace(',', '')}_np{n}"
             code, seconds = mpirun(n, ["nice", PYTHON, *command, "--output", str(out)], out.with_suffix(".log"))
-            row = {"case": case, "ranks": n, "exit_code": code, "seconds": round(seconds, 1), **record(out, files)}
+            row = {"case": case, "ranks": n, "exit_code": code, "seconds": round(seconds, 1), **record(out, files),
+                   "commit": args.commit}
             if (out / "solution.npz").is_file():
                 u = np.load(out / "solution.npz")["u"]
                 if reference is None:
@@ -145,6 +192,12 @@ def rank_table(args: argparse.Namespace, work: pathlib.Path) -> list[dict]:
                 print(out.with_suffix(".log").read_text()[-3000:], file=sys.stderr, flush=True)
             rows.append(row)
     return rows
+
+
+def in_case_order(rows: list[dict], cases: list[str]) -> list[dict]:
+    """``rows`` sorted by case (in the order of ``cases``, others last) and number of ranks."""
+    order = list(dict.fromkeys([*cases, *(r["case"] for r in rows)]))
+    return sorted(rows, key=lambda r: (order.index(r["case"]), r["ranks"]))
 
 
 def memory_worker(lev: int, output: str) -> None:
@@ -198,20 +251,27 @@ def _outside_the_bounds(rows: list[dict]) -> str:
 def markdown(data: dict) -> str:
     from contactqvi.tables import markdown_table
 
-    text = [f"## The same answer on any number of ranks (issue 24), at {data.get('rows_commit')}\n\n",
+    text = ["## The same answer on any number of ranks (issue 24)\n\n",
             "Each program as a user runs it, under `mpirun -n N` on this machine's "
             f"{data['machine']['cores']} cores (oversubscribed above), against its run on 1 rank "
-            "(benchmarks/ranks.py). Newton / Krylov: summed over the load steps (Hertz: four); "
+            "(benchmarks/ranks.py): the demo at lev 5 and 6 (d1/L1); cases/hertz.toml on its coarse "
+            "mesh (a rigid sphere, four load steps); several bodies: cases/vice.toml as shipped (three "
+            "bodies, two Coulomb joints, two load steps) and cases/hertz_bodies.toml on its coarse mesh "
+            "(ball on block, four load steps), full load paths. Each case also with exact Newton-step "
+            "solves (`pc = \"lu\"`, MUMPS) as the control. Newton / Krylov: summed over the load steps; "
             "dNewton: largest difference in a step's Newton count from 1 rank; rel. diff: "
             "max |u_N - u_1| / max |u_1| of `solution.npz`; written: every output file (body.bp, "
-            "contact_surface.bp, solution.npz, contact_states.png, summary.json); surface ranks: ranks "
-            "that own contact facets (the others write no block of contact_surface.bp); wall s: on a "
-            "machine shared with other jobs.\n\n"]
+            "contact_surface.bp, solution.npz, contact_states.png, summary.json; bodies.png for several "
+            "bodies); surface ranks: ranks that own contact facets (the others write no block of "
+            "contact_surface.bp); body ranks: per body (in the case file's order), the ranks that own "
+            "cells of it (the others own none); commit: the code measured; wall s: on a machine shared "
+            "with other jobs.\n\n"]
     rows = [[r["case"], r["ranks"], r["status"], r["newton"], r["krylov"], r.get("max_newton_difference"),
              r.get("relative_difference"), "yes" if r["written"] and r["exit_code"] == 0 else "no",
-             r["surface_blocks"], r["seconds"]] for r in data.get("rows", [])]
+             r["surface_blocks"], "/".join(map(str, r["body_ranks"])) if r.get("body_ranks") else None,
+             r.get("commit", data.get("rows_commit")), r["seconds"]] for r in data.get("rows", [])]
     text.append(markdown_table(["case", "ranks", "status", "Newton", "Krylov", "dNewton", "rel. diff", "written",
-                                "surface ranks", "wall s"], rows))
+                                "surface ranks", "body ranks", "commit", "wall s"], rows))
     text.append(_outside_the_bounds(data.get("rows", [])))
     mem = data.get("memory")
     if mem and mem.get("vmhwm_mib"):
@@ -237,9 +297,15 @@ def main() -> None:
     data = json.loads(path.read_text()) if path.is_file() else {}
     work = pathlib.Path(tempfile.mkdtemp(prefix="contactqvi-ranks-"))
     try:
-        if args.levels or not args.no_hertz:
-            data["rows"] = rank_table(args, work)
-            data["rows_commit"] = args.commit
+        if args.levels or not args.no_hertz or args.bodies:
+            from benchlib import merge_rows
+
+            old_cases = [r["case"] for r in data.get("rows", [])]
+            rows = merge_rows(path, rank_table(args, work), ("case", "ranks"))  # a part not run keeps its rows
+            for row in rows:  # rows measured before each row recorded its commit
+                row.setdefault("commit", data.get("rows_commit"))
+            data["rows"] = in_case_order(rows, old_cases)
+            data.pop("rows_commit", None)
         if args.memory_lev is not None:
             data["memory"] = memory(args.memory_lev, work) | {"commit": args.commit}
     finally:
