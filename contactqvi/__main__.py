@@ -1,6 +1,7 @@
 """``python -m contactqvi``: run a contact case file or one of the demos.
 
-    python -m contactqvi run CASE.toml --output DIR     your own contact problem (see contactqvi.case)
+    python -m contactqvi run CASE.toml --output DIR     your own contact problem (see contactqvi.case);
+                                                        --restart continues a killed run
     python -m contactqvi <demo> [options]               a paper's demo (coulomb3d, simplified_friction, thermoforming)
 
 Both work under ``mpirun -n N``. The demos are the scripts of the source tree's
@@ -34,7 +35,7 @@ def demo_directory() -> pathlib.Path | None:
 
 
 def run(argv: list[str]) -> int:
-    """``run CASE.toml --output DIR [--no-plot] [--log-level L] [-petsc_options]``."""
+    """``run CASE.toml --output DIR [--restart] [--no-plot] [--log-level L] [-petsc_options]``."""
     from mpi4py import MPI
 
     from contactqvi import cli
@@ -47,10 +48,13 @@ def run(argv: list[str]) -> int:
     parser.prog = "python -m contactqvi run"
     parser.add_argument("case", help="the case file (.toml)")
     parser.add_argument("--no-plot", action="store_true", help="skip the PNG of the contact states")
+    parser.add_argument("--restart", action="store_true",
+                        help="continue after the last complete checkpoint in --output (any number of ranks; "
+                             "from step 1 when there is none)")
     try:
         args = cli.parse_args(parser, argv)
         case = load_case(args.case)
-        _, code = run_case(case, args.output, MPI.COMM_WORLD, plot=not args.no_plot)
+        _, code = run_case(case, args.output, MPI.COMM_WORLD, plot=not args.no_plot, restart=args.restart)
     except ParameterError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_CODES["bad input"]

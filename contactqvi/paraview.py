@@ -24,6 +24,7 @@ from __future__ import annotations
 import dataclasses
 import os
 import pathlib
+import shutil
 import typing
 from xml.sax.saxutils import quoteattr
 
@@ -226,14 +227,24 @@ class VTXDatasetWriter:
     step, all steps and ranks must have the same array names. The directory
     appears under its name when the writer is closed (collective) after at least
     one step; on an exception inside a ``with`` block it is removed.
+
+    ``keep`` > 0 continues the file of an earlier run of the same output (a restart):
+    its first ``keep`` steps are copied, each rank taking every size-th block, before
+    the first new step. That file is ``path`` when the run ended (closed it) or its
+    temporary sibling when the run was killed; it is kept, as ``.NAME.previous``, until
+    the copy is complete. Steps after ``keep`` (written after the last checkpoint) are dropped.
     """
 
-    def __init__(self, comm: MPI.Comm, path: str | os.PathLike):
+    def __init__(self, comm: MPI.Comm, path: str | os.PathLike, keep: int = 0):
         self.comm = comm
         self._atomic = atomic_path(comm, path)
         self._tmp = self._atomic.__enter__()
         self._engine = self._io = self._adios = None
         self._names: tuple[list[str], list[str]] | None = None
+        self._keep = keep
+        self._previous = self._tmp.with_name(f".{pathlib.Path(path).name}.previous")
+        if keep > 0:
+            self._set_aside(pathlib.Path(path))
 
     def write(self, piece: Dataset, t: float = 0.0) -> None:
         """Write this rank's piece as one block of a new time step. Collective."""
@@ -249,6 +260,8 @@ class VTXDatasetWriter:
             self._io.define_attribute("vtk.xml", _vtx_schema(*names))
             self._engine = self._io.open(str(self._tmp), bindings.Mode.Write)
             self._names = names
+            if self._keep > 0:
+                self._copy_steps()
         elif self.comm.allreduce(names != self._names, op=MPI.LOR):
             raise ValueError(f"VTXDatasetWriter: arrays {names} differ from the first step's {self._names}")
         self._engine.begin_step()
@@ -289,6 +302,44 @@ class VTXDatasetWriter:
         else:
             variable.set_selection([[], list(array.shape)])  # a local array: count only
         self._engine.put(variable, array, bindings.Mode.Sync)
+
+    def _set_aside(self, path: pathlib.Path) -> None:
+        """Move the earlier run's file to ``.NAME.previous`` (unless a restart left it there)."""
+        error = None
+        if self.comm.rank == 0 and not self._previous.is_dir():
+            source = next((f for f in (self._tmp, path) if f.is_dir()), None)
+            if source is None:
+                error = f"no {path.name} of the earlier run in {path.parent} to continue"
+            else:
+                os.replace(source, self._previous)
+        error = self.comm.bcast(error, root=0)
+        if error is not None:
+            raise FileNotFoundError(error)
+
+    def _copy_steps(self) -> None:
+        """Copy the first ``keep`` steps of ``.NAME.previous``, then remove it. Collective."""
+        import adios2
+
+        with adios2.FileReader(str(self._previous), comm=self.comm) as source:
+            if source.num_steps() < self._keep:
+                raise RuntimeError(f"{self._previous} holds {source.num_steps()} steps, the checkpoint {self._keep}")
+            local = [name for name in source.available_variables() if name not in ("step", "types",
+                                                                                     "NumberOfNodes", "NumberOfCells")]
+            for step in range(self._keep):
+                self._engine.begin_step()
+                for name in ("step", "types"):
+                    self._put_value(name, source.read(name, step_selection=[step, 1]).reshape(-1)[0])
+                blocks = len(source.all_blocks_info("geometry")[step])
+                for block in range(self.comm.rank, blocks, self.comm.size):
+                    arrays = {name: source.read(name, block_id=block, step_selection=[step, 1]) for name in local}
+                    self._put_value("NumberOfNodes", np.uint32(len(arrays["geometry"])), local=True)
+                    self._put_value("NumberOfCells", np.uint32(len(arrays["connectivity"])), local=True)
+                    for name, array in arrays.items():
+                        self._put_array(name, np.ascontiguousarray(array))
+                self._engine.end_step()
+        self.comm.Barrier()
+        if self.comm.rank == 0:
+            shutil.rmtree(self._previous)
 
     def close(self, ok: bool = True) -> None:
         """Finish the file (collective); ``ok=False`` or no step written discards it."""

@@ -10,7 +10,8 @@ converged step as one time step (time = step number) of
 force, reactions, equilibrium error, contact/sticking/sliding areas), so everything
 up to the last converged step stays readable if a later step fails.
 ``OUTPUT/solution.npz`` holds ``x`` and ``u`` of the last converged step (up to
-:data:`~contactqvi.tables.GATHER_MAX_NODES` nodes: it is gathered on rank 0).
+:data:`~contactqvi.tables.GATHER_MAX_NODES` nodes: it is gathered on rank 0), and
+``OUTPUT/checkpoint/`` what a restart (``--restart``) needs to continue after it.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from dolfinx import mesh as dmesh
 
 from contactqvi import tables
 from contactqvi.case import Body, ContactCase, ContactPair, check_groups, check_solver
+from contactqvi.contact.checkpoint import Checkpoint, CheckpointWriter, read_checkpoint, remove_checkpoints
 from contactqvi.contact.load_path import LoadStep, solve_load_path
 from contactqvi.contact.figures import plot_contact_states, plot_deformed_bodies
 from contactqvi.contact.postprocess import ContactResultsWriter
@@ -42,6 +44,7 @@ from contactqvi.elasticity import body_materials
 from contactqvi.meshes import create_contact_body, read_gmsh, split_by_body
 from contactqvi.parameters import ParameterError, require
 from contactqvi.problems.coulomb import gap_function
+from contactqvi.result import Status
 
 __all__ = ["EXIT_CODES", "PREFIX", "Interrupted", "build_problem", "read_mesh", "run_case"]
 
@@ -55,7 +58,7 @@ EXIT_CODES = {"converged": 0, "not converged": 1, "bad input": 2, "interrupted":
 
 
 class Interrupted(Exception):
-    """SIGTERM or SIGINT arrived: the run stops after the load step being solved."""
+    """SIGTERM or SIGINT arrived between two load steps: the run stops there."""
 
 
 def read_mesh(case: ContactCase, comm: MPI.Comm) -> tuple[dmesh.Mesh, dmesh.MeshTags]:
@@ -120,7 +123,7 @@ def _pair(pair: ContactPair) -> ObstaclePair | BodyPair:
 
 
 def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
-             plot: bool = True) -> tuple[dict[str, typing.Any], int]:
+             plot: bool = True, restart: bool = False) -> tuple[dict[str, typing.Any], int]:
     """Solve the case's load path and write the results to ``output``.
 
     The first step starts from the body at rest (``solver.start = "rest"``, the
@@ -128,9 +131,14 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
     (``"contact"``: every contact node on the obstacle). The case's ``[petsc]``
     options are in the options database only while it runs.
 
-    SIGTERM and SIGINT (a batch system's time limit, Ctrl-C) stop the run after the load
-    step being solved: its results and the summary are written, with ``status =
-    "interrupted"``. The output directory is checked to be writable before the mesh is read.
+    After every converged step a checkpoint is written to ``output/checkpoint``
+    (:mod:`contactqvi.contact.checkpoint`). With ``restart`` the run continues after the
+    last complete checkpoint of ``output`` (on any number of ranks; from step 1 when
+    there is none): the output files keep the steps before it and the summary its
+    counts. SIGTERM and SIGINT (a batch system's time limit, Ctrl-C) stop the run at
+    the next Newton step: the summary is written with ``status = "interrupted"`` and the
+    last checkpoint is kept. The output directory is checked to be writable, and the
+    checkpoint to belong to this case, before the mesh is read.
 
     Returns:
         The summary (also in ``output/summary.json``) and the exit code (:data:`EXIT_CODES`):
@@ -138,15 +146,22 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
     """
     parameters = check_solver(case, scd_newton.PARAMETERS)
     _check_output(comm, output)
-    from_rest = case.solver.get("start", "rest") == "rest"
+    checkpoint = read_checkpoint(comm, output, case.to_dict()) if restart else None
+    if checkpoint is None:
+        if restart:
+            logger.warning("no checkpoint in %s: the run starts from step 1", output)
+        remove_checkpoints(comm, output)
+    elif checkpoint.step == len(case.steps):
+        logger.info("the checkpoint in %s holds every step: nothing to solve", output)
+        return checkpoint.summary, EXIT_CODES["converged" if Status[checkpoint.summary["status"].upper()].converged
+                                               else "not converged"]
     with default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, _stop_signals() as stop:
         logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks",
                     problem.n_contact, problem.n_free, len(case.steps), comm.size)
-        summary: dict[str, typing.Any] = {
-            "problem": "contact case", "case": case.to_dict(), "mpi_size": comm.size,
-            "p": problem.n_contact, "n": problem.n_free, "steps": [],
-        }
-        writer = ContactResultsWriter(output, comm)
+        summary = _start_summary(case, problem, checkpoint)
+        writer = ContactResultsWriter(output, comm, keep=0 if checkpoint is None else checkpoint.step)
+        checkpoints = CheckpointWriter(output, problem, None if checkpoint is None else checkpoint.target)
+        resume = None if checkpoint is None else checkpoint.resume(problem)
 
         def record(index: int, step: LoadStep, u: PETSc.Vec, result: SCDNewtonResult) -> None:
             entry = {"step": index + 1, "load": step.load, "translation": list(step.translation), **result.summary()}
@@ -156,27 +171,51 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
             summary["steps"].append(entry)
             summary["status"] = str(result.status)
             stopped = comm.allreduce(stop.is_set(), op=MPI.LOR) and index + 1 < len(case.steps)
-            if stopped:
+            if stopped or result.status == Status.INTERRUPTED:
                 summary["status"] = "interrupted"
             tables.write_summary(comm, writer.out / "summary.json", summary)
+            if result.converged:
+                checkpoints.write(index + 1, u, writer.last.displacement, result, summary)
             _log_step(index, result, entry)
             if stopped:
                 raise Interrupted(f"stopped by a signal after step {index + 1} of {len(case.steps)}")
 
         u = problem.A.createVecRight()
         try:
-            results = solve_load_path(problem, case.steps, u, parameters, PREFIX, record, from_rest)
-            code = EXIT_CODES["converged" if results[-1].converged and len(results) == len(case.steps)
-                              else "not converged"]
+            results = solve_load_path(problem, case.steps, u, parameters, PREFIX, record,
+                                      case.solver.get("start", "rest") == "rest", resume,
+                                      lambda: comm.allreduce(stop.is_set(), op=MPI.LOR))
+            code = _exit_code(results, len(case.steps) - (0 if resume is None else resume.done))
         except Interrupted as exc:
             logger.warning("%s; the results of the steps solved are written", exc)
             code = EXIT_CODES["interrupted"]
         finally:
-            u.destroy()
+            for vec in (u, None if resume is None else resume.previous):
+                if vec is not None:
+                    vec.destroy()
             writer.close()  # keeps every converged step, also when a later one raised
     if plot and writer.last is not None:
         _draw_figures(writer, summary, comm)
     return summary, code
+
+
+def _start_summary(case: ContactCase, problem: ContactProblem, checkpoint: Checkpoint | None) -> dict[str, typing.Any]:
+    """A new run's summary, or the checkpoint's with this restart recorded."""
+    comm = problem.comm
+    if checkpoint is not None:
+        summary = checkpoint.summary
+        summary.setdefault("restarts", []).append({"after_step": checkpoint.step, "mpi_size": comm.size})
+        summary["mpi_size"] = comm.size
+        return summary
+    return {"problem": "contact case", "case": case.to_dict(), "mpi_size": comm.size,
+            "p": problem.n_contact, "n": problem.n_free, "steps": []}
+
+
+def _exit_code(results: list[SCDNewtonResult], remaining: int) -> int:
+    """:data:`EXIT_CODES` of a load path whose ``remaining`` steps gave ``results``."""
+    if results and results[-1].status == Status.INTERRUPTED:
+        return EXIT_CODES["interrupted"]
+    return EXIT_CODES["converged" if results[-1].converged and len(results) == remaining else "not converged"]
 
 
 def _draw_figures(writer: ContactResultsWriter, summary: dict[str, typing.Any], comm: MPI.Comm) -> None:
@@ -222,7 +261,7 @@ def _stop_signals() -> typing.Iterator[threading.Event]:
         return
 
     def handler(signum: int, frame: typing.Any) -> None:
-        logger.warning("signal %d: stopping after the load step being solved", signum)
+        logger.warning("signal %d: stopping at the next Newton step", signum)
         stop.set()
 
     previous = {number: signal.signal(number, handler) for number in (signal.SIGTERM, signal.SIGINT)}

@@ -7,11 +7,13 @@ k - 1 relative to the obstacle's tangential motion c_k - c_{k-1}
 (:meth:`~contactqvi.contact.problem.ContactProblem.set_step`). Each step is solved
 by the SCD semismooth* Newton method from the previous step's solution, with the
 nodes that touched the obstacle moved along with it (no slip increment); the
-first step starts from the given guess.
+first step starts from the given guess, or a load path continues after the steps
+of a checkpoint (:class:`Resume`, :mod:`contactqvi.checkpoint`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import typing
 
@@ -25,11 +27,31 @@ from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult, SCDNewtonSolver
 from contactqvi.load_steps import LoadStep, check_steps
 
-__all__ = ["LoadStep", "check_steps", "contact_resultants", "solve_load_path"]
+__all__ = ["LoadStep", "Resume", "check_steps", "contact_resultants", "solve_load_path"]
 
 logger = logging.getLogger(__name__)
 
 StepCallback = typing.Callable[[int, "LoadStep", PETSc.Vec, SCDNewtonResult], None]
+
+#: The states of a contact node that touches its master surface.
+TOUCHING = (State.SLIDING, State.STICKING, State.WEAK_STICKING)
+
+
+@dataclasses.dataclass(frozen=True)
+class Resume:
+    """Where a load path continues: after its first ``done`` steps, which converged.
+
+    Attributes:
+        done: number of steps solved before.
+        previous: u~ = u - d of step ``done`` in the solver's variables (owned by the caller).
+        states: :class:`~contactqvi.contact.nodal.State` of each owned contact node at step ``done``.
+        target: the first step's stopping target ||y^|| (N), the accuracy of every later step.
+    """
+
+    done: int
+    previous: PETSc.Vec
+    states: np.ndarray
+    target: float
 
 
 def solve_load_path(
@@ -40,6 +62,8 @@ def solve_load_path(
     prefix: str = "coulomb_",
     on_step: StepCallback | None = None,
     from_rest: bool = False,
+    resume: Resume | None = None,
+    stop: typing.Callable[[], bool] | None = None,
 ) -> list[SCDNewtonResult]:
     """Solve the steps in turn with one SCD Newton solver; stop at the first that fails.
 
@@ -52,6 +76,9 @@ def solve_load_path(
         prefix: PETSc options prefix of the Newton-step KSP.
         on_step: called after each step with (index, step, u, result), e.g. to write output.
         from_rest: start the first step from the body at rest (u~ = 0) instead of ``u``.
+        resume: continue after the steps of a checkpoint instead (``u`` is then ignored).
+        stop: asked before each Newton step (collective); when true the step ends with
+            status ``interrupted`` (:meth:`~contactqvi.contact.scd_newton.SCDNewtonSolver.solve`).
 
     Every step after the first stops at the first step's accuracy (its target ||y^||,
     :meth:`~contactqvi.contact.scd_newton.SCDNewtonSolver.solve` with ``atol``) if its
@@ -59,18 +86,25 @@ def solve_load_path(
     not solved to ``rtol`` of its own small start.
 
     Returns:
-        The results of the steps solved; the last one failed if it is not converged.
+        The results of the steps solved (after ``resume.done``); the last one failed if it
+        is not converged.
     """
     check_steps(steps)
     results: list[SCDNewtonResult] = []
     previous = u.duplicate()
+    first, target, states = 0, 0.0, np.empty(0, np.int8)
+    if resume is not None:
+        first, target, states = resume.done, resume.target, resume.states
+        resume.previous.copy(previous)
     with SCDNewtonSolver(problem, parameters, prefix=prefix) as solver:
-        for index, step in enumerate(steps):
+        for index in range(first, len(steps)):
+            step = steps[index]
             if index > 0:
-                previous.waxpy(-1.0, problem.shift, u)  # u~ of the last step, nodal frames
+                if index > first:
+                    previous.waxpy(-1.0, problem.shift, u)  # u~ of the last step, nodal frames
                 problem.set_step(step.load, step.translation, previous)
                 u.waxpy(1.0, problem.shift, previous)
-                touching = np.isin(results[-1].states, (State.SLIDING, State.STICKING, State.WEAK_STICKING))
+                touching = np.isin(states, TOUCHING)
                 u.array.reshape(-1, 3)[problem.contact_blk[touching], :2] = 0.0  # predictor: they stick
             else:
                 problem.set_step(step.load, step.translation)
@@ -78,8 +112,9 @@ def solve_load_path(
                     problem.shift.copy(u)  # u~ = 0
             logger.info("step %d: load factor %g, obstacle translation %s m", index + 1, step.load,
                         np.array2string(np.asarray(step.translation), precision=4))
-            result = solver.solve(u, atol=results[0].target if results else 0.0)
+            result = solver.solve(u, atol=target, stop=stop)
             results.append(result)
+            target, states = (result.target if index == 0 else target), result.states
             if on_step is not None:
                 on_step(index, step, u, result)
             if not result.converged:

@@ -154,18 +154,20 @@ class ContactResultsWriter:
 
     Args:
         out: output directory (created if needed).
+        keep: continue the files of an earlier run of ``out`` after its first ``keep``
+            steps (a restart, :class:`~contactqvi.paraview.VTXDatasetWriter`).
 
     Attributes:
         last: the displacement (u~), the contact surface and the von Mises stress of the
             last step written (:class:`LastStep`).
     """
 
-    def __init__(self, out: str | os.PathLike, comm: MPI.Comm = MPI.COMM_WORLD):
+    def __init__(self, out: str | os.PathLike, comm: MPI.Comm = MPI.COMM_WORLD, keep: int = 0):
         self.out = prepare_output_dir(comm, out)
         self.comm = comm
-        self._body_file = VTXDatasetWriter(comm, self.out / "body.bp")
-        self._surface_file = VTXDatasetWriter(comm, self.out / "contact_surface.bp")
-        self._steps = 0
+        self._body_file = VTXDatasetWriter(comm, self.out / "body.bp", keep)
+        self._surface_file = VTXDatasetWriter(comm, self.out / "contact_surface.bp", keep)
+        self._steps = keep
         self._problem: ContactProblem | None = None
         self.last: LastStep | None = None
 

@@ -1,0 +1,176 @@
+"""Checkpoints of a load path: what a run needs to continue after its last converged step.
+
+After every converged load step the runner writes, into ``OUTPUT/checkpoint/``
+(adios4dolfinx, ADIOS2 BP4):
+
+* ``mesh.bp``, once: the mesh in its input order (``adios4dolfinx.read_mesh`` reads it
+  on any number of ranks, for users who want the fields without the case file);
+* ``step_0007.bp`` after step 7: ``displacement`` (u~, global components, m),
+  ``solver_variables`` (u - d, the SCD solver's unknowns: nodal frames at the contact
+  nodes, the mortar relative displacement at slave nodes of body pairs; this is what
+  the next step starts from, :func:`~contactqvi.contact.load_path.solve_load_path`)
+  and ``contact_state`` (the :class:`~contactqvi.contact.nodal.State` of each contact
+  node, -1 elsewhere: the next step's predictor keeps the touching nodes);
+* ``checkpoint.json``, written last and atomically: the step, its file, the first
+  step's stopping target and the summary so far.
+
+A checkpoint exists only once ``checkpoint.json`` names it: a step file being written
+when the run died is never read, and the one before is removed only after the marker
+has moved on. The fields are written against the mesh's input cell order
+(``write_function_on_input_mesh``), which does not depend on the partition, so
+``read_function`` fills them into the mesh that the case file builds on any number of
+ranks (N-to-M restart). On the same number of ranks the partition and the dof
+numbering are those of the interrupted run and the restored vectors are bitwise
+the ones it held.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import pathlib
+import shutil
+import typing
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import numpy as np
+
+import adios4dolfinx
+from dolfinx import fem
+
+from contactqvi.contact.load_path import Resume
+from contactqvi.contact.problem import ContactProblem
+from contactqvi.contact.scd_newton import SCDNewtonResult
+from contactqvi.parameters import ParameterError
+from contactqvi.tables import atomic_path, to_builtin
+
+__all__ = ["DIRECTORY", "Checkpoint", "CheckpointWriter", "read_checkpoint", "remove_checkpoints"]
+
+#: Subdirectory of the output directory holding the checkpoints.
+DIRECTORY = "checkpoint"
+_MARKER = "checkpoint.json"
+_ENGINE = "BP4"
+
+@dataclasses.dataclass(frozen=True)
+class Checkpoint:
+    """The last complete checkpoint of an output directory.
+
+    Attributes:
+        step: number of converged load steps it holds (1-based index of the last).
+        path: its step file (``step_XXXX.bp``).
+        target: the first step's stopping target ||y^|| (N), the accuracy of every later step.
+        summary: ``summary.json`` as it was after that step.
+    """
+
+    step: int
+    path: pathlib.Path
+    target: float
+    summary: dict[str, typing.Any]
+
+    def resume(self, problem: ContactProblem) -> Resume:
+        """The load path's state after :attr:`step`, read into ``problem``'s vectors (collective)."""
+        V = problem.V
+        S, node_of_dof = _state_space(V)
+        variables, states = fem.Function(V, name="solver_variables"), fem.Function(S, name="contact_state")
+        for f in (variables, states):
+            adios4dolfinx.read_function(self.path, f, engine=_ENGINE, time=float(self.step), name=f.name)
+        previous = problem.A.createVecRight()
+        previous.array[:] = variables.x.array[: previous.getLocalSize()]
+        node_state = np.full(variables.x.array.size // 3, -1.0)
+        node_state[node_of_dof] = states.x.array
+        state = node_state[problem.contact_blk]
+        missing = problem.comm.allreduce(int(np.count_nonzero(state < 0)), op=MPI.SUM)
+        if missing:
+            raise ParameterError("--restart", f"{missing} contact nodes of the case have no state in the checkpoint "
+                                 f"{self.path}: it was written for another contact surface")
+        return Resume(done=self.step, previous=previous, states=state.astype(np.int8), target=self.target)
+
+
+def remove_checkpoints(comm: MPI.Comm, output: str | os.PathLike) -> None:
+    """Remove the checkpoints of an earlier run of ``output`` (a new run starts). Collective."""
+    if comm.rank == 0:
+        shutil.rmtree(pathlib.Path(output) / DIRECTORY, ignore_errors=True)
+    comm.Barrier()
+
+
+def read_checkpoint(comm: MPI.Comm, output: str | os.PathLike, case: dict[str, typing.Any]) -> Checkpoint | None:
+    """The last complete checkpoint in ``output``, or None when there is none.
+
+    Raises :class:`ParameterError` (``--restart``) when it was written for another case
+    (its ``case`` entry differs from ``case``, the case file's dictionary). Collective.
+    """
+    marker = pathlib.Path(output) / DIRECTORY / _MARKER
+    data = comm.bcast(json.loads(marker.read_text()) if comm.rank == 0 and marker.exists() else None, root=0)
+    if data is None:
+        return None
+    summary = data["summary"]
+    if summary.get("case") != to_builtin(case):
+        changed = sorted(k for k in set(case) | set(summary.get("case", {}))
+                         if to_builtin(case.get(k)) != summary.get("case", {}).get(k))
+        raise ParameterError("--restart", f"the checkpoint in {marker.parent} was written for another case "
+                             f"(different: {', '.join(changed) or 'the case'}); use a new --output directory")
+    return Checkpoint(int(data["step"]), marker.parent / data["file"], float(data["target"]), summary)
+
+
+class CheckpointWriter:
+    """Writes the checkpoint of each converged step of one run (collective calls).
+
+    Args:
+        output: the run's output directory.
+        problem: the contact problem being solved.
+    """
+
+    def __init__(self, output: str | os.PathLike, problem: ContactProblem, target: float | None = None):
+        self.directory = pathlib.Path(output) / DIRECTORY
+        self.target = target  # the first step's stopping target, known after it (or from a checkpoint)
+        self.comm = problem.comm
+        self.problem = problem
+        V = problem.V
+        S, self._node_of_dof = _state_space(V)
+        self._variables = fem.Function(V, name="solver_variables")
+        self._states = fem.Function(S, name="contact_state")
+        if self.comm.rank == 0:
+            self.directory.mkdir(parents=True, exist_ok=True)
+        self.comm.Barrier()
+        mesh_file = self.directory / "mesh.bp"
+        if not self.comm.allreduce(mesh_file.exists() if self.comm.rank == 0 else False, op=MPI.LOR):
+            with atomic_path(self.comm, mesh_file) as tmp:
+                adios4dolfinx.write_mesh_input_order(tmp, V.mesh, engine=_ENGINE)
+
+    def write(self, step: int, u: PETSc.Vec, displacement: fem.Function, result: SCDNewtonResult,
+              summary: dict[str, typing.Any]) -> None:
+        """Checkpoint after ``step`` converged steps: ``u`` the solver's solution (shifted),
+        ``displacement`` u~ (global components), ``result`` the step's, ``summary`` the run's."""
+        problem = self.problem
+        if step == 1:
+            self.target = result.target
+        n_owned = u.getLocalSize()
+        self._variables.x.array[:n_owned] = u.array - problem.shift.array  # u~ in the solver's variables
+        self._variables.x.scatter_forward()
+        node_state = np.full(self._variables.x.array.size // 3, -1.0)
+        node_state[problem.contact_blk] = result.states
+        self._states.x.array[:] = node_state[self._node_of_dof]
+        self._states.x.scatter_forward()
+        name = f"step_{step:04d}.bp"
+        with atomic_path(self.comm, self.directory / name) as tmp:
+            for f in (displacement, self._variables, self._states):  # appended to a new file
+                adios4dolfinx.write_function_on_input_mesh(tmp, f, engine=_ENGINE, time=float(step), name=f.name)
+        with atomic_path(self.comm, self.directory / _MARKER) as tmp:
+            if self.comm.rank == 0:
+                tmp.write_text(json.dumps(to_builtin(
+                    {"step": step, "file": name, "target": self.target, "summary": summary}), indent=1) + "\n")
+        if self.comm.rank == 0:  # the marker has moved on: older step files are garbage
+            for old in self.directory.glob("step_*.bp"):
+                if old.name != name:
+                    shutil.rmtree(old, ignore_errors=True)
+        self.comm.Barrier()
+
+
+def _state_space(V: fem.FunctionSpace) -> tuple[fem.FunctionSpace, np.ndarray]:
+    """The scalar space of V's first component (one dof per node) and, for each of its
+    dofs (ghosts included), V's node (block) index."""
+    S, dofs = V.sub(0).collapse()
+    return S, np.asarray(dofs) // 3

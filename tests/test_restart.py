@@ -1,0 +1,112 @@
+"""Kill and restart (issue 24): a run killed with SIGKILL in the middle of a load step and
+continued with ``--restart`` ends as the uninterrupted run does.
+
+Two bodies (Cattaneo-Mindlin, coarse meshes, the indentation and the first four
+tangential steps), so the checkpoint carries mortar relative displacements, nodal
+frames and the previous step's slip. On the same number of ranks the restart must
+give the same Newton and Krylov counts and the same solution to 1e-12; restarted on
+2 ranks (N-to-M) the solution to 1e-9.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from contactqvi.contact.checkpoint import DIRECTORY
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+STEPS = 5
+MPIENV = {"OMPI_MCA_rmaps_base_oversubscribe": "1", "PRTE_MCA_rmaps_default_mapping_policy": ":oversubscribe",
+          "OMPI_MCA_btl": "self,sm", "OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1"}
+
+pytestmark = pytest.mark.serial
+
+
+def _command(case: pathlib.Path, out: pathlib.Path, *options: str, ranks: int = 1) -> list[str]:
+    run = [sys.executable, "-m", "contactqvi", "run", str(case), "--output", str(out), "--no-plot", *options]
+    return ["mpirun", "-n", str(ranks), *run] if ranks > 1 else run
+
+
+def _run(command: list[str]) -> None:
+    done = subprocess.run(command, capture_output=True, text=True, timeout=600, env=os.environ | MPIENV)
+    assert done.returncode == 0, done.stderr[-3000:]
+
+
+def _kill_during_step(case: pathlib.Path, out: pathlib.Path, step: int) -> None:
+    """Start the run and kill it (SIGKILL) once step ``step`` is being solved."""
+    run = subprocess.Popen(_command(case, out), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    marker = out / DIRECTORY / "checkpoint.json"
+    deadline = time.monotonic() + 300.0
+    while not (marker.exists() and json.loads(marker.read_text())["step"] >= step - 1):
+        assert run.poll() is None and time.monotonic() < deadline
+        time.sleep(0.05)
+    time.sleep(0.3)  # inside step ``step``: a Newton step takes well over 0.1 s
+    run.kill()
+    run.wait()
+    assert json.loads(marker.read_text())["step"] == step - 1, "killed outside the step meant"
+
+
+def _counts(out: pathlib.Path) -> list[tuple[int, int]]:
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"].startswith("converged") and len(summary["steps"]) == STEPS
+    return [(step["iterations"], step["inner_iterations"]) for step in summary["steps"]]
+
+
+def _difference(a: pathlib.Path, b: pathlib.Path) -> float:
+    ua, ub = (np.load(out / "solution.npz")["u"] for out in (a, b))
+    return float(np.abs(ua - ub).max() / np.abs(ua).max())
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory) -> tuple[pathlib.Path, pathlib.Path]:
+    """The case file and the output of its uninterrupted run."""
+    work = tmp_path_factory.mktemp("restart")
+    text = (ROOT / "cases" / "cattaneo_mindlin_bodies.toml").read_text()
+    text = text.replace('file = "../meshes/mindlin_bodies_medium.geo"',
+                        f'file = "{ROOT / "meshes" / "mindlin_bodies_coarse.geo"}"')
+    head, *steps = text.split("[[steps]]")
+    case = work / "case.toml"
+    case.write_text("[[steps]]".join([head, *steps[:STEPS]]))
+    _run(_command(case, work / "whole"))
+    return case, work / "whole"
+
+
+def test_killed_run_restarted_on_the_same_ranks_ends_as_the_uninterrupted_one(uninterrupted, tmp_path):
+    case, whole = uninterrupted
+    out = tmp_path / "out"
+    _kill_during_step(case, out, step=3)
+    _run(_command(case, out, "--restart"))
+    assert _counts(out) == _counts(whole)
+    assert _difference(whole, out) <= 1e-12
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["restarts"] == [{"after_step": 2, "mpi_size": 1}]
+    _assert_time_steps(out)
+
+
+def test_killed_run_restarted_on_two_ranks(uninterrupted, tmp_path):
+    case, whole = uninterrupted
+    out = tmp_path / "out"
+    _kill_during_step(case, out, step=4)
+    _run(_command(case, out, "--restart", ranks=2))
+    assert len(_counts(out)) == STEPS
+    assert _difference(whole, out) <= 1e-9
+    _assert_time_steps(out)
+
+
+def _assert_time_steps(out: pathlib.Path) -> None:
+    """Both ParaView files hold steps 1..STEPS once each (the steps after the checkpoint dropped)."""
+    import adios2
+
+    for name in ("body.bp", "contact_surface.bp"):
+        with adios2.FileReader(str(out / name)) as f:
+            times = [float(f.read("step", step_selection=[s, 1]).reshape(-1)[0]) for s in range(f.num_steps())]
+        assert times == [float(s) for s in range(1, STEPS + 1)], (name, times)
+    assert not list(out.glob(".*.previous")) and not list(out.glob(".*.partial"))
