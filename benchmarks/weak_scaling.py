@@ -1,0 +1,308 @@
+"""Weak scaling of the flagship Coulomb solve (seed 000): messages, reductions and memory per Newton step.
+
+The demo's solve (``demos/coulomb3d.py``: :func:`benchlib.run_coulomb_case`, i.e.
+``solve_level`` with the default solver, GAMG and tol 0.1, from u0 = 0) on 1, 2,
+4 and 8 ranks at about the same number of free dofs per rank: the 1-rank run is
+at ``--lev``, and each other number of ranks N runs the level whose n / N is
+closest (in ratio) to the 1-rank level's n; the levels grow by about 2.7x, so the
+dofs per rank can only match to that step (the table gives the ratio).
+
+Each run is ``mpirun -n N python benchmarks/weak_scaling.py --worker ...`` with
+``-log_view :log_view.txt`` (the option a user passes to the demo). The worker puts
+every ``SCDNewtonSolver.solve`` into a PETSc log stage "Newton solve" (the Newton
+steps: gamma, approximation steps, Newton matrices, multigrid set-ups and updates,
+Krylov solves, line search; not the mesh, assembly or output), and reads PETSc's
+per-rank message counters at the stage's ends (the counters -log_view sums:
+messages = (sent + received) / 2, bytes likewise, reductions = allreduces + gathers
++ scatters), so that the busiest rank is seen as well as the average. Only MPI calls
+made by PETSc are counted: DOLFINx's scatters and the solver's few mpi4py
+reductions (``contactqvi/contact/scd_newton.py``) are not. From ``log_view.txt`` it
+parses the summary lines "Time (sec)", "Flops", "MPI Msg Count", "MPI Msg Len
+(bytes)", "MPI Reductions" (whole run) and the stages' line (and checks the stage's
+totals against the counters). Memory: each rank's peak resident set (getrusage;
+-log_view of PETSc 3.22 prints no memory line). Also recorded: the multigrid
+hierarchy (levels and rows per level, at the last set-up) and each rank's number
+of neighbours (ranks owning a ghost of its displacement dofs).
+
+With more ranks than cores (here 2) the ranks share cores: wall times of 4 and 8
+ranks say nothing about scaling; message counts and volumes, reductions, flops
+and memory do.
+
+    nice python benchmarks/weak_scaling.py --lev 7
+
+Writes ``weak_scaling.json`` and ``weak_scaling.md`` to ``--output`` (rows replaced
+by case and number of ranks; a part not run keeps its old numbers; each row
+records the commit measured).
+"""
+
+from __future__ import annotations
+
+import argparse
+import ctypes
+import json
+import math
+import pathlib
+import re
+import resource
+import sys
+import tempfile
+import time
+import typing
+
+import numpy as np
+
+from ranks import PYTHON, ROOT, checkout_commit, mpirun
+
+#: PETSc's global per-process counters behind -log_view's "MPI Msg Count", "MPI Msg Len" and "MPI Reductions".
+COUNTERS = ("petsc_send_ct", "petsc_isend_ct", "petsc_recv_ct", "petsc_irecv_ct", "petsc_send_len",
+            "petsc_isend_len", "petsc_recv_len", "petsc_irecv_len", "petsc_allreduce_ct", "petsc_gather_ct",
+            "petsc_scatter_ct")
+
+STAGE = "Newton solve"
+
+
+def parse() -> tuple[argparse.Namespace, list[str]]:
+    """The options, and the ``-options`` left for PETSc (the worker's ``-log_view``)."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0], allow_abbrev=False,
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser.add_argument("--lev", type=int, default=7, help="level of the 1-rank run (sets the dofs per rank)")
+    parser.add_argument("--ranks", type=int, nargs="+", default=[1, 2, 4, 8], help="numbers of ranks (1 first)")
+    parser.add_argument("--case", default="d3/L2", help="geometry/load of seed 000")
+    parser.add_argument("--output", default=str(ROOT / "benchmarks" / "results"))
+    parser.add_argument("--commit", default=checkout_commit(), help="the code's commit, recorded with the numbers")
+    parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--run-dir", help=argparse.SUPPRESS)
+    args, petsc = parser.parse_known_args()
+    if petsc and (not args.worker or not petsc[0].startswith("-")):
+        parser.error(f"unrecognized arguments: {' '.join(petsc)}")
+    return args, petsc
+
+
+# -- level choice ------------------------------------------------------------------------------------
+def free_dofs(lev: int) -> int:
+    """Free dofs n of the paper's body at ``lev`` (without meshing it)."""
+    from contactqvi.meshes import contact_body_sizes
+
+    return contact_body_sizes(lev)["n"]
+
+
+def weak_levels(base_lev: int, ranks: list[int]) -> dict[int, int]:
+    """Number of ranks -> the level whose dofs per rank are closest in ratio to ``base_lev``'s on 1 rank."""
+    target = free_dofs(base_lev)
+    return {n: min(range(base_lev, base_lev + 2 * math.ceil(math.log2(n)) + 2),
+                   key=lambda lev: abs(math.log(free_dofs(lev) / n / target))) for n in ranks}
+
+
+# -- PETSc's counters and -log_view --------------------------------------------------------------------
+class PetscCounters:
+    """PETSc's global message and reduction counters of this process, read through ctypes
+    from the loaded PETSc library (the numbers -log_view reports)."""
+
+    def __init__(self) -> None:
+        from petsc4py import PETSc  # noqa: F401  (loads the library)
+
+        maps = pathlib.Path("/proc/self/maps").read_text().split("\n")
+        path = next(line.split()[-1] for line in maps if re.search(r"/libpetsc[^/]*\.so", line))
+        self._lib = ctypes.CDLL(path)
+
+    def read(self) -> dict[str, float]:
+        """Messages and bytes ((sent + received) / 2, as -log_view), reductions and flops so far."""
+        from petsc4py import PETSc
+
+        c = {name: ctypes.c_double.in_dll(self._lib, name).value for name in COUNTERS}
+        return {"messages": 0.5 * (c["petsc_send_ct"] + c["petsc_isend_ct"] + c["petsc_recv_ct"] + c["petsc_irecv_ct"]),
+                "bytes": 0.5 * (c["petsc_send_len"] + c["petsc_isend_len"] + c["petsc_recv_len"]
+                                + c["petsc_irecv_len"]),
+                "reductions": c["petsc_allreduce_ct"] + c["petsc_gather_ct"] + c["petsc_scatter_ct"],
+                "flops": PETSc.Log.getFlops()}
+
+
+_NUMBER = r"([-+0-9.eE]+)"
+
+
+def parse_log_view(text: str) -> dict[str, typing.Any]:
+    """The summary lines of a -log_view text (Max, Max/Min, Avg, Total where printed; per rank,
+    except that the Avg of "MPI Msg Len" is per message) and the "Summary of Stages" lines
+    (average time, flop summed over ranks, messages summed over ranks, average message length,
+    reductions per rank)."""
+    summary = {}
+    for key, label in (("time_s", r"Time \(sec\):"), ("flops", r"Flops:"), ("messages", r"MPI Msg Count:"),
+                       ("bytes", r"MPI Msg Len \(bytes\):"), ("reductions", r"MPI Reductions:")):
+        match = re.search(rf"^{label}((?:\s+{_NUMBER})+)\s*$", text, re.MULTILINE)
+        if match:
+            values = [float(v) for v in match.group(1).split()]
+            names = ("max", "max_over_min", "avg_per_message" if key == "bytes" else "avg", "total")
+            summary[key] = dict(zip(names, values))
+    stages = {}
+    for match in re.finditer(rf"^\s*\d+:\s+(.+?):\s+{_NUMBER}\s+{_NUMBER}%\s+{_NUMBER}\s+{_NUMBER}%\s+{_NUMBER}\s+"
+                             rf"{_NUMBER}%\s+{_NUMBER}\s+{_NUMBER}%\s+{_NUMBER}\s+{_NUMBER}%", text, re.MULTILINE):
+        v = [float(x) for x in match.groups()[1:]]
+        stages[match.group(1).strip()] = {"time_avg_s": v[0], "flop_total": v[2], "messages_total": v[4],
+                                          "message_length_avg": v[6], "reductions": v[8]}
+    return {"summary": summary, "stages": stages}
+
+
+# -- the worker (under mpirun) -------------------------------------------------------------------------
+def worker(args: argparse.Namespace, petsc_options: list[str]) -> None:
+    """Solve ``args.case`` at ``args.lev`` with the Newton solves in a log stage; write ``worker.json``.
+    ``petsc_options`` (``-log_view :FILE``) go to PETSc as the demo's unknown options do."""
+    from mpi4py import MPI
+    from petsc4py import PETSc
+
+    import benchlib
+    from contactqvi.cli import pass_to_petsc, setup_logging
+    from contactqvi.contact.scd_newton import SCDNewtonSolver
+    from contactqvi.multigrid import GalerkinUpdate
+
+    pass_to_petsc(petsc_options)
+    setup_logging("WARNING")
+    comm = MPI.COMM_WORLD
+    stage = PETSc.Log.Stage(STAGE)
+    counters = PetscCounters()
+    spent = {"messages": 0.0, "bytes": 0.0, "reductions": 0.0, "flops": 0.0, "seconds": 0.0}
+    seen: dict[str, typing.Any] = {}
+    solve, setup = SCDNewtonSolver.solve, GalerkinUpdate.__init__
+
+    def staged_solve(self, *a, **k):
+        """SCDNewtonSolver.solve inside the stage, with this rank's counters before and after."""
+        ghost_owners = self.problem.V.dofmap.index_map.owners
+        seen["neighbours"] = int(np.unique(ghost_owners).size)
+        comm.Barrier()
+        start, t0 = counters.read(), time.perf_counter()
+        stage.push()
+        try:
+            return solve(self, *a, **k)
+        finally:
+            stage.pop()
+            end = counters.read()
+            for key in ("messages", "bytes", "reductions", "flops"):
+                spent[key] += end[key] - start[key]
+            spent["seconds"] += time.perf_counter() - t0
+
+    def recorded_setup(self, pc):
+        """GalerkinUpdate.__init__, recording the multigrid hierarchy just set up (rows per level, coarse first)."""
+        setup(self, pc)
+        seen["mg_rows"] = [pc.getMGSmoother(level).getOperators()[0].getSize()[0] for level in range(pc.getMGLevels())]
+
+    SCDNewtonSolver.solve, GalerkinUpdate.__init__ = staged_solve, recorded_setup
+    row = benchlib.run_coulomb_case(comm, args.lev, args.case, {"pc": "gamg"}, "weak_")
+    per_rank = comm.gather({**spent, "neighbours": seen.get("neighbours", 0),
+                            "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}, root=0)
+    if comm.rank == 0:
+        row["per_rank"] = {key: [r[key] for r in per_rank] for key in per_rank[0]}
+        row["mg_rows"] = seen.get("mg_rows")
+        (pathlib.Path(args.run_dir) / "worker.json").write_text(json.dumps(row))
+
+
+# -- the driver ----------------------------------------------------------------------------------------
+def spread(values: list[float]) -> dict[str, float]:
+    """Largest, smallest and mean of per-rank values."""
+    return {"max": float(np.max(values)), "min": float(np.min(values)), "mean": float(np.mean(values))}
+
+
+def measure(n: int, lev: int, args: argparse.Namespace, work: pathlib.Path, target: int) -> dict:
+    """One run on ``n`` ranks at ``lev``: the row of the table (per Newton step where it says so)."""
+    run = work / f"np{n}_lev{lev}"
+    run.mkdir()
+    log_view = run / "log_view.txt"
+    code, seconds = mpirun(n, ["nice", PYTHON, __file__, "--worker", "--lev", str(lev), "--case", args.case,
+                               "--run-dir", str(run), "-log_view", f":{log_view}"], run / "run.log")
+    row: dict[str, typing.Any] = {"case": args.case, "ranks": n, "lev": lev, "exit_code": code,
+                                  "wall_s": round(seconds, 1), "commit": args.commit}
+    if code != 0 or not (run / "worker.json").is_file():
+        print((run / "run.log").read_text()[-3000:], file=sys.stderr, flush=True)
+        return row
+    result = json.loads((run / "worker.json").read_text())
+    log = parse_log_view(log_view.read_text())
+    steps = result["it"]
+    per_rank = result["per_rank"]
+    stage = log["stages"].get(STAGE, {})
+    row |= {
+        "n": result["n"], "p": result["p"], "dofs_per_rank": result["n"] / n, "dofs_per_rank_ratio": result["n"] / n / target,
+        "status": result["status"], "newton": steps, "krylov": result["krylov"],
+        "solve_s": result["solve_seconds"], "assembly_s": result["timings"]["assembly"],
+        "mg_rows": result["mg_rows"], "neighbours": spread(per_rank["neighbours"]),
+        "peak_rss_mib": spread(per_rank["peak_rss_mib"]),
+        "per_newton_step": {key: spread(np.asarray(per_rank[key]) / steps)
+                            for key in ("messages", "bytes", "reductions", "flops", "seconds")},
+        "log_view": log,
+        # the stage's totals in -log_view against the counters read here (the same numbers, summed)
+        "stage_matches_counters": bool(stage) and math.isclose(stage["messages_total"], sum(per_rank["messages"]),
+                                                               rel_tol=1e-3, abs_tol=1.0)
+                                  and math.isclose(stage["reductions"], np.mean(per_rank["reductions"]),
+                                                   rel_tol=1e-3, abs_tol=1.0),
+    }
+    return row
+
+
+def markdown(data: dict) -> str:
+    from contactqvi.tables import markdown_table
+
+    rows = data["rows"]
+    text = ["## Weak scaling of the Coulomb solve: messages, reductions, memory per Newton step (issue 24)\n\n",
+            f"The demo's solve (`demos/coulomb3d.py`, {rows[0]['case'] if rows else ''}, default solver: GAMG, tol 0.1, "
+            "from u0 = 0) at about the same free dofs per rank (benchmarks/weak_scaling.py), on this machine's "
+            f"{data['machine']['cores']} cores: 4 and 8 ranks are oversubscribed, so their wall times say nothing "
+            "about scaling; counts, volumes, flops and memory do. dofs/rank: n / ranks and its ratio to the 1-rank "
+            "run (the levels grow by about 2.7x). Per Newton step, in the log stage around the Newton solve (set-ups, "
+            "Galerkin updates, Krylov solves, line search; not mesh, assembly or output), from PETSc's per-rank "
+            "counters (those -log_view sums; only PETSc's own MPI calls): msgs = (sent + received) / 2 per rank, "
+            "largest / mean over ranks; kB likewise; reductions (the same on every rank); Mflop largest rank; "
+            "s: wall time of the stage per Newton step (largest rank). neighbours: ranks owning ghosts of a rank's "
+            "dofs, largest. MG rows: rows of the multigrid levels, coarse to fine. peak MiB: each rank's peak "
+            "resident memory (whole run), largest / smallest. -log_view (whole run): its MPI Msg Count Max and MPI "
+            "Reductions Max.\n\n"]
+    table = []
+    for r in rows:
+        if "per_newton_step" not in r:
+            table.append([r["ranks"], r["lev"], *[None] * 12, r.get("commit")])
+            continue
+        s = r["per_newton_step"]
+        whole = r["log_view"]["summary"]
+        table.append([r["ranks"], r["lev"], r["n"], f"{r['dofs_per_rank']:.0f} ({r['dofs_per_rank_ratio']:.2f})",
+                      f"{r['newton']} / {r['krylov']}", f"{s['messages']['max']:.0f} / {s['messages']['mean']:.0f}",
+                      f"{s['bytes']['max'] / 1e3:.0f} / {s['bytes']['mean'] / 1e3:.0f}",
+                      f"{s['reductions']['max']:.0f}", f"{s['flops']['max'] / 1e6:.0f}", f"{s['seconds']['max']:.2f}",
+                      int(r["neighbours"]["max"]), " / ".join(map(str, r["mg_rows"] or [])),
+                      f"{r['peak_rss_mib']['max']:.0f} / {r['peak_rss_mib']['min']:.0f}",
+                      f"{whole['messages']['max']:.3g} / {whole['reductions']['max']:.3g}", r["commit"]])
+    text.append(markdown_table(["ranks", "lev", "n", "dofs/rank (ratio)", "Newton / Krylov", "msgs / rank",
+                                "kB / rank", "reductions", "Mflop / rank", "s", "neighbours", "MG rows",
+                                "peak MiB / rank", "-log_view msgs / reductions", "commit"], table))
+    mismatched = [r["ranks"] for r in rows if "per_newton_step" in r and not r["stage_matches_counters"]]
+    text.append("\nThe stage's totals in -log_view (messages summed over ranks, reductions) equal the counters' "
+                "sums on every run.\n" if not mismatched else
+                f"\nThe stage's totals in -log_view differ from the counters' sums on {mismatched} ranks.\n")
+    return "".join(text)
+
+
+def main() -> None:
+    args, petsc_options = parse()
+    if args.worker:
+        worker(args, petsc_options)
+        return
+    assert args.ranks[0] == 1, "--ranks must start with 1 (the reference)"
+    out = pathlib.Path(args.output)
+    out.mkdir(parents=True, exist_ok=True)
+    levels = weak_levels(args.lev, args.ranks)
+    target = free_dofs(args.lev)
+    work = pathlib.Path(tempfile.mkdtemp(prefix="contactqvi-weak-"))
+    rows = []
+    for n, lev in levels.items():
+        rows.append(measure(n, lev, args, work, target))
+        print(json.dumps({k: v for k, v in rows[-1].items() if k != "log_view"}), flush=True)
+
+    from mpi4py import MPI
+
+    import benchlib
+    from contactqvi.tables import write_table
+
+    rows = sorted(benchlib.merge_rows(out / "weak_scaling.json", rows, ("case", "ranks")),
+                  key=lambda r: (r["case"], r["ranks"]))
+    data = {"machine": benchlib.machine(MPI.COMM_SELF), "base_lev": args.lev, "rows": rows}
+    write_table(MPI.COMM_SELF, out / "weak_scaling", data, markdown(data))
+    print(f"logs and -log_view of each run: {work}")
+
+
+if __name__ == "__main__":
+    main()
