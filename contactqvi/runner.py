@@ -146,45 +146,20 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
     """
     parameters = check_solver(case, scd_newton.PARAMETERS)
     _check_output(comm, output)
-    checkpoint = read_checkpoint(comm, output, case.to_dict()) if restart else None
-    if checkpoint is None:
-        if restart:
-            logger.warning("no checkpoint in %s: the run starts from step 1", output)
-        remove_checkpoints(comm, output)
-    elif checkpoint.step == len(case.steps):
+    checkpoint = _checkpoint(case, output, comm, restart)
+    if checkpoint is not None and checkpoint.step == len(case.steps):
         logger.info("the checkpoint in %s holds every step: nothing to solve", output)
-        return checkpoint.summary, EXIT_CODES["converged" if Status[checkpoint.summary["status"].upper()].converged
-                                               else "not converged"]
+        status = Status[checkpoint.summary["status"].upper()]
+        return checkpoint.summary, EXIT_CODES["converged" if status.converged else "not converged"]
     with default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, _stop_signals() as stop:
         logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks",
                     problem.n_contact, problem.n_free, len(case.steps), comm.size)
-        summary = _start_summary(case, problem, checkpoint)
-        writer = ContactResultsWriter(output, comm, keep=0 if checkpoint is None else checkpoint.step)
-        checkpoints = CheckpointWriter(output, problem, None if checkpoint is None else checkpoint.target)
+        recorder = _StepRecorder(case, problem, output, checkpoint, stop)
         resume = None if checkpoint is None else checkpoint.resume(problem)
-
-        def record(index: int, step: LoadStep, u: PETSc.Vec, result: SCDNewtonResult) -> None:
-            entry = {"step": index + 1, "load": step.load, "translation": list(step.translation), **result.summary()}
-            if result.converged:
-                entry.update(writer.write(problem, u, result, t=index + 1))
-                tables.write_solution_npz(writer.out / "solution.npz", writer.last.displacement)
-            summary["steps"].append(entry)
-            summary["status"] = str(result.status)
-            stopped = comm.allreduce(stop.is_set(), op=MPI.LOR) and index + 1 < len(case.steps)
-            if stopped or result.status == Status.INTERRUPTED:
-                summary["status"] = "interrupted"
-            tables.write_summary(comm, writer.out / "summary.json", summary)
-            if result.converged:
-                checkpoints.write(index + 1, u, writer.last.displacement, result, summary)
-            _log_step(index, result, entry)
-            if stopped:
-                raise Interrupted(f"stopped by a signal after step {index + 1} of {len(case.steps)}")
-
         u = problem.A.createVecRight()
         try:
-            results = solve_load_path(problem, case.steps, u, parameters, PREFIX, record,
-                                      case.solver.get("start", "rest") == "rest", resume,
-                                      lambda: comm.allreduce(stop.is_set(), op=MPI.LOR))
+            results = solve_load_path(problem, case.steps, u, parameters, PREFIX, recorder.record,
+                                      case.solver.get("start", "rest") == "rest", resume, recorder.stop_requested)
             code = _exit_code(results, len(case.steps) - (0 if resume is None else resume.done))
         except Interrupted as exc:
             logger.warning("%s; the results of the steps solved are written", exc)
@@ -193,10 +168,55 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
             for vec in (u, None if resume is None else resume.previous):
                 if vec is not None:
                     vec.destroy()
-            writer.close()  # keeps every converged step, also when a later one raised
-    if plot and writer.last is not None:
-        _draw_figures(writer, summary, comm)
-    return summary, code
+            recorder.writer.close()  # keeps every converged step, also when a later one raised
+    if plot and recorder.writer.last is not None:
+        _draw_figures(recorder.writer, recorder.summary, comm)
+    return recorder.summary, code
+
+
+def _checkpoint(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm, restart: bool) -> Checkpoint | None:
+    """The checkpoint a restart continues from; a new run removes an earlier run's checkpoints."""
+    checkpoint = read_checkpoint(comm, output, case.to_dict()) if restart else None
+    if checkpoint is None:
+        if restart:
+            logger.warning("no checkpoint in %s: the run starts from step 1", output)
+        remove_checkpoints(comm, output)
+    return checkpoint
+
+
+class _StepRecorder:
+    """What the runner does after each load step: result files, summary, checkpoint, signals."""
+
+    def __init__(self, case: ContactCase, problem: ContactProblem, output: str | pathlib.Path,
+                 checkpoint: Checkpoint | None, stop: threading.Event):
+        self.case, self.problem, self._stop = case, problem, stop
+        self.summary = _start_summary(case, problem, checkpoint)
+        self.writer = ContactResultsWriter(output, problem.comm, keep=0 if checkpoint is None else checkpoint.step)
+        self.checkpoints = CheckpointWriter(output, problem, None if checkpoint is None else checkpoint.target)
+
+    def stop_requested(self) -> bool:
+        """Whether a signal arrived on any rank (collective)."""
+        return self.problem.comm.allreduce(self._stop.is_set(), op=MPI.LOR)
+
+    def record(self, index: int, step: LoadStep, u: PETSc.Vec, result: SCDNewtonResult) -> None:
+        """Write step ``index``'s results and summary, its checkpoint if it converged; raise
+        :class:`Interrupted` if a signal arrived and steps remain."""
+        entry = {"step": index + 1, "load": step.load, "translation": list(step.translation), **result.summary()}
+        writer, summary, n_steps = self.writer, self.summary, len(self.case.steps)
+        if result.converged:
+            entry.update(writer.write(self.problem, u, result, t=index + 1))
+            tables.write_solution_npz(writer.out / "solution.npz", writer.last.displacement)
+        summary["steps"].append(entry)
+        summary["status"] = str(result.status)
+        stopped = self.stop_requested() and index + 1 < n_steps
+        if stopped or result.status == Status.INTERRUPTED:
+            summary["status"] = "interrupted"
+        tables.write_summary(self.problem.comm, writer.out / "summary.json", summary)
+        if result.converged:
+            self.checkpoints.write(index + 1, u, writer.last.displacement, result, summary)
+        _log_step(index, result, entry)
+        if stopped:
+            raise Interrupted(f"stopped by a signal after step {index + 1} of {n_steps}")
 
 
 def _start_summary(case: ContactCase, problem: ContactProblem, checkpoint: Checkpoint | None) -> dict[str, typing.Any]:

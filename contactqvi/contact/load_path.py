@@ -80,10 +80,9 @@ def solve_load_path(
         stop: asked before each Newton step (collective); when true the step ends with
             status ``interrupted`` (:meth:`~contactqvi.contact.scd_newton.SCDNewtonSolver.solve`).
 
-    Every step after the first stops at the first step's accuracy (its target ||y^||,
-    :meth:`~contactqvi.contact.scd_newton.SCDNewtonSolver.solve` with ``atol``) if its
-    own test asks for more: a step that starts near its solution (a small increment) is
-    not solved to ``rtol`` of its own small start.
+    Every step after the first stops at the first step's target ||y^|| (``atol`` of
+    :meth:`~contactqvi.contact.scd_newton.SCDNewtonSolver.solve`) if its own test asks for
+    more: a small increment is not solved to ``rtol`` of its own small start.
 
     Returns:
         The results of the steps solved (after ``resume.done``); the last one failed if it
@@ -91,21 +90,15 @@ def solve_load_path(
     """
     check_steps(steps)
     results: list[SCDNewtonResult] = []
-    previous = u.duplicate()
-    first, target, states = 0, 0.0, np.empty(0, np.int8)
-    if resume is not None:
-        first, target, states = resume.done, resume.target, resume.states
-        resume.previous.copy(previous)
+    previous = u.duplicate() if resume is None else resume.previous.copy()
+    first, target, states = (0, 0.0, None) if resume is None else (resume.done, resume.target, resume.states)
     with SCDNewtonSolver(problem, parameters, prefix=prefix) as solver:
         for index in range(first, len(steps)):
             step = steps[index]
             if index > 0:
                 if index > first:
                     previous.waxpy(-1.0, problem.shift, u)  # u~ of the last step, nodal frames
-                problem.set_step(step.load, step.translation, previous)
-                u.waxpy(1.0, problem.shift, previous)
-                touching = np.isin(states, TOUCHING)
-                u.array.reshape(-1, 3)[problem.contact_blk[touching], :2] = 0.0  # predictor: they stick
+                _continue(problem, step, u, previous, states)
             else:
                 problem.set_step(step.load, step.translation)
                 if from_rest:
@@ -121,6 +114,16 @@ def solve_load_path(
                 break
     previous.destroy()
     return results
+
+
+def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, previous: PETSc.Vec, states: np.ndarray) -> None:
+    """Set ``step`` after the step whose u~ (solver variables) is ``previous`` and whose contact
+    nodes ended in ``states``; ``u`` gets the predictor: u~ of that step, the touching nodes
+    moved along with their master surface (no slip increment)."""
+    problem.set_step(step.load, step.translation, previous)
+    u.waxpy(1.0, problem.shift, previous)
+    touching = np.isin(states, TOUCHING)
+    u.array.reshape(-1, 3)[problem.contact_blk[touching], :2] = 0.0
 
 
 def contact_resultants(problem: ContactProblem, result: SCDNewtonResult) -> dict[str, typing.Any]:
