@@ -275,11 +275,11 @@ def _outside_the_bounds(rows: list[dict]) -> str:
     exact = [case for case in controls if all(_within(r) for r in rows if r["case"] == case)]
     return ("\nOutside the bounds (Newton steps within 1 of 1 rank, solution to 1e-9, files written): "
             + "; ".join(outside) + ". The inexact Newton-step solves (GAMG, tol 0.1) depend on the partition "
-            "through the multigrid aggregates (which do not cross ranks), so each rank count takes its own path of "
+            "through the multigrid aggregates, so each rank count takes its own path of "
             "Newton iterates; a solution meeting the Newton stopping test is only as close to the exact one as "
             "those solves allow. The controls with exact solves"
-            + (f" within the bounds on every number of ranks: {', '.join(exact)}" if exact else ": none within the bounds")
-            + (f"; outside: {', '.join(c for c in controls if c not in exact)}" if len(exact) < len(controls) else "")
+            + (f" within the bounds on every number of ranks: {'; '.join(exact)}" if exact else ": none within the bounds")
+            + (f"; outside: {'; '.join(c for c in controls if c not in exact)}" if len(exact) < len(controls) else "")
             + ".\n")
 
 
