@@ -51,7 +51,7 @@ def test_newton_matrix_is_DA_plus_U(eliminate):
             Wt, Ut = scd_adjoint_blocks(v, z, *classify(v, z, solver.gamma, problem.law, 0.0), solver.gamma,
                                         problem.law)
             u.array[:] = rng.normal(size=len(u.array))
-            w["dhat"].array[:] = rng.normal(size=len(u.array))
+            w.dhat.array[:] = rng.normal(size=len(u.array))
             J = solver.newton_system(Wt, Ut, u)
 
             D = _block_diagonal(A, blk, Wt, np.eye(3))
@@ -59,7 +59,7 @@ def test_newton_matrix_is_DA_plus_U(eliminate):
             reference = D.matMult(A)
             reference.axpy(1.0, U, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
             y2 = u.copy()
-            y2.axpy(-1.0, w["dhat"])
+            y2.axpy(-1.0, w.dhat)
             rhs = A.createVecLeft()
             D.mult(y2, rhs)
             rhs.pointwiseMult(rhs, solver._gamma_dofs["gamma"])
@@ -76,7 +76,7 @@ def test_newton_matrix_is_DA_plus_U(eliminate):
             scale = reference.norm()
             reference.axpy(-1.0, J, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
             assert reference.norm() <= 1e-14 * scale
-            for mine, theirs in ((w["rhs"], rhs), (w["du"], du)):
+            for mine, theirs in ((w.rhs, rhs), (w.du, du)):
                 theirs.axpy(-1.0, mine)
                 assert theirs.norm() <= 1e-14 * max(mine.norm(), 1.0)
             stiffness, exact = A.createVecLeft(), A.createVecLeft()
@@ -104,7 +104,7 @@ def test_galerkin_update_keeps_coarse_operators_exact():
         assert A.norm(PETSc.NormType.INFINITY) == 0.0  # the solve returns with A in its storage, bit for bit
         pc = solver.ksp.getPC()
         levels = pc.getMGLevels()
-        assert levels >= 3 and solver._galerkin is not None and solver._galerkin.updates >= 2
+        assert levels >= 3 and solver.step_solver.galerkin is not None and solver.step_solver.galerkin.updates >= 2
         last_J = fine = problem.A.copy()  # A (restored by the solve) with the rows of the last step's J
         last_J.setValuesCSR(*solver._newton.rows.getValuesCSR())
         last_J.assemble()

@@ -5,6 +5,7 @@ non-matching surfaces, and quasi-static load paths."""
 from contactqvi.contact.interface import BodyPair, Interface, ObstaclePair
 from contactqvi.contact.load_path import LoadStep, contact_resultants, solve_load_path
 from contactqvi.contact.mortar import MortarCoupling, mortar_coupling
+from contactqvi.contact.newton_step_solver import NEWTON_STEP_SOLVERS, NewtonStepSolver
 from contactqvi.contact.nodal import (
     FrictionLaw,
     Normal,
@@ -17,7 +18,7 @@ from contactqvi.contact.nodal import (
     scd_adjoint_blocks,
 )
 from contactqvi.contact.problem import ContactProblem, assemble_contact_problem, build_contact_problem
-from contactqvi.contact.scd_newton import NEWTON_STEP_SOLVERS, PARAMETERS, SCDNewtonResult, SCDNewtonSolver
+from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult, SCDNewtonSolver
 
 __all__ = [
     "NEWTON_STEP_SOLVERS",
@@ -28,6 +29,7 @@ __all__ = [
     "Interface",
     "LoadStep",
     "MortarCoupling",
+    "NewtonStepSolver",
     "Normal",
     "ObstaclePair",
     "SCDNewtonResult",

@@ -1,0 +1,173 @@
+"""The linear solver of the SCD Newton step: J du = rhs of (5.4), inexactly (seed 000, Sect. 7).
+
+:class:`NewtonStepSolver` owns the Krylov solver of the Newton steps, its
+preconditioner's reuse from step to step (multigrid levels kept Galerkin-exact by
+:class:`~contactqvi.multigrid.GalerkinUpdate`) and the paper's Krylov test.
+"""
+
+from __future__ import annotations
+
+import typing
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import numpy as np
+
+from contactqvi.lifetime import PETScOwner
+from contactqvi.linalg import OptionsDict, create_ksp, default_options, ksp_converged_reason, preset
+from contactqvi.multigrid import GalerkinUpdate, is_multigrid
+
+__all__ = ["NEWTON_STEP_SOLVERS", "NewtonStepSolver"]
+
+#: Newton-step solvers selectable by the SCD parameter ``pc``, each a preset of
+#: :data:`contactqvi.linalg.KSP_PRESETS` applied under the solver's options prefix
+#: (``-{prefix}ksp_*``/``-{prefix}pc_*`` on the command line win). ``gamg``
+#: (default): FGMRES + one GAMG V-cycle with the rigid-body near-nullspace, stopped
+#: at the unpreconditioned relative residual (the paper's test, Sect. 7); ``paper``:
+#: GMRES + block-Jacobi/ILU(0) as in Sect. 7; ``hypre``: FGMRES + BoomerAMG; ``lu``:
+#: exact (MUMPS), the reference for the Newton counts. Measured in docs/coulomb.md.
+NEWTON_STEP_SOLVERS = {"gamg": "gmres_gamg", "paper": "gmres_ilu", "hypre": "gmres_hypre", "lu": "lu"}
+
+
+class NewtonStepSolver(PETScOwner):
+    """Inexact solver of the Newton systems (5.4) of one SCD Newton solver, with preconditioner reuse.
+
+    What the preconditioner keeps from step to step:
+
+    * multigrid (GAMG, MG) with ``reuse_pc``: it is set up at the first step; then
+      its coarse operators are updated by the Galerkin products of J's change, which
+      lives on the contact rows (:class:`~contactqvi.multigrid.GalerkinUpdate`), so
+      every step is preconditioned for its own J at the cost of the contact surface;
+      a new set-up follows a slow solve (:meth:`_discard_set_up`);
+    * other preconditioners with ``reuse_pc``: kept between steps in which no
+      contact node changes its kind (:meth:`_set_operator`);
+    * direct solvers (``preonly``): a new factorisation at every step.
+
+    The Krylov test is the paper's, ||rhs - J du|| <= tol ||rhs of (5.4)|| (:meth:`krylov_rtol`).
+
+    Args:
+        comm: the problem's communicator.
+        prefix: PETSc options prefix of the KSP; any ``-{prefix}ksp_*`` or
+            ``-{prefix}pc_*`` option overrides the preset.
+        pc: key of :data:`NEWTON_STEP_SOLVERS`.
+        multigrid_options: GAMG options of the problem (aggregation for several
+            bodies), added to a GAMG preset.
+        rtol: default relative tolerance of the Krylov solve (the SCD parameter ``tol``).
+        reuse_pc: multigrid: Galerkin updates of one set-up; other preconditioners:
+            kept while no contact node changes its kind.
+        rebuild_iterations: multigrid with ``reuse_pc``: a new set-up after a solve
+            of more Krylov iterations than this.
+        initial_guess: start the Krylov solve from ``du`` as given (it holds the
+            exact values of the eliminated rows); direct solvers need none.
+
+    Attributes:
+        ksp: the Krylov solver.
+        galerkin: the Galerkin updates of the current multigrid set-up (None before
+            it, and for other preconditioners).
+    """
+
+    def __init__(self, comm: MPI.Comm, prefix: str, pc: str, multigrid_options: OptionsDict, *, rtol: float,
+                 reuse_pc: bool, rebuild_iterations: int, initial_guess: bool):  # fmt: skip
+        self.comm = comm
+        self._options = preset(NEWTON_STEP_SOLVERS[pc])
+        if self._options.get("pc_type") == "gamg":
+            self._options.update(multigrid_options)
+        self.ksp = create_ksp(comm, prefix, self._options, rtol=rtol)
+        self.reuse_pc, self.rebuild_iterations, self.initial_guess = reuse_pc, rebuild_iterations, initial_guess
+        self.galerkin: GalerkinUpdate | None = None
+        self._pc_kinds: np.ndarray | None = None  # contact node kinds when the preconditioner was last built
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [self.galerkin, self.ksp]
+
+    @property
+    def iterations(self) -> int:
+        """Krylov iterations of the last solve."""
+        return self.ksp.getIterationNumber()
+
+    @property
+    def reason(self) -> str:
+        """Name of the last solve's converged reason (e.g. ``CONVERGED_RTOL``)."""
+        return ksp_converged_reason(self.ksp)
+
+    def solve(self, J: PETSc.Mat, change: PETSc.Mat, kinds: np.ndarray, rhs: PETSc.Vec, du: PETSc.Vec, tol: float,
+              rhs_ratio: float = 1.0) -> int:  # fmt: skip
+        """Solve J du = rhs to ``tol`` (Sect. 7); returns the KSP's converged reason.
+
+        Args:
+            J: the Newton matrix (the same object at every step, changed in place).
+            change: J minus the J of the previous call, nonzero on few rows (the
+                contact rows): what the multigrid levels are updated by.
+            kinds: the contact nodes' normal and tangential kinds J was built for.
+            rhs: right-hand side, the fixed rows eliminated.
+            du: solution; on entry the exact values of the eliminated rows.
+            tol: relative tolerance of the Krylov test (the forcing term).
+            rhs_ratio: ||rhs of (5.4)|| / ||rhs|| (:meth:`krylov_rtol`).
+        """
+        multigrid = self.reuse_pc and is_multigrid(self.ksp.getPC())
+        if self.galerkin is not None and self.iterations > self.rebuild_iterations:
+            self._discard_set_up()
+        if multigrid and self.galerkin is not None:
+            self.galerkin.update(change)
+        else:
+            self._set_operator(J, kinds, multigrid)
+        self.ksp.setTolerances(rtol=self.krylov_rtol(tol, rhs_ratio))
+        self.ksp.setInitialGuessNonzero(self.initial_guess and self.ksp.getType() != "preonly")
+        # Options read at set-up (GAMG: multigrid options; block Jacobi: sub_*) come from the preset.
+        with default_options(self.ksp.getOptionsPrefix(), self._options):
+            if multigrid and self.galerkin is None:
+                self.ksp.setUp()
+                self.galerkin = GalerkinUpdate(self.ksp.getPC())
+            self.ksp.solve(rhs, du)
+        return self.ksp.getConvergedReason()
+
+    def _discard_set_up(self) -> None:
+        """Drop the multigrid set-up after a solve of more than ``rebuild_iterations`` Krylov iterations.
+
+        The interpolation of a set-up is kept by the Galerkin updates; the first one is
+        made from J at u = 0, before the contact zone forms, and fits the later J less
+        well (lev 7 d3/L2, 2 ranks: 46 Krylov iterations with the first interpolation
+        throughout, 30 with a new set-up at step 3; lev 8 d1/L1, 2 ranks: 58 -> 39 with
+        a threshold of 4). At lev 7-8 a set-up costs more than the iterations it saves
+        (``benchmarks/coulomb_profile.py``, docs/coulomb.md), so the default threshold
+        10 only catches a hierarchy that has really degraded.
+        """
+        self.galerkin.destroy()
+        self.galerkin = None
+        self.ksp.getPC().reset()  # a new set-up from scratch (GAMG keeps eigenvalue estimates across a plain one)
+
+    def _set_operator(self, J: PETSc.Mat, kinds: np.ndarray, multigrid: bool) -> None:
+        """J for the preconditioner: a new set-up, or (a non-multigrid one with ``reuse_pc``, not
+        ``preonly``) the one built while no contact node has changed its kind since.
+
+        J then changes only in the sliding rows' coefficients, and the Krylov method
+        still solves the current system to ``tol``.
+        """
+        same = self._pc_kinds is not None and np.array_equal(self._pc_kinds, kinds)
+        reuse = self.comm.allreduce(same, op=MPI.LAND)
+        reuse = reuse and self.reuse_pc and not multigrid and self.ksp.getType() != "preonly"
+        if not reuse:
+            self._pc_kinds = kinds
+        self.ksp.setOperators(J)
+        self.ksp.getPC().setReusePreconditioner(reuse)
+
+    def krylov_rtol(self, tol: float, rhs_ratio: float) -> float:
+        """The KSP's rtol for the paper's test ||rhs - J du|| <= tol ||rhs of (5.4)||: ``tol * rhs_ratio``.
+
+        The eliminated rows are gamma I with one gamma (the largest), so the
+        assembled rhs holds gamma du_i there instead of gamma_i du_i; with
+        ``nodal_diagonal`` (gamma_i down to 1/3000 of the largest on the Hertz meshes)
+        that inflated ||rhs||, the initial guess (exact on the eliminated rows, zero
+        elsewhere) met the test and GMRES returned after 0 iterations: the
+        Cattaneo-Mindlin steps then stalled (coarse mesh: 23, 43, 42, 35, 39, 7 Newton
+        steps, step 7 failed after 100). ``rhs_ratio`` = ||rhs of (5.4)|| / ||assembled
+        rhs|| (:meth:`~contactqvi.contact.scd_newton.SCDNewtonSolver.newton_system`; 1
+        with one gamma, so the paper's tables are unchanged) gives 4-9 Newton steps per
+        load step. Relative to the initial residual
+        (``-{prefix}ksp_converged_use_initial_residual_norm``, then not scaled) the
+        Mindlin steps converge alike, but Table 2 at lev 3-6 needs 2 Newton and 8
+        Krylov iterations more.
+        """
+        option = self.ksp.getOptionsPrefix() + "ksp_converged_use_initial_residual_norm"
+        return tol if PETSc.Options().getBool(option, False) else tol * rhs_ratio
