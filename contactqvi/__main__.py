@@ -41,7 +41,7 @@ def run(argv: list[str]) -> int:
     from contactqvi import cli
     from contactqvi.case import load_case
     from contactqvi.parameters import ParameterError
-    from contactqvi.runner import EXIT_CODES, PREFIX, run_case
+    from contactqvi.runner import EXIT_CODES, PREFIX, OutputError, run_case
 
     parser = cli.make_parser("Solve a contact case file (TOML) along its load path.", "results/case",
                              f"-{PREFIX}ksp_monitor")
@@ -58,6 +58,9 @@ def run(argv: list[str]) -> int:
     except ParameterError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_CODES["bad input"]
+    except OutputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_CODES["output failed"]
     return code
 
 

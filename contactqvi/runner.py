@@ -46,7 +46,7 @@ from contactqvi.parameters import ParameterError, require
 from contactqvi.problems.coulomb import gap_function
 from contactqvi.result import Status
 
-__all__ = ["EXIT_CODES", "PREFIX", "Interrupted", "build_problem", "read_mesh", "run_case"]
+__all__ = ["EXIT_CODES", "PREFIX", "Interrupted", "OutputError", "build_problem", "read_mesh", "run_case"]
 
 logger = logging.getLogger(__name__)
 
@@ -54,7 +54,11 @@ logger = logging.getLogger(__name__)
 PREFIX = "case_"
 
 #: Exit codes of ``python -m contactqvi run``.
-EXIT_CODES = {"converged": 0, "not converged": 1, "bad input": 2, "interrupted": 3}
+EXIT_CODES = {"converged": 0, "not converged": 1, "bad input": 2, "interrupted": 3, "output failed": 4}
+
+
+class OutputError(Exception):
+    """Writing a step's results or checkpoint failed (a full disk, a vanished directory)."""
 
 
 class Interrupted(Exception):
@@ -192,7 +196,8 @@ class _StepRecorder:
         self.case, self.problem, self._stop = case, problem, stop
         self.summary = _start_summary(case, problem, checkpoint)
         self.writer = ContactResultsWriter(output, problem.comm, keep=0 if checkpoint is None else checkpoint.step)
-        self.checkpoints = CheckpointWriter(output, problem, None if checkpoint is None else checkpoint.target)
+        self.checkpoints = (CheckpointWriter(output, problem) if checkpoint is None
+                            else CheckpointWriter(output, problem, checkpoint.target, checkpoint.step))
 
     def stop_requested(self) -> bool:
         """Whether a signal arrived on any rank (collective)."""
@@ -202,21 +207,30 @@ class _StepRecorder:
         """Write step ``index``'s results and summary, its checkpoint if it converged; raise
         :class:`Interrupted` if a signal arrived and steps remain."""
         entry = {"step": index + 1, "load": step.load, "translation": list(step.translation), **result.summary()}
-        writer, summary, n_steps = self.writer, self.summary, len(self.case.steps)
+        summary, n_steps = self.summary, len(self.case.steps)
+        stopped = self.stop_requested() and index + 1 < n_steps
+        try:
+            self._write(index, u, result, entry, "interrupted" if stopped else None)
+        except OSError as exc:
+            raise OutputError(f"output: writing step {index + 1} to {self.writer.out} failed ({exc}); the last "
+                              f"complete checkpoint, of step {self.checkpoints.step}, is kept") from exc
+        _log_step(index, result, entry)
+        if stopped:
+            raise Interrupted(f"stopped by a signal after step {index + 1} of {n_steps}")
+
+
+    def _write(self, index: int, u: PETSc.Vec, result: SCDNewtonResult, entry: dict[str, typing.Any],
+               status: str | None) -> None:
+        """Results (if converged), summary (``status`` if given), checkpoint (if converged)."""
+        writer, summary = self.writer, self.summary
         if result.converged:
             entry.update(writer.write(self.problem, u, result, t=index + 1))
             tables.write_solution_npz(writer.out / "solution.npz", writer.last.displacement)
         summary["steps"].append(entry)
-        summary["status"] = str(result.status)
-        stopped = self.stop_requested() and index + 1 < n_steps
-        if stopped or result.status == Status.INTERRUPTED:
-            summary["status"] = "interrupted"
+        summary["status"] = status or ("interrupted" if result.status == Status.INTERRUPTED else str(result.status))
         tables.write_summary(self.problem.comm, writer.out / "summary.json", summary)
         if result.converged:
             self.checkpoints.write(index + 1, u, writer.last.displacement, result, summary)
-        _log_step(index, result, entry)
-        if stopped:
-            raise Interrupted(f"stopped by a signal after step {index + 1} of {n_steps}")
 
 
 def _start_summary(case: ContactCase, problem: ContactProblem, checkpoint: Checkpoint | None) -> dict[str, typing.Any]:

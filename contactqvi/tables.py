@@ -61,7 +61,9 @@ def prepare_output_dir(comm: MPI.Comm, path: str | os.PathLike) -> pathlib.Path:
 def atomic_path(comm: MPI.Comm, path: str | os.PathLike) -> typing.Iterator[pathlib.Path]:
     """Yield a temporary sibling of ``path``; rename it to ``path`` on success (rank 0).
 
-    Collective. On an exception the temporary file or directory is removed.
+    Collective. On an exception the temporary file or directory is removed, and the
+    ranks that did not raise raise an :class:`OSError` too (a full disk seen by one rank
+    must not leave the others in the next collective call).
     """
     final = pathlib.Path(path)
     tmp = final.with_name(f".{final.name}.partial")
@@ -70,9 +72,17 @@ def atomic_path(comm: MPI.Comm, path: str | os.PathLike) -> typing.Iterator[path
         yield tmp
         ok = True
     finally:
-        comm.Barrier()
-        if comm.rank == 0:
-            if ok:
+        error = _finish(comm, tmp, final, comm.allreduce(ok, op=MPI.LAND))
+    if error is not None:
+        raise OSError(error)
+
+
+def _finish(comm: MPI.Comm, tmp: pathlib.Path, final: pathlib.Path, keep: bool) -> str | None:
+    """Rename ``tmp`` to ``final`` (``keep``) or remove it, on rank 0; the error on every rank, or None."""
+    error = None
+    if comm.rank == 0:
+        try:
+            if keep:
                 if final.is_dir():
                     shutil.rmtree(final)
                 os.replace(tmp, final)
@@ -80,7 +90,10 @@ def atomic_path(comm: MPI.Comm, path: str | os.PathLike) -> typing.Iterator[path
                 shutil.rmtree(tmp, ignore_errors=True)
             else:
                 tmp.unlink(missing_ok=True)
-        comm.Barrier()
+        except OSError as exc:
+            error = f"cannot write {final}: {exc.strerror or exc}"
+    error = comm.bcast(error, root=0)
+    return f"writing {final} failed on another rank" if error is None and not keep else error
 
 
 def to_builtin(value: typing.Any) -> typing.Any:

@@ -84,3 +84,28 @@ def _assert_checkpoint_readable(directory: pathlib.Path, marker: dict) -> None:
 
     ours = by_position(u.function_space.tabulate_dof_coordinates(), u.x.array.reshape(-1, 3))
     assert np.abs(ours - by_position(solution["x"], solution["u"])).max() <= 1e-14 * np.abs(solution["u"]).max()
+
+
+@pytest.mark.serial
+def test_output_failing_during_the_run_is_named_and_keeps_the_last_checkpoint(tmp_path):
+    """The checkpoint of step 2 cannot be written (a file is where its directory goes, as a
+    full disk would fail it): exit code 4, an error naming the output, step 1's checkpoint kept."""
+    text = (ROOT / "cases" / "cattaneo_mindlin_bodies.toml").read_text()
+    case = tmp_path / "case.toml"
+    case.write_text(text.replace('file = "../meshes/mindlin_bodies_medium.geo"',
+                                 f'file = "{ROOT / "meshes" / "mindlin_bodies_coarse.geo"}"'))
+    out = tmp_path / "out"
+    run = subprocess.Popen([sys.executable, "-m", "contactqvi", "run", str(case), "--output", str(out), "--no-plot"],
+                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    marker = out / "checkpoint" / "checkpoint.json"
+    deadline = time.monotonic() + 300.0
+    while not marker.exists():
+        assert run.poll() is None and time.monotonic() < deadline
+        time.sleep(0.05)
+    (out / "checkpoint" / "step_0002.bp").write_text("in the way")
+    code = run.wait(timeout=300)
+    stderr = run.stderr.read()
+    assert code == EXIT_CODES["output failed"], stderr
+    assert "error: output: writing step 2" in stderr and "of step 1, is kept" in stderr
+    assert json.loads(marker.read_text())["step"] == 1
+    _assert_checkpoint_readable(out / "checkpoint", json.loads(marker.read_text()))

@@ -121,11 +121,15 @@ class CheckpointWriter:
     Args:
         output: the run's output directory.
         problem: the contact problem being solved.
+        target, step: the first step's stopping target and the last step checkpointed,
+            when a restart continues a checkpoint.
     """
 
-    def __init__(self, output: str | os.PathLike, problem: ContactProblem, target: float | None = None):
+    def __init__(self, output: str | os.PathLike, problem: ContactProblem, target: float | None = None,
+                 step: int = 0):
         self.directory = pathlib.Path(output) / DIRECTORY
         self.target = target  # the first step's stopping target, known after it (or from a checkpoint)
+        self.step = step  # the last step checkpointed (0: none yet)
         self.comm = problem.comm
         self.problem = problem
         V = problem.V
@@ -162,6 +166,7 @@ class CheckpointWriter:
             if self.comm.rank == 0:
                 tmp.write_text(json.dumps(to_builtin(
                     {"step": step, "file": name, "target": self.target, "summary": summary}), indent=1) + "\n")
+        self.step = step
         if self.comm.rank == 0:  # the marker has moved on: older step files are garbage
             for old in self.directory.glob("step_*.bp"):
                 if old.name != name:
