@@ -23,7 +23,12 @@ parses the summary lines "Time (sec)", "Flops", "MPI Msg Count", "MPI Msg Len
 totals of the stages inside the solve against the counters). Memory: each rank's peak resident set (getrusage;
 -log_view of PETSc 3.22 prints no memory line). Also recorded: the multigrid
 hierarchy (levels and rows per level, at the last set-up) and each rank's number
-of neighbours (ranks owning a ghost of its displacement dofs).
+of neighbours (ranks owning a ghost of its displacement dofs) and of owned and ghost dofs.
+
+The markdown ends with a projection to 64, 512 and 4096 ranks at the same dofs
+per rank (:func:`projection`): measured per-neighbour, per-ghost-dof and
+per-level rates, scaled by a model of a 3D partition, with the network constants
+of :data:`ASSUMED` (assumptions, not measurements; docs/cluster.md discusses them).
 
 With more ranks than cores (here 2) the ranks share cores: wall times of 4 and 8
 ranks say nothing about scaling; message counts and volumes, reductions, flops
@@ -60,6 +65,14 @@ COUNTERS = ("petsc_send_ct", "petsc_isend_ct", "petsc_recv_ct", "petsc_irecv_ct"
             "petsc_scatter_ct")
 
 STAGE = "Newton solve"
+
+#: The projection's assumptions (not measured here): ranks to project to; the most
+#: neighbours of a rank (a compact subdomain of a 3D partition touches its 26 face,
+#: edge and vertex neighbours); point-to-point latency (s) and per-rank bandwidth
+#: (bytes/s: a node's injection bandwidth shared by its ranks, InfiniBand class);
+#: latency (s) per tree level of an allreduce (log2 P levels).
+ASSUMED = {"ranks": (64, 512, 4096), "max_neighbours": 26, "latency_s": 2e-6, "bandwidth_bytes_per_s": 1e9,
+           "allreduce_level_s": 2e-6}
 
 
 def parse() -> tuple[argparse.Namespace, list[str]]:
@@ -181,8 +194,9 @@ def worker(args: argparse.Namespace, petsc_options: list[str]) -> None:
 
     def staged_solve(self, *a, **k):
         """SCDNewtonSolver.solve inside the stage, with this rank's counters before and after."""
-        ghost_owners = self.problem.V.dofmap.index_map.owners
-        seen["neighbours"] = int(np.unique(ghost_owners).size)
+        index_map, bs = self.problem.V.dofmap.index_map, self.problem.V.dofmap.index_map_bs
+        seen["neighbours"] = int(np.unique(index_map.owners).size)
+        seen["owned_dofs"], seen["ghost_dofs"] = index_map.size_local * bs, index_map.num_ghosts * bs
         comm.Barrier()
         start, t0 = counters.read(), time.perf_counter()
         stage.push()
@@ -202,7 +216,7 @@ def worker(args: argparse.Namespace, petsc_options: list[str]) -> None:
 
     SCDNewtonSolver.solve, GalerkinUpdate.__init__ = staged_solve, recorded_setup
     row = benchlib.run_coulomb_case(comm, args.lev, args.case, {"pc": "gamg"}, "weak_")
-    per_rank = comm.gather({**spent, "neighbours": seen.get("neighbours", 0),
+    per_rank = comm.gather({**spent, **{key: seen.get(key, 0) for key in ("neighbours", "owned_dofs", "ghost_dofs")},
                             "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}, root=0)
     if comm.rank == 0:
         row["per_rank"] = {key: [r[key] for r in per_rank] for key in per_rank[0]}
@@ -240,6 +254,7 @@ def measure(n: int, lev: int, args: argparse.Namespace, work: pathlib.Path, targ
         "status": result["status"], "newton": steps, "krylov": result["krylov"],
         "solve_s": result["solve_seconds"], "assembly_s": result["timings"]["assembly"],
         "mg_rows": result["mg_rows"], "neighbours": spread(per_rank["neighbours"]),
+        "owned_dofs": spread(per_rank["owned_dofs"]), "ghost_dofs": spread(per_rank["ghost_dofs"]),
         "peak_rss_mib": spread(per_rank["peak_rss_mib"]),
         "per_newton_step": {key: spread(np.asarray(per_rank[key]) / steps)
                             for key in ("messages", "bytes", "reductions", "flops", "seconds")},
@@ -252,6 +267,65 @@ def measure(n: int, lev: int, args: argparse.Namespace, work: pathlib.Path, targ
                                                    rel_tol=1e-3, abs_tol=1.0),
     }
     return row
+
+
+def shell_ghost_dofs(dofs_per_rank: float) -> float:
+    """Ghost dofs of an interior subdomain of a 3D partition: the one-node shell around a cube
+    of dofs_per_rank / 3 nodes (three dofs per node)."""
+    side = (dofs_per_rank / 3) ** (1 / 3)
+    return 3 * ((side + 2) ** 3 - side**3)
+
+
+def projection(rows: list[dict]) -> dict[str, typing.Any]:
+    """Per Newton step at 64, 512, 4096 ranks and the 1-rank run's dofs per rank, from the measured
+    rows (the rates below) and :data:`ASSUMED`.
+
+    * messages per rank = (largest measured messages per neighbour) x min(P - 1, max_neighbours);
+    * bytes per rank = (largest measured bytes per ghost dof) x ghost dofs of an interior cube;
+    * multigrid levels: the largest run's, plus log(n_P / n) / log(its mean coarsening ratio);
+    * reductions = the largest run's + (its smoother set-up reductions per level) x the added levels
+      (Krylov iterations per Newton step as measured: GAMG's counts do not grow with n here);
+    * memory per rank = a + b x (owned + ghost dofs), fitted to the multi-rank runs (means over ranks);
+    * compute seconds = flop per dof of the largest run x dofs per rank / the 1-rank run's flop rate;
+      communication seconds = messages x latency + bytes / bandwidth + reductions x log2(P) x allreduce level.
+    """
+    measured = [r for r in rows if "per_newton_step" in r]
+    serial = next(r for r in measured if r["ranks"] == 1)
+    parallel = [r for r in measured if r["ranks"] > 1 and r.get("ghost_dofs")]
+    if not parallel:
+        return {}
+    ref = max(parallel, key=lambda r: r["ranks"])
+    steps = ref["newton"]
+    dofs = serial["n"]
+    per_neighbour = max(r["per_newton_step"]["messages"]["max"] / r["neighbours"]["max"] for r in parallel)
+    per_ghost = max(r["per_newton_step"]["bytes"]["max"] / r["ghost_dofs"]["max"] for r in parallel)
+    mg = ref["mg_rows"]
+    coarsening = (mg[-1] / mg[1]) ** (1 / (len(mg) - 2))
+    setup = ref["log_view"]["events"]["linear_solve"]["PCSetUp"]["reductions"] / steps
+    per_level = setup / len(mg)
+    fit = np.polyfit([r["owned_dofs"]["mean"] + r["ghost_dofs"]["mean"] for r in parallel],
+                     [r["peak_rss_mib"]["mean"] for r in parallel], 1)
+    flop_per_dof = ref["per_newton_step"]["flops"]["max"] / ref["owned_dofs"]["max"]
+    rate = serial["per_newton_step"]["flops"]["max"] / serial["per_newton_step"]["seconds"]["max"]
+    projected = []
+    for ranks in ASSUMED["ranks"]:
+        n = ranks * dofs
+        neighbours = min(ranks - 1, ASSUMED["max_neighbours"])
+        ghosts = shell_ghost_dofs(dofs)
+        messages, volume = per_neighbour * neighbours, per_ghost * ghosts
+        levels = math.ceil(len(mg) + math.log(n / ref["n"]) / math.log(coarsening) - 1e-9)
+        reductions = ref["per_newton_step"]["reductions"]["max"] + per_level * (levels - len(mg))
+        compute = flop_per_dof * dofs / rate
+        communication = (messages * ASSUMED["latency_s"] + volume / ASSUMED["bandwidth_bytes_per_s"]
+                         + reductions * math.log2(ranks) * ASSUMED["allreduce_level_s"])
+        projected.append({"ranks": ranks, "n": n, "neighbours": neighbours, "ghost_dofs": ghosts,
+                          "messages": messages, "bytes": volume, "mg_levels": levels, "reductions": reductions,
+                          "peak_rss_mib": float(np.polyval(fit, dofs + ghosts)), "compute_s": compute,
+                          "communication_s": communication})
+    return {"from_ranks": ref["ranks"], "dofs_per_rank": dofs, "messages_per_neighbour": per_neighbour,
+            "bytes_per_ghost_dof": per_ghost, "coarsening_ratio": coarsening,
+            "setup_reductions_per_level": per_level, "memory_fit_mib": {"base": fit[1], "per_dof": fit[0]},
+            "flop_per_dof": flop_per_dof, "flop_rate_1_rank": rate, "assumed": ASSUMED, "rows": projected}
 
 
 def markdown(data: dict) -> str:
@@ -311,6 +385,30 @@ def markdown(data: dict) -> str:
                            f"{setup.get('reductions', 0) / total['reductions']:.2f}"])
     text.append(markdown_table(["ranks", "messages", "bytes", "reductions", "PCSetUp messages", "PCSetUp reductions"],
                                shares))
+    model = data.get("projection")
+    if model:
+        a = model["assumed"]
+        text.append(
+            f"\n### Projection (not measured) to {', '.join(map(str, a['ranks']))} ranks at "
+            f"{model['dofs_per_rank']} dofs per rank\n\n"
+            "From the measured rates (largest over the multi-rank runs; the "
+            f"{model['from_ranks']}-rank run for the hierarchy): {model['messages_per_neighbour']:.0f} messages per "
+            f"neighbour and {model['bytes_per_ghost_dof']:.0f} bytes per ghost dof per Newton step; multigrid "
+            f"coarsening ratio {model['coarsening_ratio']:.1f} per level, {model['setup_reductions_per_level']:.0f} "
+            "smoother set-up reductions per level per Newton step; peak memory per rank "
+            f"{model['memory_fit_mib']['base']:.0f} MiB + {model['memory_fit_mib']['per_dof'] * 2**20:.0f} B x "
+            f"(owned + ghost dofs); {model['flop_per_dof']:.0f} flop per dof per Newton step at "
+            f"{model['flop_rate_1_rank'] / 1e6:.0f} Mflop/s (1 rank, this machine). Assumed: at most "
+            f"{a['max_neighbours']} neighbours, interior subdomains as cubes (ghosts: the one-node shell), latency "
+            f"{a['latency_s'] * 1e6:.0f} us, {a['bandwidth_bytes_per_s'] / 1e9:.0f} GB/s per rank, allreduce "
+            f"{a['allreduce_level_s'] * 1e6:.0f} us per tree level (log2 P levels), Krylov iterations per Newton "
+            "step as measured (benchmarks/weak_scaling.py, projection()).\n\n")
+        text.append(markdown_table(
+            ["ranks", "n", "neighbours", "msgs / rank", "MB / rank", "MG levels", "reductions", "peak MiB / rank",
+             "compute s", "communication s"],
+            [[p["ranks"], f"{p['n']:.3g}", p["neighbours"], f"{p['messages']:.0f}", f"{p['bytes'] / 1e6:.1f}",
+              p["mg_levels"], f"{p['reductions']:.0f}", f"{p['peak_rss_mib']:.0f}", f"{p['compute_s']:.2f}",
+              f"{p['communication_s']:.3f}"] for p in model["rows"]]))
     return "".join(text)
 
 
@@ -337,7 +435,8 @@ def main() -> None:
 
     rows = sorted(benchlib.merge_rows(out / "weak_scaling.json", rows, ("case", "ranks")),
                   key=lambda r: (r["case"], r["ranks"]))
-    data = {"machine": benchlib.machine(MPI.COMM_SELF), "base_lev": args.lev, "rows": rows}
+    data = {"machine": benchlib.machine(MPI.COMM_SELF), "base_lev": args.lev, "rows": rows,
+            "projection": projection(rows)}
     write_table(MPI.COMM_SELF, out / "weak_scaling", data, markdown(data))
     print(f"logs and -log_view of each run: {work}")
 
