@@ -17,7 +17,7 @@ from the checkpoints, on the checkpoint's own mesh, so no field is gathered by t
 as max |u - u_ref| / max |u_ref|. Bounds (issue 24): the same counts and 1e-12 on the same
 ranks, 1e-9 on the others.
 
-Writes ``restart.json`` and ``restart.md``. Run with ``nice`` on a shared machine.
+Writes ``restart.json`` and ``restart.md`` (rows of cases not run are kept). Run with ``nice`` on a shared machine.
 """
 
 from __future__ import annotations
@@ -39,6 +39,8 @@ import adios4dolfinx
 from dolfinx import fem
 
 from contactqvi import tables
+
+from benchlib import merge_rows
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 MPIENV = {"OMPI_MCA_rmaps_base_oversubscribe": "1", "PRTE_MCA_rmaps_default_mapping_policy": ":oversubscribe",
@@ -124,7 +126,7 @@ def last_displacement(out: pathlib.Path) -> np.ndarray:
     return u.x.array.copy()
 
 
-def compare(case: str, path: pathlib.Path, work: pathlib.Path, args: argparse.Namespace) -> list[dict]:
+def compare(case: str, path: pathlib.Path, work: pathlib.Path, args: argparse.Namespace, commit: str | None) -> list[dict]:
     reference = work / f"{path.stem}_whole"
     wall = run(command(path, reference, args.ranks))
     steps = json.loads((reference / "summary.json").read_text())["steps"]
@@ -144,7 +146,7 @@ def compare(case: str, path: pathlib.Path, work: pathlib.Path, args: argparse.Na
             "d_newton": max(abs(a[0] - b[0]) for a, b in zip(ours, ref_counts)),
             "rel_diff": float(np.abs(u - u_ref).max() / np.abs(u_ref).max()),
             "wall_whole": round(wall, 1), "wall_killed": round(killed, 1), "wall_restart": round(restarted, 1),
-            "status": json.loads((out / "summary.json").read_text())["status"],
+            "status": json.loads((out / "summary.json").read_text())["status"], "commit": commit,
         })
         print(rows[-1], flush=True)
     return rows
@@ -152,12 +154,12 @@ def compare(case: str, path: pathlib.Path, work: pathlib.Path, args: argparse.Na
 
 def markdown(rows: list[dict], commit: str | None) -> str:
     header = ["case", "ranks", "restarted on", "steps", "killed in step", "status", "counts equal", "dNewton",
-              "rel. diff", "bound", "wall whole s", "wall killed + restart s"]
+              "rel. diff", "bound", "wall whole s", "wall killed + restart s", "commit"]
     body = [[r["case"], r["ranks"], r["restart_ranks"], r["steps"], r["killed_in_step"], r["status"],
              "yes" if r["counts_equal"] else "no", r["d_newton"], f"{r['rel_diff']:.3g}",
              "1e-12" if r["restart_ranks"] == r["ranks"] else "1e-9", r["wall_whole"],
-             f"{r['wall_killed']} + {r['wall_restart']}"] for r in rows]
-    return (f"## Kill and restart (issue 24), at {commit}\n\n{__doc__.split(chr(10) + chr(10), 1)[1].split('Writes')[0]}"
+             f"{r['wall_killed']} + {r['wall_restart']}", r.get("commit")] for r in rows]
+    return (f"## Kill and restart (issue 24), last run at {commit}\n\n{__doc__.split(chr(10) + chr(10), 1)[1].split('Writes')[0]}"
             + tables.markdown_table(header, body) + "\n\nWall times on a 2-core machine shared with other jobs.\n")
 
 
@@ -168,9 +170,10 @@ def main() -> None:
     rows = []
     with tempfile.TemporaryDirectory(prefix="contactqvi-restart-") as tmp:
         for case, path in case_files(args, pathlib.Path(tmp)).items():
-            rows += compare(case, path, pathlib.Path(tmp), args)
+            rows += compare(case, path, pathlib.Path(tmp), args, commit)
     out = pathlib.Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
+    rows = merge_rows(out / "restart.json", rows, ("case", "restart_ranks"))
     tables.write_table(MPI.COMM_SELF, out / "restart", {"commit": commit, "rows": rows}, markdown(rows, commit))
 
 
