@@ -50,12 +50,12 @@ _GMRES_RIGHT = {"ksp_type": "fgmres", "ksp_pc_side": "right", "ksp_norm_type": "
 #:   flexible form (FGMRES: the preconditioned directions are kept, so the update of
 #:   x needs no extra preconditioner application at the end of a solve; the iterates
 #:   of a fixed preconditioner are GMRES's; a solve of 2-3 iterations saves a quarter
-#:   of its multigrid cycles, lev 7 d1/L1: 4.76 -> 3.96 s). The
+#:   of its multigrid cycles; docs/coulomb.md). The
 #:   Newton-step solver of the Coulomb problem: AMG reduces all error components
 #:   alike, so a residual reduced by tol is a direction accurate to about tol. With
 #:   one hierarchy kept by Galerkin updates the V-cycle beats the W-cycle (lev 8, six
-#:   cases, 2 ranks: same Newton steps, Krylov iterations 253 against 302; d1/L1
-#:   8.1 s against 9.5 s; docs/coulomb.md).
+#:   cases, 2 ranks: same Newton steps, fewer Krylov iterations and less time;
+#:   measured in docs/coulomb.md).
 #: * ``gmres_ilu``: GMRES + block-Jacobi/ILU(0) as in seed 000, Sect. 7, stopped at
 #:   the left-preconditioned residual (MATLAB's gmres test with a preconditioner).
 #:   A 10 % reduction of that residual is met by directions that miss the smooth

@@ -14,8 +14,8 @@ interpolations are kept. Only the rows whose values changed enter the products: 
 change matrix keeps a fixed pattern (all rows J may change, with explicit zeros on the
 rows that did not), and on a mortar interface those rows are dense (378 nonzeros per
 row on the two-body Hertz medium mesh, 1.8 M nonzeros in all, against 2.9 M in J), so a
-product over the pattern cost more than a new set-up (0.33 s against 1.1 s per update
-there); over the changed rows it costs 0.04 s, with the same operators. The updated operators are exactly the Galerkin operators
+product over the pattern cost nearly as much as a new set-up; over the changed rows it
+costs an eighth of that, with the same operators (docs/bodies.md). The updated operators are exactly the Galerkin operators
 of the new J with the old interpolations, i.e. what ``-pc_gamg_reuse_interpolation``
 gives after a full set-up, at the cost of the change only. Each level's smoother
 (and the coarse solver) is set up again on its updated operator.
