@@ -20,14 +20,15 @@ made by PETSc are counted: DOLFINx's scatters and the solver's few mpi4py
 reductions (``contactqvi/contact/scd_newton.py``) are not. From ``log_view.txt`` it
 parses the summary lines "Time (sec)", "Flops", "MPI Msg Count", "MPI Msg Len
 (bytes)", "MPI Reductions" (whole run) and the stages' lines (and checks the
-totals of the stages inside the solve against the counters). Memory: each rank's peak resident set (getrusage;
--log_view of PETSc 3.22 prints no memory line). Also recorded: the multigrid
+totals of the stages inside the solve against the counters). Memory: each rank's
+peak resident set (getrusage; -log_view of PETSc 3.22 prints no memory line). Also recorded: the multigrid
 hierarchy (levels and rows per level, at the last set-up) and each rank's number
 of neighbours (ranks owning a ghost of its displacement dofs) and of owned and ghost dofs.
 
 The markdown ends with a projection to 64, 512 and 4096 ranks at the same dofs
-per rank (:func:`projection`): measured per-neighbour, per-ghost-dof and
-per-level rates, scaled by a model of a 3D partition, with the network constants
+per rank (:func:`projection`): the measured rates per neighbour and per ghost dof
+and the reductions in proportion to the multigrid levels, scaled by a model of a
+3D partition, with the network constants
 of :data:`ASSUMED` (assumptions, not measurements; docs/cluster.md discusses them).
 
 With more ranks than cores (here 2) the ranks share cores: wall times of 4 and 8
