@@ -247,18 +247,23 @@ def read_gmsh(
     volumes: dict[str, int] = {}
     counts: dict[str, int] = {}
     try:
+        error = None
         if comm.rank == 0:
-            gmsh.open(str(path))
-            if path.suffix == ".geo":
-                gmsh.model.mesh.generate(gdim)
-            for dim, tag in gmsh.model.getPhysicalGroups(gdim - 1):
+            try:  # gmsh's errors (a bad script, a missing Include) happen on rank 0 only: shared below
+                gmsh.open(str(path))
+                if path.suffix == ".geo":
+                    gmsh.model.mesh.generate(gdim)
+            except Exception as exc:
+                error = f"gmsh cannot read {str(path)!r}: {exc}"
+            for dim, tag in gmsh.model.getPhysicalGroups(gdim - 1) if error is None else ():
                 name = gmsh.model.getPhysicalName(dim, tag) or str(tag)
                 names[name] = tag
                 counts[name] = sum(len(gmsh.model.mesh.getElements(dim, entity)[1][0])
                                    for entity in gmsh.model.getEntitiesForPhysicalGroup(dim, tag))
             volumes = {gmsh.model.getPhysicalName(dim, tag) or str(tag): tag
                        for dim, tag in gmsh.model.getPhysicalGroups(gdim)}
-        names, volumes, counts = comm.bcast((names, volumes, counts), root=0)
+        names, volumes, counts, error = comm.bcast((names, volumes, counts, error), root=0)
+        require(error is None, "mesh", error or "")
         # Facet tags are distributed with the cells; with GhostMode.none DOLFINx 0.9 lost a whole
         # group now and then on 2 ranks (inclined_block.geo), so gmsh meshes keep shared-facet ghosts.
         partitioner = cell_partitioner(comm, dmesh.GhostMode.shared_facet)

@@ -116,3 +116,16 @@ def test_output_failing_during_the_run_is_named_and_keeps_the_last_checkpoint(tm
     assert kept["step"] == 1 and len(kept["summary"]["steps"]) == 1
     _, u = _checkpoint_displacement(out / "checkpoint", kept)
     assert u[:, 2].min() == pytest.approx(-1e-3, rel=1e-12)  # step 1: the ball's face pressed down 1 mm
+
+
+def test_a_mesh_gmsh_cannot_read_is_named_on_every_rank(mpi_tmp_path):
+    """gmsh reads on rank 0 only; its error (a missing Include) reaches every rank as a named error
+    instead of leaving the others waiting for the mesh."""
+    from contactqvi.meshes import read_gmsh
+
+    script = mpi_tmp_path / "broken.geo"
+    if MPI.COMM_WORLD.rank == 0:
+        script.write_text('Include "missing.geo";\n')
+    MPI.COMM_WORLD.Barrier()
+    with pytest.raises(ParameterError, match="mesh: gmsh cannot read .*missing.geo"):
+        read_gmsh(script, MPI.COMM_WORLD)
