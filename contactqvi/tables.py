@@ -152,9 +152,10 @@ def write_table(
 def gather_vertex_values(u: fem.Function) -> tuple[np.ndarray, np.ndarray] | tuple[None, None]:
     """Owned dof coordinates (N, 3) and values (N, bs) of a P1/Q1 function, gathered on rank 0.
 
-    Rows are sorted lexicographically by coordinate, so serial and parallel runs
-    give identical arrays. Returns ``(None, None)`` on other ranks. For small
-    problems, figures and tests: it holds the whole field on rank 0.
+    Rows are sorted lexicographically by coordinate, nodes at one point (two bodies
+    touching there) by their index in the mesh input, so serial and parallel runs give
+    identical arrays. Returns ``(None, None)`` on other ranks. For small problems,
+    figures and tests: it holds the whole field on rank 0.
     """
     V = u.function_space
     index_map, bs = V.dofmap.index_map, V.dofmap.index_map_bs
@@ -162,13 +163,22 @@ def gather_vertex_values(u: fem.Function) -> tuple[np.ndarray, np.ndarray] | tup
     x = V.tabulate_dof_coordinates()[:n_owned]
     values = u.x.array[: n_owned * bs].reshape(n_owned, bs)
     comm = V.mesh.comm
-    xs, vs = comm.gather(x, root=0), comm.gather(values, root=0)
+    xs, vs, inputs = comm.gather(x, root=0), comm.gather(values, root=0), comm.gather(_input_index(V), root=0)
     if comm.rank != 0:
         return None, None
     x, values = np.vstack(xs), np.vstack(vs)
     keys = np.round(x / max(np.abs(x).max(), 1e-300), 10)  # immune to round-off in the coordinates
-    order = np.lexsort((keys[:, 0], keys[:, 1], keys[:, 2]))
+    order = np.lexsort((np.concatenate(inputs), keys[:, 0], keys[:, 1], keys[:, 2]))
     return x[order], values[order]
+
+
+def _input_index(V: fem.FunctionSpace) -> np.ndarray:
+    """Index in the mesh input of the node of each owned dof of a P1/Q1 space (the geometry's
+    nodes, with the same cell-local order)."""
+    msh = V.mesh
+    node = np.empty(V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts, dtype=np.int64)
+    node[V.dofmap.list.ravel()] = msh.geometry.dofmap.ravel()
+    return np.asarray(msh.geometry.input_global_indices, dtype=np.int64)[node[: V.dofmap.index_map.size_local]]
 
 
 def write_solution_npz(
