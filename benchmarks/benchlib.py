@@ -18,6 +18,7 @@ from contactqvi import tables
 from contactqvi.cli import parse_args
 from contactqvi.contact.driver import solve_level, solve_nested
 from contactqvi.contact.scd_newton import PARAMETERS
+from contactqvi.laws import Coulomb
 from contactqvi.linalg import create_ksp, preset
 from contactqvi.problems import coulomb as data
 
@@ -85,7 +86,7 @@ def run_coulomb_case(
     """Solve one case ``"d3/L2"`` of seed 000 at ``lev`` (nested from ``initial_levels``) and record it."""
     geometry, load = case.split("/")
     kwargs = dict(gap=data.gap_function(geometry), tractions=data.tractions(load), young=data.YOUNG,
-                  poisson=data.POISSON, friction=data.FRICTION, parameters=parameters, prefix=prefix)
+                  poisson=data.POISSON, law=Coulomb(data.FRICTION), parameters=parameters, prefix=prefix)
     t0 = time.perf_counter()
     if initial_levels:
         solutions = solve_nested(comm, [*initial_levels, lev], **kwargs)

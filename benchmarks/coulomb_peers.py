@@ -26,9 +26,10 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 import benchlib
-from contactqvi.contact import ContactProblem, FrictionLaw, SCDNewtonSolver, build_contact_problem
+from contactqvi.contact import ContactProblem, SCDNewtonSolver, build_contact_problem
 from contactqvi.contact.fixed_point import FORCING, solve_tresca_fixed_point
 from contactqvi.contact.signorini_vi import SIGNORINI_VI_OPTIONS, solve_signorini_vi
+from contactqvi.laws import Coulomb, Frictionless
 from contactqvi.meshes import create_contact_body
 from contactqvi.problems import coulomb as data
 
@@ -110,7 +111,7 @@ def snes_vi_sweep(problem: ContactProblem, scd0: dict, measure: SCDNewtonSolver,
 def run_case(comm: MPI.Comm, lev: int, case: str, args) -> dict:
     geometry, load = case.split("/")
     msh, tags = create_contact_body(comm, lev, data.gap_function(geometry))
-    problem = build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions(load), data.FRICTION)
+    problem = build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions(load), Coulomb(data.FRICTION))
     row = {"lev": lev, "case": case, "p": problem.n_contact, "n": problem.n_free, "pc": args.pc}
 
     u, row["scd"], solver = _timed_newton(problem, {"pc": args.pc}, "peer_scd_")
@@ -118,7 +119,7 @@ def run_case(comm: MPI.Comm, lev: int, case: str, args) -> dict:
     row["fixed_point_configs"] = fixed_point_sweep(problem, u, args.pc, args.forcings)
     row["fixed_point"] = _fastest(row["fixed_point_configs"])
 
-    frictionless = dataclasses.replace(problem, law=FrictionLaw())
+    frictionless = dataclasses.replace(problem, law=Frictionless().lumped(problem.contact_area))
     u0, row["frictionless_scd"], solver0 = _timed_newton(frictionless, {"pc": args.pc}, "peer_scd0_")
     row["snes_vi_configs"] = snes_vi_sweep(frictionless, row["frictionless_scd"], solver0, u0, args.vi_solvers,
                                            args.vi_rtols)

@@ -27,6 +27,7 @@ from petsc4py import PETSc
 
 import benchlib
 from contactqvi.contact import SCDNewtonSolver, build_contact_problem
+from contactqvi.laws import Coulomb
 from contactqvi.meshes import create_contact_body
 from contactqvi.problems import coulomb as data
 from contactqvi.result import Timings
@@ -67,7 +68,7 @@ def profile(comm: MPI.Comm, lev: int, case: str, pc: str, version: str, repeat: 
     phases, beside the fastest of ``repeat`` elastic solves on the same mesh."""
     geometry, load = case.split("/")
     msh, tags = create_contact_body(comm, lev, data.gap_function(geometry))
-    problem = build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions(load), data.FRICTION)
+    problem = build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions(load), Coulomb(data.FRICTION))
     u = problem.A.createVecRight()
     runs = []
     for _ in range(repeat):

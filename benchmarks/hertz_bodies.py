@@ -87,7 +87,7 @@ def mindlin(mesh: str, comm: MPI.Comm) -> list[dict]:
     and the closed forms (half model: forces and areas doubled)."""
     case = load_case(MINDLIN_CASE)
     case = dataclasses.replace(case, mesh=dataclasses.replace(case.mesh, file=ROOT / "meshes" / f"mindlin_bodies_{mesh}.geo"))
-    (young, poisson), friction = (case.bodies[0].material.young, case.bodies[0].material.poisson), case.contacts[0].friction
+    (young, poisson), friction = (case.bodies[0].material.young, case.bodies[0].material.poisson), case.contacts[0].law.friction
     shear = hertz.shear_modulus(young, poisson)
     rows = []
     with build_problem(case, comm) as problem:

@@ -2,7 +2,8 @@
 
 Semismooth Newton methods for
   * 3D contact with Coulomb friction against rigid obstacles (SCD semismooth* Newton),
-    static or along quasi-static load paths, :mod:`contactqvi.contact`; a user's
+    static or along quasi-static load paths, :mod:`contactqvi.contact`, with the contact
+    laws of :mod:`contactqvi.laws` (Coulomb, Tresca, frictionless, pressure-dependent); a user's
     problem as a case file, :mod:`contactqvi.case` and :mod:`contactqvi.runner`;
   * Stadler's simplified friction problem, :mod:`contactqvi.friction`;
   * obstacle problems and the thermoforming QVI, :mod:`contactqvi.vi`, :mod:`contactqvi.qvi`.
@@ -14,6 +15,7 @@ The shared core: :class:`Status` and :class:`Result` (:mod:`contactqvi.result`),
 
 from contactqvi.case import ContactCase, load_case
 from contactqvi.elasticity import elasticity_forms, lame_parameters, rigid_motions_nullspace, strain, stress
+from contactqvi.laws import LAWS, ContactLaw, Coulomb, Frictionless, PressureDependentCoulomb, Tresca
 from contactqvi.linalg import KSP_PRESETS, preset
 from contactqvi.meshes import (
     cell_partitioner,
@@ -34,16 +36,22 @@ __version__ = "0.1.0"
 
 __all__ = [
     "KSP_PRESETS",
+    "LAWS",
     "ContactCase",
+    "ContactLaw",
+    "Coulomb",
     "Cylinder",
     "ElasticBody",
+    "Frictionless",
     "Parameter",
     "ParameterError",
     "Parameters",
     "Plane",
+    "PressureDependentCoulomb",
     "Result",
     "Sphere",
     "Status",
+    "Tresca",
     "applied_force",
     "cell_partitioner",
     "contact_body_sizes",

@@ -22,9 +22,8 @@ SI units throughout (m, Pa, N/m^3). Example::
 
     [contact]
     surface = "contact"                 # physical group that may touch the obstacle
-    law = "coulomb"                     # or "tresca"
-    friction = 0.23                     # Coulomb coefficient F >= 0 (law = "coulomb")
-    # slip_bound = 1e8                  # Tresca bound (Pa, law = "tresca")
+    law = "coulomb"                     # the contact law and its parameters (below)
+    friction = 0.23                     # Coulomb coefficient F >= 0
 
     [obstacle]                          # rigid; the body lies on the side of `normal`,
     type = "plane"                      # outside a sphere or cylinder
@@ -68,9 +67,22 @@ slave surface with a master surface (``"body.group"``) or with a rigid obstacle
     [[contacts]]
     slave = "upper.interface"           # "body.group"
     master = "lower.interface"          # ... or obstacle = {type = "plane", ...}
-    law = "coulomb"                     # "coulomb", "tresca" or "frictionless"
+    law = "coulomb"                     # as in [contact]
     friction = 0.3
     # search_distance = 0.01            # m; default: each slave facet's longest edge
+
+Contact laws (:data:`contactqvi.laws.LAWS`; ``law`` may be left out for ``coulomb``),
+with the keys each takes beside ``law`` (checked by the law's class, errors named by
+the key path, ``contacts[0].friction``):
+
+* ``coulomb``: ``friction`` = F >= 0, the friction force is at most F times the
+  normal force (seed 000; F = 0 is frictionless);
+* ``tresca``: ``slip_bound`` > 0 (Pa), a bound on the friction traction whatever
+  the normal force;
+* ``frictionless``: no keys;
+* ``pressure_coulomb``: ``friction`` = F0 >= 0, ``friction_limit`` = F_inf >= 0 and
+  ``pressure_scale`` = p0 > 0 (Pa): Coulomb friction with the coefficient
+  F(p) = F0 + (F_inf - F0) p / (p + p0) at contact pressure p.
 
 The same case in Python (sections left out take their defaults)::
 
@@ -78,7 +90,7 @@ The same case in Python (sections left out take their defaults)::
         mesh=MeshSource(file="meshes/arch_block.geo"),
         material=Material(young=70e9, poisson=0.334),
         boundary=Boundary(clamped=["dirichlet"], traction={"top": (0, 0, -1e9)}),
-        contact=Contact("contact", friction=0.23),
+        contact=Contact("contact", Coulomb(friction=0.23)),   # the law: contactqvi.laws
         obstacle=ObstacleShape("plane", point=(0, 0, 0), normal=(0, 0, 1)),
         steps=[Step(load=0.5), Step(load=1.0)],
     )
@@ -107,11 +119,18 @@ import tomllib
 import typing
 
 from contactqvi import obstacles
+from contactqvi.laws import LAWS, ContactLaw, create_law, parameter_names
 from contactqvi.load_steps import LoadStep as Step
-from contactqvi.parameters import ParameterError, Parameters, require, require_choice, require_positive
+from contactqvi.parameters import (
+    ParameterError,
+    Parameters,
+    require,
+    require_choice,
+    require_number,
+    require_positive,
+)
 
 __all__ = [
-    "LAWS",
     "OBSTACLE_KEYS",
     "Body",
     "Boundary",
@@ -130,8 +149,6 @@ __all__ = [
     "parse_case",
 ]
 
-#: Friction laws of ``contact.law`` and ``contacts[i].law``.
-LAWS = ("coulomb", "tresca", "frictionless")
 #: Keys of ``[obstacle]`` besides ``type``, per obstacle type.
 OBSTACLE_KEYS: dict[str, tuple[str, ...]] = {
     "plane": ("point", "normal"),
@@ -221,19 +238,19 @@ class Boundary:
 
 @dataclasses.dataclass(frozen=True)
 class Contact:
-    """``[contact]``: the surface that may touch the obstacle, and its friction law.
+    """``[contact]``: the surface that may touch the obstacle, and its contact law.
+
+    In a case file the law is ``law = NAME`` and its parameters, keys of the same
+    table (``law = "coulomb"``, ``friction = 0.23``); here it is one object.
 
     Attributes:
         surface: physical group of the contact surface.
-        law: ``coulomb`` (slip bound F x normal force) or ``tresca`` (given bound).
-        friction: Coulomb coefficient F >= 0 (law ``coulomb`` only; 0 = frictionless).
-        slip_bound: Tresca bound on the friction traction (Pa) > 0 (law ``tresca`` only).
+        law: the contact law (:mod:`contactqvi.laws`), e.g. ``Coulomb(friction=0.23)``,
+            ``Tresca(slip_bound=1e8)``, ``Frictionless()``.
     """
 
     surface: str
-    law: str = "coulomb"
-    friction: float | None = None
-    slip_bound: float | None = None
+    law: ContactLaw | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -284,8 +301,7 @@ class ContactPair:
         slave: ``"body.group"``, the surface whose nodes carry the contact conditions.
         master: ``"body.group"`` of another body's surface (mortar coupling), or
         obstacle: a rigid obstacle (exactly one of ``master`` and ``obstacle``).
-        law: ``coulomb``, ``tresca`` or ``frictionless``.
-        friction, slip_bound: as in :class:`Contact`.
+        law: the contact law, as in :class:`Contact`.
         search_distance: reach of the contact search (m) > 0; None: each slave
             facet's longest edge.
     """
@@ -293,9 +309,7 @@ class ContactPair:
     slave: str
     master: str | None = None
     obstacle: ObstacleShape | None = None
-    law: str = "coulomb"
-    friction: float | None = None
-    slip_bound: float | None = None
+    law: ContactLaw | None = None
     search_distance: float | None = None
 
 
@@ -403,7 +417,7 @@ def parse_case(data: collections.abc.Mapping, base_dir: str | pathlib.Path = "."
         **common,
         material=Material(**_section(top, "material", Material)),
         boundary=_parse_boundary(_section(top, "boundary", Boundary), "boundary"),
-        contact=Contact(**_section(top, "contact", Contact)),
+        contact=Contact(**_with_law(_section(top, "contact", Contact, parameter_names()), "contact")),
         obstacle=ObstacleShape(**_section(top, "obstacle", ObstacleShape)),
     )
 
@@ -438,24 +452,32 @@ def _parse_body(value: typing.Any, path: str) -> Body:
 
 
 def _parse_pair(value: typing.Any, path: str) -> ContactPair:
-    pair = _table(value, path, ContactPair)
+    pair = _with_law(_table(value, path, ContactPair, extra=parameter_names()), path)
     if "obstacle" in pair:
         pair["obstacle"] = ObstacleShape(**_table(pair["obstacle"], f"{path}.obstacle", ObstacleShape))
     return ContactPair(**pair)
+
+
+def _with_law(table: dict[str, typing.Any], path: str) -> dict[str, typing.Any]:
+    """A contact table with ``law`` and the law's parameter keys replaced by the law object."""
+    keys = ("law", *parameter_names())
+    table["law"] = create_law({key: table.pop(key) for key in keys if key in table}, path)
+    return table
 
 
 def _join(path: str, key: str) -> str:
     return f"{path}.{key}" if path else key
 
 
-def _table(value: typing.Any, path: str, cls: type | None = None, required: bool = True) -> dict[str, typing.Any]:
-    """``value`` as a dict; with ``cls``, its keys checked against the fields of ``cls``
-    (and, if ``required``, the fields without default present)."""
+def _table(value: typing.Any, path: str, cls: type | None = None, required: bool = True,
+           extra: typing.Sequence[str] = ()) -> dict[str, typing.Any]:
+    """``value`` as a dict; with ``cls``, its keys checked against the fields of ``cls`` and
+    ``extra`` (and, if ``required``, the fields without default present)."""
     require(isinstance(value, collections.abc.Mapping), path or "case", f"must be a table, got {value!r}")
     value = dict(value)
     if cls is None:
         return value
-    fields = [f.name for f in dataclasses.fields(cls)]
+    fields = [f.name for f in dataclasses.fields(cls)] + list(extra)
     for key in value:
         if key not in fields:
             close = difflib.get_close_matches(key, fields, n=1)
@@ -472,9 +494,10 @@ def _table(value: typing.Any, path: str, cls: type | None = None, required: bool
 _SECTIONS = tuple(f.name for f in dataclasses.fields(ContactCase))
 
 
-def _section(top: dict[str, typing.Any], name: str, cls: type) -> dict[str, typing.Any]:
+def _section(top: dict[str, typing.Any], name: str, cls: type,
+             extra: typing.Sequence[str] = ()) -> dict[str, typing.Any]:
     require(name in top, name, f"required table [{name}] missing")
-    return _table(top[name], name, cls)
+    return _table(top[name], name, cls, extra=extra)
 
 
 # -- checks (shared by files and Python-built cases) -------------------------------
@@ -482,12 +505,6 @@ def _section(top: dict[str, typing.Any], name: str, cls: type) -> dict[str, typi
 
 def _is_list(value: typing.Any) -> bool:
     return isinstance(value, collections.abc.Sequence) and not isinstance(value, str)
-
-
-def _number(value: typing.Any, name: str) -> float:
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool)
-    require(ok and math.isfinite(value), name, f"must be a finite number, got {value!r}")
-    return float(value)
 
 
 def _vector(value: typing.Any, name: str) -> Vector:
@@ -536,9 +553,9 @@ def _check_mesh(mesh: MeshSource) -> MeshSource:
 
 def _check_material(material: Material, path: str) -> Material:
     _instance(material, Material, path)
-    young = _number(material.young, f"{path}.young")
+    young = require_number(f"{path}.young", material.young)
     require_positive(f"{path}.young", young)
-    poisson = _number(material.poisson, f"{path}.poisson")
+    poisson = require_number(f"{path}.poisson", material.poisson)
     require(-1.0 < poisson < 0.5, f"{path}.poisson", f"must lie in (-1, 0.5), got {material.poisson!r}")
     return Material(young, poisson)
 
@@ -558,7 +575,7 @@ def _check_boundary(boundary: Boundary, path: str, supported: bool = True) -> Bo
         key = f"{path}.displacement.{name}"
         _instance(given, Displacement, key)
         components = {
-            axis: None if value is None else _number(value, f"{key}.{axis}")
+            axis: None if value is None else require_number(f"{key}.{axis}", value)
             for axis, value in dataclasses.asdict(given).items()
         }
         require(any(v is not None for v in components.values()), key, "give at least one of x, y, z")
@@ -582,26 +599,14 @@ def _check_boundary(boundary: Boundary, path: str, supported: bool = True) -> Bo
 def _check_contact(contact: Contact) -> Contact:
     _instance(contact, Contact, "contact")
     surface = _name(contact.surface, "contact.surface")
-    friction, slip_bound = _check_law(contact.law, contact.friction, contact.slip_bound, "contact")
-    return Contact(surface, contact.law, friction, slip_bound)
+    return Contact(surface, _check_law(contact.law, "contact"))
 
 
-def _check_law(law: str, friction: typing.Any, slip_bound: typing.Any, path: str) -> tuple[float | None, float | None]:
-    """The friction data of ``law`` checked: (F, None), (None, s) or (None, None)."""
-    require_choice(f"{path}.law", law, LAWS)
-    if law != "tresca":
-        require(slip_bound is None, f"{path}.slip_bound", "only used with law = 'tresca'")
-    if law != "coulomb":
-        require(friction is None, f"{path}.friction", "only used with law = 'coulomb'")
-    if law == "coulomb":
-        require(friction is not None, f"{path}.friction", "law = 'coulomb' needs a friction coefficient >= 0")
-        friction = _number(friction, f"{path}.friction")
-        require_positive(f"{path}.friction", friction, allow_zero=True)
-    elif law == "tresca":
-        require(slip_bound is not None, f"{path}.slip_bound", "law = 'tresca' needs a slip bound > 0 (Pa)")
-        slip_bound = _number(slip_bound, f"{path}.slip_bound")
-        require_positive(f"{path}.slip_bound", slip_bound)
-    return friction, slip_bound
+def _check_law(law: ContactLaw | None, path: str) -> ContactLaw:
+    """``law`` checked by its own class (:meth:`~contactqvi.laws.ContactLaw.checked`)."""
+    require(isinstance(law, ContactLaw), f"{path}.law", f"must be a contact law ({', '.join(LAWS)}), e.g. "
+            f"Coulomb(friction=0.3) from contactqvi.laws, got {law!r}")
+    return law.checked(path)
 
 
 def _check_bodies(bodies: typing.Sequence[Body]) -> tuple[Body, ...]:
@@ -639,12 +644,12 @@ def _check_contacts(contacts: typing.Sequence[ContactPair], bodies: tuple[Body, 
         require((pair.master is None) != (pair.obstacle is None), path, "give exactly one of 'master' and 'obstacle'")
         obstacle = None if pair.obstacle is None else _check_obstacle(pair.obstacle, f"{path}.obstacle")
         require(pair.master != pair.slave, f"{path}.master", "must differ from the slave surface")
-        friction, slip_bound = _check_law(pair.law, pair.friction, pair.slip_bound, path)
+        law = _check_law(pair.law, path)
         distance = pair.search_distance
         if distance is not None:
-            distance = _number(distance, f"{path}.search_distance")
+            distance = require_number(f"{path}.search_distance", distance)
             require_positive(f"{path}.search_distance", distance)
-        checked.append(ContactPair(pair.slave, pair.master, obstacle, pair.law, friction, slip_bound, distance))
+        checked.append(ContactPair(pair.slave, pair.master, obstacle, law, distance))
     return tuple(checked)
 
 
@@ -664,7 +669,7 @@ def _check_obstacle(obstacle: ObstacleShape, path: str) -> ObstacleShape:
         if key in ("normal", "axis"):
             checked[key] = _direction(value, name)
         elif key == "radius":
-            checked[key] = _number(value, name)
+            checked[key] = require_number(name, value)
             require_positive(name, checked[key])
         else:
             checked[key] = _vector(value, name)
@@ -676,7 +681,7 @@ def _check_steps(steps: typing.Sequence[Step]) -> tuple[Step, ...]:
     checked = []
     for i, step in enumerate(steps):
         _instance(step, Step, f"steps[{i}]")
-        load = _number(step.load, f"steps[{i}].load")
+        load = require_number(f"steps[{i}].load", step.load)
         require(load >= 0.0, f"steps[{i}].load", f"must be >= 0, got {load!r}")
         checked.append(Step(load, _vector(step.translation, f"steps[{i}].translation")))
     return tuple(checked) or (Step(),)
@@ -762,8 +767,14 @@ def _boundary_uses(boundary: Boundary, path: str) -> list[tuple[str, str]]:
 
 def _plain(value: typing.Any) -> typing.Any:
     if dataclasses.is_dataclass(value):
-        return {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)
-                if getattr(value, f.name) is not None}
+        plain = {}
+        for f in dataclasses.fields(value):
+            field = getattr(value, f.name)
+            if isinstance(field, ContactLaw):  # as in the file: law = NAME and its keys
+                plain.update(field.to_dict())
+            elif field is not None:
+                plain[f.name] = _plain(field)
+        return plain
     if isinstance(value, dict):
         return {k: _plain(v) for k, v in value.items()}
     if isinstance(value, (tuple, list)):

@@ -23,6 +23,7 @@ __all__ = [
     "Parameters",
     "require",
     "require_choice",
+    "require_number",
     "require_positive",
 ]
 
@@ -39,6 +40,13 @@ def require(condition: bool, name: str, message: str) -> None:
     """Raise :class:`ParameterError` for ``name`` unless ``condition`` holds."""
     if not condition:
         raise ParameterError(name, message)
+
+
+def require_number(name: str, value: typing.Any) -> float:
+    """``value`` as a float; it must be a finite number (not a bool)."""
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+    require(ok and math.isfinite(value), name, f"must be a finite number, got {value!r}")
+    return float(value)
 
 
 def require_positive(name: str, value: typing.Any, *, allow_zero: bool = False) -> None:

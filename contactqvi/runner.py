@@ -83,7 +83,7 @@ def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
     b, c = case.boundary, case.contact
     return build_contact_problem(
         msh, tags, case.material.young, case.material.poisson, dict(b.traction),
-        friction=c.friction or 0.0, slip_bound=c.slip_bound or 0.0, clamped=b.clamped, contact=c.surface,
+        law=c.law, clamped=b.clamped, contact=c.surface,
         obstacle=case.obstacle.create(), body_force=b.body_force,
         displacements={name: d.components() for name, d in b.displacement.items()}, moved=b.moved,
     )
@@ -120,10 +120,9 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
 
 def _pair(pair: ContactPair) -> ObstaclePair | BodyPair:
     """The contact pair of a ``[[contacts]]`` entry."""
-    friction, slip_bound = pair.friction or 0.0, pair.slip_bound or 0.0
     if pair.obstacle is not None:
-        return ObstaclePair(pair.slave, pair.obstacle.create(), friction, slip_bound)
-    return BodyPair(pair.slave, pair.master, friction, slip_bound, pair.search_distance)
+        return ObstaclePair(pair.slave, pair.obstacle.create(), pair.law)
+    return BodyPair(pair.slave, pair.master, pair.law, pair.search_distance)
 
 
 def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,

@@ -6,7 +6,9 @@ This demo illustrates how to:
   * solve it with the SCD semismooth* Newton method (Sects. 4-6) on PETSc objects,
     in parallel (``mpirun -n 2 python demos/coulomb3d.py``);
   * optionally start from the interpolated solution of the previous level (Table 3);
-  * or solve the Tresca variant with a given slip bound (``--law tresca --slip-bound S``);
+  * or solve it with another contact law of :mod:`contactqvi.laws`: Tresca with a given
+    slip bound (``--law tresca --slip-bound S``), frictionless, or a pressure-dependent
+    friction coefficient (``--law pressure_coulomb --friction-limit F --pressure-scale P``);
   * write ParaView files, ``summary.json`` and ``solution.npz`` to ``--output``.
 
 Units are SI (m, Pa, N). ``--pc`` picks the Newton-step solver (``gamg`` default,
@@ -28,6 +30,7 @@ from contactqvi.contact.driver import solve_nested
 from contactqvi.contact.postprocess import write_contact_results
 from contactqvi.contact.scd_newton import PARAMETERS
 from contactqvi.elasticity import lame_parameters
+from contactqvi.laws import DEFAULT_LAW, LAWS, ContactLaw, Coulomb, create_law, parameter_names
 from contactqvi.parameters import ParameterError, require
 from contactqvi.problems import coulomb as data
 
@@ -39,11 +42,12 @@ def parse(argv: list[str] | None = None):
     parser.add_argument("--lev", type=int, default=5, help="discretisation level (Table 2)")
     parser.add_argument("--geometry", default="d1", choices=sorted(data.GEOMETRIES), help="bottom surface d")
     parser.add_argument("--load", default="L1", choices=sorted(data.LOADS), help="load case")
-    parser.add_argument("--law", default="coulomb", choices=["coulomb", "tresca"],
-                        help="friction law: Coulomb (bound F x normal force) or Tresca (given bound)")
-    parser.add_argument("--friction", type=float, default=data.FRICTION, help="Coulomb friction coefficient F")
-    parser.add_argument("--slip-bound", type=float, default=None,
-                        help="Tresca slip bound: friction traction limit (Pa), required with --law tresca")
+    parser.add_argument("--law", default=DEFAULT_LAW, choices=list(LAWS), help="contact law (contactqvi.laws)")
+    for key in parameter_names():
+        users = [name for name, law in LAWS.items() if key in law.parameters]
+        default = f"; default {data.FRICTION} (the paper's F)" if key == "friction" else ""
+        parser.add_argument("--" + key.replace("_", "-"), type=float, default=None,
+                            help=f"{LAWS[users[0]].parameters[key].range_text}, law {' or '.join(users)}{default}")
     parser.add_argument("--young", type=float, default=data.YOUNG, help="Young's modulus E (Pa)")
     parser.add_argument("--poisson", type=float, default=data.POISSON, help="Poisson's ratio nu")
     PARAMETERS.add_arguments(parser.add_argument_group("SCD Newton solver"))
@@ -52,14 +56,22 @@ def parse(argv: list[str] | None = None):
     parser.add_argument("--no-plot", action="store_true", help="skip the PNG of the contact states")
     args = cli.parse_args(parser, argv)
     lame_parameters(args.young, args.poisson)
-    if args.law == "tresca":
-        require(args.slip_bound is not None and args.slip_bound > 0, "slip-bound", "--law tresca needs a slip bound > 0 (Pa)")
-        args.friction = 0.0
-    else:
-        require(args.slip_bound is None, "slip-bound", "only used with --law tresca")
+    args.contact_law = _contact_law(args)
     require(0 <= args.nested_from < args.lev or args.initial == "zero", "nested-from", "must lie in [0, lev)")
     args.solver_parameters = PARAMETERS.from_namespace(args)
     return args
+
+
+def _contact_law(args) -> ContactLaw:
+    """The law of ``--law`` and its parameters (``--friction`` defaults to the paper's F); errors
+    named by the option."""
+    values = {key: getattr(args, key) for key in parameter_names()}
+    if "friction" in LAWS[args.law].parameters and values["friction"] is None:
+        values["friction"] = data.FRICTION
+    try:
+        return create_law({"law": args.law, **values})
+    except ParameterError as exc:
+        raise ParameterError(exc.name.replace("_", "-"), str(exc).removeprefix(f"{exc.name}: ")) from None
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -69,8 +81,7 @@ def main(argv: list[str] | None = None) -> int:
         levels = range(args.nested_from, args.lev + 1) if args.initial == "nested" else [args.lev]
         solutions = solve_nested(
             comm, levels, gap=data.gap_function(args.geometry), tractions=data.tractions(args.load),
-            young=args.young, poisson=args.poisson, friction=args.friction, slip_bound=args.slip_bound or 0.0,
-            parameters=args.solver_parameters,
+            young=args.young, poisson=args.poisson, law=args.contact_law, parameters=args.solver_parameters,
         )
     except ParameterError as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -78,12 +89,13 @@ def main(argv: list[str] | None = None) -> int:
     out = tables.prepare_output_dir(comm, args.output)
     problem, u, result = solutions[-1].problem, solutions[-1].u, solutions[-1].result
     case = f"{args.geometry}/{args.load}"
-    paper_data = args.law == "coulomb" and (args.friction, args.young, args.poisson) == (data.FRICTION, data.YOUNG, data.POISSON)
+    paper_data = (args.contact_law, args.young, args.poisson) == (Coulomb(data.FRICTION), data.YOUNG, data.POISSON)
     paper = (data.PAPER_TABLE3 if args.initial == "nested" else data.PAPER_TABLE2).get(args.lev, {}).get(case)
     summary = {
         "problem": "coulomb3d",
         **result.summary(),
-        "parameters": {k: v for k, v in vars(args).items() if k != "solver_parameters"},
+        "parameters": {k: v for k, v in vars(args).items() if k not in ("solver_parameters", "contact_law")},
+        "law": args.contact_law.to_dict(),
         "solver_parameters": args.solver_parameters,
         "petsc_options": PETSc.Options().getAll(),
         "mpi_size": comm.size,

@@ -27,6 +27,8 @@ from contactqvi.case import (
     parse_case,
 )
 from contactqvi.contact import scd_newton
+from contactqvi import case as case_module
+from contactqvi.laws import LAWS, Coulomb
 from contactqvi.parameters import ParameterError
 from contactqvi.problems import coulomb as data
 from contactqvi.runner import build_problem
@@ -77,12 +79,19 @@ def test_shipped_case_parses_and_names_groups_of_its_mesh(path):
         check_groups(case, meshes.BOX_BOUNDARIES)
 
 
+def test_every_law_is_documented_with_its_keys():
+    """The case-file documentation names every registered contact law and its keys."""
+    for name, law in LAWS.items():
+        assert f"``{name}``" in case_module.__doc__
+        assert all(f"``{key}``" in case_module.__doc__ for key in law.parameters)
+
+
 def test_paper_case_is_the_demo_problem():
     """cases/paper_d3_L2.toml holds the data of demos/coulomb3d.py --geometry d3 --load L2 --lev 5."""
     case = load_case(ROOT / "cases" / "paper_d3_L2.toml")
     assert case.mesh == MeshSource(box=case.mesh.box) and (case.mesh.box.lev, case.mesh.box.geometry) == (5, "d3")
     assert case.material == Material(data.YOUNG, data.POISSON)
-    assert case.contact == Contact("contact", "coulomb", friction=data.FRICTION)
+    assert case.contact == Contact("contact", Coulomb(friction=data.FRICTION))
     assert case.boundary.clamped == ("dirichlet",) and case.boundary.body_force is None
     assert case.boundary.traction == data.tractions("L2")
     assert case.obstacle == ObstacleShape("plane", point=(0.0, 0.0, 0.0), normal=(0.0, 0.0, 1.0))
@@ -98,7 +107,7 @@ def test_case_built_in_python_equals_the_file():
         boundary=Boundary(
             clamped=["bottom"], displacement={"symmetry_x": Displacement(x=0), "symmetry_y": Displacement(y=0)}
         ),
-        contact=Contact("contact", friction=0),
+        contact=Contact("contact", Coulomb(friction=0)),
         obstacle=ObstacleShape("sphere", center=[0, 0, 1], radius=1),
         steps=[Step(translation=(0, 0, -depth)) for depth in (0.25e-3, 0.5e-3, 0.75e-3, 1e-3)],
     )
@@ -159,7 +168,7 @@ BAD = [
     # unknown keys, with the closest valid name
     ((("matrial", {}),), "matrial: unknown key; did you mean 'material'?"),
     ((("obstacle", "nromal", [0, 0, 1]),), "obstacle.nromal: unknown key; did you mean 'normal'?"),
-    ((("contact", "mu", 0.2),), "contact.mu: unknown key; valid keys: surface, law, friction, slip_bound"),
+    ((("contact", "mu", 0.2),), "contact.mu: unknown key; valid keys: surface, law, friction, slip_bound, friction_limit, pressure_scale"),
     ((("obstacle", "steps", []),),
      "obstacle.steps: unknown key; a key written after the header [obstacle] belongs to that table; move 'steps' above it"),
     ((("mesh", "box", "level", 3),), "mesh.box.level: unknown key; did you mean 'lev'?"),
@@ -201,13 +210,13 @@ BAD = [
     ((("obstacle", "type", "sphre"),), "obstacle.type: must be one of plane, sphere, cylinder, got 'sphre' (did you mean 'sphere'?)"),
     ((("contact", "law", "tresca"), ("contact", "friction", ...)),
      "contact.slip_bound: law = 'tresca' needs a slip bound > 0 (Pa)"),
-    ((("contact", "law", "tresca"), ("contact", "slip_bound", 1e8)), "contact.friction: only used with law = 'coulomb'"),
+    ((("contact", "law", "tresca"), ("contact", "slip_bound", 1e8)), "contact.friction: only used with law = 'coulomb' or 'pressure_coulomb'"),
     ((("contact", {"surface": "contact", "law": "tresca", "slip_bound": 0}),),
      "contact.slip_bound: must be > 0 and finite, got 0.0"),
     ((("contact", "slip_bound", 1e8),), "contact.slip_bound: only used with law = 'tresca'"),
     ((("contact", "friction", ...),), "contact.friction: law = 'coulomb' needs a friction coefficient >= 0"),
     ((("contact", "friction", -0.1),), "contact.friction: must be >= 0 and finite, got -0.1"),
-    ((("contact", "law", "colomb"),), "contact.law: must be one of coulomb, tresca, frictionless, got 'colomb' (did you mean 'coulomb'?)"),
+    ((("contact", "law", "colomb"),), "contact.law: must be one of coulomb, tresca, frictionless, pressure_coulomb, got 'colomb' (did you mean 'coulomb'?)"),
     ((("material", "poisson", 0.5),), "material.poisson: must lie in (-1, 0.5), got 0.5"),
     ((("material", "poisson", -1),), "material.poisson: must lie in (-1, 0.5), got -1"),
     ((("material", "young", 0),), "material.young: must be > 0 and finite, got 0.0"),

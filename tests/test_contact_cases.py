@@ -15,6 +15,7 @@ from dolfinx import fem
 from contactqvi.case import load_case, parse_case
 from contactqvi.contact import LoadStep, build_contact_problem, contact_resultants, solve_load_path
 from contactqvi.contact.postprocess import write_contact_results
+from contactqvi.laws import Coulomb
 from contactqvi.meshes import create_contact_body
 from contactqvi.obstacles import Cylinder, Plane, Sphere, tangent_frames
 from contactqvi.parameters import ParameterError
@@ -57,7 +58,7 @@ def _paper_problem(lev: int, rotation: np.ndarray | None = None, obstacle=None, 
     msh.geometry.x[:] = msh.geometry.x @ R.T
     tractions = {name: tuple(R @ np.asarray(t)) for name, t in data.tractions("L1").items()}
     obstacle = Plane((0, 0, 0), R @ [0, 0, 1.0]) if obstacle is None else obstacle
-    return build_contact_problem(msh, tags, data.YOUNG, data.POISSON, tractions, data.FRICTION, obstacle=obstacle,
+    return build_contact_problem(msh, tags, data.YOUNG, data.POISSON, tractions, Coulomb(data.FRICTION), obstacle=obstacle,
                                  **kwargs)
 
 

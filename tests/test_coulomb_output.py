@@ -13,6 +13,7 @@ from contactqvi import meshes
 from contactqvi.contact import LoadStep, State, build_contact_problem, solve_load_path
 from contactqvi.contact.postprocess import STATE_NAMES, UNITS, write_contact_results
 from contactqvi.contact.surface import ContactSurface, TributaryPatches
+from contactqvi.laws import Coulomb
 from contactqvi.paraview import Dataset, write_xdmf
 from contactqvi.problems import coulomb as data
 from contactqvi.tables import to_builtin
@@ -28,7 +29,7 @@ STICKING = (State.STICKING, State.WEAK_STICKING)
 def solution():
     """Converged d1/L1 problem at lev 3 (exact inner solves), u and result."""
     msh, tags = meshes.create_contact_body(MPI.COMM_WORLD, LEV, data.gap_function("d1"))
-    problem = build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions("L1"), data.FRICTION)
+    problem = build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions("L1"), Coulomb(data.FRICTION))
     u = problem.A.createVecRight()
     (result,) = solve_load_path(problem, [LoadStep()], u, {"pc": "lu"}, prefix="surface_")
     assert result.converged

@@ -21,6 +21,7 @@ from dolfinx import mesh as dmesh
 
 from contactqvi import meshes, tables
 from contactqvi.contact import LoadStep, build_contact_problem, solve_load_path
+from contactqvi.laws import Coulomb
 from contactqvi.problems import coulomb as data
 
 
@@ -64,7 +65,7 @@ def test_ghost_mode_none_by_default():
 def _solve(lev: int, case: str) -> tuple[int, int, list[float], np.ndarray | None]:
     geometry, load = case.split("/")
     msh, tags = meshes.create_contact_body(MPI.COMM_WORLD, lev, data.gap_function(geometry))
-    with build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions(load), data.FRICTION) as problem:
+    with build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions(load), Coulomb(data.FRICTION)) as problem:
         u = problem.A.createVecRight()
         (result,) = solve_load_path(problem, [LoadStep()], u, prefix="determinism_")  # default: GMRES + GAMG
         assert result.converged

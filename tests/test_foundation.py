@@ -16,6 +16,7 @@ from dolfinx import fem
 
 from contactqvi import meshes, paraview, tables
 from contactqvi.elasticity import elasticity_forms, lame_parameters, rigid_motions_nullspace
+from contactqvi.laws import Coulomb
 from contactqvi.linalg import create_ksp, power_iteration
 from contactqvi.parameters import ParameterError
 from contactqvi.problems.coulomb import PAPER_TABLE2, gap_function
@@ -42,7 +43,7 @@ def test_contact_body_mesh_counts(lev, geometry):
 
     comm = MPI.COMM_WORLD
     msh, tags = meshes.create_contact_body(comm, lev, gap_function(geometry))
-    problem = build_contact_problem(msh, tags, 70e9, 0.3, {"top": (0, 0, -1e9)}, 0.2)
+    problem = build_contact_problem(msh, tags, 70e9, 0.3, {"top": (0, 0, -1e9)}, Coulomb(0.2))
     assert (problem.n_contact, problem.n_free) == TABLE2_SIZES[lev]
     x = problem.V.tabulate_dof_coordinates()[problem.contact_blk]
     assert np.allclose(x[:, 2], gap_function(geometry)(x[:, 0], x[:, 1]), atol=1e-14)

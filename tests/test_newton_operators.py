@@ -17,12 +17,13 @@ import pytest
 from contactqvi import meshes
 from contactqvi.contact import SCDNewtonSolver, build_contact_problem
 from contactqvi.contact.nodal import classify, resolvent, scd_adjoint_blocks
+from contactqvi.laws import Coulomb
 from contactqvi.problems import coulomb as data
 
 
 def _problem(lev: int):
     msh, tags = meshes.create_contact_body(MPI.COMM_WORLD, lev, data.gap_function("d3"))
-    return build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions("L2"), data.FRICTION)
+    return build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions("L2"), Coulomb(data.FRICTION))
 
 
 def _block_diagonal(A: PETSc.Mat, blk: np.ndarray, blocks: np.ndarray, default: np.ndarray) -> PETSc.Mat:

@@ -22,6 +22,7 @@ import dolfinx.fem.petsc
 from dolfinx import fem, mesh
 
 from contactqvi.contact import NewtonStepSolver, SCDNewtonSolver, build_contact_problem
+from contactqvi.laws import Coulomb
 from contactqvi.lifetime import PETScOwner
 from contactqvi.meshes import create_contact_body
 from contactqvi.problems import coulomb
@@ -175,7 +176,7 @@ def test_the_scd_solver_frees_its_step_solver_and_work_vectors(mpi_tmp_path):
     def run():
         msh, tags = create_contact_body(MPI.COMM_WORLD, 2, coulomb.gap_function("d3"))
         problem = build_contact_problem(msh, tags, coulomb.YOUNG, coulomb.POISSON, coulomb.tractions("L2"),
-                                        coulomb.FRICTION)  # fmt: skip
+                                        Coulomb(coulomb.FRICTION))  # fmt: skip
         solver = SCDNewtonSolver(problem, {"pc_rebuild_iterations": 1}, prefix="nss_life_scd_")
         u = problem.A.createVecRight()
         assert solver.solve(u).converged and solver.solve(u).converged  # cold, then warm

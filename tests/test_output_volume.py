@@ -14,6 +14,7 @@ from contactqvi import meshes
 from contactqvi.contact import build_contact_problem
 from contactqvi.contact.load_path import LoadStep, contact_resultants, solve_load_path
 from contactqvi.elasticity import elasticity_forms
+from contactqvi.laws import Coulomb
 from contactqvi.linalg import assemble_system, create_ksp, preset
 from contactqvi.postprocess import ElasticBody, applied_force, reaction_forces, stress_fields, von_mises
 from contactqvi.problems import coulomb as data
@@ -90,7 +91,7 @@ def test_global_equilibrium(lev, case):
     """Reactions + contact force + applied loads = 0 (relative 1e-8) on a converged Coulomb solve."""
     geometry, load = case.split("/")
     msh, tags = meshes.create_contact_body(MPI.COMM_WORLD, lev, data.gap_function(geometry))
-    problem = build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions(load), data.FRICTION)
+    problem = build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions(load), Coulomb(data.FRICTION))
     u = problem.A.createVecRight()
     (result,) = solve_load_path(problem, [LoadStep()], u, {"pc": "lu"}, prefix="equilibrium_")
     assert result.converged

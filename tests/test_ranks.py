@@ -89,7 +89,7 @@ def test_demo_on_any_number_of_ranks(lev, mpi_tmp_path, load_demo):
         args = demo.parse(argv)
         (level,) = solve_nested(
             MPI.COMM_SELF, [lev], gap=data.gap_function("d1"), tractions=data.tractions("L1"), young=args.young,
-            poisson=args.poisson, friction=args.friction, parameters=args.solver_parameters,
+            poisson=args.poisson, law=args.contact_law, parameters=args.solver_parameters,
         )
         summary = {"iterations": level.result.iterations}
         summary |= write_contact_results(mpi_tmp_path / "one", level.problem, level.u, level.result)

@@ -21,6 +21,7 @@ import pytest
 from contactqvi.case import ContactCase, PaperBody, load_case
 from contactqvi.contact import LoadStep, build_contact_problem, solve_load_path
 from contactqvi.contact.nodal import State
+from contactqvi.laws import Coulomb
 from contactqvi.meshes import create_contact_body
 from contactqvi.obstacles import Plane
 from contactqvi.problems import coulomb as data
@@ -176,7 +177,7 @@ def test_mindlin_case_follows_the_coulomb_bound(summaries, name):
     0.05 mu P on the coarse mesh (0.037 measured; 0.011 on the medium mesh,
     benchmarks/results/cattaneo_mindlin.md)."""
     case = load_case(ROOT / "cases" / f"{name}.toml")
-    mu, E, nu = case.contact.friction, case.material.young, case.material.poisson
+    mu, E, nu = case.contact.law.friction, case.material.young, case.material.poisson
     steps = _steps(summaries, name)
     P = 2 * abs(steps[0]["contact_force"][2])
     a = np.sqrt(2 * steps[0]["contact_area"] / np.pi)
@@ -198,7 +199,7 @@ def _touching(comm: MPI.Comm, result) -> int:
 
 def _paper_body(comm: MPI.Comm, lev: int, obstacle: Plane | None = None):
     msh, tags = create_contact_body(comm, lev, data.gap_function("d1"))
-    return build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions("L1"), data.FRICTION,
+    return build_contact_problem(msh, tags, data.YOUNG, data.POISSON, data.tractions("L1"), Coulomb(data.FRICTION),
                                  obstacle=obstacle)
 
 

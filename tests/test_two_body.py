@@ -27,6 +27,7 @@ from contactqvi.contact.mortar import clip_polygons, mortar_coupling, segment_in
 from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import assemble_contact_problem
 from contactqvi.contact.scd_newton import SCDNewtonSolver
+from contactqvi.laws import Coulomb
 from contactqvi.elasticity import body_materials
 from contactqvi.meshes import boundary_facets, read_gmsh, split_by_body
 from contactqvi.parameters import ParameterError
@@ -92,7 +93,7 @@ def _patch_problem(blocks, young_upper: float, friction: float):
     msh, tags, cell_tags = blocks
     young, poisson = body_materials(msh, cell_tags, {"lower": (1e9, NU), "upper": (young_upper, NU)})
     return assemble_contact_problem(msh, tags, young, poisson, {"upper.top": (0.0, 0.0, -P)},
-                                    [BodyPair("upper.interface", "lower.interface", friction=friction)],
+                                    [BodyPair("upper.interface", "lower.interface", Coulomb(friction))],
                                     displacements=ROLLERS, cell_tags=cell_tags)
 
 
@@ -202,7 +203,7 @@ def _stack_problem(msh, tags, cell_tags, rotation: np.ndarray):
     young, poisson = body_materials(msh, cell_tags, {"lower": (1e9, NU), "upper": (3e9, 0.2)})
     traction = rotation @ np.array([0.1 * P, 0.05 * P, -P])
     return assemble_contact_problem(msh, tags, young, poisson, {"upper.top": tuple(traction)},
-                                    [BodyPair("upper.interface", "lower.interface", friction=0.5)],
+                                    [BodyPair("upper.interface", "lower.interface", Coulomb(0.5))],
                                     clamped=["lower.bottom"], cell_tags=cell_tags)
 
 

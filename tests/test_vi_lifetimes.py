@@ -14,8 +14,6 @@ Two independent checks around build + solve + ``destroy()``:
 
 from __future__ import annotations
 
-import dataclasses
-
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -24,8 +22,9 @@ import pytest
 
 from dolfinx import fem
 
-from contactqvi.contact import FrictionLaw, build_contact_problem
+from contactqvi.contact import build_contact_problem
 from contactqvi.contact.signorini_vi import solve_signorini_vi
+from contactqvi.laws import Frictionless
 from contactqvi.meshes import create_contact_body, create_unit_square
 from contactqvi.problems import coulomb, thermoforming
 from contactqvi.problems.obstacle import radial_obstacle
@@ -75,8 +74,7 @@ def test_qvi_stack_frees_its_petsc_objects(test, method, mpi_tmp_path):
 def test_signorini_snes_vi_frees_its_petsc_objects(ksp, near_nullspace, mpi_tmp_path):
     def run():
         msh, tags = create_contact_body(MPI.COMM_WORLD, 1, coulomb.gap_function("d3"))
-        problem = build_contact_problem(msh, tags, coulomb.YOUNG, coulomb.POISSON, coulomb.tractions("L2"), 0.0)
-        problem = dataclasses.replace(problem, law=FrictionLaw())
+        problem = build_contact_problem(msh, tags, coulomb.YOUNG, coulomb.POISSON, coulomb.tractions("L2"), Frictionless())
         u = problem.A.createVecRight()
         result = solve_signorini_vi(problem, u, {"snes_rtol": 1e-12}, prefix=f"tlife_signorini_{ksp}_", ksp=ksp,
                                     near_nullspace=near_nullspace)

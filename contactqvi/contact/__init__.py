@@ -1,13 +1,12 @@
 """Contact of elastic bodies with rigid obstacles and with each other: Coulomb friction
-by the SCD semismooth* Newton method (seed 000), its Tresca variant, mortar coupling of
-non-matching surfaces, and quasi-static load paths."""
+by the SCD semismooth* Newton method (seed 000), for any contact law of
+:mod:`contactqvi.laws`, mortar coupling of non-matching surfaces, and quasi-static load paths."""
 
 from contactqvi.contact.interface import BodyPair, Interface, ObstaclePair
 from contactqvi.contact.load_path import LoadStep, contact_resultants, solve_load_path
 from contactqvi.contact.mortar import MortarCoupling, mortar_coupling
 from contactqvi.contact.newton_step_solver import NEWTON_STEP_SOLVERS, NewtonStepSolver
 from contactqvi.contact.nodal import (
-    FrictionLaw,
     Normal,
     State,
     Tangential,
@@ -25,7 +24,6 @@ __all__ = [
     "PARAMETERS",
     "BodyPair",
     "ContactProblem",
-    "FrictionLaw",
     "Interface",
     "LoadStep",
     "MortarCoupling",

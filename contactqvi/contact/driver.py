@@ -15,6 +15,7 @@ from dolfinx import fem
 from contactqvi.contact.load_path import LoadStep, solve_load_path
 from contactqvi.contact.problem import ContactProblem, build_contact_problem
 from contactqvi.contact.scd_newton import SCDNewtonResult
+from contactqvi.laws import ContactLaw
 from contactqvi.lifetime import PETScOwner
 from contactqvi.meshes import GapFunction, create_contact_body
 from contactqvi.transfer import interpolate_nonmatching
@@ -48,8 +49,7 @@ def solve_level(
     tractions: dict[str, tuple[float, float, float]],
     young: float,
     poisson: float,
-    friction: float,
-    slip_bound: float = 0.0,
+    law: ContactLaw,
     parameters: dict[str, typing.Any] | None = None,
     initial: fem.Function | None = None,
     prefix: str = "coulomb_",
@@ -57,13 +57,14 @@ def solve_level(
     """Mesh Omega(d) at ``lev``, assemble the GE (6.3) and solve it by SCD Newton.
 
     Args:
+        law: the contact law on the bottom surface, e.g. ``Coulomb(friction=0.23)``.
         initial: physical displacement on another mesh of the body to start from
             (interpolated; Table 3); None starts from u0 = 0.
         parameters: :data:`~contactqvi.contact.scd_newton.PARAMETERS` overrides.
     """
     t0 = time.perf_counter()
     msh, facet_tags = create_contact_body(comm, lev, gap)
-    problem = build_contact_problem(msh, facet_tags, young, poisson, tractions, friction, slip_bound)
+    problem = build_contact_problem(msh, facet_tags, young, poisson, tractions, law)
     u = problem.A.createVecRight()
     if initial is not None:
         # Bottom nodes of a curved d lie up to O(h^2) outside the coarse mesh: nearest cell within 5 cm.

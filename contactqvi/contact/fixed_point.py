@@ -4,9 +4,11 @@ The literature's way to Coulomb friction (seed 000, refs. [2, 3]): given the
 normal forces lambda^(j) of the previous iterate, solve the Tresca problem with
 the slip bound s = F lambda^(j) (a VI of the second kind) and repeat,
     s^(j+1) = F lambda(u^(j)),   u^(j+1) = Tresca solution for s^(j+1), started from u^(j).
+The same holds for any law whose bound b(lambda) depends on the normal force
+(s^(j+1) = b(lambda(u^(j))), e.g. a pressure-dependent coefficient).
 Each Tresca problem is solved by the same SCD semismooth* Newton method
 (:class:`~contactqvi.contact.scd_newton.SCDNewtonSolver` with a
-:class:`~contactqvi.contact.nodal.FrictionLaw` of given bound). The Tresca solves
+:class:`~contactqvi.laws.LinearSlipBound` of given bound). The Tresca solves
 are inexact: each stops when its own residual is below ``forcing`` times the
 current Coulomb residual (or the final target), which keeps the outer iteration
 convergent while not over-solving early Tresca problems. The method stops on
@@ -20,13 +22,14 @@ from __future__ import annotations
 import dataclasses
 import logging
 
+from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
 
-from contactqvi.contact.nodal import FrictionLaw
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonSolver
+from contactqvi.laws import LinearSlipBound
 from contactqvi.parameters import require
 from contactqvi.result import Result, Status
 
@@ -66,11 +69,12 @@ def solve_tresca_fixed_point(
     One :class:`SCDNewtonSolver` solves every Tresca problem (its gamma, matrices and
     Krylov solver are kept; the slip bound of its law is updated in place). It also
     measures the Coulomb residual: the normal part theta of the graph point (6.17)
-    does not depend on the slip bound, so with the bound s + F lambda(u) (s the law's
-    given part, zero for Coulomb) the Tresca point at u is the Coulomb point at u.
+    does not depend on the slip bound, so with the bound b(lambda(u)) of the problem's
+    law the Tresca point at u is the Coulomb point at u.
 
     Args:
-        problem: Coulomb contact problem (``problem.law.friction`` = F > 0).
+        problem: contact problem whose law's bound depends on the normal force
+            (Coulomb with F > 0: ``problem.law.slope_bound`` > 0).
         u: initial guess (shifted displacements), overwritten by the solution.
         parameters: SCD Newton parameters of the Tresca solves; ``rtol``, ``floor`` and
             ``atol`` are the final accuracy of the Coulomb residual.
@@ -80,15 +84,13 @@ def solve_tresca_fixed_point(
         prefix: PETSc options prefix of the Newton-step KSP of the Tresca solves.
     """
     p = PARAMETERS.check(parameters)
-    law, friction = problem.law, problem.law.friction
-    require(friction > 0.0, "friction", "the fixed-point method needs a Coulomb problem with F > 0")
-    require(0.0 < forcing < 1.0, "forcing", f"must lie in (0, 1), got {forcing!r}")
-    require(max_iterations >= 1, "max_iterations", f"must be >= 1, got {max_iterations!r}")
+    _check_arguments(problem, forcing, max_iterations)
+    law = problem.law
     result = TrescaFixedPointResult(status=Status.DIVERGED_MAX_IT, iterations=0)
-    slip_bound = np.zeros(len(problem.contact_blk))  # s + F lambda(u) of the current iterate, written in place
-    tresca = dataclasses.replace(problem, law=FrictionLaw(slip_bound=slip_bound))
+    slip_bound = np.zeros(len(problem.contact_blk))  # b(lambda(u)) of the current iterate, written in place
+    tresca = dataclasses.replace(problem, law=LinearSlipBound(given=slip_bound))
     with result.timings.phase("solve"), SCDNewtonSolver(tresca, p, prefix=prefix) as solver:
-        slip_bound[:] = law.slip_bound - friction * solver.residual(u).z[:, 2]  # theta does not depend on s
+        slip_bound[:] = law.bound(-solver.residual(u).z[:, 2])  # theta does not depend on s
         norm = norm0 = solver.residual(u).norm  # of the Coulomb graph point (6.17) at u
         target = max(p["rtol"] * norm0, p["floor"] * problem.load.norm(), p["atol"])
         for j in range(max_iterations + 1):
@@ -109,7 +111,16 @@ def solve_tresca_fixed_point(
             if not inner.converged:
                 result.status = Status.DIVERGED_INNER
                 break
-            slip_bound[:] = law.slip_bound + friction * inner.normal_force
+            slip_bound[:] = law.bound(inner.normal_force)
             norm = solver.residual(u).norm
     result.iterations = len(result.history) - 1
     return result
+
+
+def _check_arguments(problem: ContactProblem, forcing: float, max_iterations: int) -> None:
+    """Raise unless the law's bound depends on the normal force and ``forcing``, ``max_iterations`` are valid."""
+    slope = problem.comm.allreduce(problem.law.slope_bound, op=MPI.MAX)
+    require(slope > 0.0, "friction", "the fixed-point method needs a law whose bound depends on the normal "
+            "force (Coulomb with F > 0)")
+    require(0.0 < forcing < 1.0, "forcing", f"must lie in (0, 1), got {forcing!r}")
+    require(max_iterations >= 1, "max_iterations", f"must be >= 1, got {max_iterations!r}")

@@ -5,7 +5,8 @@ given by its slave surface and either a rigid analytic obstacle
 (:class:`ObstaclePair`, seed 000's setting) or a master surface of a meshed body
 (:class:`BodyPair`, seed 000, Remark 6.2). :func:`build_interfaces` turns the pairs
 into :class:`Interface` objects that all look the same to the solver: owned slave
-nodes, their frames (t1, t2, n), contact areas, gaps and friction data. What
+nodes, their frames (t1, t2, n), contact areas, gaps and the pair's contact law
+(:mod:`contactqvi.laws`). What
 differs is the discretisation behind them:
 
 * obstacle: the node's gap to the obstacle and the obstacle's normal; the slave
@@ -30,9 +31,10 @@ from dolfinx import fem, la
 from dolfinx import mesh as dmesh
 
 from contactqvi.contact.mortar import MortarCoupling, mortar_coupling
+from contactqvi.laws import ContactLaw, Frictionless
 from contactqvi.meshes import boundary_facets
 from contactqvi.obstacles import Obstacle, tangent_frames
-from contactqvi.parameters import require, require_positive
+from contactqvi.parameters import require
 
 __all__ = ["BodyPair", "Interface", "ObstaclePair", "build_interfaces"]
 
@@ -44,14 +46,12 @@ class ObstaclePair:
     Attributes:
         surface: facet group of the slave surface.
         obstacle: the obstacle in its initial position (moved by the load steps' translations).
-        friction: Coulomb coefficient F >= 0.
-        slip_bound: Tresca bound on the friction traction (Pa) >= 0.
+        law: the contact law (:mod:`contactqvi.laws`), e.g. ``Coulomb(friction=0.3)``.
     """
 
     surface: str
     obstacle: Obstacle
-    friction: float = 0.0
-    slip_bound: float = 0.0
+    law: ContactLaw = Frictionless()
 
     @property
     def name(self) -> str:
@@ -64,7 +64,7 @@ class BodyPair:
 
     Attributes:
         slave, master: facet groups (``"body.group"`` for meshes with several bodies).
-        friction, slip_bound: as for :class:`ObstaclePair`.
+        law: as for :class:`ObstaclePair`.
         search_distance: master facets farther than this from a slave facet are not
             paired with it (m); None: the slave facet's longest edge. Nodes whose gap
             can close within the load path must lie within it.
@@ -72,8 +72,7 @@ class BodyPair:
 
     slave: str
     master: str
-    friction: float = 0.0
-    slip_bound: float = 0.0
+    law: ContactLaw = Frictionless()
     search_distance: float | None = None
 
     @property
@@ -136,15 +135,16 @@ def build_interfaces(
             three prescribed cannot be slave nodes.
 
     Raises:
-        ParameterError: a bad friction value, a node on two slave surfaces or on a
+        ParameterError: a bad contact law, a node on two slave surfaces or on a
             slave and a master surface, a pair that finds no master facet, or
             bodies/obstacles that overlap initially.
     """
     require(len(pairs) > 0, "contacts", "give at least one contact pair")
     interfaces = []
     for pair in pairs:
-        require_positive(f"{pair.name}: friction", pair.friction, allow_zero=True)
-        require_positive(f"{pair.name}: slip_bound", pair.slip_bound, allow_zero=True)
+        require(isinstance(pair.law, ContactLaw), f"{pair.name}.law",
+                f"must be a contact law of contactqvi.laws, got {pair.law!r}")
+        pair.law.checked(pair.name)
         if isinstance(pair, ObstaclePair):
             interfaces.append(_obstacle_interface(V, facet_tags, pair, constrained))
         else:

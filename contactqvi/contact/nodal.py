@@ -1,4 +1,4 @@
-"""Nodal friction laws of seed 000: resolvent, contact states and SCD subspace bases.
+"""The nodal law of seed 000 for any slip bound: resolvent, contact states and SCD subspace bases.
 
 All functions act on arrays of shape (m, 3) holding one 3-vector per contact node
 (components: two tangential, then normal, in the node's frame), vectorised over
@@ -7,11 +7,13 @@ the nodes; gamma is one number or one per node (a diagonal Gamma in (6.17)).
 Notation (seed 000, Sect. 6): the nodal multifunction of Coulomb friction is
     Q~(v) = {(-F theta dd||v12||, theta) : theta in N_{R+}(v3)},
 and a point of its graph is written (v, z) with z = (g, theta), theta <= 0 the
-negative normal force and g the friction force. :class:`FrictionLaw` generalises
-the slip bound F lambda (lambda = -theta) to b = s + F lambda: s = 0 is Coulomb,
-F = 0 with a given s > 0 is Tresca friction (the VI of the second kind of the
-seed's refs. [15, 16]), s = F = 0 is the frictionless Signorini problem. The
-resolvent and the SCD bases below hold for every such b.
+negative normal force and g the friction force. The functions here hold for any
+slip bound b(lambda) >= 0 of the normal force lambda = -theta in place of F lambda
+(:class:`~contactqvi.laws.NodalLaw`): they ask the law only for b and its slope
+db/dlambda (:mod:`contactqvi.laws.base` derives why that is all (6.6)-(6.15) need).
+Coulomb (b = F lambda), Tresca (b = s, the VI of the second kind of the seed's
+refs. [15, 16]), frictionless contact (b = 0) and Coulomb with a pressure-dependent
+coefficient are such laws (:mod:`contactqvi.laws`).
 
 A node is classified by a normal and a tangential kind (:class:`Normal`,
 :class:`Tangential`); the pair selects the SCD subspace and maps to the contact
@@ -20,13 +22,13 @@ states of Table 1 (:class:`State`).
 
 from __future__ import annotations
 
-import dataclasses
 import enum
 
 import numpy as np
 
+from contactqvi.laws import NodalLaw
+
 __all__ = [
-    "FrictionLaw",
     "Normal",
     "State",
     "Tangential",
@@ -37,25 +39,6 @@ __all__ = [
     "scd_adjoint_blocks",
     "stick_reversed_slip",
 ]
-
-
-@dataclasses.dataclass(frozen=True)
-class FrictionLaw:
-    """Slip bound b = s + F lambda of each contact node (lambda = -theta >= 0, N).
-
-    Attributes:
-        friction: Coulomb coefficient F >= 0 (seed 000, Sect. 6), a scalar or one
-            value per owned contact node (pairs with different coefficients).
-        slip_bound: given part s >= 0 of the bound (N), a scalar or one value per
-            owned contact node (Tresca friction).
-    """
-
-    friction: float | np.ndarray = 0.0
-    slip_bound: float | np.ndarray = 0.0
-
-    def bound(self, theta: np.ndarray) -> np.ndarray:
-        """b = s - F theta at nodes with normal graph component theta <= 0."""
-        return self.slip_bound - self.friction * theta
 
 
 class State(enum.IntEnum):
@@ -91,13 +74,13 @@ def _per_node(gamma: float | np.ndarray, m: int) -> np.ndarray:
     return np.broadcast_to(np.asarray(gamma, dtype=float), (m,))
 
 
-def resolvent(w: np.ndarray, gamma: float | np.ndarray, law: FrictionLaw) -> tuple[np.ndarray, np.ndarray]:
+def resolvent(w: np.ndarray, gamma: float | np.ndarray, law: NodalLaw) -> tuple[np.ndarray, np.ndarray]:
     """(gamma I + Q~)^{-1}(w) in closed form (Prop. 6.4, (6.6)-(6.8)).
 
     Args:
         w: (m, 3) arguments.
         gamma: gamma > 0, one or per node.
-        law: the slip bound.
+        law: the slip bound b of each node.
 
     Returns:
         ``(v, z)``: v = (gamma I + Q~)^{-1}(w) and z = w - gamma v in Q~(v), so
@@ -109,7 +92,7 @@ def resolvent(w: np.ndarray, gamma: float | np.ndarray, law: FrictionLaw) -> tup
     v[:, 2] = np.maximum(w[:, 2], 0.0) / gamma
     w12 = w[:, :2]
     norm_w12 = np.linalg.norm(w12, axis=1)
-    bound = np.broadcast_to(law.bound(theta), norm_w12.shape)
+    bound = np.broadcast_to(law.bound(-theta), norm_w12.shape)
     slides = norm_w12 > bound
     shrink = np.zeros_like(norm_w12)
     shrink[slides] = (1.0 - bound[slides] / norm_w12[slides]) / gamma[slides]
@@ -119,16 +102,17 @@ def resolvent(w: np.ndarray, gamma: float | np.ndarray, law: FrictionLaw) -> tup
     return v, z
 
 
-def lipschitz_constant(gamma: float, law: FrictionLaw) -> float:
-    """Lipschitz modulus sqrt(2 (1 + F^2)) / gamma of the resolvent (proof of Prop. 6.4).
+def lipschitz_constant(gamma: float, law: NodalLaw) -> float:
+    """Lipschitz modulus sqrt(2 (1 + L^2)) / gamma of the resolvent (proof of Prop. 6.4).
 
-    The given part s of the slip bound does not change it; with one F per node, the largest counts.
+    L = sup |db/dlambda| is the Lipschitz constant of the slip bound (F for Coulomb;
+    a given part of b does not change it), the largest over the nodes.
     """
-    return float(np.sqrt(2.0 * (1.0 + np.max(law.friction) ** 2)) / gamma)
+    return float(np.sqrt(2.0 * (1.0 + law.slope_bound**2)) / gamma)
 
 
 def classify(
-    v: np.ndarray, z: np.ndarray, gamma: float | np.ndarray, law: FrictionLaw, tol: float
+    v: np.ndarray, z: np.ndarray, gamma: float | np.ndarray, law: NodalLaw, tol: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """Normal and tangential kind of each graph point (v, z) of Q~.
 
@@ -146,7 +130,7 @@ def classify(
     normal = np.full(len(v), Normal.WEAK, dtype=np.int8)
     normal[gamma * v[:, 2] > tol] = Normal.OPEN
     normal[theta < -tol] = Normal.CONTACT
-    bound = np.broadcast_to(law.bound(theta), theta.shape)
+    bound = np.broadcast_to(law.bound(-theta), theta.shape)
     slip = gamma * np.linalg.norm(v[:, :2], axis=1) > tol
     inside = bound - np.linalg.norm(z[:, :2], axis=1) > tol  # ||g|| < b
     tangential = np.full(len(v), Tangential.WEAK_FREE, dtype=np.int8)
@@ -157,7 +141,7 @@ def classify(
 
 
 def stick_reversed_slip(
-    v: np.ndarray, z: np.ndarray, tangential: np.ndarray, v_previous: np.ndarray, law: FrictionLaw, tol: float
+    v: np.ndarray, z: np.ndarray, tangential: np.ndarray, v_previous: np.ndarray, law: NodalLaw, tol: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Move sliding nodes whose slip reversed onto the sticking branch of gph Q~.
 
@@ -177,7 +161,7 @@ def stick_reversed_slip(
         ``(v', tangential', reversed)``: copies with the reversed nodes changed and
         the (m,) boolean mask of those nodes.
     """
-    bound = np.broadcast_to(law.bound(z[:, 2]), (len(v),))
+    bound = np.broadcast_to(law.bound(-z[:, 2]), (len(v),))
     reversed_ = (
         (tangential == Tangential.SLIDING) & (bound > tol) & (np.einsum("ij,ij->i", v[:, :2], v_previous[:, :2]) < 0.0)
     )
@@ -203,14 +187,14 @@ def contact_states(normal: np.ndarray, tangential: np.ndarray) -> np.ndarray:
 
 def scd_adjoint_blocks(
     v: np.ndarray, z: np.ndarray, normal: np.ndarray, tangential: np.ndarray, gamma: float | np.ndarray,
-    law: FrictionLaw,
+    law: NodalLaw,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Transposed bases (W*^T, U*^T) of an element rge(W*, U*) of S*Q~(v, z).
 
     The Newton matrix rows of a contact node are W*^T A + U*^T and its right-hand
     side -(W*^T y1 + U*^T y2) ((5.4) with Cor. 6.8). The subspace is the product of
     a normal and a tangential part ((6.10), (6.11), (6.16)), coupled only at
-    sliding nodes in contact through the slip bound b = s + F lambda (Cor. 6.7):
+    sliding nodes in contact through the slip bound b(lambda) (Cor. 6.7):
       * normal OPEN, WEAK: rge(I, 0); CONTACT: rge(0, I);
       * tangential STICKING, WEAK_STICKING: rge(0, I); WEAK_FREE: rge(I, 0);
         SLIDING: the well-conditioned basis of Cor. 6.7.
@@ -223,12 +207,15 @@ def scd_adjoint_blocks(
     (dimensionless) identity replaced by gamma:
         C = diag(gamma (gamma I2 + b/||v12|| (I2 - P))^{-1}, gamma),  P = t t^T,
     t = v12/||v12||, which gives with beta = b / (gamma ||v12|| + b) in [0, 1)
-        W* = [[(1 - beta) I2 + beta P, 0], [F t^T, 0]],
+        W* = [[(1 - beta) I2 + beta P, 0], [b' t^T, 0]],
         U* = [[gamma beta (I2 - P), 0], [0, gamma]]
-    (the row F t^T only in contact; with b = 0, beta = 0 and the tangential part
-    is rge(I, 0)). With gamma = 1 and b = F lambda this is (6.15) derived from
-    (6.13) and C: the seed's printed second matrix of (6.15) lacks the factor
-    1/(||v12|| - F theta); see the tests.
+    with b = b(lambda) and its slope b' = db/dlambda (the row b' t^T only in contact;
+    with b = 0, beta = 0 and the tangential part is rge(I, 0)). With gamma = 1 and
+    Coulomb's b = F lambda, b' = F, this is (6.15) derived from (6.13) and C: the
+    seed's printed second matrix of (6.15) lacks the factor 1/(||v12|| - F theta);
+    see the tests. For any other b the tangent space of the graph near a sliding
+    point in contact, {(v12, 0, b(-theta) v12/||v12||, theta)}, is that of (6.12)
+    with -F theta -> b and F -> b' (:mod:`contactqvi.laws.base`), hence these bases.
 
     Returns:
         ``(Wt, Ut)``, each (m, 3, 3): the blocks W*^T and U*^T.
@@ -248,11 +235,12 @@ def scd_adjoint_blocks(
     norm_v12 = np.linalg.norm(v12, axis=1)
     t = v12 / norm_v12[:, None]
     P = t[:, :, None] * t[:, None, :]
-    bound = np.broadcast_to(law.bound(z[:, 2]), (m,))[slide]
+    lam = -z[:, 2]
+    bound = np.broadcast_to(law.bound(lam), (m,))[slide]
     beta = bound / (gamma[slide] * norm_v12 + bound)
     I2 = np.eye(2)
     Wt[slide, :2, :2] = (1.0 - beta)[:, None, None] * I2 + beta[:, None, None] * P
     Ut[slide, :2, :2] = (gamma[slide] * beta)[:, None, None] * (I2 - P)
-    friction = np.broadcast_to(law.friction, (m,))[slide & contact]
-    Wt[slide & contact, :2, 2] = friction[:, None] * t[contact[slide]]  # (W*^T)_{12,3} = F t
+    slope = np.broadcast_to(law.slope(lam), (m,))[slide & contact]
+    Wt[slide & contact, :2, 2] = slope[:, None] * t[contact[slide]]  # (W*^T)_{12,3} = b' t
     return Wt, Ut

@@ -55,13 +55,13 @@ from dolfinx import fem
 from dolfinx import mesh as dmesh
 
 from contactqvi.contact.interface import BodyPair, Interface, ObstaclePair, Pair, build_interfaces
-from contactqvi.contact.nodal import FrictionLaw
 from contactqvi.elasticity import elasticity_forms, orthonormalize, rigid_motions_nullspace
+from contactqvi.laws import ContactLaw, Frictionless, NodalLaw, StackedLaw
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import assemble_system
 from contactqvi.meshes import boundary_facets
 from contactqvi.obstacles import Obstacle, Plane
-from contactqvi.parameters import require, require_positive
+from contactqvi.parameters import require
 from contactqvi.postprocess import ElasticBody
 
 __all__ = ["ContactProblem", "assemble_contact_problem", "build_contact_problem"]
@@ -86,7 +86,8 @@ class ContactProblem(PETScOwner):
         contact_blk: owned local node (block) indices of the contact (slave) nodes, sorted.
         contact_facets: local facet indices of the slave surfaces (for output on them).
         contact_area: contact area of each owned contact node (m^2).
-        law: slip bound of the nodal friction law (Coulomb, Tresca or none).
+        law: the pairs' contact laws lumped to the contact nodes (the slip bound b(lambda)
+            of each node, :class:`~contactqvi.laws.NodalLaw`).
         frames: (m, 3, 3) frame of each owned contact node; rows t1, t2, n in global
             coordinates, fixed in the reference configuration.
         interfaces: the contact pairs' nodal data (:mod:`contactqvi.contact.interface`).
@@ -120,7 +121,7 @@ class ContactProblem(PETScOwner):
     contact_blk: np.ndarray
     contact_facets: np.ndarray
     contact_area: np.ndarray
-    law: FrictionLaw
+    law: NodalLaw
     frames: np.ndarray
     interfaces: tuple[Interface, ...]
     interface_of_node: np.ndarray
@@ -305,8 +306,7 @@ def build_contact_problem(
     young: float,
     poisson: float,
     tractions: dict[str, Vector3],
-    friction: float = 0.0,
-    slip_bound: float = 0.0,
+    law: ContactLaw = Frictionless(),
     clamped: typing.Sequence[str] = ("dirichlet",),
     contact: str = "contact",
     obstacle: Obstacle | None = None,
@@ -324,9 +324,9 @@ def build_contact_problem(
         msh, facet_tags: mesh with named boundaries.
         young, poisson: E (Pa) and nu.
         tractions: surface traction (Pa) per boundary name.
-        friction: Coulomb friction coefficient F >= 0.
-        slip_bound: Tresca slip bound (Pa) >= 0: a friction traction bound, lumped
-            to the nodal bound s_i = slip_bound * (area of node i) (N).
+        law: the contact law (:mod:`contactqvi.laws`), e.g. ``Coulomb(friction=0.23)``;
+            tractions in it (a Tresca bound) are lumped to nodal forces with each
+            node's area.
         clamped: boundaries with u = 0.
         contact: boundary that may touch the obstacle.
         obstacle: the rigid obstacle; default the foundation {x3 <= 0} of seed 000.
@@ -338,10 +338,10 @@ def build_contact_problem(
         ParameterError: bad values, unknown boundary names, or a contact node inside
             the obstacle (initial penetration).
     """
-    require_positive("friction", friction, allow_zero=True)
-    require_positive("slip_bound", slip_bound, allow_zero=True)
+    require(isinstance(law, ContactLaw), "law", f"must be a contact law of contactqvi.laws, got {law!r}")
+    law = law.checked()  # before assembly; errors named by the parameter ("friction")
     obstacle = Plane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)) if obstacle is None else obstacle
-    pair = ObstaclePair(contact, obstacle, float(friction), float(slip_bound))
+    pair = ObstaclePair(contact, obstacle, law)
     return assemble_contact_problem(msh, facet_tags, young, poisson, tractions, [pair], clamped, body_force,
                                     displacements, moved=moved)
 
@@ -394,7 +394,7 @@ def assemble_contact_problem(
         V=V, A=A, applied=loads[0], load=loads[0].duplicate(), shift=loads[0].duplicate(),
         contact_blk=contact_blk, contact_facets=np.unique(np.concatenate(
             [boundary_facets(facet_tags, i.slave_surface) for i in interfaces])).astype(np.int32),
-        contact_area=contact_area, law=_friction_law(interfaces, interface_of_node, contact_area),
+        contact_area=contact_area, law=_nodal_law(interfaces, interface_of_node, contact_area),
         frames=frames, interfaces=tuple(interfaces), interface_of_node=interface_of_node,
         body=ElasticBody(young, poisson, facet_tags, supports, dict(tractions), body_force),
         rotation=rotation, coupling=coupling, transform=transform, offset=offsets[0],
@@ -424,14 +424,11 @@ def _merged(interfaces: typing.Sequence[Interface]) -> tuple[np.ndarray, np.ndar
     return contact_blk[order], interface_of_node, frames, np.concatenate([i.area for i in interfaces])[order]
 
 
-def _friction_law(interfaces: typing.Sequence[Interface], interface_of_node: np.ndarray,
-                  contact_area: np.ndarray) -> FrictionLaw:
-    """The pairs' friction data per node: one F if all pairs share it, the Tresca bound
-    lumped to s_i = slip_bound x area_i (N)."""
-    friction = np.array([i.pair.friction for i in interfaces])
-    slip_bound = np.array([i.pair.slip_bound for i in interfaces])[interface_of_node] * contact_area
-    return FrictionLaw(float(friction[0]) if np.all(friction == friction[0]) else friction[interface_of_node],
-                       slip_bound)
+def _nodal_law(interfaces: typing.Sequence[Interface], interface_of_node: np.ndarray,
+               contact_area: np.ndarray) -> NodalLaw:
+    """Each pair's law lumped to its slave nodes with their areas (m^2), as one nodal law."""
+    laws = tuple(i.pair.law.lumped(contact_area[interface_of_node == k]) for k, i in enumerate(interfaces))
+    return laws[0] if len(laws) == 1 else StackedLaw(laws, interface_of_node)
 
 
 def _solver_variables(
@@ -559,7 +556,7 @@ def _check_held(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, cell_tags: dme
     """Raise if a body can translate freely: along no direction may a body lack both a
     prescribed displacement component and a contact surface that resists it.
 
-    A contact pair with friction (F > 0 or a Tresca bound) resists every direction;
+    A contact pair whose law has friction (:attr:`~contactqvi.laws.ContactLaw.frictional`) resists every direction;
     a frictionless one the directions of its normals, on both its bodies. Rotations
     are not checked.
     """
@@ -572,7 +569,7 @@ def _check_held(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, cell_tags: dme
         held[k] += np.diag(comm.allreduce(prescribed.astype(float), op=MPI.SUM) > 0).astype(float)
     for interface in interfaces:
         pair = interface.pair
-        frictional = pair.friction > 0.0 or pair.slip_bound > 0.0
+        frictional = pair.law.frictional
         normals = interface.frames[:, 2]
         spread = comm.allreduce(np.einsum("ij,ik->jk", normals, normals), op=MPI.SUM)
         spread = np.eye(3) if frictional else spread / max(np.trace(spread), 1e-300)

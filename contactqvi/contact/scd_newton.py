@@ -1,8 +1,9 @@
 """SCD semismooth* Newton method for the Coulomb GE 0 in A u - l + Q(u) (seed 000).
 
-Q is the nodal law of the problem's :class:`~contactqvi.contact.nodal.FrictionLaw`
-(Coulomb as in the paper; Tresca and frictionless with the same machinery), acting
-on each contact node's components in its frame (two tangential, then normal).
+Q is the nodal law of the problem's contact laws (:class:`~contactqvi.laws.NodalLaw`:
+Coulomb as in the paper; Tresca, frictionless and pressure-dependent Coulomb with the
+same machinery), acting on each contact node's components in its frame (two
+tangential, then normal).
 
 One iteration k (Algorithm 1 of Sect. 4 in the form of Sect. 5), each part a method
 named after it:

@@ -22,9 +22,8 @@ d1/L1). Of the Krylov tolerances 1e-1 ... 1e-10, 1e-2 is the fastest (1e-3 and
 
 from __future__ import annotations
 
+from mpi4py import MPI
 from petsc4py import PETSc
-
-import numpy as np
 
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.linalg import OptionsDict
@@ -56,7 +55,7 @@ def solve_signorini_vi(
     """Solve the frictionless problem by SNES VI from ``u`` (in place; projected onto the bounds first).
 
     Args:
-        problem: contact problem with ``problem.law`` frictionless (F = 0, s = 0).
+        problem: contact problem whose law has no friction (slip bound b = 0 at every node).
         u: initial guess, overwritten by the solution (shifted displacements).
         options: PETSc options replacing :data:`SIGNORINI_VI_OPTIONS` entries.
         prefix: options prefix of the SNES (and its KSP).
@@ -69,8 +68,8 @@ def solve_signorini_vi(
         Newton steps as ``iterations``, Krylov iterations as ``inner_iterations``,
         the solve's wall time as ``timings["solve"]``.
     """
-    frictionless = problem.law.friction == 0.0 and not np.any(problem.law.slip_bound)
-    require(frictionless, "friction", "SNES VI solves the frictionless problem only (F = 0, no slip bound)")
+    frictional = problem.comm.allreduce(problem.law.frictional, op=MPI.LOR)
+    require(not frictional, "friction", "SNES VI solves the frictionless problem only (slip bound b = 0)")
     defaults = {**SIGNORINI_VI_OPTIONS, **(options or {})}
     modes = problem.near_nullspace() if near_nullspace else None
     with AffineProblem(problem.A, problem.load) as residual:
