@@ -261,9 +261,11 @@ def _draw_figures(writer: ContactResultsWriter, summary: dict[str, typing.Any], 
 
 
 def _log_step(index: int, result: SCDNewtonResult, entry: dict[str, typing.Any]) -> None:
-    logger.info("step %d: %s, %d Newton steps, %d Krylov; contact force %s N, contact area %.4g m^2",
-                index + 1, result.status, result.iterations, result.inner_iterations,
-                _vector_text(entry.get("contact_force")), entry.get("contact_area", float("nan")))
+    """One line per step: status, counts, the force of each contact pair's master side on its slave, the area."""
+    forces = "; ".join(f"{name} {_vector_text(force)}" for name, force in entry.get("pair_forces", {}).items())
+    logger.info("step %d: %s, %d Newton steps, %d Krylov; contact forces (N) %s; contact area %.4g m^2",
+                index + 1, result.status, result.iterations, result.inner_iterations, forces or "-",
+                entry.get("contact_area", float("nan")))
 
 
 def _check_output(comm: MPI.Comm, output: str | pathlib.Path) -> None:

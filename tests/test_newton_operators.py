@@ -63,7 +63,7 @@ def test_newton_matrix_is_DA_plus_U(eliminate):
             y2.axpy(-1.0, w.dhat)
             rhs = A.createVecLeft()
             D.mult(y2, rhs)
-            rhs.pointwiseMult(rhs, solver._gamma_dofs["gamma"])
+            rhs.pointwiseMult(rhs, solver._gamma_dofs.gamma)
             U.multAdd(y2, rhs, rhs)
             rhs.scale(-1.0)
             du = rhs.duplicate()
@@ -71,7 +71,7 @@ def test_newton_matrix_is_DA_plus_U(eliminate):
             fixed = ~np.any(Wt, axis=2)
             fixed_loc = (3 * blk[:, None] + np.arange(3))[fixed] if eliminate else np.empty(0, dtype=np.int64)
             assert MPI.COMM_WORLD.allreduce(len(fixed_loc), op=MPI.SUM) > 0 or not eliminate
-            du.array[fixed_loc] = rhs.array[fixed_loc] / solver._gamma_dofs["gamma"].array[fixed_loc]
+            du.array[fixed_loc] = rhs.array[fixed_loc] / solver._gamma_dofs.gamma.array[fixed_loc]
             start = A.getOwnershipRange()[0]
             reference.zeroRowsColumns((start + fixed_loc).astype(PETSc.IntType), diag=solver.gamma, x=du, b=rhs)
             scale = reference.norm()

@@ -146,6 +146,24 @@ class SCDNewtonResult(Result):
 
 
 @dataclasses.dataclass(eq=False)
+class GammaVectors(PETScOwner):
+    """gamma of (6.17) per dof (gamma_i at contact node i, the largest elsewhere), as vectors.
+
+    Attributes:
+        gamma: gamma per dof (the scaling of y1^ = Gamma y2^ in the Newton system).
+        inverse: 1/gamma per dof (the approximation step's u - r/gamma).
+        weight: sqrt(gamma^2 + 1)/sqrt(gamma_max^2 + 1) per dof (the norm of y^).
+    """
+
+    gamma: PETSc.Vec
+    inverse: PETSc.Vec
+    weight: PETSc.Vec
+
+    def petsc_objects(self) -> list[PETSc.Vec]:
+        return [self.gamma, self.inverse, self.weight]
+
+
+@dataclasses.dataclass(eq=False)
 class WorkVectors(PETScOwner):
     """Vectors of A's layout that carry one Newton iteration from step to step.
 
@@ -218,12 +236,13 @@ class SCDNewtonSolver(PETScOwner):
         self._steps = line_search_steps(p["max_line_search"])
         self._gamma = p["gamma"]
         self._gamma_nodes: np.ndarray | None = None  # gamma_i per owned contact node
-        self._gamma_dofs: dict[str, PETSc.Vec] = {}  # per dof: "gamma", "inverse", "weight"
+        self._gamma_dofs: GammaVectors | None = None  # made at the first use of gamma
         self._rhs_ratio = 1.0  # of the last Newton system: ||rhs of (5.4)|| / ||rhs with the rows eliminated||
         self._work = WorkVectors.create(A)
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [self.step_solver, self._newton, self._near_nullspace, self._work, *self._gamma_dofs.values()]
+        objects = [self.step_solver, self._newton, self._near_nullspace, self._work, self._gamma_dofs]
+        return [obj for obj in objects if obj is not None]
 
     @property
     def ksp(self) -> PETSc.KSP:
@@ -233,14 +252,14 @@ class SCDNewtonSolver(PETScOwner):
     @property
     def gamma(self) -> float:
         """gamma of (6.17) (the largest gamma_i when each node has its own)."""
-        if not self._gamma_dofs:
+        if self._gamma_dofs is None:
             self._set_gamma()
         return self._gamma
 
     @property
     def gamma_nodes(self) -> np.ndarray:
         """gamma_i of each owned contact node (all equal unless the rule is ``nodal_diagonal``)."""
-        if not self._gamma_dofs:
+        if self._gamma_dofs is None:
             self._set_gamma()
         return self._gamma_nodes
 
@@ -290,7 +309,7 @@ class SCDNewtonSolver(PETScOwner):
         inverse, weight = gamma.duplicate(), gamma.duplicate()
         inverse.array[:] = 1.0 / gamma.array
         weight.array[:] = np.sqrt(gamma.array**2 + 1.0) / np.sqrt(self._gamma**2 + 1.0)
-        self._gamma_dofs = {"gamma": gamma, "inverse": inverse, "weight": weight}
+        self._gamma_dofs = GammaVectors(gamma, inverse, weight)
 
     def _gamma_rule(self, nodal: np.ndarray) -> str:
         """The parameter ``gamma_rule``, with ``auto`` resolved from the contact nodes' diagonals ``nodal``.
@@ -320,14 +339,14 @@ class SCDNewtonSolver(PETScOwner):
         sqrt(gamma^2 + 1) ||u - d^|| for one gamma.
         """
         gamma, blk = self.gamma_nodes[:, None], self.problem.contact_blk
-        dhat.pointwiseMult(self._gamma_dofs["inverse"], r)
+        dhat.pointwiseMult(self._gamma_dofs.inverse, r)
         dhat.aypx(-1.0, u)  # non-contact dofs: (gamma I)^{-1}(gamma u - r) = u - r/gamma
         w = gamma * u.array.reshape(-1, 3)[blk] - r.array.reshape(-1, 3)[blk]
         v, z = resolvent(w, gamma[:, 0], self.problem.law)
         dhat.array.reshape(-1, 3)[blk] = v
         diff = self._work.y2
         diff.waxpy(-1.0, dhat, u)
-        diff.pointwiseMult(diff, self._gamma_dofs["weight"])
+        diff.pointwiseMult(diff, self._gamma_dofs.weight)
         return GraphPoint(float(np.sqrt(self.gamma**2 + 1.0) * diff.norm()), v, z)
 
     def _graph_point(self, u: PETSc.Vec, r: PETSc.Vec, dhat: PETSc.Vec) -> GraphPoint:
@@ -397,7 +416,7 @@ class SCDNewtonSolver(PETScOwner):
         w = self._work
         self._newton.set_blocks(Wt, Ut)
         w.y2.waxpy(-1.0, w.dhat, u)  # y1^ = Gamma y2^ = Gamma (u - d^)
-        self._newton.mult_blocks(w.y2, w.rhs, self._gamma_dofs["gamma"])
+        self._newton.mult_blocks(w.y2, w.rhs, self._gamma_dofs.gamma)
         w.rhs.scale(-1.0)
         w.du.set(0.0)
         self._rhs_ratio = 1.0
@@ -405,7 +424,7 @@ class SCDNewtonSolver(PETScOwner):
             return self._newton.assemble()
         fixed = ~np.any(Wt, axis=2)  # (m, 3): W*^T rows that vanish, pure (gamma-scaled) identity rows
         fixed_loc = self._newton.fixed_dofs(fixed)
-        gamma_fixed = self._gamma_dofs["gamma"].array[fixed_loc]
+        gamma_fixed = self._gamma_dofs.gamma.array[fixed_loc]
         w.du.array[fixed_loc] = w.rhs.array[fixed_loc] / gamma_fixed
         J = self._newton.assemble(fixed, self.gamma, w.du, w.rhs)
         # The eliminated rows are gamma I with the largest gamma, so rhs holds gamma du there, not gamma_i du.
