@@ -40,3 +40,35 @@ def test_log_view_through_the_petsc_pass_through(tmp_path):
                           "--output", str(tmp_path), "-log_view"], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert "PETSc Performance Summary" in run.stdout and "linear_solve" in run.stdout
+
+
+class _Ranks:
+    """A communicator stand-in that records MPI_Abort."""
+
+    def __init__(self, size: int):
+        self.size, self.aborted = size, None
+
+    def Abort(self, code: int) -> None:
+        self.aborted = code
+
+
+def _fails() -> int:
+    raise RuntimeError("raised on this rank only")
+
+
+def test_an_error_on_one_of_several_ranks_aborts_the_job(capsys):
+    from contactqvi.__main__ import abort_on_error
+
+    ranks = _Ranks(2)
+    with pytest.raises(RuntimeError):  # after the (recorded) abort
+        abort_on_error(_fails, ranks)
+    assert ranks.aborted == 1 and "raised on this rank only" in capsys.readouterr().err
+
+
+def test_an_error_on_one_rank_propagates_without_abort():
+    from contactqvi.__main__ import abort_on_error
+
+    ranks = _Ranks(1)
+    with pytest.raises(RuntimeError, match="this rank only"):
+        abort_on_error(_fails, ranks)
+    assert ranks.aborted is None and abort_on_error(lambda: 3, ranks) == 3
