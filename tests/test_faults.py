@@ -36,16 +36,13 @@ def test_unwritable_output_is_named_before_the_mesh_is_read(mpi_tmp_path):
     assert time.perf_counter() - started < 5.0  # before meshing and assembly
 
 
-@pytest.mark.serial
-@pytest.mark.parametrize("number", [signal.SIGTERM, signal.SIGINT])
-def test_signal_stops_within_the_step_with_status_interrupted(tmp_path, number):
-    """SIGTERM / SIGINT during a step of a 15-step path: exit code 3 within 10 s, the steps solved
-    written, ``status = "interrupted"`` in summary.json, and the last checkpoint readable without
-    the case file (adios4dolfinx, its own mesh)."""
+def _run_until_the_first_checkpoint(tmp_path: pathlib.Path) -> tuple[subprocess.Popen, pathlib.Path, pathlib.Path]:
+    """Start the 15-step Cattaneo-Mindlin case on its coarse meshes in a subprocess; return
+    once step 1's checkpoint is written: the process, its output directory and the marker file."""
     text = (ROOT / "cases" / "cattaneo_mindlin_bodies.toml").read_text()
-    mesh = ROOT / "meshes" / "mindlin_bodies_coarse.geo"
     case = tmp_path / "case.toml"
-    case.write_text(text.replace('file = "../meshes/mindlin_bodies_medium.geo"', f'file = "{mesh}"'))
+    case.write_text(text.replace('file = "../meshes/mindlin_bodies_medium.geo"',
+                                 f'file = "{ROOT / "meshes" / "mindlin_bodies_coarse.geo"}"'))
     out = tmp_path / "out"
     run = subprocess.Popen([sys.executable, "-m", "contactqvi", "run", str(case), "--output", str(out), "--no-plot"],
                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
@@ -53,7 +50,17 @@ def test_signal_stops_within_the_step_with_status_interrupted(tmp_path, number):
     deadline = time.monotonic() + 300.0
     while not marker.exists():
         assert run.poll() is None and time.monotonic() < deadline, run.stderr.read() if run.poll() is not None else ""
-        time.sleep(0.1)
+        time.sleep(0.05)
+    return run, out, marker
+
+
+@pytest.mark.serial
+@pytest.mark.parametrize("number", [signal.SIGTERM, signal.SIGINT])
+def test_signal_stops_within_the_step_with_status_interrupted(tmp_path, number):
+    """SIGTERM / SIGINT during a step of a 15-step path: exit code 3 within 10 s, the steps solved
+    written, ``status = "interrupted"`` in summary.json, and the last checkpoint readable without
+    the case file (adios4dolfinx, its own mesh)."""
+    run, out, marker = _run_until_the_first_checkpoint(tmp_path)
     time.sleep(0.5)  # inside step 2
     os.kill(run.pid, number)
     signalled = time.monotonic()
@@ -95,18 +102,7 @@ def _assert_checkpoint_readable(directory: pathlib.Path, marker: dict) -> None:
 def test_output_failing_during_the_run_is_named_and_keeps_the_last_checkpoint(tmp_path):
     """The checkpoint of step 2 cannot be written (a file is where its directory goes, as a
     full disk would fail it): exit code 4, an error naming the output, step 1's checkpoint kept."""
-    text = (ROOT / "cases" / "cattaneo_mindlin_bodies.toml").read_text()
-    case = tmp_path / "case.toml"
-    case.write_text(text.replace('file = "../meshes/mindlin_bodies_medium.geo"',
-                                 f'file = "{ROOT / "meshes" / "mindlin_bodies_coarse.geo"}"'))
-    out = tmp_path / "out"
-    run = subprocess.Popen([sys.executable, "-m", "contactqvi", "run", str(case), "--output", str(out), "--no-plot"],
-                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    marker = out / "checkpoint" / "checkpoint.json"
-    deadline = time.monotonic() + 300.0
-    while not marker.exists():
-        assert run.poll() is None and time.monotonic() < deadline
-        time.sleep(0.05)
+    run, out, marker = _run_until_the_first_checkpoint(tmp_path)
     (out / "checkpoint" / "step_0002.bp").write_text("in the way")
     code = run.wait(timeout=300)
     stderr = run.stderr.read()
