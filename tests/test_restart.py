@@ -110,3 +110,22 @@ def _assert_time_steps(out: pathlib.Path) -> None:
             times = [float(f.read("step", step_selection=[s, 1]).reshape(-1)[0]) for s in range(f.num_steps())]
         assert times == [float(s) for s in range(1, STEPS + 1)], (name, times)
     assert not list(out.glob(".*.previous")) and not list(out.glob(".*.partial"))
+
+
+def test_a_checkpoint_of_another_case_is_a_named_error(tmp_path):
+    """--restart into an output directory written for another case names the keys that differ;
+    an output directory without a checkpoint has none (the run starts from step 1)."""
+    from mpi4py import MPI
+
+    from contactqvi.contact.checkpoint import read_checkpoint
+    from contactqvi.parameters import ParameterError
+
+    case = {"mesh": {"file": "block.msh"}, "material": {"young": 70e9, "poisson": 0.3}}
+    assert read_checkpoint(MPI.COMM_SELF, tmp_path, case) is None
+    (tmp_path / DIRECTORY).mkdir()
+    marker = {"step": 2, "file": "step_0002.bp", "target": 1.0, "summary": {"case": case, "steps": [{}, {}]}}
+    (tmp_path / DIRECTORY / "checkpoint.json").write_text(json.dumps(marker))
+    assert read_checkpoint(MPI.COMM_SELF, tmp_path, case).step == 2
+    other = {**case, "material": {"young": 200e9, "poisson": 0.3}}
+    with pytest.raises(ParameterError, match=r"--restart: .*another case \(different: material\)"):
+        read_checkpoint(MPI.COMM_SELF, tmp_path, other)

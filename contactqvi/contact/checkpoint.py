@@ -54,6 +54,7 @@ DIRECTORY = "checkpoint"
 _MARKER = "checkpoint.json"
 _ENGINE = "BP4"
 
+
 @dataclasses.dataclass(frozen=True)
 class Checkpoint:
     """The last complete checkpoint of an output directory.
@@ -84,6 +85,7 @@ class Checkpoint:
         state = node_state[problem.contact_blk]
         missing = problem.comm.allreduce(int(np.count_nonzero(state < 0)), op=MPI.SUM)
         if missing:
+            previous.destroy()
             raise ParameterError("--restart", f"{missing} contact nodes of the case have no state in the checkpoint "
                                  f"{self.path}: it was written for another contact surface")
         return Resume(done=self.step, previous=previous, states=state.astype(np.int8), target=self.target)
