@@ -253,15 +253,15 @@ def read_gmsh(
                 gmsh.open(str(path))
                 if path.suffix == ".geo":
                     gmsh.model.mesh.generate(gdim)
+                for dim, tag in gmsh.model.getPhysicalGroups(gdim - 1):
+                    name = gmsh.model.getPhysicalName(dim, tag) or str(tag)
+                    names[name] = tag
+                    counts[name] = sum(len(gmsh.model.mesh.getElements(dim, entity)[1][0])
+                                       for entity in gmsh.model.getEntitiesForPhysicalGroup(dim, tag))
+                volumes = {gmsh.model.getPhysicalName(dim, tag) or str(tag): tag
+                           for dim, tag in gmsh.model.getPhysicalGroups(gdim)}
             except Exception as exc:
                 error = f"gmsh cannot read {str(path)!r}: {exc}"
-            for dim, tag in gmsh.model.getPhysicalGroups(gdim - 1) if error is None else ():
-                name = gmsh.model.getPhysicalName(dim, tag) or str(tag)
-                names[name] = tag
-                counts[name] = sum(len(gmsh.model.mesh.getElements(dim, entity)[1][0])
-                                   for entity in gmsh.model.getEntitiesForPhysicalGroup(dim, tag))
-            volumes = {gmsh.model.getPhysicalName(dim, tag) or str(tag): tag
-                       for dim, tag in gmsh.model.getPhysicalGroups(gdim)}
         names, volumes, counts, error = comm.bcast((names, volumes, counts, error), root=0)
         require(error is None, "mesh", error or "")
         # Facet tags are distributed with the cells; with GhostMode.none DOLFINx 0.9 lost a whole

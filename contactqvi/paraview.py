@@ -308,13 +308,15 @@ class VTXDatasetWriter:
         error = None
         if self.comm.rank == 0 and not self._previous.is_dir():
             source = next((f for f in (self._tmp, path) if f.is_dir()), None)
-            if source is None:
-                error = f"no {path.name} of the earlier run in {path.parent} to continue"
-            else:
+            try:
+                if source is None:
+                    raise FileNotFoundError(f"no {path.name} of the earlier run in {path.parent} to continue")
                 os.replace(source, self._previous)
+            except OSError as exc:
+                error = str(exc)
         error = self.comm.bcast(error, root=0)
         if error is not None:
-            raise FileNotFoundError(error)
+            raise OSError(error)
 
     def _copy_steps(self) -> None:
         """Copy the first ``keep`` steps of ``.NAME.previous``, then remove it. Collective."""

@@ -46,7 +46,7 @@ from contactqvi.parameters import ParameterError, require
 from contactqvi.problems.coulomb import gap_function
 from contactqvi.result import Status
 
-__all__ = ["EXIT_CODES", "PREFIX", "Interrupted", "OutputError", "build_problem", "read_mesh", "run_case"]
+__all__ = ["EXIT_CODES", "PREFIX", "OutputError", "build_problem", "read_mesh", "run_case"]
 
 logger = logging.getLogger(__name__)
 
@@ -59,10 +59,6 @@ EXIT_CODES = {"converged": 0, "not converged": 1, "bad input": 2, "interrupted":
 
 class OutputError(Exception):
     """Writing a step's results or checkpoint failed (a full disk, a vanished directory)."""
-
-
-class Interrupted(Exception):
-    """SIGTERM or SIGINT arrived between two load steps: the run stops there."""
 
 
 def read_mesh(case: ContactCase, comm: MPI.Comm) -> tuple[dmesh.Mesh, dmesh.MeshTags]:
@@ -164,9 +160,6 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
             results = solve_load_path(problem, case.steps, u, parameters, PREFIX, recorder.record,
                                       case.solver.get("start", "rest") == "rest", resume, recorder.stop_requested)
             code = _exit_code(results, len(case.steps) - (0 if resume is None else resume.done))
-        except Interrupted as exc:
-            logger.warning("%s; the results of the steps solved are written", exc)
-            code = EXIT_CODES["interrupted"]
         finally:
             for vec in (u, None if resume is None else resume.previous):
                 if vec is not None:
@@ -192,7 +185,7 @@ class _StepRecorder:
 
     def __init__(self, case: ContactCase, problem: ContactProblem, output: str | pathlib.Path,
                  checkpoint: Checkpoint | None, stop: threading.Event):
-        self.case, self.problem, self._stop = case, problem, stop
+        self.problem, self._stop = problem, stop
         self.summary = _start_summary(case, problem, checkpoint)
         self.writer = ContactResultsWriter(output, problem.comm, keep=0 if checkpoint is None else checkpoint.step)
         self.checkpoints = (CheckpointWriter(output, problem) if checkpoint is None
@@ -203,33 +196,23 @@ class _StepRecorder:
         return self.problem.comm.allreduce(self._stop.is_set(), op=MPI.LOR)
 
     def record(self, index: int, step: LoadStep, u: PETSc.Vec, result: SCDNewtonResult) -> None:
-        """Write step ``index``'s results and summary, its checkpoint if it converged; raise
-        :class:`Interrupted` if a signal arrived and steps remain."""
+        """Write step ``index``'s results (if it converged), the summary, and its checkpoint
+        (if it converged); an :class:`OutputError` if the output cannot be written."""
         entry = {"step": index + 1, "load": step.load, "translation": list(step.translation), **result.summary()}
-        summary, n_steps = self.summary, len(self.case.steps)
-        stopped = self.stop_requested() and index + 1 < n_steps
+        writer, summary = self.writer, self.summary
         try:
-            self._write(index, u, result, entry, "interrupted" if stopped else None)
+            if result.converged:
+                entry.update(writer.write(self.problem, u, result, t=index + 1))
+                tables.write_solution_npz(writer.out / "solution.npz", writer.last.displacement)
+            summary["steps"].append(entry)
+            summary["status"] = str(result.status)
+            tables.write_summary(self.problem.comm, writer.out / "summary.json", summary)
+            if result.converged:
+                self.checkpoints.write(index + 1, u, writer.last.displacement, result, summary)
         except OSError as exc:
-            raise OutputError(f"output: writing step {index + 1} to {self.writer.out} failed ({exc}); the last "
+            raise OutputError(f"output: writing step {index + 1} to {writer.out} failed ({exc}); the last "
                               f"complete checkpoint, of step {self.checkpoints.step}, is kept") from exc
         _log_step(index, result, entry)
-        if stopped:
-            raise Interrupted(f"stopped by a signal after step {index + 1} of {n_steps}")
-
-
-    def _write(self, index: int, u: PETSc.Vec, result: SCDNewtonResult, entry: dict[str, typing.Any],
-               status: str | None) -> None:
-        """Results (if converged), summary (``status`` if given), checkpoint (if converged)."""
-        writer, summary = self.writer, self.summary
-        if result.converged:
-            entry.update(writer.write(self.problem, u, result, t=index + 1))
-            tables.write_solution_npz(writer.out / "solution.npz", writer.last.displacement)
-        summary["steps"].append(entry)
-        summary["status"] = status or ("interrupted" if result.status == Status.INTERRUPTED else str(result.status))
-        tables.write_summary(self.problem.comm, writer.out / "summary.json", summary)
-        if result.converged:
-            self.checkpoints.write(index + 1, u, writer.last.displacement, result, summary)
 
 
 def _start_summary(case: ContactCase, problem: ContactProblem, checkpoint: Checkpoint | None) -> dict[str, typing.Any]:

@@ -45,7 +45,7 @@ from contactqvi.contact.load_path import Resume
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult
 from contactqvi.parameters import ParameterError
-from contactqvi.tables import atomic_path, to_builtin
+from contactqvi.tables import atomic_path, prepare_output_dir, to_builtin, write_summary
 
 __all__ = ["DIRECTORY", "Checkpoint", "CheckpointWriter", "read_checkpoint", "remove_checkpoints"]
 
@@ -138,11 +138,9 @@ class CheckpointWriter:
         S, self._node_of_dof = _state_space(V)
         self._variables = fem.Function(V, name="solver_variables")
         self._states = fem.Function(S, name="contact_state")
-        if self.comm.rank == 0:
-            self.directory.mkdir(parents=True, exist_ok=True)
-        self.comm.Barrier()
+        prepare_output_dir(self.comm, self.directory)
         mesh_file = self.directory / "mesh.bp"
-        if not self.comm.allreduce(mesh_file.exists() if self.comm.rank == 0 else False, op=MPI.LOR):
+        if not self.comm.bcast(mesh_file.exists() if self.comm.rank == 0 else None, root=0):
             with atomic_path(self.comm, mesh_file) as tmp:
                 adios4dolfinx.write_mesh_input_order(tmp, V.mesh, engine=_ENGINE)
 
@@ -164,10 +162,8 @@ class CheckpointWriter:
         with atomic_path(self.comm, self.directory / name) as tmp:
             for f in (displacement, self._variables, self._states):  # appended to a new file
                 adios4dolfinx.write_function_on_input_mesh(tmp, f, engine=_ENGINE, time=float(step), name=f.name)
-        with atomic_path(self.comm, self.directory / _MARKER) as tmp:
-            if self.comm.rank == 0:
-                tmp.write_text(json.dumps(to_builtin(
-                    {"step": step, "file": name, "target": self.target, "summary": summary}), indent=1) + "\n")
+        write_summary(self.comm, self.directory / _MARKER,
+                      {"step": step, "file": name, "target": self.target, "summary": summary})
         self.step = step
         if self.comm.rank == 0:  # the marker has moved on: older step files are garbage
             for old in self.directory.glob("step_*.bp"):

@@ -8,7 +8,7 @@ k - 1 relative to the obstacle's tangential motion c_k - c_{k-1}
 by the SCD semismooth* Newton method from the previous step's solution, with the
 nodes that touched the obstacle moved along with it (no slip increment); the
 first step starts from the given guess, or a load path continues after the steps
-of a checkpoint (:class:`Resume`, :mod:`contactqvi.checkpoint`).
+of a checkpoint (:class:`Resume`, :mod:`contactqvi.contact.checkpoint`).
 """
 
 from __future__ import annotations
