@@ -222,3 +222,25 @@ def test_tributary_patches_of_triangles():
     assert area @ patches.cell_data["is_sticking"] == pytest.approx(1.0 / 3.0)
     normals = np.cross(*np.moveaxis(patches.points[patches.cells[:, [1, 3]]] - patches.points[owner][:, None], 1, 0))
     assert np.all(normals[:, 2] > 0)  # oriented as the facets
+
+
+def test_contact_state_panel_zooms_on_a_small_contact_zone():
+    """A contact zone of one cell in a 10 x 10 surface: the panel shows it with half its size
+    around it (clipped to the surface); a zone over the whole surface: no zoom."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from contactqvi.contact.figures import _zoom_to_contact
+    from contactqvi.contact.nodal import State
+
+    corners = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    plane = np.array([corners + [i, j] for i in range(10) for j in range(10)])
+    state = np.full(len(plane), State.NO_CONTACT)
+    state[0] = State.SLIDING
+    fig, ax = plt.subplots()
+    assert _zoom_to_contact(ax, plane, state)
+    assert ax.get_xlim() == (0.0, 1.5) and ax.get_ylim() == (0.0, 1.5)
+    assert not _zoom_to_contact(ax, plane, np.full(len(plane), State.STICKING))
+    plt.close(fig)

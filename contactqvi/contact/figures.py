@@ -183,6 +183,27 @@ def _plan_view(polygons: np.ndarray) -> tuple[np.ndarray, list[str]]:
     return polygons @ frame.T, labels
 
 
+#: Zoom a panel onto the contact zone when the zone spans less than this fraction of the surface.
+ZOOM_FRACTION = 0.25
+
+
+def _zoom_to_contact(ax: typing.Any, plane: np.ndarray, state: np.ndarray) -> bool:
+    """Limit the panel's axes to the patches in contact with a margin of half their extent,
+    when they cover less than :data:`ZOOM_FRACTION` of the surface's extent (a Hertz contact
+    zone on a large block is otherwise a dot in a corner); whether it zoomed."""
+    touching = plane[state != State.NO_CONTACT].reshape(-1, 2)
+    if len(touching) == 0:
+        return False
+    points = plane.reshape(-1, 2)
+    low, high, full_low, full_high = touching.min(0), touching.max(0), points.min(0), points.max(0)
+    if np.any(high - low >= ZOOM_FRACTION * (full_high - full_low)):
+        return False
+    margin = 0.5 * float((high - low).max())
+    ax.set_xlim(max(low[0] - margin, full_low[0]), min(high[0] + margin, full_high[0]))
+    ax.set_ylim(max(low[1] - margin, full_low[1]), min(high[1] + margin, full_high[1]))
+    return True
+
+
 def _draw_states(path: pathlib.Path, dataset: Dataset, pair: np.ndarray, names: list[str]) -> None:
     import matplotlib
 
@@ -209,7 +230,9 @@ def _draw_states(path: pathlib.Path, dataset: Dataset, pair: np.ndarray, names: 
         ax.set_aspect("equal")
         ax.set_xlabel(labels[0])
         ax.set_ylabel(labels[1])
-        ax.set_title(f"contact {names[k]}" if len(names) > 1 else "one colour per node's tributary area")
+        title = f"contact {names[k]}" if len(names) > 1 else "one colour per node's tributary area"
+        zoomed = _zoom_to_contact(ax, plane, state[pair == k])
+        ax.set_title(title + (", zoomed on the contact zone" if zoomed else ""))
     for ax in axes.ravel()[len(shown):]:
         ax.set_axis_off()
     fig.suptitle("Contact states (seed 000, Table 1)")
