@@ -70,6 +70,7 @@ slave surface with a master surface (``"body.group"``) or with a rigid obstacle
     law = "coulomb"                     # as in [contact]
     friction = 0.3
     # search_distance = 0.01            # m; default: each slave facet's longest edge
+    # search = "every_step"             # or "once": only in the reference configuration
 
 Contact laws (:data:`contactqvi.laws.LAWS`; ``law`` may be left out for ``coulomb``),
 with the keys each takes beside ``law`` (checked by the law's class, errors named by
@@ -119,6 +120,7 @@ import tomllib
 import typing
 
 from contactqvi import obstacles
+from contactqvi.contact.interface import SEARCHES
 from contactqvi.laws import LAWS, ContactLaw, create_law, parameter_names
 from contactqvi.load_steps import LoadStep as Step
 from contactqvi.parameters import (
@@ -304,6 +306,9 @@ class ContactPair:
         law: the contact law, as in :class:`Contact`.
         search_distance: reach of the contact search (m) > 0; None: each slave
             facet's longest edge.
+        search: when a ``master`` pair is searched: ``"every_step"`` (before every
+            load step after the first, in the configuration the step before ended in)
+            or ``"once"`` (in the reference configuration only).
     """
 
     slave: str
@@ -311,6 +316,7 @@ class ContactPair:
     obstacle: ObstacleShape | None = None
     law: ContactLaw | None = None
     search_distance: float | None = None
+    search: str = "every_step"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -649,7 +655,8 @@ def _check_contacts(contacts: typing.Sequence[ContactPair], bodies: tuple[Body, 
         if distance is not None:
             distance = require_number(f"{path}.search_distance", distance)
             require_positive(f"{path}.search_distance", distance)
-        checked.append(ContactPair(pair.slave, pair.master, obstacle, law, distance))
+        require_choice(f"{path}.search", pair.search, SEARCHES)
+        checked.append(ContactPair(pair.slave, pair.master, obstacle, law, distance, pair.search))
     return tuple(checked)
 
 

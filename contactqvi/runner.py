@@ -118,7 +118,7 @@ def _pair(pair: ContactPair) -> ObstaclePair | BodyPair:
     """The contact pair of a ``[[contacts]]`` entry."""
     if pair.obstacle is not None:
         return ObstaclePair(pair.slave, pair.obstacle.create(), pair.law)
-    return BodyPair(pair.slave, pair.master, pair.law, pair.search_distance)
+    return BodyPair(pair.slave, pair.master, pair.law, pair.search_distance, pair.search)
 
 
 def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,

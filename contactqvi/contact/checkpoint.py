@@ -8,8 +8,9 @@ After every converged load step the runner writes, into ``OUTPUT/checkpoint/``
 * ``step_0007.bp`` after step 7: ``displacement`` (u~, global components, m),
   ``solver_variables`` (u - d, the SCD solver's unknowns: nodal frames at the contact
   nodes, the mortar relative displacement at slave nodes of body pairs; this is what
-  the next step starts from, :func:`~contactqvi.contact.load_path.solve_load_path`)
-  and ``contact_state`` (the :class:`~contactqvi.contact.nodal.State` of each contact
+  the next step starts from, :func:`~contactqvi.contact.load_path.solve_load_path`;
+  a problem searched each step starts from ``displacement`` instead, searched again in
+  that configuration) and ``contact_state`` (the :class:`~contactqvi.contact.nodal.State` of each contact
   node, -1 elsewhere: the next step's predictor keeps the touching nodes);
 * ``checkpoint.json``, written last and atomically: the step, its file, the first
   step's stopping target and the summary so far.
@@ -72,23 +73,30 @@ class Checkpoint:
     summary: dict[str, typing.Any]
 
     def resume(self, problem: ContactProblem) -> Resume:
-        """The load path's state after :attr:`step`, read into ``problem``'s vectors (collective)."""
+        """The load path's state after :attr:`step`, read into ``problem``'s vectors (collective).
+
+        A problem searched each step resumes from the physical displacement (its variables
+        follow from the search in that configuration); any other from its solver variables.
+        """
         V = problem.V
         S, node_of_dof = _state_space(V)
-        variables, states = fem.Function(V, name="solver_variables"), fem.Function(S, name="contact_state")
-        for f in (variables, states):
+        states = fem.Function(S, name="contact_state")
+        read = [states] + [fem.Function(V, name="displacement" if problem.searched_each_step else "solver_variables")]
+        for f in read:
             adios4dolfinx.read_function(self.path, f, engine=_ENGINE, time=float(self.step), name=f.name)
-        previous = problem.A.createVecRight()
-        previous.array[:] = variables.x.array[: previous.getLocalSize()]
-        node_state = np.full(variables.x.array.size // 3, -1.0)
-        node_state[node_of_dof] = states.x.array
-        state = node_state[problem.contact_blk]
-        missing = problem.comm.allreduce(int(np.count_nonzero(state < 0)), op=MPI.SUM)
+        node_state = np.full(V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts, -1, dtype=np.int8)
+        node_state[node_of_dof] = np.rint(states.x.array)
+        if problem.searched_each_step:
+            return Resume(done=self.step, previous=None, displacement=read[1], node_states=node_state,
+                          target=self.target)
+        missing = problem.comm.allreduce(int(np.count_nonzero(node_state[problem.contact_blk] < 0)), op=MPI.SUM)
         if missing:
-            previous.destroy()
             raise ParameterError("--restart", f"{missing} contact nodes of the case have no state in the checkpoint "
                                  f"{self.path}: it was written for another contact surface")
-        return Resume(done=self.step, previous=previous, states=state.astype(np.int8), target=self.target)
+        previous = problem.A.createVecRight()
+        previous.array[:] = read[1].x.array[: previous.getLocalSize()]
+        return Resume(done=self.step, previous=previous, displacement=None, node_states=node_state,
+                      target=self.target)
 
 
 def remove_checkpoints(comm: MPI.Comm, output: str | os.PathLike) -> None:

@@ -36,7 +36,10 @@ from contactqvi.meshes import boundary_facets
 from contactqvi.obstacles import Obstacle, tangent_frames
 from contactqvi.parameters import require
 
-__all__ = ["BodyPair", "Interface", "ObstaclePair", "build_interfaces"]
+__all__ = ["BodyPair", "Interface", "ObstaclePair", "SEARCHES", "build_interfaces", "search_again"]
+
+#: When a body pair is searched (:attr:`BodyPair.search`).
+SEARCHES = ("every_step", "once")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -67,13 +70,18 @@ class BodyPair:
         law: as for :class:`ObstaclePair`.
         search_distance: master facets farther than this from a slave facet are not
             paired with it (m); None: the slave facet's longest edge. Nodes whose gap
-            can close within the load path must lie within it.
+            can close within a load step must lie within it.
+        search: ``"every_step"``: the pair is searched again before every load step
+            after the first, in the configuration the step before ended in, so a sliding
+            contact follows the bodies (:func:`search_again`); ``"once"``: only in the
+            reference configuration (small sliding over the whole load path).
     """
 
     slave: str
     master: str
     law: ContactLaw = Frictionless()
     search_distance: float | None = None
+    search: str = "every_step"
 
     @property
     def name(self) -> str:
@@ -94,8 +102,8 @@ class Interface:
         area: (m,) contact area of each node (m^2): the lumped area (obstacle) or
             D_ii of the mortar segments (body).
         coupling: the mortar rows C of a body pair; None for an obstacle.
-        initial_gap: (m,) gap in the reference configuration (m), before any
-            translation of an obstacle.
+        initial_gap: (m,) gap of the reference positions (m): to an obstacle before
+            any translation of it; for a body pair weighted with the C of the last search.
     """
 
     pair: Pair
@@ -108,6 +116,11 @@ class Interface:
     @property
     def obstacle(self) -> Obstacle | None:
         return self.pair.obstacle if isinstance(self.pair, ObstaclePair) else None
+
+    @property
+    def searched_each_step(self) -> bool:
+        """Whether the pair is searched again before every load step (:attr:`BodyPair.search`)."""
+        return isinstance(self.pair, BodyPair) and self.pair.search == "every_step"
 
     @property
     def slave_surface(self) -> str:
@@ -153,6 +166,20 @@ def build_interfaces(
     return interfaces
 
 
+def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: typing.Sequence[Interface],
+                 constrained: np.ndarray, displacement: fem.Function) -> list[Interface]:
+    """The interfaces with the pairs searched each step found again in the configuration
+    x + ``displacement`` (the others as they are; collective).
+
+    Its slave nodes, mortar rows, normals and areas are those of that configuration; a
+    pair may find fewer nodes or none (the bodies moved apart), and a small overlap left
+    by the last step's discrete conditions is no error.
+    """
+    x = displacement.x.array.reshape(-1, 3)
+    return [_body_interface(V, facet_tags, i.pair, constrained, x) if i.searched_each_step else i
+            for i in interfaces]
+
+
 def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: ObstaclePair,
                         constrained: np.ndarray) -> Interface:
     n_owned = V.dofmap.index_map.size_local
@@ -179,22 +206,27 @@ FACETING = 0.02
 
 
 def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: BodyPair,
-                    constrained: np.ndarray) -> Interface:
+                    constrained: np.ndarray, displacement: np.ndarray | None = None) -> Interface:
+    """A body pair's interface searched in the reference configuration (checked: it finds
+    nodes, and they do not overlap) or in x + ``displacement`` (local nodes, 3)."""
     slave, master = boundary_facets(facet_tags, pair.slave), boundary_facets(facet_tags, pair.master)
     distance = pair.search_distance
     require(distance is None or distance > 0.0, f"{pair.name}: search_distance", f"must be > 0, got {distance!r}")
-    coupling = mortar_coupling(V, slave, master, distance, np.flatnonzero(constrained.all(axis=1)))
+    require(pair.search in SEARCHES, f"{pair.name}: search", f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
+    coupling = mortar_coupling(V, slave, master, distance, np.flatnonzero(constrained.all(axis=1)), displacement)
     comm = V.mesh.comm
-    found = comm.allreduce(len(coupling.slave_blk), op=MPI.SUM)
-    reach = "one facet size" if distance is None else f"{distance:.3g} m"
-    require(found > 0, f"{pair.name}", f"no node of {pair.slave!r} has a facet of {pair.master!r} within "
-            f"{reach} facing it: the surfaces are nowhere near each other (raise search_distance?)")
+    if displacement is None:
+        found = comm.allreduce(len(coupling.slave_blk), op=MPI.SUM)
+        reach = "one facet size" if distance is None else f"{distance:.3g} m"
+        require(found > 0, f"{pair.name}", f"no node of {pair.slave!r} has a facet of {pair.master!r} within "
+                f"{reach} facing it: the surfaces are nowhere near each other (raise search_distance?)")
     # on a symmetry plane through the interface (prescribed components) the normal lies in the plane
     normal = coupling.normal * ~constrained[coupling.slave_blk]
     normal /= np.linalg.norm(normal, axis=1)[:, None]
     gap = np.einsum("ij,ij->i", normal, coupling.separation)
-    _check_overlap(comm, V, gap, pair.name, f"nodes of {pair.slave!r} lie inside the body of {pair.master!r}",
-                   FACETING * np.sqrt(coupling.weight))
+    if displacement is None:
+        _check_overlap(comm, V, gap, pair.name, f"nodes of {pair.slave!r} lie inside the body of {pair.master!r}",
+                       FACETING * np.sqrt(coupling.weight))
     return Interface(pair, coupling.slave_blk, tangent_frames(normal), coupling.weight, coupling, gap)
 
 

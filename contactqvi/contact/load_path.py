@@ -9,6 +9,13 @@ by the SCD semismooth* Newton method from the previous step's solution, with the
 nodes that touched the obstacle moved along with it (no slip increment); the
 first step starts from the given guess, or a load path continues after the steps
 of a checkpoint (:class:`Resume`, :mod:`contactqvi.contact.checkpoint`).
+
+Body pairs searched each step are found again before every step after the first,
+in the configuration the step before ended in
+(:meth:`~contactqvi.contact.problem.ContactProblem.search`): the change of variables
+u = T_k w is new, the slip is measured from T_k^-1 of the last displacement, and the
+contact states are carried over node by node (a node new to the contact starts as
+not in contact). The solver is rebuilt for the new A.
 """
 
 from __future__ import annotations
@@ -21,6 +28,8 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
+
+from dolfinx import fem
 
 from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
@@ -43,14 +52,20 @@ class Resume:
 
     Attributes:
         done: number of steps solved before.
-        previous: u~ = u - d of step ``done`` in the solver's variables (owned by the caller).
-        states: :class:`~contactqvi.contact.nodal.State` of each owned contact node at step ``done``.
+        previous: u~ = u - d of step ``done`` in the solver's variables (owned by the
+            caller); None when the problem is searched each step (it follows from
+            ``displacement`` after the search).
+        displacement: the physical displacement of step ``done`` (global components)
+            when the problem is searched each step, else None.
+        node_states: :class:`~contactqvi.contact.nodal.State` at step ``done`` of each
+            local node, -1 where it was no contact node.
         target: the first step's stopping target ||y^|| (N), the accuracy of every later step.
     """
 
     done: int
-    previous: PETSc.Vec
-    states: np.ndarray
+    previous: PETSc.Vec | None
+    displacement: fem.Function | None
+    node_states: np.ndarray
     target: float
 
 
@@ -90,14 +105,25 @@ def solve_load_path(
     """
     check_steps(steps)
     results: list[SCDNewtonResult] = []
-    previous = u.duplicate() if resume is None else resume.previous.copy()
-    first, target, states = (0, 0.0, None) if resume is None else (resume.done, resume.target, resume.states)
-    with SCDNewtonSolver(problem, parameters, prefix=prefix) as solver:
+    first, target = (0, 0.0) if resume is None else (resume.done, resume.target)
+    previous = u.duplicate()
+    states = None if resume is None else _node_states(problem, resume.node_states)
+    displacement = fem.Function(problem.V) if problem.searched_each_step else None
+    if resume is not None and resume.previous is not None:
+        resume.previous.copy(previous)
+    solver = None
+    try:
         for index in range(first, len(steps)):
             step = steps[index]
             if index > 0:
                 if index > first:
-                    previous.waxpy(-1.0, problem.shift, u)  # u~ of the last step, nodal frames
+                    previous.waxpy(-1.0, problem.shift, u)  # u~ of the last step, solver variables
+                if displacement is not None:
+                    if solver is not None:
+                        solver.destroy()
+                        solver = None
+                    states = _search(problem, steps[index - 1], u if index > first else None, displacement,
+                                     previous, states, resume)
                 _continue(problem, step, u, previous, states)
             else:
                 problem.set_step(step.load, step.translation)
@@ -105,6 +131,8 @@ def solve_load_path(
                     problem.shift.copy(u)  # u~ = 0
             logger.info("step %d: load factor %g, obstacle translation %s m", index + 1, step.load,
                         np.array2string(np.asarray(step.translation), precision=4))
+            if solver is None:
+                solver = SCDNewtonSolver(problem, parameters, prefix=prefix)
             result = solver.solve(u, atol=target, stop=stop)
             results.append(result)
             target, states = (result.target if index == 0 else target), result.states
@@ -112,8 +140,40 @@ def solve_load_path(
                 on_step(index, step, u, result)
             if not result.converged:
                 break
-    previous.destroy()
+    finally:
+        for obj in (solver, previous):
+            if obj is not None:
+                obj.destroy()
     return results
+
+
+def _node_states(problem: ContactProblem, node_states: np.ndarray) -> np.ndarray:
+    """The states of the problem's contact nodes from states per local node (-1: none there,
+    taken as not in contact)."""
+    states = node_states[problem.contact_blk]
+    return np.where(states < 0, State.NO_CONTACT, states).astype(np.int8)
+
+
+def _search(problem: ContactProblem, step: LoadStep, u: PETSc.Vec | None, displacement: fem.Function,
+            previous: PETSc.Vec, states: np.ndarray, resume: Resume | None) -> np.ndarray:
+    """Search the problem again in the configuration of the last step (``step``, solution
+    ``u``; None: the checkpoint's ``resume``), and put its u~ into ``previous`` in the new
+    variables. Returns the contact states carried over node by node."""
+    if u is None:
+        problem.set_step(step.load, step.translation)  # the last step's load factor and translation
+        resume.displacement.x.petsc_vec.copy(displacement.x.petsc_vec)
+        displacement.x.scatter_forward()
+        node_states = resume.node_states
+    else:
+        problem.physical_displacement(u, displacement)
+        node_states = np.full(len(displacement.x.array) // 3, -1, dtype=np.int8)
+        node_states[problem.contact_blk] = states
+    problem.search(displacement)
+    problem.solver_variables(displacement, previous)
+    logger.info("contact search in the deformed configuration: %d contact nodes, %.2f s (search) + %.2f s "
+                "(change of variables)", problem.n_contact, problem.setup_seconds["contact_search"],
+                problem.setup_seconds["change_of_variables"])
+    return _node_states(problem, node_states)
 
 
 def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, previous: PETSc.Vec, states: np.ndarray) -> None:

@@ -30,7 +30,11 @@ Parallel search: each rank owns the slave facets of its cells; it receives from
 every rank the master facets that lie within ``search_distance`` of the bounding
 box of its own slave facets (never a whole surface), pairs them by a k-d tree on
 facet centroids, integrates, and sends the rows of ghost slave nodes to their
-owners. Small deformations: geometry in the reference configuration.
+owners. Small deformations with small sliding per search: the search and the
+integration take the geometry of a given configuration (the reference one, or the
+deformed one of the last load step, :func:`mortar_coupling`'s ``displacement``); the
+unknown stays the total displacement, so the weighted gap is taken between the
+reference positions with the C of that configuration.
 """
 
 from __future__ import annotations
@@ -78,8 +82,9 @@ class SurfaceTriangles:
         return 0.5 * np.linalg.norm(np.cross(self.x[:, 1] - self.x[:, 0], self.x[:, 2] - self.x[:, 0]), axis=1)
 
 
-def surface_triangles(V: fem.FunctionSpace, facets: np.ndarray) -> SurfaceTriangles:
-    """The owned exterior facets ``facets`` (local indices) of a tetrahedral P1 space."""
+def surface_triangles(V: fem.FunctionSpace, facets: np.ndarray, coords: np.ndarray | None = None) -> SurfaceTriangles:
+    """The owned exterior facets ``facets`` (local indices) of a tetrahedral P1 space, with
+    the node positions ``coords`` (local nodes, ghosts included; default the mesh's)."""
     msh = V.mesh
     tdim = msh.topology.dim
     require(msh.topology.cell_name() == "tetrahedron", "mesh",
@@ -94,7 +99,7 @@ def surface_triangles(V: fem.FunctionSpace, facets: np.ndarray) -> SurfaceTriang
     closure = np.array([V.dofmap.dof_layout.entity_closure_dofs(tdim - 1, i) for i in range(4)])
     cell_blk = V.dofmap.list[cells]
     blk = np.take_along_axis(cell_blk, closure[local], axis=1)
-    coords = V.tabulate_dof_coordinates()
+    coords = V.tabulate_dof_coordinates() if coords is None else coords
     x = coords[blk]
     normal = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
     normal /= np.linalg.norm(normal, axis=1)[:, None]
@@ -216,8 +221,8 @@ class MortarCoupling:
             columns the global node indices of master nodes; every row sums to 1.
         normal: (m, 3) unit nodal normals pointing from the master into the slave body
             (area-weighted averages of the slave facets' normals).
-        separation: (m, 3) weighted initial separation x_i - sum_j C_ij x_j (m);
-            the gap is its normal component.
+        separation: (m, 3) weighted separation of the reference positions
+            x_i - sum_j C_ij x_j (m); the gap is its normal component.
     """
 
     slave_blk: np.ndarray
@@ -230,7 +235,7 @@ class MortarCoupling:
 
     @property
     def gap(self) -> np.ndarray:
-        """(m,) weighted initial gap n_i . (x_i - sum_j C_ij x_j) (m)."""
+        """(m,) weighted gap n_i . (x_i - sum_j C_ij x_j) of the reference positions (m)."""
         return np.einsum("ij,ij->i", self.normal, self.separation)
 
 
@@ -253,7 +258,8 @@ def _exchange_master(comm: MPI.Comm, slave: SurfaceTriangles, master: SurfaceTri
 
 
 def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facets: np.ndarray,
-                    search_distance: float | None = None, excluded_blk: np.ndarray | None = None) -> MortarCoupling:
+                    search_distance: float | None = None, excluded_blk: np.ndarray | None = None,
+                    displacement: np.ndarray | None = None) -> MortarCoupling:
     """C = D^{-1} M, nodal normals and weighted gaps of a slave and a master surface.
 
     Args:
@@ -263,14 +269,19 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
             (between bounding boxes, m) are not paired with it; None: the slave
             facet's longest edge.
         excluded_blk: local node indices never coupled (e.g. clamped slave nodes).
+        displacement: (local nodes, 3) displacement of the configuration searched
+            (ghosts included); None: the reference configuration.
 
     Collective. Slave nodes with less than :data:`MIN_COVERAGE` of their lumped area
-    in the master's shadow are left out, and so are nodes whose weighted gap exceeds
-    ``search_distance`` (default: the node's own size sqrt(2 x lumped area)).
+    in the master's shadow are left out, and so are nodes whose weighted gap in the
+    searched configuration exceeds ``search_distance`` (default: the node's own size
+    sqrt(2 x lumped area)).
     """
     comm = V.mesh.comm
     index_map = V.dofmap.index_map
-    slave, master = surface_triangles(V, slave_facets), surface_triangles(V, master_facets)
+    x = V.tabulate_dof_coordinates()
+    current = x if displacement is None else x + displacement
+    slave, master = surface_triangles(V, slave_facets, current), surface_triangles(V, master_facets, current)
     master_glob = index_map.local_to_global(master.blk.ravel()).reshape(-1, 3)
     diameter = max(_max_edge(slave.x, comm), _max_edge(master.x, comm))
     reach = 2.0 * diameter + (diameter if search_distance is None else search_distance)
@@ -298,14 +309,15 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
 
     n = normal[slave_blk]
     n /= np.linalg.norm(n, axis=1)[:, None]
-    x = V.tabulate_dof_coordinates()
-    projected = np.zeros((len(slave_blk), 3))
-    np.add.at(projected, position, values[:, None] * _master_coordinates(comm, index_map, x, cols))
+    positions = np.hstack([x, current])  # reference and searched positions, fetched together
+    projected = np.zeros((len(slave_blk), 6))
+    np.add.at(projected, position, values[:, None] * _master_coordinates(comm, index_map, positions, cols))
+    separation = positions[slave_blk] - projected
     coupling = MortarCoupling(slave_blk, weight[slave_blk], indptr, cols.astype(np.int64), values, n,
-                              x[slave_blk] - projected)
+                              separation[:, :3])
     # a node farther than the search distance (default: its own size) cannot touch in this step
     reach = np.sqrt(2.0 * lumped_area[slave_blk]) if search_distance is None else search_distance
-    return _restricted(coupling, coupling.gap <= reach)
+    return _restricted(coupling, np.einsum("ij,ij->i", n, separation[:, 3:]) <= reach)
 
 
 def _owned_sums(comm: MPI.Comm, index_map, slave: SurfaceTriangles, pairs_s: np.ndarray, master_glob: np.ndarray,
@@ -422,7 +434,8 @@ def _sum_to_owners(comm: MPI.Comm, owners: np.ndarray, rows: np.ndarray, cols: n
 
 
 def _master_coordinates(comm: MPI.Comm, index_map, x: np.ndarray, glob: np.ndarray) -> np.ndarray:
-    """Coordinates of the nodes with global indices ``glob``, fetched from their owners."""
+    """Rows of ``x`` (owned nodes first, any width) of the nodes with global indices ``glob``,
+    fetched from their owners."""
     owners = _owners(comm, index_map)
     rank = np.searchsorted(owners, glob, side="right") - 1
     order = np.argsort(rank, kind="stable")
@@ -430,6 +443,6 @@ def _master_coordinates(comm: MPI.Comm, index_map, x: np.ndarray, glob: np.ndarr
     requests = comm.alltoall([glob[order[a:b]] for a, b in zip(bounds[:-1], bounds[1:])])
     start = index_map.local_range[0]
     replies = comm.alltoall([x[r - start] for r in requests])
-    result = np.empty((len(glob), 3))
-    result[order] = np.concatenate(replies) if replies else np.empty((0, 3))
+    result = np.empty((len(glob), x.shape[1]))
+    result[order] = np.concatenate(replies) if replies else np.empty((0, x.shape[1]))
     return result

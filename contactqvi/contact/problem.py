@@ -54,7 +54,7 @@ import dolfinx.la
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 
-from contactqvi.contact.interface import BodyPair, Interface, ObstaclePair, Pair, build_interfaces
+from contactqvi.contact.interface import BodyPair, Interface, ObstaclePair, Pair, build_interfaces, search_again
 from contactqvi.elasticity import elasticity_forms, orthonormalize, rigid_motions_nullspace
 from contactqvi.laws import ContactLaw, Frictionless, NodalLaw, StackedLaw
 from contactqvi.lifetime import PETScOwner
@@ -64,9 +64,30 @@ from contactqvi.obstacles import Obstacle, Plane
 from contactqvi.parameters import require
 from contactqvi.postprocess import ElasticBody
 
-__all__ = ["ContactProblem", "assemble_contact_problem", "build_contact_problem"]
+__all__ = ["ContactProblem", "ElasticSystem", "assemble_contact_problem", "build_contact_problem"]
 
 Vector3 = tuple[float, float, float]
+
+
+@dataclasses.dataclass
+class ElasticSystem(PETScOwner):
+    """The assembled elastic system before the change of variables, kept to search the
+    contact again (:meth:`ContactProblem.search`).
+
+    Attributes:
+        stiffness: A_K (identity rows and columns at the prescribed dofs).
+        loads: the lifted loads l~_K at load factor 1 and of the unit translations.
+        constrained: (local nodes, 3) mask of the prescribed components.
+        owned_dirichlet: owned local indices of the prescribed dofs.
+    """
+
+    stiffness: PETSc.Mat
+    loads: list[PETSc.Vec]
+    constrained: np.ndarray
+    owned_dirichlet: np.ndarray
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [self.stiffness, *self.loads]
 
 
 @dataclasses.dataclass
@@ -108,9 +129,11 @@ class ContactProblem(PETScOwner):
         n_contact: global number p of contact nodes.
         n_free: global number n of free dofs.
         load_factor, translation: the current step (:meth:`set_step`).
-        setup_seconds: wall seconds (largest rank) of the contact search with the nodal
-            frames and mortar integration (``contact_search``) and of A = T^T A_K T with the
-            loads (``change_of_variables``).
+        setup_seconds: wall seconds (largest rank) of the last contact search with the
+            nodal frames and mortar integration (``contact_search``) and of A = T^T A_K T
+            with the loads (``change_of_variables``).
+        elastic: A_K and the loads before the change of variables when a pair is searched
+            again before every load step (:meth:`search`), else None.
     """
 
     V: fem.FunctionSpace
@@ -140,6 +163,7 @@ class ContactProblem(PETScOwner):
     load_factor: float = 1.0
     translation: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
     setup_seconds: dict[str, float] = dataclasses.field(default_factory=dict)
+    elastic: ElasticSystem | None = None
 
     @property
     def comm(self) -> MPI.Comm:
@@ -152,9 +176,61 @@ class ContactProblem(PETScOwner):
 
     def petsc_objects(self) -> list[typing.Any]:
         """A, the load vectors, R, N, T and c (copies by ``dataclasses.replace`` share them)."""
-        objects = (self.A, self.applied, self.load, self.shift, self.rotation, self.coupling, self.transform,
-                   self.offset, *self.translated, *self.translated_offset)
+        objects = (self.A, self.applied, self.load, self.shift, self.elastic, *self._variables_objects())
         return [obj for obj in objects if obj is not None]
+
+    def _variables_objects(self) -> list[typing.Any]:
+        """The PETSc objects of the change of variables, which a new search replaces."""
+        objects = (self.rotation, self.coupling, self.transform, self.offset, *self.translated,
+                   *self.translated_offset)
+        return [obj for obj in objects if obj is not None]
+
+    @property
+    def searched_each_step(self) -> bool:
+        """Whether a pair is searched again before every load step (:meth:`search`)."""
+        return self.elastic is not None
+
+    def search(self, displacement: fem.Function) -> None:
+        """Search the pairs searched each step again in the configuration x + ``displacement``
+        (global components), and rebuild the nodal data and the change of variables from it:
+        the contact nodes, frames, areas and laws, T, A = T^T A_K T and the loads.
+
+        The step (load factor, translation) is kept, but its load and shift belong to the
+        old variables: set a step (:meth:`set_step`) before solving. A solver built on the
+        old problem (its A, its contact nodes) must be rebuilt. Collective.
+        """
+        require(self.elastic is not None, "search", "no contact pair of this problem is searched each step")
+        interfaces, search_seconds = _timed(self.comm, search_again, self.V, self.body.facet_tags, self.interfaces,
+                                            self.elastic.constrained, displacement)
+        for obj in (self.A, self.applied, *self._variables_objects()):
+            obj.destroy()
+        fields, variables_seconds = _timed(self.comm, _contact_fields, self.elastic, interfaces, True)
+        for name, value in fields.items():
+            setattr(self, name, value)
+        self.setup_seconds = {"contact_search": search_seconds, "change_of_variables": variables_seconds}
+
+    def solver_variables(self, displacement: fem.Function, out: PETSc.Vec) -> PETSc.Vec:
+        """The solver's variables u~ = T^-1 (u - lambda c - sum_c t_c c_c) of a physical
+        displacement u (global components) at the current step's load factor and
+        translation, with T^-1 = R^T (I - N): the inverse of :meth:`physical_displacement`
+        (without the shift); written into ``out``."""
+        local = displacement.x.petsc_vec.copy()
+        if self.offset is not None:
+            local.axpy(-self.load_factor, self.offset)
+        for t, c in zip(self.translation, self.translated_offset):
+            if c is not None:
+                local.axpy(-t, c)
+        if self.coupling is not None:
+            coupled = local.duplicate()
+            self.coupling.mult(local, coupled)
+            local.axpy(-1.0, coupled)
+            coupled.destroy()
+        if self.rotation is None:
+            local.copy(out)
+        else:
+            self.rotation.multTranspose(local, out)
+        local.destroy()
+        return out
 
     def gap(self, translation: typing.Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
         """Gap of each owned contact node (m), obstacles translated by ``translation``."""
@@ -379,30 +455,24 @@ def assemble_contact_problem(
     loads = [applied, *_unit_translations(a, A, moved_bc, dirichlet_dofs_loc)]
     index_map = V.dofmap.index_map
     constrained = np.isin(np.arange(3 * (index_map.size_local + index_map.num_ghosts)), dirichlet_dofs_loc).reshape(-1, 3)
-    interfaces, search_seconds = _timed(msh.comm, build_interfaces, V, facet_tags, pairs, constrained)
-    contact_blk, interface_of_node, frames, contact_area = _merged(interfaces)
-    _check_prescribed_on_contact(loads, contact_blk, constrained[contact_blk], msh.comm)
-    frames = _align_frames(frames, constrained[contact_blk], msh.comm)
     owned_dirichlet = dirichlet_dofs_loc[dirichlet_dofs_loc < 3 * index_map.size_local]
-    (A, loads, rotation, coupling, transform, offsets), variables_seconds = _timed(
-        msh.comm, _solver_variables, A, loads, interfaces, constrained, contact_blk, frames, owned_dirichlet)
+    interfaces, search_seconds = _timed(msh.comm, build_interfaces, V, facet_tags, pairs, constrained)
+    elastic = ElasticSystem(A, loads, constrained, owned_dirichlet)
+    searched = any(i.searched_each_step for i in interfaces)
+    fields, variables_seconds = _timed(msh.comm, _contact_fields, elastic, interfaces, searched)
     node_body = None if cell_tags is None else _node_body(V, cell_tags)
     if node_body is not None:
         _check_held(V, facet_tags, cell_tags, node_body, constrained, interfaces)
     supports, comm = tuple(dict.fromkeys([*clamped, *(displacements or {}), *moved])), msh.comm
     problem = ContactProblem(
-        V=V, A=A, applied=loads[0], load=loads[0].duplicate(), shift=loads[0].duplicate(),
-        contact_blk=contact_blk, contact_facets=np.unique(np.concatenate(
+        V=V, load=fields["applied"].duplicate(), shift=fields["applied"].duplicate(),
+        contact_facets=np.unique(np.concatenate(
             [boundary_facets(facet_tags, i.slave_surface) for i in interfaces])).astype(np.int32),
-        contact_area=contact_area, law=_nodal_law(interfaces, interface_of_node, contact_area),
-        frames=frames, interfaces=tuple(interfaces), interface_of_node=interface_of_node,
         body=ElasticBody(young, poisson, facet_tags, supports, dict(tractions), body_force),
-        rotation=rotation, coupling=coupling, transform=transform, offset=offsets[0],
-        translated=tuple(loads[1:]), translated_offset=tuple(offsets[1:]),
-        rollers=constrained[contact_blk].any(axis=1), dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32),
-        node_body=node_body, n_contact=comm.allreduce(len(contact_blk), op=MPI.SUM),
+        dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32), node_body=node_body,
         n_free=comm.allreduce(3 * index_map.size_local - len(owned_dirichlet), op=MPI.SUM),
         setup_seconds={"contact_search": search_seconds, "change_of_variables": variables_seconds},
+        elastic=elastic if searched else None, **fields,
     )
     problem.set_step()
     return problem
@@ -431,26 +501,52 @@ def _nodal_law(interfaces: typing.Sequence[Interface], interface_of_node: np.nda
     return laws[0] if len(laws) == 1 else StackedLaw(laws, interface_of_node)
 
 
+def _contact_fields(elastic: ElasticSystem, interfaces: typing.Sequence[Interface],
+                    keep: bool) -> dict[str, typing.Any]:
+    """The :class:`ContactProblem` fields that follow from the interfaces: the merged contact
+    nodes with their frames, areas and laws, and the change of variables with A and the
+    loads in the solver's variables (:func:`_solver_variables`). ``keep``: leave ``elastic``'s
+    matrix and loads alive (they are freed or reused as the new A otherwise)."""
+    comm = elastic.stiffness.getComm().tompi4py()
+    contact_blk, interface_of_node, frames, contact_area = _merged(interfaces)
+    constrained = elastic.constrained[contact_blk]
+    _check_prescribed_on_contact(elastic.loads, contact_blk, constrained, comm)
+    frames = _align_frames(frames, constrained, comm)
+    A, loads, rotation, coupling, transform, offsets = _solver_variables(elastic, interfaces, contact_blk, frames,
+                                                                         keep)
+    return {"A": A, "applied": loads[0], "translated": tuple(loads[1:]), "offset": offsets[0],
+            "translated_offset": tuple(offsets[1:]), "contact_blk": contact_blk, "contact_area": contact_area,
+            "law": _nodal_law(interfaces, interface_of_node, contact_area), "frames": frames,
+            "interfaces": tuple(interfaces), "interface_of_node": interface_of_node, "rotation": rotation,
+            "coupling": coupling, "transform": transform, "rollers": constrained.any(axis=1),
+            "n_contact": comm.allreduce(len(contact_blk), op=MPI.SUM)}
+
+
 def _solver_variables(
-    A: PETSc.Mat, loads: list[PETSc.Vec], interfaces: typing.Sequence[Interface], constrained: np.ndarray,
-    contact_blk: np.ndarray, frames: np.ndarray, owned_dirichlet: np.ndarray,
+    elastic: ElasticSystem, interfaces: typing.Sequence[Interface], contact_blk: np.ndarray, frames: np.ndarray,
+    keep: bool,
 ) -> tuple[PETSc.Mat, list[PETSc.Vec], PETSc.Mat | None, PETSc.Mat | None, PETSc.Mat | None, list[PETSc.Vec | None]]:
-    """A = T^T A_K T and l~ = T^T (l~_K - A_K c) for each load (``A`` and ``loads`` are
-    replaced), with R, N, T and the offsets c of the change of variables."""
+    """A = T^T A_K T and l~ = T^T (l~_K - A_K c) for each load, with R, N, T and the offsets c
+    of the change of variables. Without a change (T = I) A_K and the loads themselves;
+    otherwise new objects, and A_K and the loads are freed unless ``keep``."""
+    A_K, loads = elastic.stiffness, elastic.loads
     mortar = any(i.coupling is not None for i in interfaces)
-    rotation = _nodal_rotation(A, contact_blk, frames, always=mortar)
+    rotation = _nodal_rotation(A_K, contact_blk, frames, always=mortar)
     coupling = transform = None
     offsets: list[PETSc.Vec | None] = [None] * len(loads)
     if mortar:
-        coupling = _mortar_rows(A, interfaces, constrained)
-        offsets = [_prescribed_offset(coupling, b, owned_dirichlet) for b in loads]
-        transform = _change_of_variables(coupling, rotation, owned_dirichlet)
-    if rotation is not None:
-        T = transform if transform is not None else rotation
-        loads = [_in_solver_variables(A, T, b, c) for b, c in zip(loads, offsets)]
-        A_global, A = A, A.PtAP(T)
-        A_global.destroy()
-    return A, loads, rotation, coupling, transform, offsets
+        coupling = _mortar_rows(A_K, interfaces, elastic.constrained)
+        offsets = [_prescribed_offset(coupling, b, elastic.owned_dirichlet) for b in loads]
+        transform = _change_of_variables(coupling, rotation, elastic.owned_dirichlet)
+    if rotation is None:
+        return A_K, loads, rotation, coupling, transform, offsets
+    T = transform if transform is not None else rotation
+    transformed = [_in_solver_variables(A_K, T, b, c) for b, c in zip(loads, offsets)]
+    A = A_K.PtAP(T)
+    if not keep:
+        for obj in (A_K, *loads):
+            obj.destroy()
+    return A, transformed, rotation, coupling, transform, offsets
 
 
 def _unit_translations(a: fem.Form, A: PETSc.Mat, moved_bc: fem.DirichletBC | None,
@@ -487,16 +583,14 @@ def _check_prescribed_on_contact(loads: list[PETSc.Vec], contact_blk: np.ndarray
 
 
 def _in_solver_variables(A_K: PETSc.Mat, T: PETSc.Mat, b: PETSc.Vec, offset: PETSc.Vec | None) -> PETSc.Vec:
-    """T^T (b - A_K c) for a lifted load b (``b`` is destroyed)."""
+    """T^T (b - A_K c) for a lifted load b (a new vector)."""
+    lifted = b.copy()
     if offset is not None:
-        lifted = b.duplicate()
         A_K.mult(offset, lifted)
         lifted.aypx(-1.0, b)
-        b.destroy()
-        b = lifted
     out = b.duplicate()
-    T.multTranspose(b, out)
-    b.destroy()
+    T.multTranspose(lifted, out)
+    lifted.destroy()
     return out
 
 

@@ -1,0 +1,123 @@
+"""A block slid along a longer one by several element sizes: the contact search is done
+again before every load step, so the contact follows the sliding body.
+
+The upper block's top is moved by (s_k, 0, -delta) with s_k up to 0.6 m, 2.4 element
+sizes of the lower block, with Coulomb friction F = 0.2 (:mod:`meshes/sliding_blocks.geo`).
+What the search must give, checked at every step:
+
+* the force on the master (lower) block acts where the slave block is: the centroid of
+  the normal nodal forces on the master nodes equals that on the slave nodes, both in
+  the deformed configuration (moment balance across the interface; C reproduces linear
+  fields in the configuration it was searched in, which is the step before's, so they
+  agree within the increment 0.1 m, and within 1e-3 m in the last step, which repeats
+  the last position);
+* the friction force opposes the sliding, at the Coulomb bound F times the normal force
+  at every sliding node;
+* the master and slave forces balance (Newton's third law through C^T).
+
+Searched only once, in the reference configuration, the force on the master stays where
+the block started: the same check fails by the whole slide.
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+
+from dolfinx import fem
+
+from contactqvi.contact import LoadStep, solve_load_path
+from contactqvi.contact.interface import BodyPair
+from contactqvi.contact.load_path import contact_resultants
+from contactqvi.contact.nodal import State
+from contactqvi.contact.problem import assemble_contact_problem
+from contactqvi.elasticity import body_materials
+from contactqvi.laws import Coulomb
+from contactqvi.meshes import boundary_facets, read_gmsh, split_by_body
+
+MESH = pathlib.Path(__file__).resolve().parent.parent / "meshes" / "sliding_blocks.geo"
+FRICTION = 0.2
+DELTA = 1e-3  # m, the indentation
+SLIDES = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.6)  # m, the last step repeats the last position
+
+
+@pytest.fixture(scope="module")
+def blocks():
+    msh, facet_tags, cell_tags = read_gmsh(MESH, MPI.COMM_WORLD)
+    return msh, split_by_body(msh, facet_tags, cell_tags), cell_tags
+
+
+def _centroid(comm: MPI.Comm, x: np.ndarray, forces: np.ndarray) -> float:
+    """x-coordinate of the centroid of the normal (z) forces at the points ``x``."""
+    moment, total = (comm.allreduce(float(v), op=MPI.SUM) for v in ((x[:, 0] * forces[:, 2]).sum(), forces[:, 2].sum()))
+    return moment / total
+
+
+def _slide(blocks, search: str) -> list[dict]:
+    """Per step: the centroids of the normal forces on the slave and on the master nodes,
+    the contact forces on both sides, the Coulomb bound's excess at the sliding nodes and
+    the solver status."""
+    msh, tags, cell_tags = blocks
+    comm = msh.comm
+    young, poisson = body_materials(msh, cell_tags, {"lower": (1e9, 0.3), "upper": (1e9, 0.3)})
+    pair = BodyPair("upper.interface", "lower.interface", Coulomb(FRICTION), search=search)
+    steps = [LoadStep(1.0, (s, 0.0, -DELTA)) for s in SLIDES]
+    rows = []
+    with assemble_contact_problem(msh, tags, young, poisson, {}, [pair], clamped=["lower.bottom"],
+                                  cell_tags=cell_tags, moved=["upper.top"]) as problem:
+        V = problem.V
+        n_owned = V.dofmap.index_map.size_local
+        master = fem.locate_dofs_topological(V, 2, boundary_facets(tags, "lower.interface"))
+        master = master[master < n_owned]
+        reference = V.tabulate_dof_coordinates()[:n_owned]
+        displacement = fem.Function(V)
+
+        def record(index, step, u, result):
+            x = reference + problem.physical_displacement(u, displacement).x.array.reshape(-1, 3)[:n_owned]
+            forces = problem.nodal_contact_forces(result.normal_force, result.friction_force)
+            slave = problem.contact_blk
+            sliding = result.states == State.SLIDING
+            excess = np.linalg.norm(result.friction_force, axis=1) - FRICTION * result.normal_force
+            rows.append({
+                "converged": result.converged,
+                "on_master": comm.allreduce(forces[master].sum(axis=0), op=MPI.SUM),
+                "on_slave": np.array(contact_resultants(problem, result)["pair_forces"][pair.name]),
+                "master_centroid": _centroid(comm, x[master], forces[master]),
+                "slave_centroid": _centroid(comm, x[slave], forces[slave]),
+                "sliding": comm.allreduce(int(sliding.sum()), op=MPI.SUM),
+                "touching": comm.allreduce(int((result.normal_force > 0).sum()), op=MPI.SUM),
+                "bound_excess": comm.allreduce(float(np.abs(excess[sliding]).max(initial=0.0)), op=MPI.MAX),
+            })
+
+        u = problem.A.createVecRight()
+        try:
+            solve_load_path(problem, steps, u, {"pc": "lu"}, on_step=record, from_rest=True)
+        finally:
+            u.destroy()
+    return rows
+
+
+def test_contact_search_follows_a_sliding_block(blocks):
+    rows = _slide(blocks, "every_step")
+    assert [r["converged"] for r in rows] == [True] * len(SLIDES)
+    for k, row in enumerate(rows):
+        increment = SLIDES[k] - SLIDES[k - 1] if k else 0.0
+        assert abs(row["master_centroid"] - row["slave_centroid"]) <= increment + 1e-3, (k, row)
+        slave, master = row["on_slave"], row["on_master"]
+        assert np.abs(slave + master).max() <= 1e-9 * slave[2]  # third law through C^T
+        assert slave[2] > 0.0  # the lower block pushes the upper one up
+        if increment > 0.0:  # sliding along +x: friction along -x, at the bound at every sliding node
+            assert row["sliding"] >= 0.9 * row["touching"], (k, row)
+            assert row["bound_excess"] <= 1e-8 * slave[2], (k, row)
+            assert -slave[0] >= 0.99 * FRICTION * slave[2], (k, row)
+
+
+def test_a_pair_searched_once_keeps_the_reference_coupling(blocks):
+    """The control: without a new search the force on the master stays where the block started."""
+    last = _slide(blocks, "once")[-1]
+    assert last["converged"]
+    assert abs(last["master_centroid"] - last["slave_centroid"]) > 0.5
