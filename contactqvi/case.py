@@ -120,8 +120,8 @@ import tomllib
 import typing
 
 from contactqvi import obstacles
-from contactqvi.contact.interface import SEARCHES
 from contactqvi.laws import LAWS, ContactLaw, create_law, parameter_names
+from contactqvi.load_steps import SEARCHES
 from contactqvi.load_steps import LoadStep as Step
 from contactqvi.parameters import (
     ParameterError,

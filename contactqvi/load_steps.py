@@ -9,7 +9,12 @@ import numpy as np
 
 from contactqvi.parameters import require, require_positive
 
-__all__ = ["LoadStep", "check_steps"]
+__all__ = ["SEARCHES", "LoadStep", "check_steps"]
+
+#: When a pair of meshed bodies is searched along the load path: before every load step
+#: after the first, in the configuration the step before ended in, or once, in the
+#: reference configuration (:class:`~contactqvi.contact.interface.BodyPair`).
+SEARCHES = ("every_step", "once")
 
 
 @dataclasses.dataclass(frozen=True)

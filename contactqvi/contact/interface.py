@@ -32,14 +32,12 @@ from dolfinx import mesh as dmesh
 
 from contactqvi.contact.mortar import MortarCoupling, mortar_coupling
 from contactqvi.laws import ContactLaw, Frictionless
+from contactqvi.load_steps import SEARCHES
 from contactqvi.meshes import boundary_facets
 from contactqvi.obstacles import Obstacle, tangent_frames
 from contactqvi.parameters import require
 
-__all__ = ["BodyPair", "Interface", "ObstaclePair", "SEARCHES", "build_interfaces", "search_again"]
-
-#: When a body pair is searched (:attr:`BodyPair.search`).
-SEARCHES = ("every_step", "once")
+__all__ = ["BodyPair", "Interface", "ObstaclePair", "build_interfaces", "search_again"]
 
 
 @dataclasses.dataclass(frozen=True)

@@ -80,15 +80,14 @@ def solve_load_path(
     resume: Resume | None = None,
     stop: typing.Callable[[], bool] | None = None,
 ) -> list[SCDNewtonResult]:
-    """Solve the steps in turn with one SCD Newton solver; stop at the first that fails.
+    """Solve the steps in turn with one SCD Newton solver (one per step when the problem is
+    searched each step); stop at the first that fails.
 
     Args:
-        problem: the contact problem (its step is set here).
-        steps: the load path.
+        problem, steps: the contact problem (its step is set here) and the load path.
         u: initial guess of the first step (shifted displacements); holds the last
             step's solution on return.
-        parameters: SCD Newton parameters.
-        prefix: PETSc options prefix of the Newton-step KSP.
+        parameters, prefix: SCD Newton parameters, PETSc options prefix of the Newton-step KSP.
         on_step: called after each step with (index, step, u, result), e.g. to write output.
         from_rest: start the first step from the body at rest (u~ = 0) instead of ``u``.
         resume: continue after the steps of a checkpoint instead (``u`` is then ignored).
@@ -99,40 +98,25 @@ def solve_load_path(
     :meth:`~contactqvi.contact.scd_newton.SCDNewtonSolver.solve`) if its own test asks for
     more: a small increment is not solved to ``rtol`` of its own small start.
 
-    Returns:
-        The results of the steps solved (after ``resume.done``); the last one failed if it
-        is not converged.
+    Returns the results of the steps solved (after ``resume.done``); the last one failed
+    if it is not converged.
     """
     check_steps(steps)
     results: list[SCDNewtonResult] = []
-    first, target = (0, 0.0) if resume is None else (resume.done, resume.target)
-    previous = u.duplicate()
+    first, target, solver = (0, 0.0, None) if resume is None else (resume.done, resume.target, None)
+    previous = u.duplicate() if resume is None or resume.previous is None else resume.previous.copy()
     states = None if resume is None else _node_states(problem, resume.node_states)
     displacement = fem.Function(problem.V) if problem.searched_each_step else None
-    if resume is not None and resume.previous is not None:
-        resume.previous.copy(previous)
-    solver = None
     try:
         for index in range(first, len(steps)):
             step = steps[index]
-            if index > 0:
-                if index > first:
-                    previous.waxpy(-1.0, problem.shift, u)  # u~ of the last step, solver variables
-                if displacement is not None:
-                    if solver is not None:
-                        solver.destroy()
-                        solver = None
-                    states = _search(problem, steps[index - 1], u if index > first else None, displacement,
-                                     previous, states, resume)
-                _continue(problem, step, u, previous, states)
-            else:
-                problem.set_step(step.load, step.translation)
-                if from_rest:
-                    problem.shift.copy(u)  # u~ = 0
+            if index > 0 and displacement is not None and solver is not None:
+                solver.destroy()  # the search replaces A and the contact nodes
+                solver = None
+            states = _start(problem, steps, index, first, u, previous, states, from_rest, displacement, resume)
             logger.info("step %d: load factor %g, obstacle translation %s m", index + 1, step.load,
                         np.array2string(np.asarray(step.translation), precision=4))
-            if solver is None:
-                solver = SCDNewtonSolver(problem, parameters, prefix=prefix)
+            solver = solver or SCDNewtonSolver(problem, parameters, prefix=prefix)
             result = solver.solve(u, atol=target, stop=stop)
             results.append(result)
             target, states = (result.target if index == 0 else target), result.states
@@ -145,6 +129,27 @@ def solve_load_path(
             if obj is not None:
                 obj.destroy()
     return results
+
+
+def _start(problem: ContactProblem, steps: typing.Sequence[LoadStep], index: int, first: int, u: PETSc.Vec,
+           previous: PETSc.Vec, states: np.ndarray | None, from_rest: bool, displacement: fem.Function | None,
+           resume: Resume | None) -> np.ndarray | None:
+    """Set step ``index`` of a load path that began at ``first`` and put its initial guess in ``u``
+    (after a step: its solution ``u``, or ``previous`` of a checkpoint when ``index == first``).
+    Returns the contact states of the step before, carried over to the problem's contact nodes."""
+    step = steps[index]
+    if index == 0:
+        problem.set_step(step.load, step.translation)
+        if from_rest:
+            problem.shift.copy(u)  # u~ = 0
+        return states
+    if index > first:
+        previous.waxpy(-1.0, problem.shift, u)  # u~ of the last step, solver variables
+    if displacement is not None:
+        states = _search(problem, steps[index - 1], u if index > first else None, displacement, previous, states,
+                         resume)
+    _continue(problem, step, u, previous, states)
+    return states
 
 
 def _node_states(problem: ContactProblem, node_states: np.ndarray) -> np.ndarray:

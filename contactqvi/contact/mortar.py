@@ -277,9 +277,7 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
     searched configuration exceeds ``search_distance`` (default: the node's own size
     sqrt(2 x lumped area)).
     """
-    comm = V.mesh.comm
-    index_map = V.dofmap.index_map
-    x = V.tabulate_dof_coordinates()
+    comm, index_map, x = V.mesh.comm, V.dofmap.index_map, V.tabulate_dof_coordinates()
     current = x if displacement is None else x + displacement
     slave, master = surface_triangles(V, slave_facets, current), surface_triangles(V, master_facets, current)
     master_glob = index_map.local_to_global(master.blk.ravel()).reshape(-1, 3)
