@@ -199,6 +199,8 @@ class _StepRecorder:
         """Write step ``index``'s results (if it converged), the summary, and its checkpoint
         (if it converged); an :class:`OutputError` if the output cannot be written."""
         entry = {"step": index + 1, "load": step.load, "translation": list(step.translation), **result.summary()}
+        if index == 0 or self.problem.searched_each_step:  # the search this step's problem comes from
+            entry.update(p=self.problem.n_contact, search_seconds=dict(self.problem.setup_seconds))
         writer, summary = self.writer, self.summary
         try:
             if result.converged:
