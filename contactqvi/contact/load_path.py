@@ -91,19 +91,18 @@ def solve_load_path(
         on_step: called after each step with (index, step, u, result), e.g. to write output.
         from_rest: start the first step from the body at rest (u~ = 0) instead of ``u``.
         resume: continue after the steps of a checkpoint instead (``u`` is then ignored).
-        stop: asked before each Newton step (collective); when true the step ends with
-            status ``interrupted`` (:meth:`~contactqvi.contact.scd_newton.SCDNewtonSolver.solve`).
+        stop: asked before each Newton step (collective); true ends the step as ``interrupted``.
 
-    Every step after the first stops at the first step's target ||y^|| (``atol`` of
-    :meth:`~contactqvi.contact.scd_newton.SCDNewtonSolver.solve`) if its own test asks for
-    more: a small increment is not solved to ``rtol`` of its own small start.
+    Every later step stops at the first step's target ||y^|| (``atol`` of ``solve``) if its
+    own test asks for more: a small increment is not solved to ``rtol`` of its own small start.
 
     Returns the results of the steps solved (after ``resume.done``); the last one failed
     if it is not converged.
     """
     check_steps(steps)
     results: list[SCDNewtonResult] = []
-    first, target, solver = (0, 0.0, None) if resume is None else (resume.done, resume.target, None)
+    first, target = (0, 0.0) if resume is None else (resume.done, resume.target)
+    solver: SCDNewtonSolver | None = None
     previous = u.duplicate() if resume is None or resume.previous is None else resume.previous.copy()
     states = None if resume is None else _node_states(problem, resume.node_states)
     displacement = fem.Function(problem.V) if problem.searched_each_step else None
@@ -116,7 +115,8 @@ def solve_load_path(
             states = _start(problem, steps, index, first, u, previous, states, from_rest, displacement, resume)
             logger.info("step %d: load factor %g, obstacle translation %s m", index + 1, step.load,
                         np.array2string(np.asarray(step.translation), precision=4))
-            solver = solver or SCDNewtonSolver(problem, parameters, prefix=prefix)
+            if solver is None:
+                solver = SCDNewtonSolver(problem, parameters, prefix=prefix)
             result = solver.solve(u, atol=target, stop=stop)
             results.append(result)
             target, states = (result.target if index == 0 else target), result.states
@@ -125,9 +125,9 @@ def solve_load_path(
             if not result.converged:
                 break
     finally:
-        for obj in (solver, previous):
-            if obj is not None:
-                obj.destroy()
+        previous.destroy()
+        if solver is not None:
+            solver.destroy()
     return results
 
 
