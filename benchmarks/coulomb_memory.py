@@ -11,7 +11,8 @@ so the matrices' storage is counted from their nonzeros (8-byte values, 4-byte
 column indices per nonzero of AIJ or per block of BAIJ, 4-byte row offsets).
 
     mpirun -n 2 python benchmarks/coulomb_memory.py --lev 9
-    PETSC_OPTIONS="-matptap_via allatonce" mpirun -n 2 python benchmarks/coulomb_memory.py --lev 9 --label allatonce
+    PETSC_OPTIONS="-matptap_via nonscalable -mat_product_clear 0" \
+        mpirun -n 2 python benchmarks/coulomb_memory.py --lev 9 --label "PETSc's default products"
 
 Rows are added to ``coulomb_memory.{json,md}`` in ``--output`` (same lev, case,
 ranks and ``--label`` replaced).

@@ -44,7 +44,7 @@ def main() -> None:
     args, comm, out = benchlib.parse(parser)
     row = benchlib.run_coulomb_case(comm, args.lev, args.case, {"pc": args.pc}, "scaling_")
     row["pc"] = args.pc
-    row["petsc_options"] = os.environ.get("PETSC_OPTIONS", "")  # e.g. -matptap_via allatonce for lev 11
+    row["petsc_options"] = os.environ.get("PETSC_OPTIONS", "")  # e.g. -matptap_via allatonce (leaner, slower set-ups)
     rows = benchlib.merge_rows(out / "coulomb_scaling.json", [row], ("lev", "case", "pc", "mpi_size"))
     benchlib.emit(comm, out, "coulomb_scaling", rows, markdown(rows))
 

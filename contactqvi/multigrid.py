@@ -19,6 +19,18 @@ costs an eighth of that, with the same operators (docs/bodies.md). The updated o
 of the new J with the old interpolations, i.e. what ``-pc_gamg_reuse_interpolation``
 gives after a full set-up, at the cost of the change only. Each level's smoother
 (and the coarse solver) is set up again on its updated operator.
+
+Memory of the set-up's products (PETSc 3.22, MPIAIJ on several processes;
+docs/coulomb.md, Memory). PETSc's default parallel PtAP ("nonscalable") forms A P on
+each process, a local copy of P and P^T, and keeps them on the coarse operator for a
+later product of the same pattern, which nothing here makes (GAMG's set-up forms each
+coarse operator once, the updates form new products): about 1.7 KB/dof held after the
+set-up. :func:`set_up` frees them as each product is done and forms the products by
+the "backend" algorithm (a sequential P^T A P of the diagonal blocks, which forms no
+A P, plus the off-process part), which peaks lower (lev 9 d3/L2, 2 ranks: peak 5526
+-> 4259 B/dof; lev 11 fits 2 ranks in 16.2 GiB); "allatonce" peaks lower still but
+took 4-6x longer on the finest level. The updates keep the default algorithm: its
+products of a change on few rows were the fastest and are freed with the change.
 """
 
 from __future__ import annotations
@@ -30,15 +42,34 @@ from petsc4py import PETSc
 import numpy as np
 
 from contactqvi.lifetime import PETScOwner
+from contactqvi.linalg import default_options
 
-__all__ = ["GalerkinUpdate", "is_multigrid"]
+__all__ = ["GalerkinUpdate", "is_multigrid", "set_up"]
 
 _SUBSET = PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN
+#: Options without a prefix (a product's matrix has none) in force during a multigrid
+#: set-up: each Galerkin product's intermediates are freed when it is formed ...
+_SET_UP_OPTIONS = {"mat_product_clear": True}
+#: ... and on several processes formed by the "backend" algorithm (an MPIAIJ product
+#: only: a sequential PtAP rejects the name, and forms no A P anyway).
+_PARALLEL_SET_UP_OPTIONS = {**_SET_UP_OPTIONS, "matptap_via": "backend"}
 
 
 def is_multigrid(pc: PETSc.PC) -> bool:
     """True for preconditioners with Galerkin levels this module can update (GAMG, MG)."""
     return pc.getType() in (PETSc.PC.Type.GAMG, PETSc.PC.Type.MG)
+
+
+def set_up(ksp: PETSc.KSP) -> None:
+    """Set up ``ksp`` and its multigrid preconditioner with the memory-lean Galerkin products above.
+
+    The same coarse operators as PETSc's default products up to round-off (on 1 rank
+    bit for bit: only the clearing applies); the user's own ``-matptap_via`` or
+    ``-mat_product_clear`` wins.
+    """
+    options = _SET_UP_OPTIONS if ksp.getComm().getSize() == 1 else _PARALLEL_SET_UP_OPTIONS
+    with default_options("", options):
+        ksp.setUp()
 
 
 class GalerkinUpdate(PETScOwner):

@@ -16,7 +16,7 @@ import numpy as np
 
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import OptionsDict, create_ksp, default_options, ksp_converged_reason, preset
-from contactqvi.multigrid import GalerkinUpdate, is_multigrid
+from contactqvi.multigrid import GalerkinUpdate, is_multigrid, set_up
 
 __all__ = ["NEWTON_STEP_SOLVERS", "NewtonStepSolver"]
 
@@ -117,7 +117,7 @@ class NewtonStepSolver(PETScOwner):
         # Options read at set-up (GAMG: multigrid options; block Jacobi: sub_*) come from the preset.
         with default_options(self.ksp.getOptionsPrefix(), self._options):
             if multigrid and self.galerkin is None:
-                self.ksp.setUp()
+                set_up(self.ksp)
                 self.galerkin = GalerkinUpdate(self.ksp.getPC())
             self.ksp.solve(rhs, du)
         return self.ksp.getConvergedReason()

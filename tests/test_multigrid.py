@@ -1,0 +1,57 @@
+"""The multigrid set-up of ``contactqvi/multigrid.py``: the memory-lean Galerkin products of
+:func:`~contactqvi.multigrid.set_up` give PETSc's default coarse operators (to round-off),
+leave the options database as they found it, and the Galerkin updates still work on them.
+Serial and on 2 ranks (the "backend" product is the parallel one).
+"""
+
+from __future__ import annotations
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import numpy as np
+import ufl
+
+import dolfinx.fem.petsc
+from dolfinx import fem, mesh
+
+from contactqvi.linalg import create_ksp, default_options, preset
+from contactqvi.multigrid import GalerkinUpdate, set_up
+
+
+def _coarse_operators(ksp: PETSc.KSP) -> list[PETSc.Mat]:
+    pc = ksp.getPC()
+    return [pc.getMGSmoother(level).getOperators()[0] for level in range(pc.getMGLevels() - 1)]
+
+
+def test_lean_set_up_gives_the_default_coarse_operators_and_restores_the_options():
+    msh = mesh.create_unit_cube(MPI.COMM_WORLD, 8, 8, 8)
+    V = fem.functionspace(msh, ("Lagrange", 1))
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    J = dolfinx.fem.petsc.assemble_matrix(fem.form(ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx + u * v * ufl.dx))
+    J.assemble()
+    options = preset("gmres_gamg")
+    plain, lean = (create_ksp(MPI.COMM_WORLD, prefix, options, A=J) for prefix in ("mg_plain_", "mg_lean_"))
+    with default_options("mg_plain_", options):
+        plain.setUp()
+    with default_options("mg_lean_", options):
+        set_up(lean)
+    assert not any(PETSc.Options().hasName(name) for name in ("matptap_via", "mat_product_clear"))
+    expected, actual = _coarse_operators(plain), _coarse_operators(lean)
+    assert len(expected) == len(actual) >= 1
+    for C, D in zip(expected, actual):
+        difference = D.copy()
+        difference.axpy(-1.0, C)
+        assert difference.norm() <= 1e-12 * C.norm()
+        difference.destroy()
+
+    change = J.duplicate(copy=False)  # the updates' products run on the lean operators
+    start = change.getOwnershipRange()[0]
+    change.setValue(start, start, 0.5)
+    change.assemble()
+    galerkin = GalerkinUpdate(lean.getPC())
+    galerkin.update(change)
+    coarsest = _coarse_operators(lean)[0]
+    assert np.isfinite(coarsest.norm()) and galerkin.updates == 1
+    for obj in (galerkin, change, plain, lean, J):
+        obj.destroy()
