@@ -40,7 +40,7 @@ from contactqvi.runner import build_problem
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 CASE = ROOT / "cases" / "hertz_bodies.toml"
 MINDLIN_CASE = ROOT / "cases" / "cattaneo_mindlin_bodies.toml"
-MESHES = {"coarse": 6, "medium": 10, "fine": 16, "xfine": 21, "xxfine": 34}  # h at the contact = a / value (block; the ball 0.7 of it)
+MESHES = {"coarse": 6, "medium": 10, "fine": 16, "xfine": 21, "xxfine": 35}  # h at the contact = a / value (block; the ball 0.7 of it)
 
 
 def run(mesh: str, comm: MPI.Comm) -> dict:
@@ -68,7 +68,7 @@ def run(mesh: str, comm: MPI.Comm) -> dict:
         "status": [str(r.status) for r in results], "newton": [r.iterations for r in results],
         "krylov": [r.inner_iterations for r in results], "assembly_s": built - start, "solve_s": solved - built,
         "elastic_s": elastic["seconds"], "elastic_krylov": elastic["krylov"], **problem_seconds,
-        "P": force, "a": float(np.sqrt(area / np.pi)), "p0": p0,
+        "P": force, "a": float(np.sqrt(area / np.pi)), "p0": p0, "peak_rss_mib": benchlib.peak_rss_mib(comm, MPI.SUM),
     }
 
 
@@ -153,7 +153,8 @@ def _hertz_table(meshes: list[str], comm: MPI.Comm, output: pathlib.Path) -> Non
     rows = [run(mesh, comm) for mesh in meshes]
     header = ["mesh (h at contact)", "dofs", "Newton per step", "Krylov per step", "P (MN) / Hertz", "error P",
               "a (mm) / Hertz", "|a - a_H| / h", "p0 (GPa) / Hertz", "error p0", "solve (s)",
-              "elastic solve (s)", "solve per step / elastic", "search + mortar (s)", "/ solve per step"]
+              "elastic solve (s)", "solve per step / elastic", "search + mortar (s)", "/ solve per step",
+              "peak memory (GiB)", "KB per dof"]
     table = []
     for row in rows:
         h = reference["a"] / MESHES[row["mesh"]]
@@ -164,7 +165,8 @@ def _hertz_table(meshes: list[str], comm: MPI.Comm, output: pathlib.Path) -> Non
                       f"{row['p0'] / 1e9:.3f} / {reference['p0'] / 1e9:.3f}", f"{row['p0'] / reference['p0'] - 1:+.2%}",
                       f"{row['solve_s']:.1f}", f"{row['elastic_s']:.2f}",
                       f"{row['solve_s'] / len(row['newton']) / row['elastic_s']:.2f}",
-                      f"{row['contact_search_s']:.2f}", f"{row['contact_search_s'] * len(row['newton']) / row['solve_s']:.1%}"])
+                      f"{row['contact_search_s']:.2f}", f"{row['contact_search_s'] * len(row['newton']) / row['solve_s']:.1%}",
+                      f"{row['peak_rss_mib'] / 1024:.1f}", f"{row['peak_rss_mib'] * 1024 / row['dofs']:.1f}"])
     title = ("## Hertz between two elastic bodies: steel ball (R = 1 m, E = 210 GPa) pressed 1 mm into an "
              "aluminium block (E = 70 GPa), nu = 0.3, non-matching meshes, mortar contact\n\n"
              f"E* = {reference['E_star'] / 1e9:.2f} GPa; quarter model, four steps of 0.25 mm on "

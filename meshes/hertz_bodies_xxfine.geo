@@ -1,5 +1,4 @@
-// Hertz between two elastic bodies (ball on block), quarter model, h = a / 34 at the contact:
-// 966 942 dofs (benchmarks/hertz_bodies.py --meshes xxfine --name hertz_bodies_xxfine, on 2 ranks:
-// about 20 GB in all).
-refinement = 34;
+// Hertz between two elastic bodies (ball on block), quarter model, h = a / 35 at the contact:
+// about 1.06 M dofs (benchmarks/hertz_bodies.py --meshes xxfine --name hertz_bodies_xxfine, on 2 ranks).
+refinement = 35;
 Include "hertz_bodies.geo";

@@ -344,7 +344,8 @@ class ContactProblem(PETScOwner):
         Newton steps 9/21/13/17 -> 8/8/9/8. Larger aggregates (a distance-3 maximal
         independent set) did as well on small meshes but fail at a million dofs on 2 ranks:
         PETSc 3.22 preallocates local rows times the largest aggregate (160189 x 17994,
-        beyond 32-bit indices; the dense mortar rows make aggregates of thousands of nodes).
+        beyond 32-bit indices; the mortar rows, then with their zero entries stored, made aggregates of
+        thousands of nodes).
         One body: none (PETSc's defaults; the paper's tables).
         """
         bodies = 0 if self.node_body is None else self.comm.allreduce(int(self.node_body.max(initial=-1)) + 1,
