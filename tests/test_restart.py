@@ -13,8 +13,10 @@ from __future__ import annotations
 import json
 import os
 import pathlib
+import shutil
 import subprocess
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -36,7 +38,14 @@ def _command(case: pathlib.Path, out: pathlib.Path, *options: str, ranks: int = 
 
 
 def _run(command: list[str]) -> None:
-    done = subprocess.run(command, capture_output=True, text=True, timeout=600, env=os.environ | MPIENV)
+    """Run ``command``; mpirun gets its own session directory: a run killed before leaves
+    OpenMPI's behind, and one of a reused process id made mpirun fail ("prte_session_dir failed")."""
+    session = tempfile.mkdtemp(prefix="prte-")
+    try:
+        done = subprocess.run(command, capture_output=True, text=True, timeout=600,
+                              env=os.environ | MPIENV | {"TMPDIR": session})
+    finally:
+        shutil.rmtree(session, ignore_errors=True)
     assert done.returncode == 0, done.stderr[-3000:]
 
 
