@@ -306,15 +306,15 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
 
     n = normal[slave_blk]
     n /= np.linalg.norm(n, axis=1)[:, None]
-    positions = np.hstack([x, current])  # reference and searched positions, fetched together
-    projected = np.zeros((len(slave_blk), 6))
+    positions = x if displacement is None else np.hstack([x, current])  # reference, searched: fetched together
+    projected = np.zeros((len(slave_blk), positions.shape[1]))
     np.add.at(projected, position, values[:, None] * _master_coordinates(comm, index_map, positions, cols))
     separation = positions[slave_blk] - projected
     coupling = MortarCoupling(slave_blk, weight[slave_blk], indptr, cols.astype(np.int64), values, n,
                               separation[:, :3])
     # a node farther than the search distance (default: its own size) cannot touch in this step
     reach = np.sqrt(2.0 * lumped_area[slave_blk]) if search_distance is None else search_distance
-    return _restricted(coupling, np.einsum("ij,ij->i", n, separation[:, 3:]) <= reach)
+    return _restricted(coupling, np.einsum("ij,ij->i", n, separation[:, -3:]) <= reach)
 
 
 #: Candidate pairs integrated at a time by :func:`_overlapping` (bounds its work arrays to about 100 MB).

@@ -585,11 +585,13 @@ def _check_prescribed_on_contact(loads: list[PETSc.Vec], contact_blk: np.ndarray
 
 def _in_solver_variables(A_K: PETSc.Mat, T: PETSc.Mat, b: PETSc.Vec, offset: PETSc.Vec | None) -> PETSc.Vec:
     """T^T (b - A_K c) for a lifted load b (a new vector)."""
-    lifted = b.copy()
-    if offset is not None:
-        A_K.mult(offset, lifted)
-        lifted.aypx(-1.0, b)
     out = b.duplicate()
+    if offset is None:
+        T.multTranspose(b, out)
+        return out
+    lifted = b.duplicate()
+    A_K.mult(offset, lifted)
+    lifted.aypx(-1.0, b)
     T.multTranspose(lifted, out)
     lifted.destroy()
     return out
