@@ -9,16 +9,20 @@ the coarse operators change by
 
     Delta_{l-1} = P_l^T Delta_l P_l,    C_{l-1} <- C_{l-1} + Delta_{l-1},
 
-products whose cost scales with the changed rows (and one pass over P_l), while the
-interpolations are kept. Only the rows whose values changed enter the products: the
-change matrix keeps a fixed pattern (all rows J may change, with explicit zeros on the
-rows that did not), and on a mortar interface those rows are dense (two-body Hertz
-medium mesh: 1.0 M entries in the pattern against 2.2 M in J; when the mortar rows
-still stored their zero entries, 1.8 M against 2.9 M, a product over the pattern cost
-nearly as much as a new set-up, over the changed rows an eighth of that), with the
-same operators (docs/bodies.md). The updated operators are exactly the Galerkin operators
-of the new J with the old interpolations, i.e. what ``-pc_gamg_reuse_interpolation``
-gives after a full set-up, at the cost of the change only. Each level's smoother
+products whose cost scales with the changed rows, while the interpolations are kept.
+With S the rows on which Delta_l has nonzero entries, P_l^T Delta_l P_l =
+(P_l)_S^T ((Delta_l)_S P_l): only the rows S of P_l enter, never its transpose (a
+PtAP of the whole change transposes the local P_l each time: lev 9 d3/L2, 2 ranks,
+0.27 s against 0.08 s per update, 12 % of the solve against 3 %). Only the rows whose
+values changed count: the change matrix keeps a fixed pattern (all rows J may
+change, with explicit zeros on the rows that did not), and on a mortar interface
+those rows are dense (two-body Hertz medium mesh: 1.0 M entries in the pattern
+against 2.2 M in J; when the mortar rows still stored their zero entries, 1.8 M
+against 2.9 M, a product over the pattern cost nearly as much as a new set-up, over
+the changed rows an eighth of that), with the same operators (docs/bodies.md). The
+updated operators are exactly the Galerkin operators of the new J with the old
+interpolations, i.e. what ``-pc_gamg_reuse_interpolation`` gives after a full
+set-up, at the cost of the change only. Each level's smoother
 (and the coarse solver) is set up again on its updated operator.
 
 Memory of the set-up's products (PETSc 3.22, MPIAIJ on several processes;
@@ -30,8 +34,9 @@ set-up. :func:`set_up` frees them as each product is done and forms the products
 the "backend" algorithm (a sequential P^T A P of the diagonal blocks, which forms no
 A P, plus the off-process part), which peaks lower (lev 9 d3/L2, 2 ranks: peak 5526
 -> 4259 B/dof; lev 11 fits 2 ranks in 16.2 GiB); "allatonce" peaks lower still but
-took 4-6x longer on the finest level. The updates keep the default algorithm: its
-products of a change on few rows were the fastest and are freed with the change.
+took 4-6x longer on the finest level. The updates' products (Delta_l)_S P_l are
+formed by the "backend" algorithm on several processes too: the default one merges
+all local rows of P_l first (lev 9: 0.06 against 0.02 s per update).
 """
 
 from __future__ import annotations
@@ -88,22 +93,24 @@ class GalerkinUpdate(PETScOwner):
         self._pc = pc
         levels = pc.getMGLevels()
         self._interpolations = [pc.getMGInterpolation(level) for level in range(1, levels)]
+        self._columns = [PETSc.IS().createStride(hi - lo, lo, 1, comm=P.getComm())  # owned columns of each P_l
+                         for P in self._interpolations for lo, hi in [P.getOwnershipRangeColumn()]]
         self._operators = [pc.getMGSmoother(level).getOperators()[0] for level in range(levels)]
         for operator in self._operators[:-1]:  # the coarse ones, changed here row by row by their owners
             operator.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)
         self.updates = 0  # updates since the set-up
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [*self._interpolations, *self._operators, self._pc]
+        return [*self._interpolations, *self._columns, *self._operators, self._pc]
 
     def update(self, change: PETSc.Mat) -> None:
         """Add ``change`` (already added to the fine operator) to every coarse level and
         set up the smoothers again; the preconditioner is then to be reused."""
-        change = _nonzero_entries(change)
         for level in reversed(range(len(self._interpolations))):
-            coarse = change.PtAP(self._interpolations[level])
+            coarse = _galerkin_product(change, self._interpolations[level], self._columns[level])
             self._operators[level].axpy(1.0, coarse, _SUBSET)
-            change.destroy()
+            if level < len(self._interpolations) - 1:
+                change.destroy()  # a coarse change made here, not the caller's
             change = coarse
         change.destroy()
         for level, operator in enumerate(self._operators):
@@ -112,12 +119,31 @@ class GalerkinUpdate(PETScOwner):
         self.updates += 1
 
 
-def _nonzero_entries(M: PETSc.Mat) -> PETSc.Mat:
-    """A new AIJ matrix with the nonzero values of ``M`` only (owned rows, global columns)."""
+def _galerkin_product(change: PETSc.Mat, P: PETSc.Mat, columns: PETSc.IS) -> PETSc.Mat:
+    """P^T ``change`` P as P_S^T (change_S P), S the rows of ``change`` with nonzero entries
+    (a new matrix in the layout of P's columns; ``columns``: this process's columns of P)."""
+    rows, change_rows = _nonzero_rows(change)
+    P_rows = P.createSubMatrix(rows, columns)
+    options = {} if P.getComm().getSize() == 1 else {"matmatmult_via": "backend"}  # a sequential product rejects the name
+    with default_options("", options):
+        product = change_rows.matMult(P)
+    coarse = P_rows.transposeMatMult(product)
+    for obj in (rows, change_rows, P_rows, product):
+        obj.destroy()
+    return coarse
+
+
+def _nonzero_rows(M: PETSc.Mat) -> tuple[PETSc.IS, PETSc.Mat]:
+    """The owned rows of ``M`` with a nonzero entry (global indices), and those rows of
+    ``M`` with their nonzero entries only, as a new AIJ matrix (in M's column layout)."""
     indptr, indices, values = M.getValuesCSR()
     kept = values != 0.0
     counts = np.concatenate([[0], np.cumsum(kept)])
-    compact = PETSc.Mat().createAIJ(size=M.getSizes(), comm=M.getComm(), csr=(
-        (counts[indptr] - counts[indptr[0]]).astype(PETSc.IntType), indices[kept].astype(PETSc.IntType), values[kept]))
+    per_row = counts[indptr[1:]] - counts[indptr[:-1]]
+    rows = np.flatnonzero(per_row)
+    comm = M.getComm()
+    compact = PETSc.Mat().createAIJ(size=((len(rows), None), M.getSizes()[1]), comm=comm, csr=(
+        np.concatenate([[0], np.cumsum(per_row[rows])]).astype(PETSc.IntType), indices[kept].astype(PETSc.IntType),
+        values[kept]))
     compact.assemble()
-    return compact
+    return PETSc.IS().createGeneral((rows + M.getOwnershipRange()[0]).astype(PETSc.IntType), comm=comm), compact
