@@ -22,8 +22,8 @@ against 2.9 M, a product over the pattern cost nearly as much as a new set-up, o
 the changed rows an eighth of that), with the same operators (docs/bodies.md). The
 updated operators are exactly the Galerkin operators of the new J with the old
 interpolations, i.e. what ``-pc_gamg_reuse_interpolation`` gives after a full
-set-up, at the cost of the change only. Each level's smoother
-(and the coarse solver) is set up again on its updated operator.
+set-up, at the cost of the change only. Each level's smoother (and the coarse
+solver) is set up again on its updated operator.
 
 Memory of the set-up's products (PETSc 3.22, MPIAIJ on several processes;
 docs/coulomb.md, Memory). PETSc's default parallel PtAP ("nonscalable") forms A P on
@@ -106,13 +106,14 @@ class GalerkinUpdate(PETScOwner):
     def update(self, change: PETSc.Mat) -> None:
         """Add ``change`` (already added to the fine operator) to every coarse level and
         set up the smoothers again; the preconditioner is then to be reused."""
+        coarse = change
         for level in reversed(range(len(self._interpolations))):
-            coarse = _galerkin_product(change, self._interpolations[level], self._columns[level])
+            finer, coarse = coarse, _galerkin_product(coarse, self._interpolations[level], self._columns[level])
             self._operators[level].axpy(1.0, coarse, _SUBSET)
-            if level < len(self._interpolations) - 1:
-                change.destroy()  # a coarse change made here, not the caller's
-            change = coarse
-        change.destroy()
+            if finer is not change:  # a coarse change made here, not the caller's
+                finer.destroy()
+        if coarse is not change:
+            coarse.destroy()
         for level, operator in enumerate(self._operators):
             self._pc.getMGSmoother(level).setOperators(operator, operator)
         self._pc.setReusePreconditioner(True)
@@ -124,7 +125,8 @@ def _galerkin_product(change: PETSc.Mat, P: PETSc.Mat, columns: PETSc.IS) -> PET
     (a new matrix in the layout of P's columns; ``columns``: this process's columns of P)."""
     rows, change_rows = _nonzero_rows(change)
     P_rows = P.createSubMatrix(rows, columns)
-    options = {} if P.getComm().getSize() == 1 else {"matmatmult_via": "backend"}  # a sequential product rejects the name
+    # "backend" on several processes (a sequential product rejects the name)
+    options = {} if P.getComm().getSize() == 1 else {"matmatmult_via": "backend"}
     with default_options("", options):
         product = change_rows.matMult(P)
     coarse = P_rows.transposeMatMult(product)
