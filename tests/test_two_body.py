@@ -61,6 +61,39 @@ def test_clipping_and_segment_integrals_of_one_pair():
     assert np.allclose(M[0][:, [2, 0, 1]], np.eye(3) / 6.0, atol=1e-15)  # master vertex k is slave vertex (k+1) % 3
 
 
+def test_segment_integrals_of_random_pairs_sum_to_the_slave_weights():
+    """Random slave and master triangles (about a third overlap, some touch at an edge): the
+    pairs the separating-axis filter skips have no overlap (their clipped polygon has zero
+    area), and sum_j M_ij = D_i (sum_j phi_j = 1 on the overlap) for all of them."""
+    rng = np.random.default_rng(7)
+    count = 4000
+    slave = np.concatenate([rng.uniform(-1.0, 1.0, (count, 3, 2)), np.zeros((count, 3, 1))], axis=2)
+    master = np.concatenate([rng.uniform(-1.0, 1.0, (count, 3, 2)) + rng.uniform(-1.5, 1.5, (count, 1, 2)),
+                             np.full((count, 3, 1), -0.1)], axis=2)
+    master[:50, :2] = slave[:50, [1, 0]]  # sharing the edge v0 v1, on the other side of it
+    master[:50, 2, :2] = 2.0 * (slave[:50, 0, :2] + slave[:50, 1, :2]) / 2.0 - slave[:50, 2, :2]
+    normal = np.tile([0.0, 0.0, 1.0], (count, 1))
+    D, M = segment_integrals(slave, normal, master)
+    assert np.allclose(M.sum(axis=2), D, atol=1e-13)
+
+    def ccw(t: np.ndarray) -> np.ndarray:
+        d1, d2 = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
+        return np.where((d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0] < 0.0)[:, None, None], t[:, [0, 2, 1]], t)
+
+    polygon = np.zeros((count, 6, 2))
+    polygon[:, :3] = ccw(master[..., :2])
+    clipped, vertices = clip_polygons(polygon, np.full(count, 3), ccw(slave[..., :2]))
+    area = np.zeros(count)
+    for k in range(1, 5):  # fan areas of the brute-force clipping
+        has = vertices >= k + 2
+        d1, d2 = clipped[has, k] - clipped[has, 0], clipped[has, k + 1] - clipped[has, 0]
+        area[has] += 0.5 * np.abs(d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
+    skipped = ~np.any(M != 0.0, axis=(1, 2))
+    assert np.all(area[skipped] <= 1e-14)
+    assert 0.2 * count < np.count_nonzero(~skipped) < 0.8 * count
+    assert np.allclose(D.sum(axis=1), area, atol=1e-13)  # sum_i psi_i = 1: D sums to the overlap's area
+
+
 @pytest.mark.parametrize("slave, master", [("upper", "lower"), ("lower", "upper")])
 def test_flat_non_matching_interface_is_integrated_exactly(blocks, slave, master):
     """sum_j C_ij x_j = x_i (linear fields are reproduced), rows sum to 1, gap 0, and the
