@@ -93,22 +93,20 @@ class GalerkinUpdate(PETScOwner):
         self._pc = pc
         levels = pc.getMGLevels()
         self._interpolations = [pc.getMGInterpolation(level) for level in range(1, levels)]
-        self._columns = [PETSc.IS().createStride(hi - lo, lo, 1, comm=P.getComm())  # owned columns of each P_l
-                         for P in self._interpolations for lo, hi in [P.getOwnershipRangeColumn()]]
         self._operators = [pc.getMGSmoother(level).getOperators()[0] for level in range(levels)]
         for operator in self._operators[:-1]:  # the coarse ones, changed here row by row by their owners
             operator.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)
         self.updates = 0  # updates since the set-up
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [*self._interpolations, *self._columns, *self._operators, self._pc]
+        return [*self._interpolations, *self._operators, self._pc]
 
     def update(self, change: PETSc.Mat) -> None:
         """Add ``change`` (already added to the fine operator) to every coarse level and
         set up the smoothers again; the preconditioner is then to be reused."""
         coarse = change
         for level in reversed(range(len(self._interpolations))):
-            finer, coarse = coarse, _galerkin_product(coarse, self._interpolations[level], self._columns[level])
+            finer, coarse = coarse, _galerkin_product(coarse, self._interpolations[level])
             self._operators[level].axpy(1.0, coarse, _SUBSET)
             if finer is not change:  # a coarse change made here, not the caller's
                 finer.destroy()
@@ -120,17 +118,19 @@ class GalerkinUpdate(PETScOwner):
         self.updates += 1
 
 
-def _galerkin_product(change: PETSc.Mat, P: PETSc.Mat, columns: PETSc.IS) -> PETSc.Mat:
+def _galerkin_product(change: PETSc.Mat, P: PETSc.Mat) -> PETSc.Mat:
     """P^T ``change`` P as P_S^T (change_S P), S the rows of ``change`` with nonzero entries
-    (a new matrix in the layout of P's columns; ``columns``: this process's columns of P)."""
+    (a new matrix in the layout of P's columns)."""
     rows, change_rows = _nonzero_rows(change)
+    low, high = P.getOwnershipRangeColumn()
+    columns = PETSc.IS().createStride(high - low, low, 1, comm=P.getComm())  # all of P's columns
     P_rows = P.createSubMatrix(rows, columns)
     # "backend" on several processes (a sequential product rejects the name)
     options = {} if P.getComm().getSize() == 1 else {"matmatmult_via": "backend"}
     with default_options("", options):
         product = change_rows.matMult(P)
     coarse = P_rows.transposeMatMult(product)
-    for obj in (rows, change_rows, P_rows, product):
+    for obj in (rows, columns, change_rows, P_rows, product):
         obj.destroy()
     return coarse
 

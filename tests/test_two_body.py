@@ -71,7 +71,7 @@ def test_segment_integrals_of_random_pairs_sum_to_the_slave_weights():
     master = np.concatenate([rng.uniform(-1.0, 1.0, (count, 3, 2)) + rng.uniform(-1.5, 1.5, (count, 1, 2)),
                              np.full((count, 3, 1), -0.1)], axis=2)
     master[:50, :2] = slave[:50, [1, 0]]  # sharing the edge v0 v1, on the other side of it
-    master[:50, 2, :2] = 2.0 * (slave[:50, 0, :2] + slave[:50, 1, :2]) / 2.0 - slave[:50, 2, :2]
+    master[:50, 2, :2] = slave[:50, 0, :2] + slave[:50, 1, :2] - slave[:50, 2, :2]  # v2 mirrored
     normal = np.tile([0.0, 0.0, 1.0], (count, 1))
     D, M = segment_integrals(slave, normal, master)
     assert np.allclose(M.sum(axis=2), D, atol=1e-13)
