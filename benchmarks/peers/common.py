@@ -86,31 +86,110 @@ class Case:
         raise NotImplementedError(f"obstacle type {kind!r}: the peer drivers know 'plane' and 'sphere'")
 
 
-def load_case(path: str | os.PathLike) -> Case:
-    """Read a case file (format of ``cases/*.toml``); ``mesh.file`` must be a ``.msh`` file."""
+def _read(path: str | os.PathLike) -> tuple[pathlib.Path, dict[str, typing.Any], pathlib.Path, list]:
+    """The case file's path, its tables, its ``.msh`` and its steps (load factor, translation)."""
     path = pathlib.Path(path).resolve()
     data = tomllib.loads(path.read_text())
     mesh = path.parent / data["mesh"]["file"]
     if mesh.suffix != ".msh":
         raise ValueError(f"{path}: the peer drivers read .msh files; export {mesh} first (peers_real.py does)")
-    boundary = data.get("boundary", {})
-    law = data["contact"].get("law", "coulomb")
-    if law != "coulomb":
-        raise NotImplementedError(f"contact law {law!r}: the peer drivers run Coulomb (or frictionless) cases")
     steps = [(float(s.get("load", 1.0)), np.asarray(s.get("translation", (0.0, 0.0, 0.0)), float))
              for s in data.get("steps", [])] or [(1.0, np.zeros(3))]
-    axes = {"x": 0, "y": 1, "z": 2}
+    return path, data, mesh, steps
+
+
+_AXES = {"x": 0, "y": 1, "z": 2}
+
+
+def _displacements(boundary: dict[str, typing.Any]) -> dict[str, dict[int, float]]:
+    return {name: {_AXES[k]: float(v) for k, v in comp.items()}
+            for name, comp in boundary.get("displacement", {}).items()}
+
+
+def _law(table: dict[str, typing.Any], where: str) -> float:
+    """The friction coefficient of a Coulomb or frictionless law (the peers run no other)."""
+    law = table.get("law", "coulomb")
+    if law not in ("coulomb", "frictionless"):
+        raise NotImplementedError(f"{where}: contact law {law!r}: the peer drivers run Coulomb or frictionless cases")
+    return float(table.get("friction", 0.0)) if law == "coulomb" else 0.0
+
+
+def load_case(path: str | os.PathLike) -> Case:
+    """Read a one-body case file (format of ``cases/*.toml``); ``mesh.file`` must be a ``.msh`` file."""
+    path, data, mesh, steps = _read(path)
+    if "bodies" in data:
+        raise ValueError(f"{path}: a case with [[bodies]]: read it with load_bodies_case")
+    boundary = data.get("boundary", {})
     return Case(
         path=path, mesh=mesh,
         young=float(data["material"]["young"]), poisson=float(data["material"]["poisson"]),
         clamped=list(boundary.get("clamped", [])),
-        displacement={name: {axes[k]: float(v) for k, v in comp.items()}
-                      for name, comp in boundary.get("displacement", {}).items()},
+        displacement=_displacements(boundary),
         traction={name: np.asarray(t, float) for name, t in boundary.get("traction", {}).items()},
         body_force=None if boundary.get("body_force") is None else np.asarray(boundary["body_force"], float),
-        contact=data["contact"]["surface"], friction=float(data["contact"].get("friction", 0.0)),
+        contact=data["contact"]["surface"], friction=_law(data["contact"], "contact"),
         obstacle=dict(data["obstacle"]), steps=steps,
     )
+
+
+def is_bodies_case(path: str | os.PathLike) -> bool:
+    """Whether the case file has ``[[bodies]]`` (several deformable bodies)."""
+    return "bodies" in tomllib.loads(pathlib.Path(path).read_text())
+
+
+@dataclasses.dataclass
+class Body:
+    """One ``[[bodies]]`` entry: its physical volume ``name``, material and conditions on its
+    surface groups (names without the body's; displacement values are scaled by the step's
+    load factor, ``moved`` groups follow the step's translation)."""
+
+    name: str
+    young: float
+    poisson: float
+    clamped: list[str]
+    displacement: dict[str, dict[int, float]]
+    traction: dict[str, np.ndarray]
+    moved: list[str]
+
+
+@dataclasses.dataclass
+class Pair:
+    """One ``[[contacts]]`` entry between two bodies: ``(body, group)`` of the slave and master."""
+
+    slave: tuple[str, str]
+    master: tuple[str, str]
+    friction: float
+
+
+@dataclasses.dataclass
+class BodiesCase:
+    """A contact case between deformable bodies (fields as in :class:`contactqvi.case.ContactCase`)."""
+
+    path: pathlib.Path
+    mesh: pathlib.Path
+    bodies: list[Body]
+    pairs: list[Pair]
+    steps: list[tuple[float, np.ndarray]]
+
+
+def load_bodies_case(path: str | os.PathLike) -> BodiesCase:
+    """Read a case file with ``[[bodies]]`` and ``[[contacts]]`` between them."""
+    path, data, mesh, steps = _read(path)
+    bodies = []
+    for body in data["bodies"]:
+        boundary = body.get("boundary", {})
+        bodies.append(Body(
+            name=body["name"], young=float(body["material"]["young"]), poisson=float(body["material"]["poisson"]),
+            clamped=list(boundary.get("clamped", [])), displacement=_displacements(boundary),
+            traction={name: np.asarray(t, float) for name, t in boundary.get("traction", {}).items()},
+            moved=list(boundary.get("moved", []))))
+    pairs = []
+    for i, pair in enumerate(data.get("contacts", [])):
+        if "master" not in pair:
+            raise NotImplementedError(f"contacts[{i}]: the peer drivers' body pairs need a master surface")
+        pairs.append(Pair(slave=tuple(pair["slave"].split(".", 1)), master=tuple(pair["master"].split(".", 1)),
+                          friction=_law(pair, f"contacts[{i}]")))
+    return BodiesCase(path=path, mesh=mesh, bodies=bodies, pairs=pairs, steps=steps)
 
 
 @dataclasses.dataclass
@@ -121,11 +200,13 @@ class Mesh:
         points: (N, 3) node coordinates, in file order.
         cells: (M, 8) hexahedra or (M, 4) tetrahedra as rows into ``points`` (gmsh node order).
         faces: physical surface name -> (K, 4) quadrilaterals or (K, 3) triangles.
+        volumes: physical volume name -> indices of its cells.
     """
 
     points: np.ndarray
     cells: np.ndarray
     faces: dict[str, np.ndarray]
+    volumes: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
 
     @property
     def cell_type(self) -> str:
@@ -137,13 +218,26 @@ class Mesh:
             raise KeyError(f"physical group {name!r} not in the mesh (it has: {', '.join(sorted(self.faces))})")
         return np.unique(self.faces[name])
 
-    def clamped_nodes(self, case: Case) -> np.ndarray:
+    def clamped_nodes(self, case: Case | Body) -> np.ndarray:
         """Sorted indices of the nodes of the case's clamped groups."""
         return np.unique(np.concatenate([self.group_nodes(g) for g in case.clamped] + [np.empty(0, np.int64)]))
 
-    def roller_nodes(self, case: Case, name: str) -> np.ndarray:
+    def roller_nodes(self, case: Case | Body, name: str) -> np.ndarray:
         """Nodes of displacement group ``name`` that are not clamped (a clamped node needs no second condition)."""
         return np.setdiff1d(self.group_nodes(name), self.clamped_nodes(case))
+
+    def body(self, name: str) -> tuple[Mesh, np.ndarray]:
+        """The mesh of physical volume ``name`` (its nodes renumbered, the faces of every surface
+        group that lie on it) and the indices of its nodes in this mesh."""
+        if name not in self.volumes:
+            raise KeyError(f"physical volume {name!r} not in the mesh (it has: {', '.join(sorted(self.volumes))})")
+        cells = self.cells[self.volumes[name]]
+        nodes = np.unique(cells)
+        local = np.full(len(self.points), -1, dtype=np.int64)
+        local[nodes] = np.arange(len(nodes))
+        faces = {group: local[f[(local[f] >= 0).all(axis=1)]] for group, f in self.faces.items()}
+        return Mesh(self.points[nodes], local[cells], {g: f for g, f in faces.items() if len(f)},
+                    {name: np.arange(len(cells))}), nodes
 
 
 #: gmsh element type -> nodes (first order only).
@@ -172,7 +266,7 @@ def read_msh(path: str | os.PathLike) -> Mesh:
     for line in section("Elements")[1:]:
         values = line.split()
         by_type.setdefault(int(values[1]), []).append([int(v) for v in values])
-    cells = None
+    cells, volume = None, None
     faces: dict[str, list[np.ndarray]] = {}
     for etype, rows in by_type.items():
         n_tags = rows[0][2]
@@ -182,12 +276,13 @@ def read_msh(path: str | os.PathLike) -> Mesh:
         if etype in (4, 5):
             if cells is not None:
                 raise ValueError(f"{path}: one kind of volume cell only")
-            cells = conn
+            cells, volume = conn, physical
         elif etype in (2, 3):
             for tag in np.unique(physical):
                 name = names.get((2, int(tag)), str(tag))
                 faces.setdefault(name, []).append(conn[physical == tag])
-    return Mesh(nodes[:, 1:].copy(), cells, {k: np.vstack(v) for k, v in faces.items()})
+    volumes = {names.get((3, int(tag)), str(tag)): np.flatnonzero(volume == tag) for tag in np.unique(volume)}
+    return Mesh(nodes[:, 1:].copy(), cells, {k: np.vstack(v) for k, v in faces.items()}, volumes)
 
 
 def nodal_resultants(case: Case, mesh: Mesh, nodal: np.ndarray, contact_nodes: np.ndarray
@@ -213,9 +308,11 @@ def nodal_resultants(case: Case, mesh: Mesh, nodal: np.ndarray, contact_nodes: n
 
 
 def sort_nodes(x: np.ndarray) -> np.ndarray:
-    """The order that sorts node coordinates ``x`` (N, 3) like :func:`contactqvi.tables.gather_vertex_values`."""
+    """The order that sorts node coordinates ``x`` (N, 3, rows in the mesh file's node order) like
+    :func:`contactqvi.tables.gather_vertex_values`: by coordinate, nodes at one point (two bodies
+    touching there) by their file order."""
     keys = np.round(x / max(np.abs(x).max(), 1e-300), 10)
-    return np.lexsort((keys[:, 0], keys[:, 1], keys[:, 2]))
+    return np.lexsort((np.arange(len(x)), keys[:, 0], keys[:, 1], keys[:, 2]))
 
 
 def peak_memory_mib() -> float:

@@ -76,6 +76,9 @@ def main() -> int:
         summary = contact_summary(problem, u, result, displacement=displacement)
         x, values = tables.gather_vertex_values(displacement)
         n_nodes = problem.V.dofmap.index_map.size_global
+        # Between bodies: the force of the master bodies on the slave bodies (the obstacles' is zero).
+        contact_force = (np.sum(list(summary["pair_forces"].values()), axis=0).tolist() if case.bodies
+                         else summary["contact_force"])
         record = {
             "code": "contactqvi (SCD semismooth* Newton)",
             "case": str(pathlib.Path(args.case).resolve()),
@@ -86,7 +89,8 @@ def main() -> int:
             "newton_per_step": [r.iterations for r in results],
             "krylov_iterations": sum(r.inner_iterations for r in results),
             "wall_time": wall_time, "solve_time": solve_time, "solve_cpu_time": solve_cpu, "peak_memory_mib": peak,
-            "contact_force": summary["contact_force"], "reactions": summary["reaction_forces"],
+            "contact_force": contact_force, "pair_forces": summary["pair_forces"],
+            "reactions": summary["reaction_forces"],
             "equilibrium_error": summary["equilibrium_error"],
             "settings": {"solver": {**parameters, "start": "rest" if from_rest else "contact"},
                          "petsc": dict(case.petsc), "mpi_size": comm.size},
