@@ -44,7 +44,9 @@ RESULT_FIELDS = {
     "solve_time": "seconds of the load path's solves only (set-up of the solver included, assembly of A not)",
     "solve_cpu_time": "CPU seconds (user + system, summed over ranks) of the same",
     "peak_memory_mib": "VmHWM of the process (MiB) after the solve",
-    "contact_force": "total force of the obstacle on the body (N, global components), code's own multipliers",
+    "contact_force": "total force of the obstacle on the body, or of the master bodies on the slave bodies "
+                     "(N, global components), last step",
+    "contact_force_per_step": "the same after each load step",
     "reactions": "reaction force of each clamped / displacement group (N)",
     "settings": "solver settings of the run",
     "threads": "threads the code's linear algebra was allowed",

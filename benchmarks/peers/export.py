@@ -135,11 +135,10 @@ def mesh_geo(geo: pathlib.Path, msh: pathlib.Path) -> None:
 
 
 def export_case(out: pathlib.Path, case: pathlib.Path, name: str, mesh: pathlib.Path | None = None,
-                steps: typing.Sequence[dict[str, typing.Any]] | None = None,
-                solver: dict[str, typing.Any] | None = None) -> pathlib.Path:
+                **tables: typing.Any) -> pathlib.Path:
     """Copy the case file ``case`` to ``out/name.toml`` with its mesh (or ``mesh``, a ``.geo``
-    or ``.msh``) as ``.msh`` (meshed once), ``steps`` (a list of ``{"load":, "translation":}``)
-    and ``solver`` replaced if given."""
+    or ``.msh``) as ``.msh`` (meshed once) and the top-level ``tables`` replaced (e.g.
+    ``steps=[{"load":, "translation":}, ...]``, ``solver={...}``, ``boundary={...}``)."""
     out.mkdir(parents=True, exist_ok=True)
     data = tomllib.loads(case.read_text())
     source = pathlib.Path(mesh).resolve() if mesh is not None else (case.parent / data["mesh"]["file"]).resolve()
@@ -149,10 +148,7 @@ def export_case(out: pathlib.Path, case: pathlib.Path, name: str, mesh: pathlib.
     elif source.suffix == ".msh":
         msh.write_bytes(source.read_bytes())
     data["mesh"]["file"] = msh.name
-    if steps is not None:
-        data["steps"] = list(steps)
-    if solver is not None:
-        data["solver"] = dict(solver)
+    data.update(tables)
     target = out / f"{name}.toml"
     target.write_text(f"# {case.name} with its mesh exported (written by peers_real.py)\n" + _toml(data))
     return target

@@ -30,8 +30,12 @@ Pitfalls, and how this driver handles them:
   not physical group tags; the regions are built here from the physical groups' nodes
   (:func:`common.read_msh`) with ``Mesh.faces_from_pid`` on the outer faces.
 * Load steps. The obstacle of the nodal brick is a fixed expression: each step replaces the
-  brick (same multipliers, warm start). Friction acts on the total tangential displacement
-  (no slip increment), so only static cases and frictionless load paths mean the same as ours.
+  brick (same multipliers, warm start). The rigid brick's friction acts on the total tangential
+  displacement; ours on the slip since the step before, relative to the obstacle (seed 000,
+  (6.3) with d_t of the previous step). The basic brick has that form: its tangential
+  condition is on B_T (u - gamma w_t), and with gamma = 1 and w_t = u of the step before plus
+  the obstacle's translation since it, it is our incremental condition. So a frictional case
+  with several steps gets the basic brick (``--brick auto``); the rigid brick refuses it.
 
 Contact force and reactions are K u - f summed over the contact and clamped nodes (K, f
 assembled by GetFEM, ``asm_generic``); ``contact_force_multipliers`` is the sum of the brick's
@@ -178,7 +182,12 @@ def main() -> int:
     md.add_initialized_data("r", [r])
     # The rigid brick takes the normal by finite differences (step 1e-3 x cell radius) of the moved
     # obstacle's distance: exact for a plane only; a sphere gets the basic brick with our normals.
-    brick = args.brick if args.brick != "auto" else ("rigid" if case.obstacle["type"] == "plane" else "basic")
+    path_dependent = frictional and len(case.steps) > 1
+    brick = args.brick if args.brick != "auto" else (
+        "rigid" if case.obstacle["type"] == "plane" and not path_dependent else "basic")
+    if brick == "rigid" and path_dependent:
+        raise ValueError("--brick rigid: its friction acts on the total tangential displacement, not on the "
+                         "slip of each load step; use --brick basic for a frictional load path")
     # GetFEM's vector dofs: node k of the fem has dofs 3 k, 3 k + 1, 3 k + 2 (checked: basic_dof_nodes).
     dof_nodes = mf_u.basic_dof_nodes()[:, ::3].T
     dof_pid = np.asarray(m.pid_from_coords(dof_nodes.T, 1e-12 * np.abs(mesh.points).max()), dtype=np.int64)
@@ -195,6 +204,9 @@ def main() -> int:
         alpha = np.array([mass[3 * k, 3 * k] for k in contact_fem]) / extent
         md.add_initialized_data("alpha", alpha)
         md.add_initialized_data("gap", np.zeros(n_contact))
+        if frictional:  # the slip of a step: B_T (u - w_t), w_t = u of the step before + obstacle translation since
+            md.add_initialized_data("gamma", [1.0])
+            md.add_initialized_data("wt", np.zeros(mf_u.nbdof()))
 
     def add_contact(translation: np.ndarray) -> int:
         if brick == "rigid":
@@ -218,18 +230,21 @@ def main() -> int:
             BT.add([2 * j, 2 * j + 1], dofs, tangents[j])
         if frictional:
             return md.add_basic_contact_brick("u", "lambda_n", "lambda_t", "r", BN, BT, "friction", "gap", "alpha",
-                                              args.option)
+                                              args.option, "gamma", "wt")
         return md.add_basic_contact_brick("u", "lambda_n", "r", BN, "gap", "alpha", args.option)
 
     options = ["max_res", args.max_res, "max_iter", args.max_iter, "lsolver", args.lsolver, "lsearch", args.lsearch]
     if args.noisy:
         options.append("noisy")
     per_step, status = [], "converged"
-    contact_brick = None
+    contact_brick, previous, solutions = None, np.zeros(3), []
     t0, c0 = time.perf_counter(), time.process_time()
     for load, translation in case.steps:
         for name, brick_data in case.traction.items():
             md.set_variable(f"t_{name}", load * brick_data / STRESS_UNIT)
+        if brick == "basic" and frictional:
+            md.set_variable("wt", md.variable("u") + np.tile(translation - previous, mf_u.nbdof() // 3))
+        previous = translation
         if contact_brick is not None:
             md.delete_brick(contact_brick)
         contact_brick = add_contact(translation)
@@ -237,6 +252,7 @@ def main() -> int:
         its = int(np.ravel(iterations)[0])
         converged = bool(np.ravel(iterations)[1]) if np.size(iterations) > 1 else its < args.max_iter
         per_step.append(its)
+        solutions.append(md.variable("u").copy())
         if not converged:
             status = f"not converged in {args.max_iter} Newton iterations"
             break
@@ -244,19 +260,21 @@ def main() -> int:
     wall_time = common.clock()
     peak = common.peak_memory_mib()
 
-    u = md.variable("u")
-    u_nodes = u.reshape(-1, 3)[fem_node]  # displacement at our nodes
-    # Nodal forces K u - f (GN), the load of the last step; reactions and contact force from them.
-    stress = "(lambda*Trace(Grad_u)*Id(3)+mu*(Grad_u+Grad_u'))"
-    md.disable_bricks(contact_brick)
-    internal = gf.asm_generic(mim, 1, f"{stress}:Grad_Test_u", -1, "u", 1, mf_u, u, "lambda", 0, md.variable("lambda"),
-                              "mu", 0, md.variable("mu"))
-    external = np.zeros_like(internal)
-    for name in case.traction:
-        external += gf.asm_generic(mim_b, 1, f"t_{name}.Test_u", regions[name], "u", 1, mf_u, u,
-                                   f"t_{name}", 0, md.variable(f"t_{name}"))
-    nodal = ((internal - external).reshape(-1, 3)[fem_node]) * STRESS_UNIT  # N
-    contact_force, reactions = common.nodal_resultants(case, mesh, nodal, contact_nodes)
+    def resultants(u: np.ndarray, load: float) -> tuple[list[float], dict[str, list[float]]]:
+        """Contact force and reactions (N) from the nodal forces K u - f at load factor ``load``."""
+        stress = "(lambda*Trace(Grad_u)*Id(3)+mu*(Grad_u+Grad_u'))"
+        internal = gf.asm_generic(mim, 1, f"{stress}:Grad_Test_u", -1, "u", 1, mf_u, u,
+                                  "lambda", 0, md.variable("lambda"), "mu", 0, md.variable("mu"))
+        external = np.zeros_like(internal)
+        for name, traction in case.traction.items():
+            external += gf.asm_generic(mim_b, 1, "t.Test_u", regions[name], "u", 1, mf_u, u,
+                                       "t", 0, load * traction / STRESS_UNIT)
+        nodal = ((internal - external).reshape(-1, 3)[fem_node]) * STRESS_UNIT
+        return common.nodal_resultants(case, mesh, nodal, contact_nodes)
+
+    step_forces = [resultants(u, load)[0] for u, (load, _) in zip(solutions, case.steps)]
+    contact_force, reactions = resultants(solutions[-1], case.steps[len(solutions) - 1][0])
+    u_nodes = solutions[-1].reshape(-1, 3)[fem_node]  # displacement at our nodes
     lambda_n = md.variable("lambda_n")
     record = {
         "code": f"GetFEM 5.4.4 ({brick} nodal contact brick, Alart-Curnier option {args.option})",
@@ -265,7 +283,7 @@ def main() -> int:
         "contact_nodes": int(n_contact), "unknowns": int(md.nbdof()),
         "newton_iterations": int(sum(per_step)), "newton_per_step": per_step,
         "wall_time": wall_time, "solve_time": solve_time, "solve_cpu_time": solve_cpu, "peak_memory_mib": peak,
-        "contact_force": contact_force,
+        "contact_force": contact_force, "contact_force_per_step": step_forces,
         "contact_force_multipliers_normal": float(-np.sum(lambda_n)) * STRESS_UNIT,
         "reactions": reactions,
         "settings": {"lsolver": args.lsolver, "lsearch": args.lsearch, "max_res": args.max_res, "r": r,

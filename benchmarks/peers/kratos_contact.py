@@ -104,6 +104,19 @@ def oriented(faces: np.ndarray, points: np.ndarray, outward: np.ndarray) -> np.n
     return faces
 
 
+def sub_model_parts(parts: dict[str, dict[str, list]]) -> list[str]:
+    """The ``.mdpa`` lines of sub-model parts: name -> {"nodes", "elements", "conditions": Kratos ids}."""
+    lines = []
+    for name, part in parts.items():
+        lines.append(f"Begin SubModelPart {name}")
+        for kind, key in (("Nodes", "nodes"), ("Elements", "elements"), ("Conditions", "conditions")):
+            lines.append(f"Begin SubModelPart{kind}")
+            lines += [str(v) for v in part.get(key, [])]
+            lines.append(f"End SubModelPart{kind}")
+        lines.append("End SubModelPart")
+    return lines
+
+
 def write_mdpa(path: pathlib.Path, case: common.Case, mesh: common.Mesh, obstacle: tuple) -> dict[str, np.ndarray]:
     """Write the Kratos model: body (properties 1), obstacle (properties 2), load and contact
     conditions, and the node sub-model parts; return the Kratos node ids (1-based) per part."""
@@ -167,13 +180,7 @@ def write_mdpa(path: pathlib.Path, case: common.Case, mesh: common.Mesh, obstacl
     for name in case.displacement:
         parts[f"roller_{name}"] = {"nodes": (mesh.roller_nodes(case, name) + 1).tolist()}
     parts["clamped_slave"] = {"nodes": (np.intersect1d(mesh.group_nodes(case.contact), fixed) + 1).tolist()}
-    for name, part in parts.items():
-        lines.append(f"Begin SubModelPart {name}")
-        for kind, key in (("Nodes", "nodes"), ("Elements", "elements"), ("Conditions", "conditions")):
-            lines.append(f"Begin SubModelPart{kind}")
-            lines += [str(v) for v in part.get(key, [])]
-            lines.append(f"End SubModelPart{kind}")
-        lines.append("End SubModelPart")
+    lines += sub_model_parts(parts)
     path.write_text("\n".join(lines) + "\n")
     return {name: np.asarray(part["nodes"]) for name, part in parts.items()}
 
@@ -311,6 +318,7 @@ def main() -> int:
         """Counts Newton iterations per step and fixes the multipliers of clamped slave nodes."""
 
         newton_per_step: list[int] = []
+        obstacle_forces: list[list[float]] = []
 
         def InitializeSolutionStep(self):
             super().InitializeSolutionStep()
@@ -330,8 +338,15 @@ def main() -> int:
             super().FinalizeSolutionStep()
             info = self._GetSolver().GetComputingModelPart().ProcessInfo
             self.newton_per_step.append(int(info[KM.NL_ITERATION_NUMBER]))
+            self.obstacle_forces.append(reaction("obstacle").tolist())
 
     model = KM.Model()
+
+    def reaction(part: str) -> np.ndarray:
+        """Sum of REACTION (the supports' force on the nodes) over sub-model part ``part``."""
+        return np.sum([[n.GetSolutionStepValue(v) for v in (KM.REACTION_X, KM.REACTION_Y, KM.REACTION_Z)]
+                       for n in model.GetModelPart(f"Structure.{part}").Nodes], axis=0)
+
     analysis = Analysis(model, KM.Parameters(json.dumps(parameters)))
     t0, c0 = time.perf_counter(), time.process_time()
     analysis.Run()
@@ -350,11 +365,7 @@ def main() -> int:
     u_nodes = np.empty_like(u)
     u_nodes[ids - 1] = u
 
-    def reaction(part: str) -> np.ndarray:
-        return np.sum([[n.GetSolutionStepValue(v) for v in (KM.REACTION_X, KM.REACTION_Y, KM.REACTION_Z)]
-                       for n in structure.GetSubModelPart(part).Nodes], axis=0)
-
-    reactions = {name: (-reaction(f"clamped_{name}")).tolist() for name in case.clamped}
+    reactions = {name: reaction(f"clamped_{name}").tolist() for name in case.clamped}  # support on body, as ours
     contact_force = reaction("obstacle")  # the obstacle's supports hold the body's push: that is the contact force
     max_iter = args.max_iter
     status = "converged" if len(Analysis.newton_per_step) == len(case.steps) * args.substeps and all(
@@ -368,7 +379,8 @@ def main() -> int:
         "unknowns": None,
         "newton_iterations": int(sum(Analysis.newton_per_step)), "newton_per_step": Analysis.newton_per_step,
         "wall_time": wall_time, "solve_time": solve_time, "solve_cpu_time": solve_cpu, "peak_memory_mib": peak,
-        "contact_force": contact_force.tolist(), "reactions": reactions,
+        "contact_force": contact_force.tolist(),
+        "contact_force_per_step": Analysis.obstacle_forces[args.substeps - 1::args.substeps], "reactions": reactions,
         "settings": {"linear_solver": args.linear_solver, "tol": args.tol, "atol": args.atol,
                      "move_mesh_flag": args.move_mesh, "substeps": args.substeps, "obstacle_nodes": len(obstacle[0])},
         "threads": args.threads,

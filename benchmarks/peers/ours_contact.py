@@ -29,7 +29,7 @@ import common  # noqa: E402
 from contactqvi import tables  # noqa: E402
 from contactqvi.case import load_case  # noqa: E402
 from contactqvi.cli import setup_logging  # noqa: E402
-from contactqvi.contact.load_path import solve_load_path  # noqa: E402
+from contactqvi.contact.load_path import contact_resultants, solve_load_path  # noqa: E402
 from contactqvi.contact.postprocess import contact_summary  # noqa: E402
 from contactqvi.linalg import default_options  # noqa: E402
 from contactqvi.runner import PREFIX, build_problem  # noqa: E402
@@ -66,7 +66,15 @@ def main() -> int:
         u = problem.A.createVecRight()
         comm.Barrier()
         t0, c0 = time.perf_counter(), time.process_time()
-        results = solve_load_path(problem, case.steps, u, parameters, PREFIX, from_rest=from_rest)
+        step_forces = []
+
+        def record_force(index, step, u, result) -> None:
+            forces = contact_resultants(problem, result)
+            step_forces.append(np.sum(list(forces["pair_forces"].values()), axis=0).tolist() if case.bodies
+                               else forces["contact_force"])
+
+        results = solve_load_path(problem, case.steps, u, parameters, PREFIX, on_step=record_force,
+                                  from_rest=from_rest)
         solve_time = comm.allreduce(time.perf_counter() - t0, op=MPI.MAX)
         solve_cpu = comm.allreduce(time.process_time() - c0, op=MPI.SUM)
         wall_time = comm.allreduce(common.clock(), op=MPI.MAX)
@@ -89,7 +97,8 @@ def main() -> int:
             "newton_per_step": [r.iterations for r in results],
             "krylov_iterations": sum(r.inner_iterations for r in results),
             "wall_time": wall_time, "solve_time": solve_time, "solve_cpu_time": solve_cpu, "peak_memory_mib": peak,
-            "contact_force": contact_force, "pair_forces": summary["pair_forces"],
+            "contact_force": contact_force, "contact_force_per_step": step_forces,
+            "pair_forces": summary["pair_forces"],
             "reactions": summary["reaction_forces"],
             "equilibrium_error": summary["equilibrium_error"],
             "settings": {"solver": {**parameters, "start": "rest" if from_rest else "contact"},
