@@ -6,16 +6,28 @@ Problems (``--problems``):
   * ``hertz``: cases/hertz.toml (rigid sphere, frictionless, quarter model) on the meshes
     ``--hertz-meshes`` (meshes/hertz_*.geo), at the final depth delta = 1 mm in one step
     (frictionless contact is path-independent), against the closed form of
-    :mod:`contactqvi.problems.hertz`.
+    :mod:`contactqvi.problems.hertz`;
+  * ``mindlin``: cases/cattaneo_mindlin.toml (rigid sphere, mu = 0.3, indentation then 14
+    tangential steps) on the full block ``meshes/hertz_full_{--mindlin-meshes}.geo`` (no rollers
+    on the contact surface: GetFEM's nodal bricks cannot take a roller and a tangential
+    condition on one node), against Mindlin's Q(s);
+  * ``patch``: cases/patch_test.toml (two blocks, non-matching tetrahedra, Coulomb 0.3),
+    against the homogeneous closed-form solution;
+  * ``hertz_bodies``: cases/hertz_bodies.toml (steel ball on aluminium block, four steps) on
+    ``meshes/hertz_bodies_{--hertz-bodies-meshes}.geo``, against Hertz with E*.
 
 For each problem and size: (1) the reference, our solver with exact Newton steps (``pc = lu``) to
 ||y^|| <= 1e-12 ||y^0||; (2) each code from its loosest tolerance down (``TOLERANCES``) until its
 total contact force and its displacement agree with the reference to ``--accuracy`` (1e-6)
-relative; that run is the one timed. Every code runs in its own process on one core
-(``OMP_NUM_THREADS=1``), ours also on 2 ranks. Writes ``peers_real.json`` / ``.md`` to
-``--output``; the load average of the machine is recorded with every run.
+relative; that run is the one timed. Between deformable bodies the codes discretise the contact
+differently (ours mortar, GetFEM node-to-segment, Kratos mortar ALM), so each peer's reference
+there is its own run at the tightest tolerance, and the difference of its solution to ours is
+reported beside it. Every code runs in its own process on one core (``OMP_NUM_THREADS=1``),
+ours also on 2 ranks. Writes ``peers_real.json`` / ``.md`` to ``--output``; the load average
+of the machine is recorded with every run.
 
     python benchmarks/peers_real.py --problems d1_L1 d3_L2 --levels 3 4 5 6 7 --hertz-meshes coarse medium
+    python benchmarks/peers_real.py --problems patch hertz_bodies mindlin
     python benchmarks/peers_real.py --peers getfem --problems d1_L1 --levels 3     # a quick check
 
 Needs ``make peers`` (GetFEM from Debian, Kratos in build/kratos-venv); a peer that is not
@@ -58,10 +70,19 @@ TOLERANCES = {
 GETFEM_TRIALS = [("mumps", 0.1), ("mumps", 1.0), ("mumps", 10.0), ("gmres/ilu", 1.0)]
 #: Kratos' options in the table: the one configuration that came closest (docs/peers.md, Kratos).
 KRATOS_OPTIONS = ["--move-mesh", "--substeps", "10", "--max-iter", "30", "--tol", "1e-6"]
+#: Kratos' options between bodies: the contact search needs the moved mesh where the contact
+#: grows (Hertz); the patch test's interface is closed from the start (docs/peers.md, Kratos).
+KRATOS_BODIES_OPTIONS = {"patch": [], "hertz_bodies": ["--move-mesh"]}
+#: Problems between deformable bodies: each code's discretisation of the contact is its own.
+BODIES = ("patch", "hertz_bodies")
+#: Tightest tolerance of each code: its own reference between bodies.
+TIGHTEST = {"ours": 1e-12, "getfem": 1e-12, "kratos": 1e-12}
 
 PYTHON = {"ours": str(ROOT / ".venv/bin/python"), "getfem": "/usr/bin/python3",
           "kratos": str(ROOT / "build/kratos-venv/bin/python")}
 DRIVER = {name: str(HERE / "peers" / f"{name}_contact.py") for name in ("ours", "getfem", "kratos")}
+#: Drivers of the peers for cases with [[bodies]] (ours reads every case).
+BODIES_DRIVER = {name: str(HERE / "peers" / f"{name}_bodies.py") for name in ("getfem", "kratos")}
 MPIENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
           "OMPI_MCA_rmaps_base_oversubscribe": "1", "PRTE_MCA_rmaps_default_mapping_policy": ":oversubscribe",
           "OMPI_MCA_btl": "self,sm"}
@@ -105,7 +126,8 @@ class Runner:
         self.count += 1
         out = self.work / "runs" / f"{case.stem}-{code}-{self.count:03d}"
         shutil.rmtree(out, ignore_errors=True)
-        command = [PYTHON[code], DRIVER[code], str(case), "--output", str(out), *options]
+        driver = BODIES_DRIVER[code] if code in BODIES_DRIVER and common.is_bodies_case(case) else DRIVER[code]
+        command = [PYTHON[code], driver, str(case), "--output", str(out), *options]
         env = {**os.environ, **ONE_THREAD}
         if code == "ours":
             env["PYTHONPATH"] = str(self.ours_src)
@@ -177,13 +199,59 @@ def ladder(runner: Runner, code: str, case: pathlib.Path, reference: dict, optio
     return None, runs
 
 
-def hertz_closed_form(case: common.Case) -> dict:
-    """Hertz force (quarter model) and contact radius at the case's final depth."""
-    e_star = case.young / (1 - case.poisson**2)
-    radius = float(case.obstacle["radius"])
-    depth = -float(case.steps[-1][1][2])
-    quarter = 4.0 / 3.0 * e_star * math.sqrt(radius) * depth**1.5 / 4.0
-    return {"force_z": quarter, "radius": math.sqrt(radius * depth), "depth": depth}
+def closed_form(problem: str, case: pathlib.Path) -> dict | None:
+    """What the closed form of ``problem`` needs (:func:`closed_form_error` uses it)."""
+    from contactqvi.problems import hertz
+
+    if problem == "hertz":
+        c = common.load_case(case)
+        depth = -float(c.steps[-1][1][2])
+        force = hertz.contact_force(c.young, c.poisson, float(c.obstacle["radius"]), depth)
+        return {"kind": "force", "force_z": force / 4.0, "depth": depth, "model": "quarter"}
+    if problem == "hertz_bodies":
+        c = common.load_bodies_case(case)
+        first, second = c.bodies[:2]
+        e_star = hertz.combined_modulus(first.young, first.poisson, second.young, second.poisson)
+        ball = next(b for b in c.bodies if b.name == "ball")
+        depth = -ball.displacement["load"][2] * c.steps[-1][0]
+        return {"kind": "force", "force_z": hertz.contact_force(e_star, 0.0, 1.0, depth) / 4.0, "depth": depth,
+                "model": "quarter"}
+    if problem == "mindlin":
+        c = common.load_case(case)
+        radius, depth = float(c.obstacle["radius"]), -float(c.steps[0][1][2])
+        force = hertz.contact_force(c.young, c.poisson, radius, depth)
+        s_star = hertz.sliding_displacement(c.friction, force, hertz.shear_modulus(c.young, c.poisson), c.poisson,
+                                            hertz.contact_radius(radius, depth))
+        return {"kind": "mindlin", "friction": c.friction, "s_star": s_star,
+                "s": [float(t[0]) for _, t in c.steps]}
+    if problem == "patch":
+        c = common.load_bodies_case(case)
+        upper = next(b for b in c.bodies if b.traction)
+        return {"kind": "patch", "pressure": -float(next(iter(upper.traction.values()))[2]),
+                "young": upper.young, "poisson": upper.poisson}
+    return None
+
+
+def closed_form_error(closed: dict | None, run: dict) -> float | None:
+    """A run's distance to the closed form: 'force' (F_z - P) / P; 'mindlin' max over the
+    tangential steps of |Q/(mu P) - [1 - (1 - s/s*)^(3/2)]| with the run's own P and Q;
+    'patch' max |u - u_exact| / max |u_exact| over all nodes."""
+    if closed is None or not str(run.get("status")).startswith("converged"):
+        return None
+    kind = closed.get("kind", "force")
+    if kind == "force":
+        return (abs(run["contact_force"][2]) - closed["force_z"]) / closed["force_z"]
+    if kind == "mindlin":
+        forces = np.abs(np.asarray(run["contact_force_per_step"]))
+        s = np.asarray(closed["s"])
+        ratio = 1.0 - (1.0 - np.clip(s / closed["s_star"], 0.0, 1.0)) ** 1.5
+        measured = forces[:, 0] / (closed["friction"] * forces[:, 2])
+        return float(np.abs(measured - ratio)[s > 0].max())
+    solution = np.load(pathlib.Path(run["output"]) / "solution.npz")
+    x, u = solution["x"], solution["u"]
+    p, young, nu = closed["pressure"], closed["young"], closed["poisson"]
+    exact = np.column_stack([nu * p * x[:, 0] / young, nu * p * x[:, 1] / young, -p * x[:, 2] / young])
+    return float(np.abs(u - exact).max() / np.abs(exact).max())
 
 
 def machine() -> dict:
@@ -216,6 +284,9 @@ def main() -> int:
     parser.add_argument("--problems", nargs="+", default=["d1_L1", "d3_L2", "hertz"])
     parser.add_argument("--levels", nargs="+", type=int, default=[3, 4, 5, 6, 7])
     parser.add_argument("--hertz-meshes", nargs="+", default=["coarse", "medium"])
+    parser.add_argument("--mindlin-meshes", nargs="+", default=["coarse"], help="meshes/hertz_full_*.geo")
+    parser.add_argument("--hertz-bodies-meshes", nargs="+", default=["coarse", "medium"],
+                        help="meshes/hertz_bodies_*.geo")
     parser.add_argument("--peers", nargs="+", default=["getfem", "kratos"])
     parser.add_argument("--peer-max-dofs", type=int, default=10**9,
                         help="skip a peer above this many dofs (its time is extrapolated instead)")
@@ -255,6 +326,19 @@ def main() -> int:
                                           mesh=ROOT / f"meshes/hertz_{size}.geo",
                                           steps=[{"translation": [0.0, 0.0, -1e-3]}])
                 cases.append((problem, size, case))
+        elif problem == "mindlin":
+            for size in args.mindlin_meshes:
+                case = export.export_case(work / "cases", ROOT / "cases/cattaneo_mindlin.toml", f"mindlin_{size}",
+                                          mesh=ROOT / f"meshes/hertz_full_{size}.geo", boundary={"clamped": ["bottom"]})
+                cases.append((problem, f"full {size}", case))
+        elif problem == "patch":
+            cases.append((problem, "h 0.25 / 0.16", export.export_case(work / "cases", ROOT / "cases/patch_test.toml",
+                                                                       "patch")))
+        elif problem == "hertz_bodies":
+            for size in args.hertz_bodies_meshes:
+                case = export.export_case(work / "cases", ROOT / "cases/hertz_bodies.toml", f"hertz_bodies_{size}",
+                                          mesh=ROOT / f"meshes/hertz_bodies_{size}.geo")
+                cases.append((problem, size, case))
         else:
             geometry, load = problem.split("_")
             for lev in args.levels:
@@ -269,11 +353,28 @@ def main() -> int:
         if row.get("best") and row["code"] in TOLERANCES:
             sufficed[(row["code"], row["problem"])] = row["best"]["tolerance"]
 
-    def timed(code: str, case: pathlib.Path, reference: dict, options: list[str], flag: str, problem: str):
-        best, runs = ladder(runner, code, case, reference, options, flag, args.accuracy, sufficed.get((code, problem)))
+    def timed(code: str, case: pathlib.Path, reference: dict, options: list[str], flag: str, problem: str,
+              closed: dict | None) -> dict:
+        """The row of ``code``: its timed run and all runs; between bodies against its own reference
+        (its run at the tightest tolerance), with the difference of that run to ours."""
+        own = None
+        if problem in BODIES and code != "ours":
+            own = runner.run(code, case, [*options, flag, f"{TIGHTEST[code]:g}"])
+            own.update(errors(own, reference), tolerance=TIGHTEST[code])
+            if not own["status"].startswith("converged"):
+                return {"code": code, "best": None, "runs": [own]}
+        best, runs = ladder(runner, code, case, own or reference, options, flag, args.accuracy,
+                            sufficed.get((code, problem)))
         if best is not None:
             sufficed[(code, problem)] = best["tolerance"]
-        return best, runs
+        row = {"code": code, "best": best, "runs": runs}
+        if own is not None:
+            row["own_reference"] = own
+            if best is not None:
+                best.update(difference_to_ours=errors(best, reference))
+        for run in runs + ([own] if own else []):
+            run["closed_form_error"] = closed_form_error(closed, run)
+        return row
 
     settings_problem, settings_level = args.settings_case.split(":")
     for problem, size, case in cases:
@@ -284,23 +385,29 @@ def main() -> int:
             continue
         base = {"problem": problem, "size": size, "case": str(case), "dofs": reference["dofs"],
                 "contact_nodes": reference["contact_nodes"], "ours_commit": sha}
-        closed = hertz_closed_form(common.load_case(case)) if problem == "hertz" else None
+        closed = closed_form(problem, case)
+        reference["closed_form_error"] = closed_form_error(closed, reference)
         rows.append({**base, **reference, **errors(reference, reference), "closed_form": closed, "code": "reference",
                      "reference_pc": args.reference_pc})
-        best, runs = timed("ours", case, reference, [], "--rtol", problem)
-        rows.append({**base, "code": "ours", "best": best, "runs": runs, "closed_form": closed})
+        rows.append({**base, **timed("ours", case, reference, [], "--rtol", problem, closed), "closed_form": closed})
+        best = rows[-1]["best"]
         if best is not None and not args.no_np2:
             np2 = runner.run("ours", case, ["--rtol", f"{best['tolerance']:g}"], ranks=2)
-            np2.update(errors(np2, reference), tolerance=best["tolerance"])
+            np2.update(errors(np2, reference), tolerance=best["tolerance"], closed_form_error=closed_form_error(closed, np2))
             rows.append({**base, "code": "ours np2", "best": np2 if accurate(np2, args.accuracy) else None,
                          "runs": [np2], "closed_form": closed})
         if "getfem" in peers and reference["dofs"] <= args.peer_max_dofs:
             if problem == settings_problem and size == f"lev {settings_level}" and not settings_trials:
                 getfem_options, settings_trials = getfem_settings(runner, case, reference, args.accuracy)
                 print(f"  GetFEM settings: {' '.join(getfem_options)}", flush=True)
-            best, runs = timed("getfem", case, reference, getfem_options, "--max-res", problem)
-            rows.append({**base, "code": "getfem", "best": best, "runs": runs, "closed_form": closed})
-        if "kratos" in peers and reference["dofs"] <= args.kratos_max_dofs and problem != "hertz":
+            options = getfem_options if problem not in BODIES else []  # the bodies driver: r = E of the slave
+            rows.append({**base, **timed("getfem", case, reference, options, "--max-res", problem, closed),
+                         "closed_form": closed})
+        if "kratos" in peers and problem in BODIES:
+            rows.append({**base, **timed("kratos", case, reference, KRATOS_BODIES_OPTIONS[problem], "--tol", problem,
+                                 closed),
+                         "closed_form": closed})
+        elif "kratos" in peers and reference["dofs"] <= args.kratos_max_dofs and problem not in ("hertz", "mindlin"):
             record = runner.run("kratos", case, KRATOS_OPTIONS)
             record.update(errors(record, reference) if record["status"] == "converged" else {}, tolerance=1e-6)
             rows.append({**base, "code": "kratos", "best": record if accurate(record, args.accuracy) else None,
@@ -386,14 +493,18 @@ def markdown(data: dict) -> str:
         + "; ".join(f"{k} {', '.join(f'{t:g}' for t in v)}" for k, v in data["tolerances"].items())
         + "). 1 core each (OMP_NUM_THREADS=1), ours also on 2 MPI ranks. *solve*: the load path's solves "
         "(wall and CPU seconds; CPU summed over ranks); *process*: the whole process (start-up, mesh, assembly, "
-        "solve, output), CPU seconds. Memory: VmHWM (summed over ranks). The machine was shared with other jobs: "
-        "the 1-minute load average at the start of each run is listed (2 cores: above 2, wall times are "
-        f"stretched; CPU times much less). Our code at commit {data['ours_commit'][:10]}; "
-        f"GetFEM options {' '.join(data['getfem_options'])}.",
+        "solve, output), CPU seconds. Memory: VmHWM (summed over ranks). The 1-minute load average at the start "
+        "of each run is listed (2 cores: above about 1, another job ran beside it and wall times may be "
+        "stretched; CPU times much less). Between deformable bodies (patch, hertz_bodies) each peer's *force err* "
+        "and *u err* are against its own run at tolerance 1e-12 (its discretisation is not ours) and *u vs ours* "
+        "is ||u - u_ours|| / ||u_ours|| (the difference of the discretisations). *vs closed form*: hertz, "
+        "hertz_bodies (F_z - P)/P; mindlin max over the tangential steps of |Q/(mu P) - Q_M(s)/(mu P)| with "
+        "the run's own P and Q (Mindlin's law, beta = 0 assumed); patch max |u - u_exact| / max |u_exact|. "
+        f"Our code at commit {data['ours_commit'][:10]}; GetFEM options {' '.join(data['getfem_options'])}.",
         "",
         "| problem | size | dofs | code | tol | Newton | solve s | solve CPU s | process CPU s | peak MiB "
-        "| contact force z (N) | force err | u err | vs closed form | load |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| contact force z (N) | force err | u err | u vs ours | vs closed form | load |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for row in data["rows"]:
         run = _timed_run(row)
@@ -403,22 +514,24 @@ def markdown(data: dict) -> str:
                          f"{_fmt(last.get('tolerance'))} | {_fmt(last.get('newton_iterations'))} | "
                          f"{_fmt(last.get('solve_time'))} | {_fmt(last.get('solve_cpu_time'))} | "
                          f"{_fmt(last.get('process_cpu_seconds'))} | – | – | "
-                         f"{_fmt(last.get('force_error'))} | {_fmt(last.get('displacement_error'))} | – | "
+                         f"{_fmt(last.get('force_error'))} | {_fmt(last.get('displacement_error'))} | – | – | "
                          f"{_fmt(last.get('load_average'), '.1f')} |")
             lines.append(f"| | | | | **{row['code']} not within accuracy: {str(last.get('status', ''))[:70]}** "
-                         "| | | | | | | | | | |")
+                         "| | | | | | | | | | | |")
             continue
         closed = row.get("closed_form")
         force_z = run["contact_force"][2]
         label = row["code"]
         if label == "reference" and row.get("reference_pc", "lu") != "lu":
             label += f" ({row['reference_pc']})"
-        versus = None if closed is None else (abs(force_z) - closed["force_z"]) / closed["force_z"]
+        versus = run["closed_form_error"] if "closed_form_error" in run else closed_form_error(closed, run)
+        to_ours = (run.get("difference_to_ours") or {}).get("displacement_error")
         lines.append(
             f"| {row['problem']} | {row['size']} | {row['dofs']} | {label} | {_fmt(run.get('tolerance'))} | "
             f"{run['newton_iterations']} | {_fmt(run['solve_time'])} | {_fmt(run.get('solve_cpu_time'))} | "
             f"{_fmt(run.get('process_cpu_seconds'))} | {_fmt(run['peak_memory_mib'], '.0f')} | {force_z:.7g} | "
-            f"{_fmt(run.get('force_error'))} | {_fmt(run.get('displacement_error'))} | {_fmt(versus, '+.3g')} | "
+            f"{_fmt(run.get('force_error'))} | {_fmt(run.get('displacement_error'))} | {_fmt(to_ours)} | "
+            f"{_fmt(versus, '+.3g')} | "
             f"{_fmt(run.get('load_average'), '.1f')} |")
     lines += ["", "Ratios at equal accuracy, peer / ours on 1 core (solve wall, solve CPU, process CPU):", "",
               "| problem | size | dofs | peer | solve | solve CPU | process CPU |", "|---|---|---|---|---|---|---|"]
@@ -450,7 +563,7 @@ def markdown(data: dict) -> str:
                          f"{_fmt(t.get('solve_time'))} | {_fmt(t.get('solve_cpu_time'))} | "
                          f"{str(t.get('status')).splitlines()[0][:60]} |")
     lines += ["", f"Machine: {data['machine']['cpu']}, {data['machine']['cores']} cores, "
-              f"{data['machine']['memory_gib']} GiB, shared with other jobs; 1-minute load average at the end "
+              f"{data['machine']['memory_gib']} GiB; 1-minute load average at the end "
               f"{data['load_average_end'][0]:.1f}."]
     return "\n".join(lines) + "\n"
 
