@@ -54,6 +54,7 @@ import numpy as np
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 import common  # noqa: E402
+import getfem_contact  # noqa: E402
 from getfem_contact import INTEGRATION, STRESS_UNIT  # noqa: E402
 
 import getfem as gf  # noqa: E402
@@ -153,24 +154,11 @@ class BodyModel:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0],
-                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    parser.add_argument("case")
-    parser.add_argument("--output", required=True)
-    parser.add_argument("--lsolver", default="mumps", help="GetFEM linear solver: mumps, gmres/ilu, ...")
-    parser.add_argument("--lsearch", default="default", help="GetFEM line search")
-    parser.add_argument("--max-res", type=float, default=1e-10, help="Newton stops at this residual (GPa units)")
-    parser.add_argument("--max-iter", type=int, default=100)
+    parser = getfem_contact.command_line(__doc__.split("\n")[0])
     parser.add_argument("--r-factor", type=float, default=1.0,
                         help="Alart-Curnier augmentation r as a multiple of the slave body's E (GetFEM's advice: ~E)")
-    parser.add_argument("--option", type=int, default=1, help="augmented_version of the brick (1: non-symmetric AC)")
-    parser.add_argument("--noisy", action="store_true")
-    parser.add_argument("--threads", type=int, default=1, help="GetFEM threads (gf.util_set_num_threads)")
     args = parser.parse_args()
-
-    gf.util_set_num_threads(args.threads)
-    gf.util_trace_level(2 if args.noisy else 0)
-    gf.util_warning_level(2 if args.noisy else 0)
+    options = getfem_contact.set_up(args)
     case = common.load_bodies_case(args.case)
     full = common.read_msh(case.mesh)
     frictional = any(p.friction > 0 for p in case.pairs)
@@ -205,17 +193,12 @@ def main() -> int:
                 slave.mim_b, master.mim_b, slave.var, master.var, f"lambda_n_{k}", f"r_{k}",
                 201 + k, 301 + k, 1, 0, args.option)
 
-    options = ["max_res", args.max_res, "max_iter", args.max_iter, "lsolver", args.lsolver, "lsearch", args.lsearch]
-    if args.noisy:
-        options.append("noisy")
     per_step, status, states = [], "converged", []
     t0, c0 = time.perf_counter(), time.process_time()
     for load, translation in case.steps:
         for body in bodies.values():
             body.set_step(md, load, translation)
-        iterations = md.solve(*options)
-        its = int(np.ravel(iterations)[0])
-        converged = bool(np.ravel(iterations)[1]) if np.size(iterations) > 1 else its < args.max_iter
+        its, converged = getfem_contact.newton(md, options, args.max_iter)
         per_step.append(its)
         states.append({b.var: md.variable(b.var).copy() for b in bodies.values()})
         if not converged:

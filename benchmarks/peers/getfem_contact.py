@@ -89,28 +89,46 @@ def _tangents(normal: np.ndarray) -> np.ndarray:
     return np.stack([t1, np.cross(normal, t1)], axis=1)
 
 
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0],
-                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+def command_line(description: str) -> argparse.ArgumentParser:
+    """The command line the GetFEM drivers share: case, output and GetFEM's Newton settings."""
+    parser = argparse.ArgumentParser(description=description, formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("case")
     parser.add_argument("--output", required=True)
-    parser.add_argument("--lsolver", default="mumps", help="GetFEM linear solver: mumps, superlu, gmres/ilu, ...")
+    parser.add_argument("--lsolver", default="mumps", help="GetFEM linear solver: mumps, gmres/ilu, ...")
     parser.add_argument("--lsearch", default="default", help="GetFEM line search: default, simplest, basic, ...")
     parser.add_argument("--max-res", type=float, default=1e-10, help="Newton stops at this residual (GPa units)")
     parser.add_argument("--max-iter", type=int, default=100)
-    parser.add_argument("--r", type=float, default=None,
-                        help="Alart-Curnier augmentation r (GPa); default E (GetFEM's advice)")
-    parser.add_argument("--brick", default="auto", choices=["auto", "rigid", "basic"],
-                        help="rigid: add_nodal_contact_with_rigid_obstacle_brick; basic: add_basic_contact_brick "
-                             "with BN, BT from the exact obstacle normal; auto: rigid for a plane, basic otherwise")
     parser.add_argument("--option", type=int, default=1, help="augmented_version of the brick (1: non-symmetric AC)")
     parser.add_argument("--noisy", action="store_true")
     parser.add_argument("--threads", type=int, default=1, help="GetFEM threads (gf.util_set_num_threads)")
-    args = parser.parse_args()
+    return parser
 
+
+def set_up(args: argparse.Namespace) -> list:
+    """Threads and messages of GetFEM as ``args`` ask; the options of ``Model.solve``."""
     gf.util_set_num_threads(args.threads)
     gf.util_trace_level(2 if args.noisy else 0)
     gf.util_warning_level(2 if args.noisy else 0)
+    options = ["max_res", args.max_res, "max_iter", args.max_iter, "lsolver", args.lsolver, "lsearch", args.lsearch]
+    return options + (["noisy"] if args.noisy else [])
+
+
+def newton(md: gf.Model, options: list, max_iter: int) -> tuple[int, bool]:
+    """``Model.solve``: its Newton iterations and whether it converged."""
+    iterations = md.solve(*options)
+    its = int(np.ravel(iterations)[0])
+    return its, bool(np.ravel(iterations)[1]) if np.size(iterations) > 1 else its < max_iter
+
+
+def main() -> int:
+    parser = command_line(__doc__.split("\n")[0])
+    parser.add_argument("--r", type=float, default=None,
+                         help="Alart-Curnier augmentation r (GPa); default E (GetFEM's advice)")
+    parser.add_argument("--brick", default="auto", choices=["auto", "rigid", "basic"],
+                         help="rigid: add_nodal_contact_with_rigid_obstacle_brick; basic: add_basic_contact_brick "
+                              "with BN, BT from the exact obstacle normal; auto: rigid for a plane, basic otherwise")
+    args = parser.parse_args()
+    options = set_up(args)
     case = common.load_case(args.case)
     mesh = common.read_msh(case.mesh)
     m = gf.Mesh("import", "gmsh", str(case.mesh))
@@ -233,9 +251,6 @@ def main() -> int:
                                               args.option, "gamma", "wt")
         return md.add_basic_contact_brick("u", "lambda_n", "r", BN, "gap", "alpha", args.option)
 
-    options = ["max_res", args.max_res, "max_iter", args.max_iter, "lsolver", args.lsolver, "lsearch", args.lsearch]
-    if args.noisy:
-        options.append("noisy")
     per_step, status = [], "converged"
     contact_brick, previous, solutions = None, np.zeros(3), []
     t0, c0 = time.perf_counter(), time.process_time()
@@ -248,9 +263,7 @@ def main() -> int:
         if contact_brick is not None:
             md.delete_brick(contact_brick)
         contact_brick = add_contact(translation)
-        iterations = md.solve(*options)
-        its = int(np.ravel(iterations)[0])
-        converged = bool(np.ravel(iterations)[1]) if np.size(iterations) > 1 else its < args.max_iter
+        its, converged = newton(md, options, args.max_iter)
         per_step.append(its)
         solutions.append(md.variable("u").copy())
         if not converged:

@@ -73,7 +73,7 @@ from scipy import sparse
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 import common  # noqa: E402
-from kratos_contact import ELEMENTS, oriented, sub_model_parts  # noqa: E402
+from kratos_contact import ELEMENTS, command_line, oriented, sub_model_parts  # noqa: E402
 
 
 def outward(mesh: common.Mesh, faces: np.ndarray) -> np.ndarray:
@@ -271,27 +271,12 @@ def project_parameters(case: common.BodiesCase, args: argparse.Namespace, materi
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0],
-                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    parser.add_argument("case")
-    parser.add_argument("--output", required=True)
-    parser.add_argument("--linear-solver", default="sparse_lu",
-                        help="Kratos linear solver: sparse_lu (Eigen), skyline_lu_factorization, amgcl, ...")
-    parser.add_argument("--tol", type=float, default=1e-8, help="relative tolerances of the convergence criteria")
-    parser.add_argument("--atol", type=float, default=1e-12, help="absolute tolerances of the convergence criteria")
-    parser.add_argument("--max-iter", type=int, default=100)
-    parser.add_argument("--threads", type=int, default=1)
-    parser.add_argument("--mixed-ulm", action="store_true",
-                        help="Kratos' MixedULMLinearSolver (condenses the multipliers) instead of the linear "
-                             "solver on all unknowns")
-    parser.add_argument("--substeps", type=int, default=1,
-                        help="Kratos time steps per load step, the load ramped linearly (path-dependent with friction)")
+    parser = command_line(__doc__.split("\n")[0])
     parser.add_argument("--builder", default="elimination", choices=["elimination", "block"],
                         help="Kratos builder and solver (block: fixed dofs kept as rows with their diagonal)")
     parser.add_argument("--contact-parameters", default="{}",
                         help="JSON merged into ALMContactProcess' Parameters, e.g. "
                              "'{\"normal_variation\": \"nodal_elemental_derivatives\"}'")
-    parser.add_argument("--echo", type=int, default=0)
     parser.add_argument("--move-mesh", action="store_true",
                         help="move_mesh_flag true (Kratos' default): needed when the contact zone grows (Hertz)")
     args = parser.parse_args()

@@ -267,9 +267,9 @@ def project_parameters(case: common.Case, args: argparse.Namespace, materials: p
     }
 
 
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0],
-                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+def command_line(description: str) -> argparse.ArgumentParser:
+    """The command line the Kratos drivers share: case, output and Kratos' solver settings."""
+    parser = argparse.ArgumentParser(description=description, formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("case")
     parser.add_argument("--output", required=True)
     parser.add_argument("--linear-solver", default="sparse_lu",
@@ -284,6 +284,11 @@ def main() -> int:
     parser.add_argument("--substeps", type=int, default=1,
                         help="Kratos time steps per load step, the load ramped linearly (path-dependent with friction)")
     parser.add_argument("--echo", type=int, default=0)
+    return parser
+
+
+def main() -> int:
+    parser = command_line(__doc__.split("\n")[0])
     parser.add_argument("--move-mesh", action="store_true", help="move_mesh_flag true (Kratos' default)")
     args = parser.parse_args()
     os.environ["OMP_NUM_THREADS"] = str(args.threads)
