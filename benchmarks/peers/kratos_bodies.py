@@ -73,7 +73,7 @@ from scipy import sparse
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 import common  # noqa: E402
-from kratos_contact import ELEMENTS, command_line, oriented, sub_model_parts  # noqa: E402
+from kratos_contact import ELEMENTS, analysis_settings, command_line, oriented, sub_model_parts  # noqa: E402
 
 
 def outward(mesh: common.Mesh, faces: np.ndarray) -> np.ndarray:
@@ -224,32 +224,12 @@ def project_parameters(case: common.BodiesCase, args: argparse.Namespace, materi
                                     "SURFACE_LOAD", [ramp(previous[0] * traction[c], load * traction[c])
                                                      for c in range(3)], interval))
         previous = (load, translation)
-    tol = args.tol
-    contact_tolerances = {f"{kind}_{which}_tolerance": tol if which == "relative" else args.atol
-                          for kind in ("contact_displacement", "contact_residual",
-                                       "frictional_stick_contact_displacement", "frictional_stick_contact_residual",
-                                       "frictional_slip_contact_displacement", "frictional_slip_contact_residual")
-                          for which in ("relative", "absolute")}
+    settings = analysis_settings(args, materials, mdpa, len(case.steps), frictional)
+    settings["solver_settings"].update({"builder_and_solver_settings": {"type": args.builder},
+                                        "multi_point_constraints_used": False})
     n_bodies = len(case.bodies)
     return {
-        "problem_data": {"problem_name": "peer", "parallel_type": "OpenMP", "echo_level": args.echo,
-                         "start_time": 0.0, "end_time": len(case.steps) - 0.5 / args.substeps},
-        "solver_settings": {
-            "solver_type": "Static", "model_part_name": "Structure", "domain_size": 3, "echo_level": args.echo,
-            "analysis_type": "non_linear", "time_stepping": {"time_step": 1.0 / args.substeps},
-            "model_import_settings": {"input_type": "mdpa", "input_filename": str(mdpa.with_suffix(""))},
-            "material_import_settings": {"materials_filename": str(materials)},
-            "move_mesh_flag": args.move_mesh,
-            "compute_reactions": True,
-            "builder_and_solver_settings": {"type": args.builder}, "multi_point_constraints_used": False,
-            "convergence_criterion": "contact_residual_criterion",
-            "displacement_relative_tolerance": tol, "displacement_absolute_tolerance": args.atol,
-            "residual_relative_tolerance": tol, "residual_absolute_tolerance": args.atol,
-            "max_iteration": args.max_iter,
-            "linear_solver_settings": {"solver_type": args.linear_solver},
-            "contact_settings": {"mortar_type": "ALMContactFrictional" if frictional else "ALMContactFrictionless",
-                                 "use_mixed_ulm_solver": args.mixed_ulm, **contact_tolerances},
-        },
+        **settings,
         "processes": {
             "constraints_process_list": constraints,
             "loads_process_list": loads,

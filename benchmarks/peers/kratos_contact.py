@@ -185,6 +185,37 @@ def write_mdpa(path: pathlib.Path, case: common.Case, mesh: common.Mesh, obstacl
     return {name: np.asarray(part["nodes"]) for name, part in parts.items()}
 
 
+def analysis_settings(args: argparse.Namespace, materials: pathlib.Path, mdpa: pathlib.Path, n_steps: int,
+                      frictional: bool) -> dict:
+    """``problem_data`` and ``solver_settings`` of a static contact analysis of ``n_steps`` load steps,
+    ``--substeps`` time steps each, with ``--tol`` on every ratio of the contact residual criterion."""
+    tol = args.tol
+    contact_tolerances = {f"{kind}_{which}_tolerance": tol if which == "relative" else args.atol
+                          for kind in ("contact_displacement", "contact_residual",
+                                       "frictional_stick_contact_displacement", "frictional_stick_contact_residual",
+                                       "frictional_slip_contact_displacement", "frictional_slip_contact_residual")
+                          for which in ("relative", "absolute")}
+    return {
+        "problem_data": {"problem_name": "peer", "parallel_type": "OpenMP", "echo_level": args.echo,
+                         "start_time": 0.0, "end_time": n_steps - 0.5 / args.substeps},
+        "solver_settings": {
+            "solver_type": "Static", "model_part_name": "Structure", "domain_size": 3, "echo_level": args.echo,
+            "analysis_type": "non_linear", "time_stepping": {"time_step": 1.0 / args.substeps},
+            "model_import_settings": {"input_type": "mdpa", "input_filename": str(mdpa.with_suffix(""))},
+            "material_import_settings": {"materials_filename": str(materials)},
+            "move_mesh_flag": args.move_mesh,
+            "compute_reactions": True,
+            "convergence_criterion": "contact_residual_criterion",
+            "displacement_relative_tolerance": tol, "displacement_absolute_tolerance": args.atol,
+            "residual_relative_tolerance": tol, "residual_absolute_tolerance": args.atol,
+            "max_iteration": args.max_iter,
+            "linear_solver_settings": {"solver_type": args.linear_solver},
+            "contact_settings": {"mortar_type": "ALMContactFrictional" if frictional else "ALMContactFrictionless",
+                                 "use_mixed_ulm_solver": args.mixed_ulm, **contact_tolerances},
+        },
+    }
+
+
 def project_parameters(case: common.Case, args: argparse.Namespace, materials: pathlib.Path,
                        mdpa: pathlib.Path) -> dict:
     """ProjectParameters of a static contact analysis with one time step per load step."""
@@ -225,30 +256,8 @@ def project_parameters(case: common.Case, args: argparse.Namespace, materials: p
                                                    for c in range(3)],
                                          "interval": interval}})
         previous = (load, translation)
-    tol = args.tol
-    contact_tolerances = {f"{kind}_{which}_tolerance": tol if which == "relative" else args.atol
-                          for kind in ("contact_displacement", "contact_residual",
-                                       "frictional_stick_contact_displacement", "frictional_stick_contact_residual",
-                                       "frictional_slip_contact_displacement", "frictional_slip_contact_residual")
-                          for which in ("relative", "absolute")}
     return {
-        "problem_data": {"problem_name": "peer", "parallel_type": "OpenMP", "echo_level": args.echo,
-                         "start_time": 0.0, "end_time": n_steps - 0.5 / args.substeps},
-        "solver_settings": {
-            "solver_type": "Static", "model_part_name": "Structure", "domain_size": 3, "echo_level": args.echo,
-            "analysis_type": "non_linear", "time_stepping": {"time_step": 1.0 / args.substeps},
-            "model_import_settings": {"input_type": "mdpa", "input_filename": str(mdpa.with_suffix(""))},
-            "material_import_settings": {"materials_filename": str(materials)},
-            "move_mesh_flag": args.move_mesh,
-            "compute_reactions": True,
-            "convergence_criterion": "contact_residual_criterion",
-            "displacement_relative_tolerance": tol, "displacement_absolute_tolerance": args.atol,
-            "residual_relative_tolerance": tol, "residual_absolute_tolerance": args.atol,
-            "max_iteration": args.max_iter,
-            "linear_solver_settings": {"solver_type": args.linear_solver},
-            "contact_settings": {"mortar_type": "ALMContactFrictional" if frictional else "ALMContactFrictionless",
-                                 "use_mixed_ulm_solver": args.mixed_ulm, **contact_tolerances},
-        },
+        **analysis_settings(args, materials, mdpa, n_steps, frictional),
         "processes": {
             "constraints_process_list": constraints,
             "loads_process_list": loads,
