@@ -63,7 +63,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import pathlib
 import sys
 import time
@@ -73,7 +72,8 @@ from scipy import sparse
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 import common  # noqa: E402
-from kratos_contact import ELEMENTS, analysis_settings, command_line, oriented, sub_model_parts  # noqa: E402
+from kratos_contact import (ELEMENTS, analysis_settings, command_line, oriented, start_kratos,  # noqa: E402
+                            sub_model_parts)
 
 
 def outward(mesh: common.Mesh, faces: np.ndarray) -> np.ndarray:
@@ -260,18 +260,8 @@ def main() -> int:
     parser.add_argument("--move-mesh", action="store_true",
                         help="move_mesh_flag true (Kratos' default): needed when the contact zone grows (Hertz)")
     args = parser.parse_args()
-    os.environ["OMP_NUM_THREADS"] = str(args.threads)
-
-    import KratosMultiphysics as KM
-    import KratosMultiphysics.ContactStructuralMechanicsApplication as CSMA  # registers the contact solver
-    import KratosMultiphysics.LinearSolversApplication  # noqa: F401  (sparse_lu, pardiso, ...: Eigen solvers)
+    KM, CSMA, StructuralMechanicsAnalysis = start_kratos(args)
     import KratosMultiphysics.StructuralMechanicsApplication as SMA
-    from KratosMultiphysics.StructuralMechanicsApplication.structural_mechanics_analysis import (
-        StructuralMechanicsAnalysis)
-
-    KM.ParallelUtilities.SetNumThreads(args.threads)
-    if args.echo == 0:
-        KM.Logger.GetDefaultOutput().SetSeverity(KM.Logger.Severity.WARNING)
     case = common.load_bodies_case(args.case)
     slave_bodies = [pair.slave[0] for pair in case.pairs]
     if len(set(slave_bodies)) < len(slave_bodies) or set(slave_bodies) & {pair.master[0] for pair in case.pairs}:

@@ -41,6 +41,7 @@ import os
 import pathlib
 import sys
 import time
+import types
 
 import numpy as np
 
@@ -296,21 +297,27 @@ def command_line(description: str) -> argparse.ArgumentParser:
     return parser
 
 
-def main() -> int:
-    parser = command_line(__doc__.split("\n")[0])
-    parser.add_argument("--move-mesh", action="store_true", help="move_mesh_flag true (Kratos' default)")
-    args = parser.parse_args()
+def start_kratos(args: argparse.Namespace) -> tuple[types.ModuleType, types.ModuleType, type]:
+    """Import Kratos with ``--threads`` OpenMP threads and its log at ``--echo``: Kratos, its contact
+    application (which registers the contact solver) and ``StructuralMechanicsAnalysis``."""
     os.environ["OMP_NUM_THREADS"] = str(args.threads)
-
     import KratosMultiphysics as KM
-    import KratosMultiphysics.ContactStructuralMechanicsApplication as CSMA  # registers the contact solver
-    import KratosMultiphysics.LinearSolversApplication  # noqa: F401  (sparse_lu, pardiso, ...: Eigen solvers)
+    import KratosMultiphysics.ContactStructuralMechanicsApplication as CSMA
+    import KratosMultiphysics.LinearSolversApplication  # noqa: F401  (sparse_lu, ...: Eigen's solvers)
     from KratosMultiphysics.StructuralMechanicsApplication.structural_mechanics_analysis import (
         StructuralMechanicsAnalysis)
 
     KM.ParallelUtilities.SetNumThreads(args.threads)
     if args.echo == 0:
         KM.Logger.GetDefaultOutput().SetSeverity(KM.Logger.Severity.WARNING)
+    return KM, CSMA, StructuralMechanicsAnalysis
+
+
+def main() -> int:
+    parser = command_line(__doc__.split("\n")[0])
+    parser.add_argument("--move-mesh", action="store_true", help="move_mesh_flag true (Kratos' default)")
+    args = parser.parse_args()
+    KM, CSMA, StructuralMechanicsAnalysis = start_kratos(args)
     case = common.load_case(args.case)
     mesh = common.read_msh(case.mesh)
     out = pathlib.Path(args.output)
