@@ -1,10 +1,12 @@
 """What the peer drivers share: the case they read, the mesh file, the result files they write.
 
-Every driver (``getfem_contact.py``, ``kratos_contact.py``, ``ours_contact.py``) is called as
+Every driver (``getfem_contact.py``, ``kratos_contact.py``, ``ours_contact.py``; between deformable
+bodies ``getfem_bodies.py``, ``kratos_bodies.py``) is called as
 
     PYTHON DRIVER.py CASE.toml --output DIR [--tol TOL] [driver options]
 
-reads the case file (the format of ``cases/*.toml``, :mod:`contactqvi.case`; ``mesh.file``
+reads the case file (the format of ``cases/*.toml``, :mod:`contactqvi.case`: :func:`load_case`
+for a body and rigid obstacles, :func:`load_bodies_case` for ``[[bodies]]``; ``mesh.file``
 must be a gmsh ``.msh`` file in format 2.2 ASCII, see :func:`benchmarks.peers_real.export`)
 and writes
 
