@@ -183,7 +183,7 @@ def accurate(entry: dict, accuracy: float) -> bool:
 
 
 def ladder(runner: Runner, code: str, case: pathlib.Path, reference: dict, options: list[str], flag: str,
-           accuracy: float, start: float | None = None) -> tuple[dict | None, list[dict]]:
+           accuracy: float, start: float | None = None, ranks: int = 1) -> tuple[dict | None, list[dict]]:
     """Run ``code`` from its loosest tolerance (or ``start``, the one that sufficed on the size
     before) down; the first run within ``accuracy`` and all runs."""
     runs = []
@@ -191,7 +191,7 @@ def ladder(runner: Runner, code: str, case: pathlib.Path, reference: dict, optio
     if start is not None:
         tolerances = [t for t in tolerances if t <= start]
     for tol in tolerances:
-        record = runner.run(code, case, [*options, flag, f"{tol:g}"])
+        record = runner.run(code, case, [*options, flag, f"{tol:g}"], ranks=ranks)
         record.update(errors(record, reference), tolerance=tol)
         runs.append(record)
         if accurate(record, accuracy):
@@ -393,12 +393,11 @@ def main() -> int:
                      "reference_pc": args.reference_pc})
         rows.append({**base, **timed("ours", case, reference, [], "--rtol", problem, closed), "closed_form": closed})
         best = rows[-1]["best"]
-        if best is not None and not args.no_np2:
-            np2 = runner.run("ours", case, ["--rtol", f"{best['tolerance']:g}"], ranks=2)
-            np2.update(errors(np2, reference), tolerance=best["tolerance"],
-                       closed_form_error=closed_form_error(closed, np2))
-            rows.append({**base, "code": "ours np2", "best": np2 if accurate(np2, args.accuracy) else None,
-                         "runs": [np2], "closed_form": closed})
+        if best is not None and not args.no_np2:  # from the tolerance that sufficed on 1 rank
+            np2, runs = ladder(runner, "ours", case, reference, [], "--rtol", args.accuracy, best["tolerance"], ranks=2)
+            for run in runs:
+                run["closed_form_error"] = closed_form_error(closed, run)
+            rows.append({**base, "code": "ours np2", "best": np2, "runs": runs, "closed_form": closed})
         if "getfem" in peers and reference["dofs"] <= args.peer_max_dofs:
             if problem == settings_problem and size == f"lev {settings_level}" and not settings_trials:
                 getfem_options, settings_trials = getfem_settings(runner, case, reference, args.accuracy)
