@@ -72,8 +72,8 @@ from scipy import sparse
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 import common  # noqa: E402
-from kratos_contact import (ELEMENTS, analysis_settings, command_line, oriented, start_kratos,  # noqa: E402
-                            sub_model_parts)
+from kratos_contact import (ELEMENTS, alm_contact_process, analysis_settings, command_line,  # noqa: E402
+                            oriented, start_kratos, sub_model_parts)
 
 
 def outward(mesh: common.Mesh, faces: np.ndarray) -> np.ndarray:
@@ -233,18 +233,9 @@ def project_parameters(case: common.BodiesCase, args: argparse.Namespace, materi
         "processes": {
             "constraints_process_list": constraints,
             "loads_process_list": loads,
-            "contact_process_list": [{
-                "python_module": "alm_contact_process",
-                "kratos_module": "KratosMultiphysics.ContactStructuralMechanicsApplication",
-                "process_name": "ALMContactProcess",
-                "Parameters": {"model_part_name": "Structure",
-                               "contact_model_part": {str(i): [f"slave_{i}", f"master_{i}"]
-                                                      for i in range(len(case.pairs))},
-                               "assume_master_slave": {str(i): [f"slave_{i}"] for i in range(len(case.pairs))},
-                               "contact_property_ids": {str(i): n_bodies + 1 + i for i in range(len(case.pairs))},
-                               "friction_coefficients": {str(i): pair.friction for i, pair in enumerate(case.pairs)},
-                               "contact_type": "Frictional" if frictional else "Frictionless",
-                               **json.loads(args.contact_parameters)}}],
+            "contact_process_list": [alm_contact_process(
+                [(f"slave_{i}", f"master_{i}", n_bodies + 1 + i, pair.friction) for i, pair in enumerate(case.pairs)],
+                **json.loads(args.contact_parameters))],
         },
         "output_processes": {},
     }

@@ -42,6 +42,7 @@ import pathlib
 import sys
 import time
 import types
+import typing
 
 import numpy as np
 
@@ -217,6 +218,23 @@ def analysis_settings(args: argparse.Namespace, materials: pathlib.Path, mdpa: p
     }
 
 
+def alm_contact_process(pairs: list[tuple[str, str, int, float]], **parameters: typing.Any) -> dict:
+    """``ALMContactProcess`` for contact pairs (slave part, master part, property id, friction
+    coefficient): ``Frictional`` if any pair has friction, ``Frictionless`` otherwise; ``parameters``
+    are merged into its Parameters."""
+    return {
+        "python_module": "alm_contact_process",
+        "kratos_module": "KratosMultiphysics.ContactStructuralMechanicsApplication",
+        "process_name": "ALMContactProcess",
+        "Parameters": {"model_part_name": "Structure",
+                       "contact_model_part": {str(i): [slave, master] for i, (slave, master, _, _) in enumerate(pairs)},
+                       "assume_master_slave": {str(i): [slave] for i, (slave, _, _, _) in enumerate(pairs)},
+                       "contact_property_ids": {str(i): prop for i, (_, _, prop, _) in enumerate(pairs)},
+                       "friction_coefficients": {str(i): mu for i, (_, _, _, mu) in enumerate(pairs)},
+                       "contact_type": "Frictional" if any(p[3] > 0 for p in pairs) else "Frictionless",
+                       **parameters}}
+
+
 def project_parameters(case: common.Case, args: argparse.Namespace, materials: pathlib.Path,
                        mdpa: pathlib.Path) -> dict:
     """ProjectParameters of a static contact analysis with one time step per load step."""
@@ -262,16 +280,7 @@ def project_parameters(case: common.Case, args: argparse.Namespace, materials: p
         "processes": {
             "constraints_process_list": constraints,
             "loads_process_list": loads,
-            "contact_process_list": [{
-                "python_module": "alm_contact_process",
-                "kratos_module": "KratosMultiphysics.ContactStructuralMechanicsApplication",
-                "process_name": "ALMContactProcess",
-                "Parameters": {"model_part_name": "Structure",
-                               "contact_model_part": {"0": ["contact_slave", "contact_master"]},
-                               "assume_master_slave": {"0": ["contact_slave"]},
-                               "contact_property_ids": {"0": 3},
-                               "friction_coefficients": {"0": case.friction},
-                               "contact_type": "Frictional" if frictional else "Frictionless"}}],
+            "contact_process_list": [alm_contact_process([("contact_slave", "contact_master", 3, case.friction)])],
         },
         "output_processes": {},
     }
