@@ -125,10 +125,10 @@ def newton(md: gf.Model, options: list, max_iter: int) -> tuple[int, bool]:
 def main() -> int:
     parser = command_line(__doc__.split("\n")[0])
     parser.add_argument("--r", type=float, default=None,
-                         help="Alart-Curnier augmentation r (GPa); default E (GetFEM's advice)")
+                        help="Alart-Curnier augmentation r (GPa); default E (GetFEM's advice)")
     parser.add_argument("--brick", default="auto", choices=["auto", "rigid", "basic"],
-                         help="rigid: add_nodal_contact_with_rigid_obstacle_brick; basic: add_basic_contact_brick "
-                              "with BN, BT from the exact obstacle normal; auto: rigid for a plane, basic otherwise")
+                        help="rigid: add_nodal_contact_with_rigid_obstacle_brick; basic: add_basic_contact_brick "
+                             "with BN, BT from the exact obstacle normal; auto: rigid for a plane, basic otherwise")
     args = parser.parse_args()
     options = set_up(args)
     case = common.load_case(args.case)
