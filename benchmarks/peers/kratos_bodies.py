@@ -275,6 +275,7 @@ def main() -> int:
 
     frictional = any(pair.friction > 0 for pair in case.pairs)
     fixed = prescribed(case, groups, len(mesh.points))
+    supported = np.flatnonzero(fixed.any(axis=1))
     slaves = [parts[f"slave_{i}"] - 1 for i in range(len(case.pairs))]
     areas = lumped_areas(mesh, [groups[pair.slave[0]]["faces"][pair.slave[1]] for pair in case.pairs])
     displacement = (KM.DISPLACEMENT_X, KM.DISPLACEMENT_Y, KM.DISPLACEMENT_Z)
@@ -287,7 +288,8 @@ def main() -> int:
 
     def resultants(structure) -> dict:
         """Contact force of each pair from Kratos' reactions and from its multipliers, reactions per group."""
-        support = nodal(structure, reaction) * fixed  # the supports' forces on the bodies (Kratos: REACTION)
+        support = np.zeros_like(fixed, dtype=float)  # the supports' forces on the bodies (Kratos: REACTION),
+        support[supported] = nodal(structure, reaction, supported) * fixed[supported]  # read at fixed nodes only
         applied = {body.name: np.zeros(3) for body in case.bodies}
         for body in case.bodies:
             for group in body.traction:
