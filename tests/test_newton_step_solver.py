@@ -82,10 +82,10 @@ def _set_ups() -> int:
     return PETSc.Log.Event("PCSetUp").getPerfInfo()["count"]
 
 
-def _solver(pc: str, prefix: str, **options) -> NewtonStepSolver:
+def _solver(pc: str, prefix: str, multigrid_options: dict | None = None, **options) -> NewtonStepSolver:
     PETSc.Log.begin()
     parameters = {"rtol": 0.1, "reuse_pc": True, "rebuild_iterations": 10, "initial_guess": True, **options}
-    return NewtonStepSolver(MPI.COMM_WORLD, prefix, pc, {}, **parameters)
+    return NewtonStepSolver(MPI.COMM_WORLD, prefix, pc, multigrid_options or {}, **parameters)
 
 
 def test_multigrid_is_set_up_once_and_follows_J_by_galerkin_updates():
@@ -110,6 +110,19 @@ def test_a_slow_solve_brings_a_new_multigrid_set_up():
         system.step(solver, kinds, tol=1e-8)
         assert solver.galerkin is not first and solver.galerkin.updates == 0
         assert first.updates == 0 and system.relative_residual() <= 1e-8
+
+
+def test_unsmoothed_aggregation_is_not_set_up_again_after_a_slow_solve():
+    """Its interpolation depends on J's pattern and the near-nullspace only (several bodies)."""
+    unsmoothed = {"pc_gamg_agg_nsmooths": 0}
+    with _System.create() as system, _solver("gamg", "nss_unsmoothed_", unsmoothed, rebuild_iterations=1) as solver:
+        kinds = np.zeros(4, np.int8)
+        system.step(solver, kinds, tol=1e-8)
+        first = solver.galerkin
+        assert solver.iterations > 1
+        system.step(solver, kinds, tol=1e-8)
+        assert solver.galerkin is first and first.updates == 1
+        assert system.relative_residual() <= 1e-8
 
 
 @pytest.mark.parametrize("reuse_pc", [True, False])

@@ -39,7 +39,8 @@ class NewtonStepSolver(PETScOwner):
       its coarse operators are updated by the Galerkin products of J's change, which
       lives on the contact rows (:class:`~contactqvi.multigrid.GalerkinUpdate`), so
       every step is preconditioned for its own J at the cost of the contact surface;
-      a new set-up follows a slow solve (:meth:`_discard_set_up`);
+      a new set-up follows a slow solve (:meth:`_discard_set_up`) when the
+      interpolation depends on J's values (smoothed aggregation);
     * other preconditioners with ``reuse_pc``: kept between steps in which no
       contact node changes its kind (:meth:`_set_operator`);
     * direct solvers (``preonly``): a new factorisation at every step.
@@ -56,8 +57,8 @@ class NewtonStepSolver(PETScOwner):
         rtol: default relative tolerance of the Krylov solve (the SCD parameter ``tol``).
         reuse_pc: multigrid: Galerkin updates of one set-up; other preconditioners:
             kept while no contact node changes its kind.
-        rebuild_iterations: multigrid with ``reuse_pc``: a new set-up after a solve
-            of more Krylov iterations than this.
+        rebuild_iterations: multigrid with ``reuse_pc`` and smoothed aggregation: a
+            new set-up after a solve of more Krylov iterations than this.
         initial_guess: start the Krylov solve from ``du`` as given (it holds the
             exact values of the eliminated rows); direct solvers need none.
 
@@ -75,6 +76,7 @@ class NewtonStepSolver(PETScOwner):
             self._options.update(multigrid_options)
         self.ksp = create_ksp(comm, prefix, self._options, rtol=rtol)
         self.reuse_pc, self.rebuild_iterations, self.initial_guess = reuse_pc, rebuild_iterations, initial_guess
+        self._rebuilds = _smoothed_aggregation(prefix, self._options)
         self.galerkin: GalerkinUpdate | None = None
         self._pc_kinds: np.ndarray | None = None  # contact node kinds when the preconditioner was last built
 
@@ -106,7 +108,7 @@ class NewtonStepSolver(PETScOwner):
             rhs_ratio: ||rhs of (5.4)|| / ||rhs|| (:meth:`krylov_rtol`).
         """
         multigrid = self.reuse_pc and is_multigrid(self.ksp.getPC())
-        if self.galerkin is not None and self.iterations > self.rebuild_iterations:
+        if self.galerkin is not None and self._rebuilds and self.iterations > self.rebuild_iterations:
             self._discard_set_up()
         if multigrid and self.galerkin is not None:
             self.galerkin.update(change)
@@ -132,6 +134,12 @@ class NewtonStepSolver(PETScOwner):
         a threshold of 4). At lev 7-8 a set-up costs more than the iterations it saves
         (``benchmarks/coulomb_profile.py``, docs/coulomb.md), so the default threshold
         10 only catches a hierarchy that has really degraded.
+
+        With unsmoothed aggregation (several bodies) the interpolation is made of the
+        aggregates of J's graph (its pattern, fixed in a load step) and the
+        near-nullspace alone, so a new set-up would build the same hierarchy: no
+        rebuilds (two-body Hertz fine mesh: the same Krylov counts with and without
+        them, 6 s more with, in a 25 s load path).
         """
         self.galerkin.destroy()
         self.galerkin = None
@@ -171,3 +179,12 @@ class NewtonStepSolver(PETScOwner):
         """
         option = self.ksp.getOptionsPrefix() + "ksp_converged_use_initial_residual_norm"
         return tol if PETSc.Options().getBool(option, False) else tol * rhs_ratio
+
+
+def _smoothed_aggregation(prefix: str, options: OptionsDict) -> bool:
+    """Whether a GAMG preconditioner smooths its aggregates (PETSc's default: one step),
+    so that its interpolation depends on J's values; the command line wins over ``options``."""
+    if options.get("pc_type") != "gamg":
+        return True
+    default = int(options.get("pc_gamg_agg_nsmooths", 1))
+    return PETSc.Options().getInt(f"{prefix}pc_gamg_agg_nsmooths", default) > 0

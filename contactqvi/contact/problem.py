@@ -335,22 +335,29 @@ class ContactProblem(PETScOwner):
         """GAMG options for this problem's near-nullspace (PETSc option names without prefix).
 
         With several bodies the near-nullspace has six modes per body, and GAMG gives every
-        aggregate as many coarse unknowns as there are modes: 12 for two bodies, half of
-        them zero columns (an aggregate lies in one body). With smoothed aggregation the
-        first coarse operator of the two-body Hertz medium mesh then had 5124 rows and
-        2.6 M nonzeros, as many as the fine one, and a set-up took 4.8 s (1.2 s with six
-        modes). Unsmoothed aggregation (plain aggregates as interpolation) keeps the
+        aggregate as many coarse unknowns as there are modes: 12 for two bodies. With smoothed
+        aggregation the first coarse operator of the two-body Hertz medium mesh then had 5124
+        rows and 2.6 M nonzeros, as many as the fine one, and a set-up took 4.8 s (1.2 s with
+        six modes). Unsmoothed aggregation (plain aggregates as interpolation) keeps the
         coarse operators to neighbouring aggregates: set-up 0.8 s, the load path 117 -> 25 s,
         Newton steps 9/21/13/17 -> 8/8/9/8. Larger aggregates (a distance-3 maximal
         independent set) did as well on small meshes but fail at a million dofs on 2 ranks:
         PETSc 3.22 preallocates local rows times the largest aggregate (160189 x 17994,
         beyond 32-bit indices; the mortar rows, then with their zero entries stored, made aggregates of
         thousands of nodes).
+
+        Below about a thousand unknowns the 12-unknown aggregates hardly coarsen (medium
+        mesh: 31425 -> 5256 -> 1020 -> 348 -> 180 -> 132 -> 96 -> 72 -> 60 -> 48 rows), and
+        those six Chebyshev-smoothed levels cost Krylov iterations: the coarsest level is
+        the first one below 3000 unknowns, solved exactly on one process (GAMG's default
+        coarse solver). Two-body Hertz, Newton rtol 1e-8: medium 287 -> 200 Krylov
+        iterations; fine (113 k dofs) 235 -> 168, Newton steps 29 -> 27, solve 31.2 -> 25 s
+        on 1 rank, 25.5 -> 18.7 s on 2 (docs/bodies.md).
         One body: none (PETSc's defaults; the paper's tables).
         """
         bodies = 0 if self.node_body is None else self.comm.allreduce(int(self.node_body.max(initial=-1)) + 1,
                                                                       op=MPI.MAX)
-        return {"pc_gamg_agg_nsmooths": 0} if bodies > 1 else {}
+        return {"pc_gamg_agg_nsmooths": 0, "pc_gamg_coarse_eq_limit": 3000} if bodies > 1 else {}
 
     def near_nullspace(self) -> PETSc.NullSpace:
         """Rigid-body modes of each body in the solver's variables, T^-1 = R^T (I - N) of
