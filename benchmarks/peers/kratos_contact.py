@@ -211,7 +211,8 @@ def analysis_settings(args: argparse.Namespace, materials: pathlib.Path, mdpa: p
             "displacement_relative_tolerance": tol, "displacement_absolute_tolerance": args.atol,
             "residual_relative_tolerance": tol, "residual_absolute_tolerance": args.atol,
             "max_iteration": args.max_iter,
-            "linear_solver_settings": {"solver_type": args.linear_solver},
+            "linear_solver_settings": {"solver_type": args.linear_solver, **({} if args.linear_tol is None else {
+                "tolerance": args.linear_tol, "max_iteration": 1000})},
             "contact_settings": {"mortar_type": "ALMContactFrictional" if frictional else "ALMContactFrictionless",
                                  "use_mixed_ulm_solver": args.mixed_ulm, **contact_tolerances},
         },
@@ -293,6 +294,8 @@ def command_line(description: str) -> argparse.ArgumentParser:
     parser.add_argument("--output", required=True)
     parser.add_argument("--linear-solver", default="sparse_lu",
                         help="Kratos linear solver: sparse_lu (Eigen), skyline_lu_factorization, amgcl, ...")
+    parser.add_argument("--linear-tol", type=float, default=None,
+                        help="relative tolerance of an iterative linear solver (AMGCL's default: 1e-6)")
     parser.add_argument("--tol", type=float, default=1e-8, help="relative tolerances of the convergence criteria")
     parser.add_argument("--atol", type=float, default=1e-12, help="absolute tolerances of the convergence criteria")
     parser.add_argument("--max-iter", type=int, default=100)
