@@ -22,8 +22,11 @@ against 2.9 M, a product over the pattern cost nearly as much as a new set-up, o
 the changed rows an eighth of that), with the same operators (docs/bodies.md). The
 updated operators are exactly the Galerkin operators of the new J with the old
 interpolations, i.e. what ``-pc_gamg_reuse_interpolation`` gives after a full
-set-up, at the cost of the change only. Each level's smoother (and the coarse
-solver) is set up again on its updated operator.
+set-up, at the cost of the change only. The coarse solver is factorised again and
+each level's smoother preconditioner (Jacobi) set up again on its updated operator;
+the Chebyshev smoothers keep the eigenvalue bounds estimated at the set-up (a new
+estimate is ten GMRES iterations per level: two-body Hertz medium mesh, 0.67 of a
+6.75 s load path, the same Krylov counts without it, 125 and 124; docs/bodies.md).
 
 Memory of the set-up's products (PETSc 3.22, MPIAIJ on several processes;
 docs/coulomb.md, Memory). PETSc's default parallel PtAP ("nonscalable") forms A P on
@@ -103,7 +106,7 @@ class GalerkinUpdate(PETScOwner):
 
     def update(self, change: PETSc.Mat) -> None:
         """Add ``change`` (already added to the fine operator) to every coarse level and
-        set up the smoothers again; the preconditioner is then to be reused."""
+        set up the smoothers' preconditioners again; the preconditioner is then to be reused."""
         coarse = change
         for level in reversed(range(len(self._interpolations))):
             finer, coarse = coarse, _galerkin_product(coarse, self._interpolations[level])
@@ -113,7 +116,11 @@ class GalerkinUpdate(PETScOwner):
         if coarse is not change:
             coarse.destroy()
         for level, operator in enumerate(self._operators):
-            self._pc.getMGSmoother(level).setOperators(operator, operator)
+            smoother = self._pc.getMGSmoother(level)
+            if level == 0:  # the coarse solver: factorised again
+                smoother.setOperators(operator, operator)
+            else:  # the smoother's preconditioner follows its operator; Chebyshev keeps its bounds
+                smoother.getPC().setUp()
         self._pc.setReusePreconditioner(True)
         self.updates += 1
 

@@ -55,3 +55,40 @@ def test_lean_set_up_gives_the_default_coarse_operators_and_restores_the_options
     assert np.isfinite(coarsest.norm()) and galerkin.updates == 1
     for obj in (galerkin, change, plain, lean, J):
         obj.destroy()
+
+
+def test_galerkin_update_sets_up_each_smoothers_jacobi_on_its_updated_operator():
+    """After an update every level's Jacobi preconditioner is 1 / diag of that level's new
+    operator (the fine one changed in place), not of the operator of the set-up."""
+    msh = mesh.create_unit_cube(MPI.COMM_WORLD, 8, 8, 8)
+    V = fem.functionspace(msh, ("Lagrange", 1))
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    J = dolfinx.fem.petsc.assemble_matrix(fem.form(ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx + u * v * ufl.dx))
+    J.assemble()
+    options = preset("gmres_gamg")
+    ksp = create_ksp(MPI.COMM_WORLD, "mg_jacobi_", options, A=J)
+    with default_options("mg_jacobi_", options):
+        set_up(ksp)
+    pc = ksp.getPC()
+    assert pc.getMGLevels() >= 2
+    change = J.duplicate(copy=False)
+    low, high = change.getOwnershipRange()
+    for row in range(low, high, 7):  # a few rows per rank, their diagonal raised tenfold
+        change.setValue(row, row, 9.0 * J.getValue(row, row))
+    change.assemble()
+    J.axpy(1.0, change, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+    galerkin = GalerkinUpdate(pc)
+    galerkin.update(change)
+    for level in range(1, pc.getMGLevels()):
+        smoother = pc.getMGSmoother(level)
+        assert smoother.getPC().getType() == PETSc.PC.Type.JACOBI
+        operator = smoother.getOperators()[0]
+        ones, applied = operator.createVecRight(), operator.createVecRight()
+        ones.set(1.0)
+        smoother.getPC().apply(ones, applied)
+        diagonal = operator.getDiagonal()
+        assert np.allclose(applied.array * diagonal.array, 1.0, rtol=1e-12)
+        for vec in (ones, applied, diagonal):
+            vec.destroy()
+    for obj in (galerkin, change, ksp, J):
+        obj.destroy()

@@ -84,7 +84,7 @@ NEWTON_STEPS = {
     "inclined_plane": {1: [18, 7, 6, 6], 2: [18, 7, 6, 6]},
     "paper_d3_L2": {1: [8], 2: [9]},
     "patch_test": {1: [5], 2: [5]},
-    "vice": {1: [9, 7], 2: [8, 7]},
+    "vice": {1: [8, 7], 2: [8, 7]},
 }
 
 #: Newton steps allowed per load step: 15 for the Hertz case (issue 23), 25 for any other.
