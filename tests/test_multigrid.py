@@ -24,18 +24,19 @@ def _coarse_operators(ksp: PETSc.KSP) -> list[PETSc.Mat]:
     return [pc.getMGSmoother(level).getOperators()[0] for level in range(pc.getMGLevels() - 1)]
 
 
-def _operator() -> PETSc.Mat:
-    """A scalar P1 operator (Laplacian plus mass) on the unit cube, 8^3 cells."""
+def _operator() -> tuple[PETSc.Mat, fem.FunctionSpace]:
+    """A scalar P1 operator (Laplacian plus mass) on the unit cube, 8^3 cells, and its space
+    (to be kept alive while the matrix is used)."""
     msh = mesh.create_unit_cube(MPI.COMM_WORLD, 8, 8, 8)
     V = fem.functionspace(msh, ("Lagrange", 1))
     u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
     J = dolfinx.fem.petsc.assemble_matrix(fem.form(ufl.inner(ufl.grad(u), ufl.grad(v)) * ufl.dx + u * v * ufl.dx))
     J.assemble()
-    return J
+    return J, V
 
 
 def test_lean_set_up_gives_the_default_coarse_operators_and_restores_the_options():
-    J = _operator()
+    J, _space = _operator()
     options = preset("gmres_gamg")
     plain, lean = (create_ksp(MPI.COMM_WORLD, prefix, options, A=J) for prefix in ("mg_plain_", "mg_lean_"))
     with default_options("mg_plain_", options):
@@ -66,7 +67,7 @@ def test_lean_set_up_gives_the_default_coarse_operators_and_restores_the_options
 def test_galerkin_update_sets_up_each_smoothers_jacobi_on_its_updated_operator():
     """After an update every level's Jacobi preconditioner is 1 / diag of that level's new
     operator (the fine one changed in place), not of the operator of the set-up."""
-    J = _operator()
+    J, _space = _operator()
     options = preset("gmres_gamg")
     ksp = create_ksp(MPI.COMM_WORLD, "mg_jacobi_", options, A=J)
     with default_options("mg_jacobi_", options):
