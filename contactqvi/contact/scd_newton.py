@@ -100,8 +100,9 @@ PARAMETERS = Parameters(
     pc=Parameter("gamg", "Newton-step solver", type=str, choices=tuple(NEWTON_STEP_SOLVERS)),
     reuse_pc=Parameter(True, "multigrid: coarse operators updated by the contact rows' change instead of a new "
                        "set-up; other preconditioners: kept while no contact node changes its kind", type=bool),
-    pc_rebuild_iterations=Parameter(10, "multigrid with reuse_pc: a new set-up (new interpolation) after a Krylov "
-                                    "solve that took more iterations than this", type=int, minimum=1),
+    pc_rebuild_iterations=Parameter(10, "multigrid with reuse_pc and smoothed aggregation: a new set-up (new "
+                                    "interpolation) after a Krylov solve that took more iterations than this",
+                                    type=int, minimum=1),
 )
 
 
