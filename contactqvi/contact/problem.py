@@ -340,12 +340,11 @@ class ContactProblem(PETScOwner):
         rows and 2.6 M nonzeros, as many as the fine one, and a set-up took 4.8 s (1.2 s with
         six modes). Unsmoothed aggregation (plain aggregates as interpolation) keeps the
         coarse operators to neighbouring aggregates: set-up 0.8 s, the load path 117 -> 25 s,
-        Newton steps 9/21/13/17 -> 8/8/9/8. The aggregates are a distance-3 maximal
-        independent set of the graph (instead of PETSc's default, a maximal independent set
-        of its square): two-body Hertz at 1.05 M dofs on 2 ranks, load path 201 -> 168 s,
-        peak 7.8 -> 6.8 GiB (docs/bodies.md). (It failed at a million dofs when the mortar
-        rows still stored their zero entries: PETSc 3.22 preallocates local rows times the
-        largest aggregate, 160189 x 17994, beyond 32-bit indices.)
+        Newton steps 9/21/13/17 -> 8/8/9/8. Larger aggregates (a distance-3 maximal
+        independent set) did as well on small meshes but fail at a million dofs on 2 ranks:
+        PETSc 3.22 preallocates local rows times the largest aggregate (160189 x 17994,
+        beyond 32-bit indices; the mortar rows, then with their zero entries stored, made aggregates of
+        thousands of nodes).
 
         Below about a thousand unknowns the 12-unknown aggregates hardly coarsen (medium
         mesh: 31425 -> 5256 -> 1020 -> 348 -> 180 -> 132 -> 96 -> 72 -> 60 -> 48 rows), and
@@ -358,10 +357,7 @@ class ContactProblem(PETScOwner):
         """
         bodies = 0 if self.node_body is None else self.comm.allreduce(int(self.node_body.max(initial=-1)) + 1,
                                                                       op=MPI.MAX)
-        if bodies < 2:
-            return {}
-        return {"pc_gamg_agg_nsmooths": 0, "pc_gamg_aggressive_square_graph": False, "pc_gamg_aggressive_mis_k": 3,
-                "pc_gamg_coarse_eq_limit": 3000}
+        return {"pc_gamg_agg_nsmooths": 0, "pc_gamg_coarse_eq_limit": 3000} if bodies > 1 else {}
 
     def near_nullspace(self) -> PETSc.NullSpace:
         """Rigid-body modes of each body in the solver's variables, T^-1 = R^T (I - N) of
