@@ -16,6 +16,8 @@ import typing
 from mpi4py import MPI
 from petsc4py import PETSc
 
+import numpy as np
+
 import dolfinx.fem.petsc
 from dolfinx import fem
 
@@ -32,6 +34,8 @@ __all__ = [
     "reassemble_matrix",
     "power_iteration",
     "ksp_converged_reason",
+    "nonzero_entries",
+    "nonzero_rows",
 ]
 
 OptionsDict = dict[str, typing.Any]
@@ -199,3 +203,23 @@ def ksp_converged_reason(ksp: PETSc.KSP) -> str:
     reason = ksp.getConvergedReason()
     names = {v: k for k, v in PETSc.KSP.ConvergedReason.__dict__.items() if isinstance(v, int)}
     return names.get(reason, str(reason))
+
+
+def nonzero_rows(M: PETSc.Mat) -> tuple[PETSc.IS, PETSc.Mat]:
+    """The owned rows of ``M`` with a nonzero entry (global indices), and those rows of
+    ``M`` with their nonzero entries only, as a new AIJ matrix (in M's column layout)."""
+    per_row, indices, values = nonzero_entries(M)
+    rows = np.flatnonzero(per_row)
+    comm = M.getComm()
+    compact = PETSc.Mat().createAIJ(size=((len(rows), None), M.getSizes()[1]), comm=comm, csr=(
+        np.concatenate([[0], np.cumsum(per_row[rows])]).astype(PETSc.IntType), indices, values))
+    compact.assemble()
+    return PETSc.IS().createGeneral((rows + M.getOwnershipRange()[0]).astype(PETSc.IntType), comm=comm), compact
+
+
+def nonzero_entries(M: PETSc.Mat) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per owned row of ``M`` its number of nonzero entries, and their columns and values."""
+    indptr, indices, values = M.getValuesCSR()
+    kept = np.flatnonzero(values)
+    per_row = np.bincount(np.searchsorted(indptr, kept, side="right") - 1, minlength=len(indptr) - 1)
+    return per_row, indices[kept].astype(PETSc.IntType), values[kept]

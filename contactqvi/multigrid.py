@@ -48,10 +48,8 @@ import typing
 
 from petsc4py import PETSc
 
-import numpy as np
-
 from contactqvi.lifetime import PETScOwner
-from contactqvi.linalg import default_options
+from contactqvi.linalg import default_options, nonzero_rows
 
 __all__ = ["GalerkinUpdate", "is_multigrid", "set_up"]
 
@@ -104,17 +102,25 @@ class GalerkinUpdate(PETScOwner):
     def petsc_objects(self) -> list[typing.Any]:
         return [*self._interpolations, *self._operators, self._pc]
 
-    def update(self, change: PETSc.Mat) -> None:
+    def update(self, change: PETSc.Mat, structure: PETSc.Mat.Structure = _SUBSET) -> None:
         """Add ``change`` (already added to the fine operator) to every coarse level and
-        set up the smoothers' preconditioners again; the preconditioner is then to be reused."""
+        set up the smoothers' preconditioners again; the preconditioner is then to be reused.
+
+        ``structure``: the coarse changes' patterns lie within the levels' own
+        (``SUBSET_NONZERO_PATTERN``: J changed on its own pattern), or may add entries
+        (``DIFFERENT_NONZERO_PATTERN``: J's pattern grew, e.g. by a contact search).
+        """
         coarse = change
         for level in reversed(range(len(self._interpolations))):
             finer, coarse = coarse, _galerkin_product(coarse, self._interpolations[level])
-            self._operators[level].axpy(1.0, coarse, _SUBSET)
+            self._operators[level].axpy(1.0, coarse, structure)
             if finer is not change:  # a coarse change made here, not the caller's
                 finer.destroy()
         if coarse is not change:
             coarse.destroy()
+        if structure != _SUBSET:  # a grown pattern is a new matrix in the same object
+            for operator in self._operators[:-1]:
+                operator.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)
         for level, operator in enumerate(self._operators):
             smoother = self._pc.getMGSmoother(level)
             if level == 0:  # the coarse solver: factorised again
@@ -128,7 +134,7 @@ class GalerkinUpdate(PETScOwner):
 def _galerkin_product(change: PETSc.Mat, P: PETSc.Mat) -> PETSc.Mat:
     """P^T ``change`` P as P_S^T (change_S P), S the rows of ``change`` with nonzero entries
     (a new matrix in the layout of P's columns)."""
-    rows, change_rows = _nonzero_rows(change)
+    rows, change_rows = nonzero_rows(change)
     low, high = P.getOwnershipRangeColumn()
     columns = PETSc.IS().createStride(high - low, low, 1, comm=P.getComm())  # all of P's columns
     P_rows = P.createSubMatrix(rows, columns)
@@ -140,19 +146,3 @@ def _galerkin_product(change: PETSc.Mat, P: PETSc.Mat) -> PETSc.Mat:
     for obj in (rows, columns, change_rows, P_rows, product):
         obj.destroy()
     return coarse
-
-
-def _nonzero_rows(M: PETSc.Mat) -> tuple[PETSc.IS, PETSc.Mat]:
-    """The owned rows of ``M`` with a nonzero entry (global indices), and those rows of
-    ``M`` with their nonzero entries only, as a new AIJ matrix (in M's column layout)."""
-    indptr, indices, values = M.getValuesCSR()
-    kept = values != 0.0
-    counts = np.concatenate([[0], np.cumsum(kept)])
-    per_row = counts[indptr[1:]] - counts[indptr[:-1]]
-    rows = np.flatnonzero(per_row)
-    comm = M.getComm()
-    compact = PETSc.Mat().createAIJ(size=((len(rows), None), M.getSizes()[1]), comm=comm, csr=(
-        np.concatenate([[0], np.cumsum(per_row[rows])]).astype(PETSc.IntType), indices[kept].astype(PETSc.IntType),
-        values[kept]))
-    compact.assemble()
-    return PETSc.IS().createGeneral((rows + M.getOwnershipRange()[0]).astype(PETSc.IntType), comm=comm), compact

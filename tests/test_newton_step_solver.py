@@ -125,6 +125,36 @@ def test_unsmoothed_aggregation_is_not_set_up_again_after_a_slow_solve():
         assert system.relative_residual() <= 1e-8
 
 
+def test_levels_set_up_before_the_first_solve_follow_a_grown_pattern():
+    """A contact search (several bodies) changes J where the mortar couplings move, outside
+    its pattern: after :meth:`update_operator` every level is again the Galerkin product of
+    the finer one with the kept interpolation, and the solves go on without a new set-up."""
+    with _System.create() as system, _solver("gamg", "nss_grown_", {"pc_gamg_agg_nsmooths": 0}) as solver:
+        J = system.J
+        assert solver.set_up_levels(J)
+        galerkin = solver.galerkin
+        n, start = J.getSize()[0], J.getOwnershipRange()[0]
+        grown = PETSc.Mat().createAIJ(size=J.getSizes(), nnz=(2, 2), comm=J.getComm())
+        far = (start + n // 2) % n  # not a neighbour of row ``start`` on the cube
+        grown.setValues([start, far], [far, start], [[0.0, 0.05], [0.05, 0.0]], addv=PETSc.InsertMode.ADD_VALUES)
+        grown.assemble()
+        J.axpy(1.0, grown, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        solver.update_operator(grown, grown=True)
+        pc = solver.ksp.getPC()
+        operators = [pc.getMGSmoother(level).getOperators()[0] for level in range(pc.getMGLevels())]
+        assert operators[-1].handle == J.handle
+        for level in range(1, len(operators)):
+            expected = operators[level].PtAP(pc.getMGInterpolation(level))
+            scale = expected.norm()
+            expected.axpy(-1.0, operators[level - 1], PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+            assert expected.norm() <= 1e-13 * scale, level
+            expected.destroy()
+        system.step(solver, np.zeros(4, np.int8))
+        assert solver.galerkin is galerkin and galerkin.updates == 2
+        assert system.relative_residual() <= 0.1
+        grown.destroy()
+
+
 @pytest.mark.parametrize("reuse_pc", [True, False])
 def test_other_preconditioners_are_kept_while_no_contact_node_changes_its_kind(reuse_pc):
     with _System.create() as system, _solver("paper", f"nss_ilu_{reuse_pc}_", reuse_pc=reuse_pc) as solver:

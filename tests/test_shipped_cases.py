@@ -76,15 +76,15 @@ NEWTON_STEPS = {
     "arch_block": {1: [10, 8, 8, 9], 2: [10, 8, 7, 7]},
     "cattaneo_mindlin": {1: [8, 5, 4, 5, 4, 4, 5, 5, 4, 4, 4, 4, 4, 4, 4],
                          2: [8, 5, 5, 5, 5, 4, 5, 4, 4, 5, 4, 4, 4, 4, 4]},
-    "cattaneo_mindlin_bodies": {1: [8, 7, 6], 2: [9, 7, 6]},
+    "cattaneo_mindlin_bodies": {1: [8, 7, 6], 2: [9, 6, 6]},
     "cattaneo_mindlin_nu045": {1: [9, 6, 7, 6, 6, 7, 6, 5, 5, 6, 5, 6, 6, 6, 6],
                                2: [10, 6, 7, 6, 7, 7, 6, 6, 7, 6, 6, 6, 5, 6, 6]},
     "hertz": {1: [6, 6, 6, 6], 2: [6, 6, 6, 7]},
-    "hertz_bodies": {1: [5, 6, 7, 7], 2: [6, 5, 5, 5]},
+    "hertz_bodies": {1: [5, 7, 7, 7], 2: [6, 6, 6, 6]},
     "inclined_plane": {1: [18, 7, 6, 6], 2: [18, 7, 6, 6]},
     "paper_d3_L2": {1: [8], 2: [9]},
     "patch_test": {1: [5], 2: [5]},
-    "vice": {1: [8, 7], 2: [8, 7]},
+    "vice": {1: [8, 8], 2: [8, 7]},
 }
 
 #: Newton steps allowed per load step: 15 for the Hertz case (issue 23), 25 for any other.

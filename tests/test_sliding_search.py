@@ -24,6 +24,7 @@ from __future__ import annotations
 import pathlib
 
 from mpi4py import MPI
+from petsc4py import PETSc
 
 import numpy as np
 import pytest
@@ -121,3 +122,30 @@ def test_a_pair_searched_once_keeps_the_reference_coupling(blocks):
     last = _slide(blocks, "once")[-1]
     assert last["converged"]
     assert abs(last["master_centroid"] - last["slave_centroid"]) > 0.5
+
+
+def test_a_search_changes_A_in_place_near_the_interface(blocks):
+    """After a search, A is the same object and holds T^T A_K T of the new T, and the change
+    returned is the new A minus the old one (what the kept multigrid levels are updated by)."""
+    msh, tags, cell_tags = blocks
+    young, poisson = body_materials(msh, cell_tags, {"lower": (1e9, 0.3), "upper": (1e9, 0.3)})
+    pair = BodyPair("upper.interface", "lower.interface", Coulomb(FRICTION))
+    with assemble_contact_problem(msh, tags, young, poisson, {}, [pair], clamped=["lower.bottom"],
+                                  cell_tags=cell_tags, moved=["upper.top"]) as problem:
+        A, before = problem.A, problem.A.copy()
+        displacement = fem.Function(problem.V)  # the upper block slid by 0.3 m: new couplings
+        upper = problem.node_body == list(cell_tags.names).index("upper")
+        displacement.x.array.reshape(-1, 3)[upper, 0] = 0.3
+        change = problem.search(displacement, change=True)
+        assert problem.A.handle == A.handle
+        expected = problem.elastic.stiffness.PtAP(problem.transform)
+        scale = expected.norm()
+        different = PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN
+        expected.axpy(-1.0, problem.A, different)  # T^T A_K T - A
+        before.axpy(1.0, change, different)
+        before.axpy(-1.0, problem.A, different)  # old A + change - A
+        assert expected.norm() <= 1e-13 * scale
+        assert before.norm() <= 1e-13 * scale
+        assert change.norm() >= 1e-3 * scale  # the coupling moved
+        for M in (before, change, expected):
+            M.destroy()

@@ -31,9 +31,10 @@ import numpy as np
 
 from dolfinx import fem
 
+from contactqvi.contact.newton_step_solver import NewtonStepSolver
 from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
-from contactqvi.contact.scd_newton import SCDNewtonResult, SCDNewtonSolver
+from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult, SCDNewtonSolver, newton_step_solver
 from contactqvi.load_steps import LoadStep, check_steps
 
 __all__ = ["LoadStep", "Resume", "check_steps", "contact_resultants", "solve_load_path"]
@@ -96,8 +97,7 @@ def solve_load_path(
     Every later step stops at the first step's target ||y^|| (``atol`` of ``solve``) if its
     own test asks for more: a small increment is not solved to ``rtol`` of its own small start.
 
-    Returns the results of the steps solved (after ``resume.done``); the last one failed
-    if it is not converged.
+    Returns the results of the steps solved (after ``resume.done``); the last one failed if not converged.
     """
     check_steps(steps)
     results: list[SCDNewtonResult] = []
@@ -106,17 +106,18 @@ def solve_load_path(
     previous = u.duplicate() if resume is None or resume.previous is None else resume.previous.copy()
     states = None if resume is None else _node_states(problem, resume.node_states)
     displacement = fem.Function(problem.V) if problem.searched_each_step else None
+    carried = _path_levels(problem, parameters, prefix) if displacement is not None else None
     try:
         for index in range(first, len(steps)):
             step = steps[index]
             if index > 0 and displacement is not None and solver is not None:
-                solver.destroy()  # the search replaces A and the contact nodes
+                carried = solver.release_step_solver()
+                solver.destroy()  # the search replaces the contact nodes and changes A
                 solver = None
-            states = _start(problem, steps, index, first, u, previous, states, from_rest, displacement, resume)
-            logger.info("step %d: load factor %g, obstacle translation %s m", index + 1, step.load,
-                        np.array2string(np.asarray(step.translation), precision=4))
+            states = _start(problem, steps, index, first, u, previous, states, from_rest, displacement, resume,
+                            carried)
             if solver is None:
-                solver = SCDNewtonSolver(problem, parameters, prefix=prefix)
+                solver, carried = SCDNewtonSolver(problem, parameters, prefix=prefix, step_solver=carried), None
             result = solver.solve(u, atol=target, stop=stop)
             results.append(result)
             target, states = (result.target if index == 0 else target), result.states
@@ -125,19 +126,43 @@ def solve_load_path(
             if not result.converged:
                 break
     finally:
-        previous.destroy()
-        if solver is not None:
-            solver.destroy()
+        for owner in (previous, solver, carried):
+            if owner is not None:
+                owner.destroy()
     return results
+
+
+def _path_levels(problem: ContactProblem, parameters: dict | None, prefix: str) -> NewtonStepSolver | None:
+    """The Newton-step solver of a load path searched each step, if it keeps multigrid levels
+    (:attr:`~contactqvi.contact.newton_step_solver.NewtonStepSolver.keeps_levels`), else None.
+
+    Its levels are set up once, on A of the reference configuration, and then follow
+    every Newton matrix and every search by Galerkin updates: a search changes A near
+    the interfaces only, and a new set-up per step cost more than the updates
+    (two-body Hertz, docs/bodies.md). A restart sets up on the same A, so it continues
+    with the levels of the uninterrupted run (up to the round-off of the updates).
+    """
+    step_solver = newton_step_solver(problem, PARAMETERS.check(parameters), prefix)
+    near_nullspace = problem.near_nullspace()
+    problem.A.setNearNullSpace(near_nullspace)
+    kept = step_solver.set_up_levels(problem.A)
+    near_nullspace.destroy()
+    if kept:
+        return step_solver
+    step_solver.destroy()
+    return None
 
 
 def _start(problem: ContactProblem, steps: typing.Sequence[LoadStep], index: int, first: int, u: PETSc.Vec,
            previous: PETSc.Vec, states: np.ndarray | None, from_rest: bool, displacement: fem.Function | None,
-           resume: Resume | None) -> np.ndarray | None:
+           resume: Resume | None, step_solver: NewtonStepSolver | None) -> np.ndarray | None:
     """Set step ``index`` of a load path that began at ``first`` and put its initial guess in ``u``
-    (after a step: its solution ``u``, or ``previous`` of a checkpoint when ``index == first``).
+    (after a step: its solution ``u``, or ``previous`` of a checkpoint when ``index == first``);
+    a search updates the levels of ``step_solver`` (if any) for the new A.
     Returns the contact states of the step before, carried over to the problem's contact nodes."""
     step = steps[index]
+    logger.info("step %d: load factor %g, obstacle translation %s m", index + 1, step.load,
+                np.array2string(np.asarray(step.translation), precision=4))
     if index == 0:
         problem.set_step(step.load, step.translation)
         if from_rest:
@@ -147,7 +172,7 @@ def _start(problem: ContactProblem, steps: typing.Sequence[LoadStep], index: int
         previous.waxpy(-1.0, problem.shift, u)  # u~ of the last step, solver variables
     if displacement is not None:
         states = _search(problem, steps[index - 1], u if index > first else None, displacement, previous, states,
-                         resume)
+                         resume, step_solver)
     _continue(problem, step, u, previous, states)
     return states
 
@@ -160,10 +185,12 @@ def _node_states(problem: ContactProblem, node_states: np.ndarray) -> np.ndarray
 
 
 def _search(problem: ContactProblem, step: LoadStep, u: PETSc.Vec | None, displacement: fem.Function,
-            previous: PETSc.Vec, states: np.ndarray, resume: Resume | None) -> np.ndarray:
+            previous: PETSc.Vec, states: np.ndarray, resume: Resume | None,
+            step_solver: NewtonStepSolver | None) -> np.ndarray:
     """Search the problem again in the configuration of the last step (``step``, solution
-    ``u``; None: the checkpoint's ``resume``), and put its u~ into ``previous`` in the new
-    variables. Returns the contact states carried over node by node."""
+    ``u``; None: the checkpoint's ``resume``), update ``step_solver``'s levels (if any) for
+    the new A, and put its u~ into ``previous`` in the new variables. Returns the contact
+    states carried over node by node."""
     if u is None:
         problem.set_step(step.load, step.translation)  # the last step's load factor and translation
         resume.displacement.x.petsc_vec.copy(displacement.x.petsc_vec)
@@ -173,7 +200,10 @@ def _search(problem: ContactProblem, step: LoadStep, u: PETSc.Vec | None, displa
         problem.physical_displacement(u, displacement)
         node_states = np.full(len(displacement.x.array) // 3, -1, dtype=np.int8)
         node_states[problem.contact_blk] = states
-    problem.search(displacement)
+    change = problem.search(displacement, change=step_solver is not None)
+    if change is not None:
+        step_solver.update_operator(change, grown=True)
+        change.destroy()
     problem.solver_variables(displacement, previous)
     logger.info("contact search in the deformed configuration: %d contact nodes, %.2f s (search) + %.2f s "
                 "(change of variables)", problem.n_contact, problem.setup_seconds["contact_search"],

@@ -116,6 +116,13 @@ class NewtonMatrix(PETScOwner):
             _insert_rows(self.J, self._rows_of_A)
             self._holds_J = False
 
+    def undone(self) -> PETSc.Mat:
+        """A minus the J of the last :meth:`assemble` (zero before the first), on the pattern
+        of ``rows``: the storage's change from that J back to A (:meth:`restore`; a new matrix)."""
+        undone = self._rows_of_A.copy()
+        undone.axpy(-1.0, self.rows, _SAME)
+        return undone
+
     def mult_stiffness(self, x: PETSc.Vec, y: PETSc.Vec) -> None:
         """y = A x, also while the storage holds J: J's rows off ``rows`` are A's, and
         A's own values are kept for the others."""

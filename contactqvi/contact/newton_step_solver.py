@@ -124,6 +124,39 @@ class NewtonStepSolver(PETScOwner):
             self.ksp.solve(rhs, du)
         return self.ksp.getConvergedReason()
 
+    def set_up_levels(self, A: PETSc.Mat) -> bool:
+        """Set the multigrid levels up on ``A`` (with its near-nullspace) before the first
+        solve, so that every later operator is reached by Galerkin updates (each solve's
+        change, :meth:`update_operator`). Returns whether this solver keeps levels
+        (multigrid with ``reuse_pc``); if not, nothing is done."""
+        if not (self.reuse_pc and is_multigrid(self.ksp.getPC())):
+            return False
+        self.ksp.setOperators(A)
+        with default_options(self.ksp.getOptionsPrefix(), self._options):
+            set_up(self.ksp)
+        self.galerkin = GalerkinUpdate(self.ksp.getPC())
+        return True
+
+    @property
+    def keeps_levels(self) -> bool:
+        """Whether a multigrid set-up is kept up to date by Galerkin updates (``reuse_pc``, after the first solve)."""
+        return self.galerkin is not None
+
+    def update_operator(self, change: PETSc.Mat, grown: bool) -> None:
+        """The operator of the last solve changed in place by ``change``, outside the solves:
+        the kept multigrid levels follow it (:attr:`keeps_levels`; else nothing is kept to
+        update). ``grown``: the operator's pattern grew (a contact search,
+        :meth:`~contactqvi.contact.problem.ContactProblem.search`), and the levels' may.
+
+        The interpolations stay those of the set-up. With unsmoothed aggregation
+        (several bodies) they are the aggregates of the first J's graph and the
+        near-nullspace; a search moves the mortar couplings along the interface, so
+        its new J is preconditioned with the old aggregates instead of a new set-up.
+        """
+        if self.galerkin is not None:
+            structure = PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN if grown else PETSc.Mat.Structure.SUBSET
+            self.galerkin.update(change, structure)
+
     def _discard_set_up(self) -> None:
         """Drop the multigrid set-up after a solve of more than ``rebuild_iterations`` Krylov iterations.
 

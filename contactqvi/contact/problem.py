@@ -58,13 +58,16 @@ from contactqvi.contact.interface import BodyPair, Interface, ObstaclePair, Pair
 from contactqvi.elasticity import elasticity_forms, orthonormalize, rigid_motions_nullspace
 from contactqvi.laws import ContactLaw, Frictionless, NodalLaw, StackedLaw
 from contactqvi.lifetime import PETScOwner
-from contactqvi.linalg import assemble_system
+from contactqvi.linalg import assemble_system, nonzero_entries
 from contactqvi.meshes import boundary_facets
 from contactqvi.obstacles import Obstacle, Plane
 from contactqvi.parameters import require
 from contactqvi.postprocess import ElasticBody
 
 __all__ = ["ContactProblem", "ElasticSystem", "assemble_contact_problem", "build_contact_problem"]
+
+_DIFFERENT = PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN
+_SUBSET = PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN
 
 Vector3 = tuple[float, float, float]
 
@@ -190,24 +193,38 @@ class ContactProblem(PETScOwner):
         """Whether a pair is searched again before every load step (:meth:`search`)."""
         return self.elastic is not None
 
-    def search(self, displacement: fem.Function) -> None:
+    def search(self, displacement: fem.Function, *, change: bool = False) -> PETSc.Mat | None:
         """Search the pairs searched each step again in the configuration x + ``displacement``
         (global components), and rebuild the nodal data and the change of variables from it:
         the contact nodes, frames, areas and laws, T, A = T^T A_K T and the loads.
 
+        A keeps its identity: the new T^T A_K T is written into the object ``A``, whose
+        pattern grows by the new slave-master couplings (old ones stay as explicit
+        zeros), so a preconditioner set up on A can be updated instead of set up again
+        (:meth:`~contactqvi.contact.newton_step_solver.NewtonStepSolver.update_operator`).
         The step (load factor, translation) is kept, but its load and shift belong to the
         old variables: set a step (:meth:`set_step`) before solving. A solver built on the
-        old problem (its A, its contact nodes) must be rebuilt. Collective.
+        old problem (its contact nodes) must be rebuilt. Collective.
+
+        Returns, with ``change``, the new A minus the old one (a new matrix, nonzero only
+        on the rows near the interfaces), else None.
         """
         require(self.elastic is not None, "search", "no contact pair of this problem is searched each step")
         interfaces, search_seconds = _timed(self.comm, search_again, self.V, self.body.facet_tags, self.interfaces,
                                             self.elastic.constrained, displacement)
-        for obj in (self.A, self.applied, *self._variables_objects()):
+        for obj in (self.applied, *self._variables_objects()):
             obj.destroy()
         fields, variables_seconds = _timed(self.comm, _contact_fields, self.elastic, interfaces, True)
+        searched = fields.pop("A")
+        self.A.axpy(-1.0, searched, _DIFFERENT)  # old - new, on the union of both patterns
+        difference = _nonzeros(self.A, -1.0) if change else None
+        self.A.zeroEntries()
+        self.A.axpy(1.0, searched, _SUBSET)
+        searched.destroy()
         for name, value in fields.items():
             setattr(self, name, value)
         self.setup_seconds = {"contact_search": search_seconds, "change_of_variables": variables_seconds}
+        return difference
 
     def solver_variables(self, displacement: fem.Function, out: PETSc.Vec) -> PETSc.Vec:
         """The solver's variables u~ = T^-1 (u - lambda c - sum_c t_c c_c) of a physical
@@ -486,6 +503,15 @@ def assemble_contact_problem(
     return problem
 
 
+def _nonzeros(M: PETSc.Mat, scale: float) -> PETSc.Mat:
+    """``scale`` times the nonzero entries of ``M`` (a new matrix of M's layout)."""
+    per_row, columns, values = nonzero_entries(M)
+    out = PETSc.Mat().createAIJ(size=M.getSizes(), comm=M.getComm(), csr=(
+        np.concatenate([[0], np.cumsum(per_row)]).astype(PETSc.IntType), columns, scale * values))
+    out.assemble()
+    return out
+
+
 def _timed(comm: MPI.Comm, function: typing.Callable[..., typing.Any], *args: typing.Any) -> tuple[typing.Any, float]:
     """``function(*args)`` and its wall seconds (largest rank). Collective."""
     start = time.perf_counter()
@@ -649,7 +675,7 @@ def _change_of_variables(N: PETSc.Mat, rotation: PETSc.Mat, owned_dirichlet: np.
     N.diagonalScale(None, free)
     NR = N.matMult(rotation)
     transform = rotation.copy()
-    transform.axpy(1.0, NR, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    transform.axpy(1.0, NR, structure=_DIFFERENT)
     for obj in (free, NR):
         obj.destroy()
     return transform

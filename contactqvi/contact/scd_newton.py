@@ -223,21 +223,23 @@ class SCDNewtonSolver(PETScOwner):
         parameters: overrides of :data:`PARAMETERS`.
         prefix: PETSc options prefix of the Newton-step KSP; any ``-{prefix}ksp_*``
             or ``-{prefix}pc_*`` option overrides the preset chosen by ``pc``.
+        step_solver: a Newton-step solver to take over (and own) instead of a new one:
+            one released by the solver of this problem before a search
+            (:meth:`release_step_solver`), its levels updated for the searched A.
 
     Attributes:
         step_solver: the linear solver of the Newton steps (KSP and preconditioner reuse).
     """
 
-    def __init__(self, problem: ContactProblem, parameters: dict | None = None, prefix: str = "coulomb_"):
+    def __init__(self, problem: ContactProblem, parameters: dict | None = None, prefix: str = "coulomb_",
+                 step_solver: NewtonStepSolver | None = None):
         self.problem = problem
         self.parameters = p = PARAMETERS.check(parameters)
         A = problem.A
         self._newton = NewtonMatrix(A, problem.contact_blk)
         self._near_nullspace = problem.near_nullspace()  # for AMG; the rows of J off the contact are A's
         self._newton.J.setNearNullSpace(self._near_nullspace)
-        self.step_solver = NewtonStepSolver(
-            problem.comm, prefix, p["pc"], problem.multigrid_options, rtol=p["tol"], reuse_pc=p["reuse_pc"],
-            rebuild_iterations=p["pc_rebuild_iterations"], initial_guess=p["eliminate_fixed_rows"])
+        self.step_solver = step_solver or newton_step_solver(problem, p, prefix)
         self._steps = line_search_steps(p["max_line_search"])
         self._gamma = p["gamma"]
         self._gamma_nodes: np.ndarray | None = None  # gamma_i per owned contact node
@@ -248,6 +250,24 @@ class SCDNewtonSolver(PETScOwner):
     def petsc_objects(self) -> list[typing.Any]:
         objects = [self.step_solver, self._newton, self._near_nullspace, self._work, self._gamma_dofs]
         return [obj for obj in objects if obj is not None]
+
+    def release_step_solver(self) -> NewtonStepSolver | None:
+        """Restore A and hand the Newton-step solver over to the caller (who then owns it),
+        if it keeps multigrid levels (:attr:`NewtonStepSolver.keeps_levels`), updated to A;
+        else None (it stays with this solver). This solver can then only be destroyed.
+
+        Before a contact search (:func:`~contactqvi.contact.load_path.solve_load_path`):
+        the searched A changes near the interfaces only, and updating the levels costs
+        a fraction of a new set-up (two-body Hertz, docs/bodies.md).
+        """
+        if not self.step_solver.keeps_levels:
+            return None
+        undone = self._newton.undone()
+        self._newton.restore()
+        self.step_solver.update_operator(undone, grown=False)
+        undone.destroy()
+        step_solver, self.step_solver = self.step_solver, None
+        return step_solver
 
     @property
     def ksp(self) -> PETSc.KSP:
@@ -591,6 +611,15 @@ class SCDNewtonSolver(PETScOwner):
         result.iterations = len(result.history) - 1
         result.normal_force, result.friction_force = -point.z[:, 2].copy(), -point.z[:, :2].copy()
         return result
+
+
+def newton_step_solver(problem: ContactProblem, parameters: dict, prefix: str) -> NewtonStepSolver:
+    """The Newton-step solver of the checked SCD ``parameters`` (``pc``, ``tol``, ``reuse_pc``, ...)
+    for ``problem``, with options prefix ``prefix``."""
+    p = parameters
+    return NewtonStepSolver(problem.comm, prefix, p["pc"], problem.multigrid_options, rtol=p["tol"],
+                            reuse_pc=p["reuse_pc"], rebuild_iterations=p["pc_rebuild_iterations"],
+                            initial_guess=p["eliminate_fixed_rows"])
 
 
 def _coordinate_noise(problem: ContactProblem) -> PETSc.Vec:
