@@ -71,7 +71,10 @@ COARSE = {
 #: cattaneo_mindlin_bodies [10, 7, 7] -> [11, 7, 7] on 1 rank, hertz_bodies -> [7, 7, 7, 7]
 #: on 1 and 2 ranks and vice [8, 7] -> [8, 8] on 2 ranks; the lean multigrid set-up
 #: (multigrid.set_up: products cleared, PETSc's "backend" PtAP on several processes, which
-#: sums the coarse operators in another order) moved the 2-rank counts by up to 1 per step.
+#: sums the coarse operators in another order) moved the 2-rank counts by up to 1 per step;
+#: the multigrid levels of several bodies set up once per load path (on A) and kept across
+#: the searches changed hertz_bodies [5, 6, 7, 7] / [6, 5, 5, 5] -> [5, 7, 7, 7] / [6, 6, 6, 6],
+#: vice [8, 7] -> [8, 8] on 1 rank and cattaneo_mindlin_bodies [9, 7, 6] -> [9, 6, 6] on 2.
 NEWTON_STEPS = {
     "arch_block": {1: [10, 8, 8, 9], 2: [10, 8, 7, 7]},
     "cattaneo_mindlin": {1: [8, 5, 4, 5, 4, 4, 5, 5, 4, 4, 4, 4, 4, 4, 4],
