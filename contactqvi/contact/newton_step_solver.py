@@ -139,7 +139,8 @@ class NewtonStepSolver(PETScOwner):
 
     @property
     def keeps_levels(self) -> bool:
-        """Whether a multigrid set-up is kept up to date by Galerkin updates (``reuse_pc``, after the first solve)."""
+        """Whether a multigrid set-up is kept up to date by Galerkin updates (``reuse_pc``,
+        after the first solve or :meth:`set_up_levels`)."""
         return self.galerkin is not None
 
     def update_operator(self, change: PETSc.Mat, grown: bool) -> None:
@@ -149,9 +150,10 @@ class NewtonStepSolver(PETScOwner):
         :meth:`~contactqvi.contact.problem.ContactProblem.search`), and the levels' may.
 
         The interpolations stay those of the set-up. With unsmoothed aggregation
-        (several bodies) they are the aggregates of the first J's graph and the
-        near-nullspace; a search moves the mortar couplings along the interface, so
-        its new J is preconditioned with the old aggregates instead of a new set-up.
+        (several bodies) they are the aggregates of the graph of the operator set up on
+        (:meth:`set_up_levels`: A of the reference configuration) and its near-nullspace;
+        a search moves the mortar couplings along the interfaces only, so the new
+        operator keeps those aggregates instead of a new set-up.
         """
         if self.galerkin is not None:
             structure = PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN if grown else PETSc.Mat.Structure.SUBSET

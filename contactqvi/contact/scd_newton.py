@@ -239,7 +239,7 @@ class SCDNewtonSolver(PETScOwner):
         self._newton = NewtonMatrix(A, problem.contact_blk)
         self._near_nullspace = problem.near_nullspace()  # for AMG; the rows of J off the contact are A's
         self._newton.J.setNearNullSpace(self._near_nullspace)
-        self.step_solver = step_solver or newton_step_solver(problem, p, prefix)
+        self.step_solver = newton_step_solver(problem, p, prefix) if step_solver is None else step_solver
         self._steps = line_search_steps(p["max_line_search"])
         self._gamma = p["gamma"]
         self._gamma_nodes: np.ndarray | None = None  # gamma_i per owned contact node
