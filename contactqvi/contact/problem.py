@@ -220,7 +220,8 @@ class ContactProblem(PETScOwner):
         difference = _nonzeros(self.A, -1.0) if change else None
         self.A.zeroEntries()
         self.A.axpy(1.0, searched, _SUBSET)
-        searched.destroy()
+        if searched is not self.elastic.stiffness:  # without contact nodes T = I and A_K itself came back
+            searched.destroy()
         for name, value in fields.items():
             setattr(self, name, value)
         self.setup_seconds = {"contact_search": search_seconds, "change_of_variables": variables_seconds}
