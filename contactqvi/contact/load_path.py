@@ -15,7 +15,9 @@ in the configuration the step before ended in
 (:meth:`~contactqvi.contact.problem.ContactProblem.search`): the change of variables
 u = T_k w is new, the slip is measured from T_k^-1 of the last displacement, and the
 contact states are carried over node by node (a node new to the contact starts as
-not in contact). The solver is rebuilt for the new A.
+not in contact). The SCD solver is rebuilt for the new contact nodes; a multigrid
+Newton-step solver is set up once per load path and kept, its levels updated for the
+searched A (:func:`_path_levels`).
 """
 
 from __future__ import annotations

@@ -35,10 +35,12 @@ class NewtonStepSolver(PETScOwner):
 
     What the preconditioner keeps from step to step:
 
-    * multigrid (GAMG, MG) with ``reuse_pc``: it is set up at the first step; then
-      its coarse operators are updated by the Galerkin products of J's change, which
-      lives on the contact rows (:class:`~contactqvi.multigrid.GalerkinUpdate`), so
-      every step is preconditioned for its own J at the cost of the contact surface;
+    * multigrid (GAMG, MG) with ``reuse_pc``: it is set up at the first step (or
+      before it, on A: :meth:`set_up_levels`); then its coarse operators are updated by
+      the Galerkin products of J's change, which lives on the contact rows
+      (:class:`~contactqvi.multigrid.GalerkinUpdate`), and of A's change at a contact
+      search (:meth:`update_operator`), so every step is preconditioned for its own J
+      at the cost of the contact surface;
       a new set-up follows a slow solve (:meth:`_discard_set_up`) when the
       interpolation depends on J's values (smoothed aggregation);
     * other preconditioners with ``reuse_pc``: kept between steps in which no
