@@ -505,11 +505,23 @@ def assemble_contact_problem(
 
 
 def _nonzeros(M: PETSc.Mat, scale: float) -> PETSc.Mat:
-    """``scale`` times the nonzero entries of ``M`` (a new matrix of M's layout)."""
-    per_row, columns, values = nonzero_entries(M)
+    """``scale`` times the nonzero entries of ``M`` (a new matrix of M's layout), read through
+    its nonzero rows only: after a search M is zero but near the interfaces, and a copy of
+    all of it would be one more matrix of A's size at the peak of the search."""
+    low, high = M.getOwnershipRange()
+    zero = M.findZeroRows()
+    rows = np.setdiff1d(np.arange(low, high), zero.getIndices()).astype(PETSc.IntType)
+    nonzero = PETSc.IS().createGeneral(rows, comm=M.getComm())
+    columns = PETSc.IS().createStride(M.getLocalSize()[1], M.getOwnershipRangeColumn()[0], 1, comm=M.getComm())
+    sub = M.createSubMatrix(nonzero, columns)
+    per_row, indices, values = nonzero_entries(sub)
+    lengths = np.zeros(high - low, dtype=np.int64)
+    lengths[rows - low] = per_row
     out = PETSc.Mat().createAIJ(size=M.getSizes(), comm=M.getComm(), csr=(
-        np.concatenate([[0], np.cumsum(per_row)]).astype(PETSc.IntType), columns, scale * values))
+        np.concatenate([[0], np.cumsum(lengths)]).astype(PETSc.IntType), indices, scale * values))
     out.assemble()
+    for obj in (zero, nonzero, columns, sub):
+        obj.destroy()
     return out
 
 
