@@ -58,7 +58,7 @@ from contactqvi.contact.interface import BodyPair, Interface, ObstaclePair, Pair
 from contactqvi.elasticity import elasticity_forms, orthonormalize, rigid_motions_nullspace
 from contactqvi.laws import ContactLaw, Frictionless, NodalLaw, StackedLaw
 from contactqvi.lifetime import PETScOwner
-from contactqvi.linalg import assemble_system, nonzero_entries
+from contactqvi.linalg import assemble_system, default_options, nonzero_entries
 from contactqvi.meshes import boundary_facets
 from contactqvi.obstacles import Obstacle, Plane
 from contactqvi.parameters import require
@@ -589,7 +589,8 @@ def _solver_variables(
         return A_K, loads, rotation, coupling, transform, offsets
     T = transform if transform is not None else rotation
     transformed = [_in_solver_variables(A_K, T, b, c) for b, c in zip(loads, offsets)]
-    A = A_K.PtAP(T)
+    with default_options("", {"mat_product_clear": True}):  # A keeps no copies of A_K T and T (same values)
+        A = A_K.PtAP(T)
     if not keep:
         for obj in (A_K, *loads):
             obj.destroy()
