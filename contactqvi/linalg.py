@@ -34,7 +34,7 @@ __all__ = [
     "reassemble_matrix",
     "power_iteration",
     "ksp_converged_reason",
-    "nonzero_entries",
+    "nonzero_row_indices",
     "nonzero_rows",
 ]
 
@@ -207,17 +207,36 @@ def ksp_converged_reason(ksp: PETSc.KSP) -> str:
 
 def nonzero_rows(M: PETSc.Mat) -> tuple[PETSc.IS, PETSc.Mat]:
     """The owned rows of ``M`` with a nonzero entry (global indices), and those rows of
-    ``M`` with their nonzero entries only, as a new AIJ matrix (in M's column layout)."""
-    per_row, indices, values = nonzero_entries(M)
-    rows = np.flatnonzero(per_row)
+    ``M`` with their nonzero entries only, as a new AIJ matrix (in M's column layout).
+
+    Only those rows are read (PETSc finds them, :func:`nonzero_row_indices`): the changes
+    this is made for are nonzero on few rows of a large pattern."""
     comm = M.getComm()
-    compact = PETSc.Mat().createAIJ(size=((len(rows), None), M.getSizes()[1]), comm=comm, csr=(
-        np.concatenate([[0], np.cumsum(per_row[rows])]).astype(PETSc.IntType), indices, values))
+    rows = PETSc.IS().createGeneral(nonzero_row_indices(M), comm=comm)
+    low, high = M.getOwnershipRangeColumn()
+    columns = PETSc.IS().createStride(high - low, low, 1, comm=comm)  # all of M's columns
+    sub = M.createSubMatrix(rows, columns)
+    per_row, indices, values = _nonzero_entries(sub)
+    compact = PETSc.Mat().createAIJ(size=((len(per_row), None), M.getSizes()[1]), comm=comm, csr=(
+        np.concatenate([[0], np.cumsum(per_row)]).astype(PETSc.IntType), indices, values))
     compact.assemble()
-    return PETSc.IS().createGeneral((rows + M.getOwnershipRange()[0]).astype(PETSc.IntType), comm=comm), compact
+    for obj in (columns, sub):
+        obj.destroy()
+    return rows, compact
 
 
-def nonzero_entries(M: PETSc.Mat) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def nonzero_row_indices(M: PETSc.Mat) -> np.ndarray:
+    """Global indices of the owned rows of ``M`` that hold a nonzero value (explicit zeros
+    do not count), ascending."""
+    low, high = M.getOwnershipRange()
+    zero = M.findZeroRows()
+    nonzero = np.ones(high - low, dtype=bool)
+    nonzero[zero.getIndices() - low] = False
+    zero.destroy()
+    return (np.flatnonzero(nonzero) + low).astype(PETSc.IntType)
+
+
+def _nonzero_entries(M: PETSc.Mat) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per owned row of ``M`` its number of nonzero entries, and their columns and values."""
     indptr, indices, values = M.getValuesCSR()
     kept = np.flatnonzero(values)

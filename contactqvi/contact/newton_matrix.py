@@ -27,7 +27,7 @@ from petsc4py import PETSc
 import numpy as np
 
 from contactqvi.lifetime import PETScOwner
-from contactqvi.linalg import nonzero_entries
+from contactqvi.linalg import nonzero_row_indices
 
 __all__ = ["NewtonMatrix"]
 
@@ -164,7 +164,8 @@ def _insert_rows(M: PETSc.Mat, rows: PETSc.Mat, changed: PETSc.Mat | None = None
     indptr, indices, values = rows.getValuesCSR()
     if changed is not None:
         lengths = np.diff(indptr)
-        kept = nonzero_entries(changed)[0] > 0
+        kept = np.zeros(len(lengths), dtype=bool)
+        kept[nonzero_row_indices(changed) - changed.getOwnershipRange()[0]] = True
         entries = np.repeat(kept, lengths)
         indptr = np.concatenate([[0], np.cumsum(np.where(kept, lengths, 0))]).astype(PETSc.IntType)
         indices, values = indices[entries], values[entries]

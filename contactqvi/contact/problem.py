@@ -58,7 +58,7 @@ from contactqvi.contact.interface import BodyPair, Interface, ObstaclePair, Pair
 from contactqvi.elasticity import elasticity_forms, orthonormalize, rigid_motions_nullspace
 from contactqvi.laws import ContactLaw, Frictionless, NodalLaw, StackedLaw
 from contactqvi.lifetime import PETScOwner
-from contactqvi.linalg import assemble_system, default_options, nonzero_entries
+from contactqvi.linalg import assemble_system, default_options, nonzero_rows
 from contactqvi.meshes import boundary_facets
 from contactqvi.obstacles import Obstacle, Plane
 from contactqvi.parameters import require
@@ -508,19 +508,15 @@ def _nonzeros(M: PETSc.Mat, scale: float) -> PETSc.Mat:
     """``scale`` times the nonzero entries of ``M`` (a new matrix of M's layout), read through
     its nonzero rows only: after a search M is zero but near the interfaces, and a copy of
     all of it would be one more matrix of A's size at the peak of the search."""
+    rows, compact = nonzero_rows(M)
+    indptr, indices, values = compact.getValuesCSR()
     low, high = M.getOwnershipRange()
-    zero = M.findZeroRows()
-    rows = np.setdiff1d(np.arange(low, high), zero.getIndices()).astype(PETSc.IntType)
-    nonzero = PETSc.IS().createGeneral(rows, comm=M.getComm())
-    columns = PETSc.IS().createStride(M.getLocalSize()[1], M.getOwnershipRangeColumn()[0], 1, comm=M.getComm())
-    sub = M.createSubMatrix(nonzero, columns)
-    per_row, indices, values = nonzero_entries(sub)
     lengths = np.zeros(high - low, dtype=np.int64)
-    lengths[rows - low] = per_row
+    lengths[rows.getIndices() - low] = np.diff(indptr)
     out = PETSc.Mat().createAIJ(size=M.getSizes(), comm=M.getComm(), csr=(
         np.concatenate([[0], np.cumsum(lengths)]).astype(PETSc.IntType), indices, scale * values))
     out.assemble()
-    for obj in (zero, nonzero, columns, sub):
+    for obj in (rows, compact):
         obj.destroy()
     return out
 
