@@ -14,10 +14,8 @@ from __future__ import annotations
 import pathlib
 import runpy
 import sys
-import traceback
-import typing
 
-__all__ = ["DEMOS", "abort_on_error", "entry", "main"]
+__all__ = ["DEMOS", "entry", "main"]
 
 #: Demos by name, with what they solve.
 DEMOS = {
@@ -90,32 +88,11 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def abort_on_error(function: typing.Callable[[], int], comm: typing.Any = None) -> int:
-    """``function()``; an exception it raises on one rank of several ends the whole job.
-
-    Errors of bad input are raised on every rank and become exit codes inside
-    :func:`run`; anything else may be raised on one rank only while the others wait in
-    a collective call, which would hold a cluster allocation until its time limit. So
-    under ``mpirun`` the traceback is printed and ``MPI_Abort`` ends every rank (exit
-    code 1); on one rank the exception propagates as usual.
-    """
-    try:
-        return function()
-    except Exception:
-        if comm is None:
-            from mpi4py import MPI
-
-            comm = MPI.COMM_WORLD
-        if comm.size == 1:
-            raise
-        traceback.print_exc()
-        sys.stderr.flush()
-        comm.Abort(1)
-        raise
-
-
 def entry() -> int:
-    """The ``contactqvi`` command and ``python -m contactqvi``: :func:`main` under :func:`abort_on_error`."""
+    """The ``contactqvi`` command and ``python -m contactqvi``: :func:`main` under
+    :func:`contactqvi.cli.abort_on_error`."""
+    from contactqvi.cli import abort_on_error
+
     return abort_on_error(main)
 
 

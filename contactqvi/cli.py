@@ -1,4 +1,4 @@
-"""Command-line plumbing shared by the demos.
+"""Command-line plumbing shared by the demos and ``python -m contactqvi``.
 
 Every demo accepts ``--help``, ``--output DIR`` and ``--log-level``; any unknown
 option starting with ``-`` (e.g. ``-coulomb_ksp_type gmres``) goes to PETSc.
@@ -9,11 +9,13 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
+import traceback
+import typing
 
 from mpi4py import MPI
 from petsc4py import PETSc
 
-__all__ = ["make_parser", "parse_args", "pass_to_petsc", "setup_logging"]
+__all__ = ["abort_on_error", "make_parser", "parse_args", "pass_to_petsc", "setup_logging"]
 
 
 def make_parser(description: str, default_output: str, petsc_example: str | None = None) -> argparse.ArgumentParser:
@@ -69,3 +71,24 @@ def setup_logging(level: str = "INFO") -> None:
         stream=sys.stdout,
         force=True,
     )
+
+
+def abort_on_error(function: typing.Callable[[], int], comm: MPI.Comm | None = None) -> int:
+    """``function()``; an exception it raises on one rank of several ends the whole job.
+
+    Errors of bad input are raised on every rank and become exit codes (the case
+    runner and the demos check their input first); anything else may be raised on one rank only while the others wait in
+    a collective call, which would hold a cluster allocation until its time limit. So
+    under ``mpirun`` the traceback is printed and ``MPI_Abort`` ends every rank (exit
+    code 1); on one rank the exception propagates as usual.
+    """
+    try:
+        return function()
+    except Exception:
+        comm = MPI.COMM_WORLD if comm is None else comm
+        if comm.size == 1:
+            raise
+        traceback.print_exc()
+        sys.stderr.flush()
+        comm.Abort(1)
+        raise

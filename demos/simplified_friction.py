@@ -29,7 +29,7 @@ import sys
 from mpi4py import MPI
 
 from contactqvi import tables
-from contactqvi.cli import make_parser, parse_args
+from contactqvi.cli import abort_on_error, make_parser, parse_args
 from contactqvi.friction import GRID_PARAMETERS, create_problem, methods
 from contactqvi.friction.output import plot_surface, write_solution
 from contactqvi.parameters import Parameter, ParameterError, Parameters
@@ -125,4 +125,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(abort_on_error(main))

@@ -57,7 +57,7 @@ def _fails() -> int:
 
 
 def test_an_error_on_one_of_several_ranks_aborts_the_job(capsys):
-    from contactqvi.__main__ import abort_on_error
+    from contactqvi.cli import abort_on_error
 
     ranks = _Ranks(2)
     with pytest.raises(RuntimeError):  # after the (recorded) abort
@@ -66,7 +66,7 @@ def test_an_error_on_one_of_several_ranks_aborts_the_job(capsys):
 
 
 def test_an_error_on_one_rank_propagates_without_abort():
-    from contactqvi.__main__ import abort_on_error
+    from contactqvi.cli import abort_on_error
 
     ranks = _Ranks(1)
     with pytest.raises(RuntimeError, match="this rank only"):
