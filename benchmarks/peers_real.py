@@ -297,6 +297,10 @@ def main() -> int:
                         help="skip a peer above this many dofs (its time is extrapolated instead)")
     parser.add_argument("--kratos-max-dofs", type=int, default=10_000,
                         help="Kratos runs only up to this size (it does not converge here, see docs/peers.md)")
+    parser.add_argument("--kratos-linear-tol", type=float, default=None,
+                        help="AMGCL's relative tolerance in Kratos' Hertz runs between bodies (default AMGCL's "
+                             "1e-6; on the fine mesh no Newton tolerance then comes within 1e-6 of Kratos' own "
+                             "reference, docs/peers.md)")
     parser.add_argument("--accuracy", type=float, default=1e-6)
     parser.add_argument("--start", nargs="*", default=[], metavar="CODE=TOL",
                         help="start CODE's ladder at TOL (its looser runs measured before were not accurate)")
@@ -418,6 +422,8 @@ def main() -> int:
                          "closed_form": closed})
         if "kratos" in peers and problem in BODIES:
             options = KRATOS_BODIES_OPTIONS[problem]
+            if args.kratos_linear_tol is not None and "amgcl" in options:
+                options = [*options, "--linear-tol", f"{args.kratos_linear_tol:g}"]
             rows.append({**base, **timed("kratos", case, reference, options, "--tol", problem, closed),
                          "closed_form": closed})
             best = rows[-1]["best"]
@@ -468,36 +474,54 @@ def _timed_run(row: dict) -> dict | None:
     return row if row["code"] == "reference" else row.get("best")
 
 
+#: Order of the table: problems as in the module docstring, then size, then code.
+PROBLEM_ORDER = ("d1_L1", "d3_L2", "hertz", "mindlin", "patch", "hertz_bodies")
+CODE_ORDER = ("reference", "ours", "ours np2", "getfem", "kratos", "kratos 2 threads")
+#: Runs shorter than this (process CPU seconds) are start-up, not solver: not extrapolated from.
+EXTRAPOLATE_MIN_SECONDS = 5.0
+
+
+def _row_order(row: dict) -> tuple:
+    problem = PROBLEM_ORDER.index(row["problem"]) if row["problem"] in PROBLEM_ORDER else len(PROBLEM_ORDER)
+    code = CODE_ORDER.index(row["code"]) if row["code"] in CODE_ORDER else len(CODE_ORDER)
+    return problem, row["dofs"], code
+
+
 def limits(data: dict, seconds: float = 600.0, memory_mib: float = 20 * 1024) -> list[dict]:
-    """Largest size each code solves within ``seconds`` (process CPU time) and ``memory_mib``,
-    extrapolated by a power law through each code's two largest measured sizes per problem."""
+    """Largest size each code solves within ``seconds`` (process CPU time on one core, wall time
+    on several) and ``memory_mib``:
+    the largest measured one, and a power law through the code's two largest sizes of at least
+    :data:`EXTRAPOLATE_MIN_SECONDS` (None where there are not two: start-up would dominate)."""
     series: dict = {}
     for row in data["rows"]:
         run = _timed_run(row)
         if run is None or row["code"] == "reference":
             continue
+        several = run.get("ranks", 1) > 1 or run.get("threads", 1) > 1  # wall time; on 1 core CPU time
+        seconds_used = run.get("process_seconds") if several else run.get("process_cpu_seconds")
         series.setdefault((row["problem"], row["code"]), []).append(
-            (row["dofs"], run.get("process_cpu_seconds") or run["wall_time"], run["peak_memory_mib"]))
+            (row["dofs"], seconds_used or run["wall_time"], run["peak_memory_mib"]))
     out = []
-    for (problem, code), points in series.items():
+    for (problem, code), points in sorted(series.items(), key=lambda item: _row_order(
+            {"problem": item[0][0], "code": item[0][1], "dofs": 0})):
         points.sort()
-        if len(points) < 2:
-            continue
-        (n0, t0, m0), (n1, t1, m1) = points[-2], points[-1]
-        alpha = math.log(t1 / t0) / math.log(n1 / n0)
-        beta = math.log(m1 / m0) / math.log(n1 / n0)
-
-        def reach(limit: float, value: float, exponent: float) -> float:
-            """n where value (n / n1)^exponent = limit; inf when growth is too slow to tell."""
-            return n1 * math.exp(math.log(limit / value) / exponent) if exponent > 0.05 else math.inf
-
-        try:
-            n_time, n_memory = reach(seconds, t1, alpha), reach(memory_mib, m1, beta)
-        except OverflowError:
-            n_time = n_memory = math.inf
-        out.append({"problem": problem, "code": code, "largest_measured": n1, "time_exponent": alpha,
-                    "memory_exponent": beta, "dofs_at_time_limit": n_time, "dofs_at_memory_limit": n_memory,
-                    "largest": min(n_time, n_memory), "measured_within": t1 <= seconds and m1 <= memory_mib})
+        within = [n for n, t, m in points if t <= seconds and m <= memory_mib]
+        lim = {"problem": problem, "code": code, "largest_measured": points[-1][0],
+               "largest_measured_within": max(within) if within else None,
+               "time_exponent": None, "memory_exponent": None, "dofs_at_time_limit": None,
+               "dofs_at_memory_limit": None, "largest": max(within) if within else None}
+        long = [p for p in points if p[1] >= EXTRAPOLATE_MIN_SECONDS]
+        if len(long) >= 2:
+            (n0, t0, m0), (n1, t1, m1) = long[-2], long[-1]
+            alpha = math.log(t1 / t0) / math.log(n1 / n0)
+            beta = math.log(m1 / m0) / math.log(n1 / n0)
+            # n where value (n / n1)^exponent = limit; exponents below 0.1 cannot be told from noise
+            n_time = n1 * (seconds / t1) ** (1 / alpha) if alpha >= 0.1 else None
+            n_memory = n1 * (memory_mib / m1) ** (1 / beta) if beta >= 0.1 else None
+            reach = min([n for n in (n_time, n_memory) if n is not None], default=None)
+            lim.update(time_exponent=alpha, memory_exponent=beta, dofs_at_time_limit=n_time,
+                       dofs_at_memory_limit=n_memory, largest=max(filter(None, [reach, lim["largest"]]), default=None))
+        out.append(lim)
     return out
 
 
@@ -528,7 +552,7 @@ def markdown(data: dict) -> str:
         "| contact force z (N) | force err | u err | u vs ours | vs closed form | load |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for row in data["rows"]:
+    for row in sorted(data["rows"], key=_row_order):
         run = _timed_run(row)
         if run is None:
             last = (row.get("runs") or [{}])[-1]
@@ -558,7 +582,7 @@ def markdown(data: dict) -> str:
     lines += ["", "Ratios at equal accuracy, peer / ours on 1 core (solve wall, solve CPU, process CPU):", "",
               "| problem | size | dofs | peer | solve | solve CPU | process CPU |", "|---|---|---|---|---|---|---|"]
     by_key: dict = {}
-    for row in data["rows"]:
+    for row in sorted(data["rows"], key=_row_order):
         by_key.setdefault((row["problem"], row["size"]), {})[row["code"]] = row
     for (problem, size), codes in by_key.items():
         ours = (codes.get("ours") or {}).get("best")
@@ -569,14 +593,18 @@ def markdown(data: dict) -> str:
                     return _fmt(other[key] / ours[key], ".1f") if other.get(key) and ours.get(key) else "–"
                 lines.append(f"| {problem} | {size} | {codes['ours']['dofs']} | {peer} | {ratio('solve_time')} | "
                              f"{ratio('solve_cpu_time')} | {ratio('process_cpu_seconds')} |")
-    lines += ["", "Largest size within 10 minutes (process CPU time) and 20 GiB, **extrapolated** by a power law "
-              "through each code's two largest measured sizes (t ~ n^a, memory ~ n^b):", "",
-              "| problem | code | largest measured dofs | a | b | dofs at 600 s | dofs at 20 GiB |",
-              "|---|---|---|---|---|---|---|"]
+    lines += ["", "Largest size within 10 minutes (the process's CPU time on one core, its wall time on two "
+              "ranks or threads) and 20 GiB: the largest measured one, and "
+              "**extrapolated** by a power law through each code's two largest measured sizes of at least "
+              f"{EXTRAPOLATE_MIN_SECONDS:g} s (t ~ n^a, memory ~ n^b; – where there are not two such sizes, or "
+              "an exponent below 0.1 cannot be told from noise):", "",
+              "| problem | code | largest measured dofs | largest measured within | a | b | dofs at 600 s "
+              "| dofs at 20 GiB |", "|---|---|---|---|---|---|---|---|"]
     for lim in limits(data):
-        lines.append(f"| {lim['problem']} | {lim['code']} | {lim['largest_measured']} | {lim['time_exponent']:.2f} | "
-                     f"{lim['memory_exponent']:.2f} | {lim['dofs_at_time_limit']:.3g} | "
-                     f"{lim['dofs_at_memory_limit']:.3g} |")
+        lines.append(f"| {lim['problem']} | {lim['code']} | {lim['largest_measured']} | "
+                     f"{_fmt(lim['largest_measured_within'])} | {_fmt(lim['time_exponent'], '.2f')} | "
+                     f"{_fmt(lim['memory_exponent'], '.2f')} | {_fmt(lim['dofs_at_time_limit'], '.3g')} | "
+                     f"{_fmt(lim['dofs_at_memory_limit'], '.3g')} |")
     if data.get("getfem_settings_trials"):
         lines += ["", "GetFEM settings sweep (max_res 1e-10; the fastest accurate one is used above):", "",
                   "| lsolver | r / E | Newton | solve s | solve CPU s | status |", "|---|---|---|---|---|---|"]
