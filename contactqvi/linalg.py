@@ -231,7 +231,8 @@ def nonzero_row_indices(M: PETSc.Mat) -> np.ndarray:
     low, high = M.getOwnershipRange()
     zero = M.findZeroRows()
     nonzero = np.ones(high - low, dtype=bool)
-    nonzero[zero.getIndices() - low] = False
+    if zero:  # PETSc gives no index set at all (NULL) when no row of M is zero
+        nonzero[zero.getIndices() - low] = False
     zero.destroy()
     return (np.flatnonzero(nonzero) + low).astype(PETSc.IntType)
 
