@@ -204,6 +204,22 @@ def test_bodies_picture(solution, mpi_tmp_path):
         assert len(np.unique(np.round(drawn * 32), axis=0)) > 20  # a colour map, not one colour
 
 
+def test_bodies_picture_looks_at_the_largest_stress_and_spans_its_decades():
+    """The camera of ``bodies.png`` is on the side of the largest stress (a quarter model's
+    contact lies at its symmetry planes, x = y = 0 here, which a view from the positive
+    octant would hide), and stresses spanning decades get a log colour scale."""
+    from contactqvi.contact.figures import _camera_direction, _stress_colour_range
+
+    centres = np.random.default_rng(1).uniform([0.0, 0.0, -1.0], [1.0, 1.0, 0.0], size=(500, 3))
+    stress = 1e4 + 1e9 * np.exp(-50.0 * np.sum(centres**2, axis=1))  # peaks at the contact, (0, 0, 0)
+    direction = _camera_direction(centres, stress)
+    assert np.allclose(np.linalg.norm(direction), 1.0) and np.all(np.sign(direction) == [-1.0, -1.0, 1.0])
+    assert np.isclose(np.degrees(np.arcsin(direction[2])), 35.0)
+    (low, high), log_scale = _stress_colour_range(stress)
+    assert log_scale and high == stress.max() and np.isclose(low, 1e-4 * high)
+    assert _stress_colour_range(np.array([2.0, 3.0, 5.0])) == ((0.0, 5.0), False)  # within two decades: linear
+
+
 def test_tributary_patches_of_triangles():
     """Triangles are cut into three quadrilaterals of a third of their area each (the lumped P1 area)."""
     points = np.array([[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 1.0, 0.0], [2.0, 1.0, 0.0]])

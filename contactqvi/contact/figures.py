@@ -139,17 +139,24 @@ def _draw_bodies(path: pathlib.Path, dataset: Dataset) -> None:
     import pyvista
 
     points, u = dataset.points, dataset.point_data["displacement"]
+    stress = dataset.cell_data["von_mises"]
     largest = float(np.linalg.norm(u, axis=1).max(initial=0.0))
     scale = 0.1 * float(np.ptp(points, axis=0).max()) / largest if largest > 0.0 else 1.0
     grid = pyvista.UnstructuredGrid({dataset.cell_type: dataset.cells}, points + scale * u)
-    grid.cell_data["von Mises stress [Pa]"] = dataset.cell_data["von_mises"]
+    name = "von Mises stress [Pa]"
+    grid.cell_data[name] = stress
+    limits, log_scale = _stress_colour_range(stress)
     with _display():
         plotter = pyvista.Plotter(off_screen=True, window_size=(1600, 1200))
         try:
-            plotter.add_mesh(grid, scalars="von Mises stress [Pa]", cmap="viridis", show_edges=True,
+            plotter.add_mesh(grid, scalars=name, cmap="viridis", clim=limits, log_scale=log_scale, show_edges=True,
                              edge_color="#404040", line_width=0.3, scalar_bar_args={"vertical": True, "fmt": "%.3g"})
-            plotter.add_text(f"deformed bodies, displacement x {scale:.3g}; von Mises stress per cell", font_size=12)
-            plotter.view_isometric()
+            plotter.add_text(f"deformed bodies, displacement x {scale:.3g}; von Mises stress per cell"
+                             + (" (log scale)" if log_scale else ""), font_size=12)
+            # looking along -direction at the bodies (reset_camera keeps the direction and fits them in)
+            plotter.camera_position = [tuple(_camera_direction(grid.cell_centers().points, stress)), (0.0, 0.0, 0.0),
+                                       (0.0, 0.0, 1.0)]
+            plotter.reset_camera()
             plotter.show_axes()
             image = plotter.screenshot(None, return_img=True)
         finally:
@@ -157,6 +164,33 @@ def _draw_bodies(path: pathlib.Path, dataset: Dataset) -> None:
     import matplotlib.image
 
     matplotlib.image.imsave(path, image, format="png")
+
+
+#: Stresses spanning more than this factor are coloured on a log scale (contact stresses are
+#: concentrated: on a linear scale all but the contact zone has the colour of zero).
+LOG_SCALE_RANGE = 100.0
+
+
+def _stress_colour_range(stress: np.ndarray) -> tuple[tuple[float, float], bool]:
+    """Colour limits of the von Mises stress and whether to use a log scale: linear from 0 when
+    the stresses span less than :data:`LOG_SCALE_RANGE`, else logarithmic over the top four
+    decades (lower values take the lowest colour)."""
+    top = float(stress.max(initial=0.0))
+    positive = stress[stress > 0.0]
+    if top <= 0.0 or positive.min() * LOG_SCALE_RANGE > top:
+        return (0.0, max(top, 1.0)), False
+    return (max(float(positive.min()), 1e-4 * top), top), True
+
+
+def _camera_direction(centres: np.ndarray, stress: np.ndarray) -> np.ndarray:
+    """Unit vector from the bodies towards the camera: the diagonal of the octant of the
+    bounding box that holds the largest stress, 35 degrees above (or below) the horizontal, so
+    that the region that matters faces the camera (e.g. the symmetry planes through the
+    contact of a quarter model, which an isometric view from the positive octant hides)."""
+    side = np.sign(centres[np.argmax(stress)] - 0.5 * (centres.min(axis=0) + centres.max(axis=0)))
+    side[side == 0.0] = 1.0
+    direction = np.array([side[0], side[1], side[2] * np.tan(np.radians(35.0)) * np.sqrt(2.0)])
+    return direction / np.linalg.norm(direction)
 
 
 def _facet_pair(pair: np.ndarray, vertices: int) -> np.ndarray:
