@@ -77,10 +77,11 @@ def abort_on_error(function: typing.Callable[[], int], comm: MPI.Comm | None = N
     """``function()``; an exception it raises on one rank of several ends the whole job.
 
     Errors of bad input are raised on every rank and become exit codes (the case
-    runner and the demos check their input first); anything else may be raised on one rank only while the others wait in
-    a collective call, which would hold a cluster allocation until its time limit. So
-    under ``mpirun`` the traceback is printed and ``MPI_Abort`` ends every rank (exit
-    code 1); on one rank the exception propagates as usual.
+    runner and the demos check their input first); anything else may be raised on one
+    rank only while the others wait in a collective call, which would hold a cluster
+    allocation until its time limit. So under ``mpirun`` the traceback is printed and
+    ``MPI_Abort`` ends every rank (exit code 1); on one rank the exception propagates
+    as usual.
     """
     try:
         return function()
