@@ -70,7 +70,8 @@ slave surface with a master surface (``"body.group"``) or with a rigid obstacle
     law = "coulomb"                     # as in [contact]
     friction = 0.3
     # search_distance = 0.01            # m; default: each slave facet's longest edge
-    # search = "every_step"             # or "once": only in the reference configuration
+    # search = "every_step"             # "until_settled": also after each step, solved again
+    #                                   # until it settles; "once": the reference configuration
 
 Contact laws (:data:`contactqvi.laws.LAWS`; ``law`` may be left out for ``coulomb``),
 with the keys each takes beside ``law`` (checked by the law's class, errors named by
@@ -307,8 +308,9 @@ class ContactPair:
         search_distance: reach of the contact search (m) > 0; None: each slave
             facet's longest edge.
         search: when a ``master`` pair is searched: ``"every_step"`` (before every
-            load step after the first, in the configuration the step before ended in)
-            or ``"once"`` (in the reference configuration only).
+            load step after the first, in the configuration the step before ended in),
+            ``"until_settled"`` (also after each step, which is solved again until its
+            configuration settles) or ``"once"`` (in the reference configuration only).
     """
 
     slave: str

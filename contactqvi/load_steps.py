@@ -12,9 +12,11 @@ from contactqvi.parameters import require, require_positive
 __all__ = ["SEARCHES", "LoadStep", "check_steps"]
 
 #: When a pair of meshed bodies is searched along the load path: before every load step
-#: after the first, in the configuration the step before ended in, or once, in the
-#: reference configuration (:class:`~contactqvi.contact.interface.BodyPair`).
-SEARCHES = ("every_step", "once")
+#: after the first, in the configuration the step before ended in; as that, and again
+#: after each step in the configuration it reached, the step solved again until that
+#: configuration settles; or once, in the reference configuration
+#: (:class:`~contactqvi.contact.interface.BodyPair`).
+SEARCHES = ("every_step", "until_settled", "once")
 
 
 @dataclasses.dataclass(frozen=True)

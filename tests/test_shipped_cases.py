@@ -87,6 +87,7 @@ NEWTON_STEPS = {
     "inclined_plane": {1: [18, 7, 6, 6], 2: [18, 7, 6, 6]},
     "paper_d3_L2": {1: [8], 2: [9]},
     "patch_test": {1: [5], 2: [5]},
+    "sliding_blocks": {1: [11, 14, 13, 14, 14, 14, 13, 5], 2: [11, 14, 13, 13, 14, 12, 13, 5]},
     "vice": {1: [8, 8], 2: [8, 7]},
 }
 
@@ -204,6 +205,22 @@ def test_mindlin_case_follows_the_coulomb_bound(summaries, name):
     if nu == 0.45:
         mindlin = hertz.mindlin_force(s, mu, P, hertz.shear_modulus(E, nu), nu, a)
         assert np.abs(Q - mindlin).max() <= 0.05 * mu * P
+
+
+def test_sliding_case_slides_at_the_coulomb_bound(summaries):
+    """The slider of ``sliding_blocks``, searched until settled: in every sliding step the
+    friction force is F times the normal force, against the slide (within 0.1 %: the nodes at
+    its trailing edge stick), each step searched at least twice; held, the force stays."""
+    case = load_case(ROOT / "cases" / "sliding_blocks.toml")
+    friction = case.contacts[0].law.friction
+    steps = _steps(summaries, "sliding_blocks")
+    forces = np.array([step["pair_forces"]["upper.interface/lower.interface"] for step in steps])
+    sliding = [k for k in range(1, len(steps)) if case.steps[k].translation != case.steps[k - 1].translation]
+    assert sliding == list(range(1, 7))
+    ratio = -forces[sliding, 0] / forces[sliding, 2]
+    assert np.all(ratio <= friction * (1 + 1e-9)) and np.all(ratio >= 0.999 * friction), ratio
+    assert all(max(entry["search"] for entry in steps[k]["history"]) >= 1 for k in sliding)
+    assert np.abs(forces[-1] - forces[-2]).max() <= 1e-4 * forces[-1, 2]
 
 
 def _touching(comm: MPI.Comm, result) -> int:

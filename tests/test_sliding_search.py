@@ -92,6 +92,8 @@ def _slide(blocks, search: str) -> list[dict]:
                 "sliding": comm.allreduce(int(sliding.sum()), op=MPI.SUM),
                 "touching": comm.allreduce(int((result.normal_force > 0).sum()), op=MPI.SUM),
                 "bound_excess": comm.allreduce(float(np.abs(excess[sliding]).max(initial=0.0)), op=MPI.MAX),
+                "searches": 1 + max((entry.get("search", 0) for entry in result.history), default=0),
+                "iterations": result.iterations,
             })
 
         u = problem.A.createVecRight()
@@ -115,6 +117,25 @@ def test_contact_search_follows_a_sliding_block(blocks):
             assert row["sliding"] >= 0.9 * row["touching"], (k, row)
             assert row["bound_excess"] <= 1e-8 * slave[2], (k, row)
             assert -slave[0] >= 0.99 * FRICTION * slave[2], (k, row)
+
+
+def test_a_pair_searched_until_settled_has_no_lag(blocks):
+    """Searched again after each step in the configuration it reached and solved again until
+    that settles, the force on the master acts under the slave block in every step, not one
+    increment behind; each sliding step needs a second search, and friction still acts at
+    the Coulomb bound against the slide."""
+    rows = _slide(blocks, "until_settled")
+    assert [r["converged"] for r in rows] == [True] * len(SLIDES)
+    lagged = _slide(blocks, "every_step")
+    for k, (row, before) in enumerate(zip(rows, lagged)):
+        assert abs(row["master_centroid"] - row["slave_centroid"]) <= 1e-3, (k, row)
+        slave = row["on_slave"]
+        assert np.abs(slave + row["on_master"]).max() <= 1e-9 * slave[2]
+        if SLIDES[k] != SLIDES[k - 1] and k:
+            assert row["searches"] >= 2, (k, row)
+            assert row["bound_excess"] <= 1e-8 * slave[2], (k, row)
+            assert -slave[0] >= 0.99 * FRICTION * slave[2], (k, row)
+            assert abs(before["master_centroid"] - before["slave_centroid"]) >= 0.05  # the lag it removes
 
 
 def test_a_pair_searched_once_keeps_the_reference_coupling(blocks):

@@ -71,8 +71,11 @@ class BodyPair:
             can close within a load step must lie within it.
         search: ``"every_step"``: the pair is searched again before every load step
             after the first, in the configuration the step before ended in, so a sliding
-            contact follows the bodies (:func:`search_again`); ``"once"``: only in the
-            reference configuration (small sliding over the whole load path).
+            contact follows the bodies (:func:`search_again`); ``"until_settled"``: as
+            ``"every_step"``, and each step is solved again after a search in the
+            configuration it reached, until that configuration settles (no lag of one
+            step: :func:`~contactqvi.contact.load_path.solve_load_path`); ``"once"``: only
+            in the reference configuration (small sliding over the whole load path).
     """
 
     slave: str
@@ -118,7 +121,12 @@ class Interface:
     @property
     def searched_each_step(self) -> bool:
         """Whether the pair is searched again before every load step (:attr:`BodyPair.search`)."""
-        return isinstance(self.pair, BodyPair) and self.pair.search == "every_step"
+        return isinstance(self.pair, BodyPair) and self.pair.search in ("every_step", "until_settled")
+
+    @property
+    def settles(self) -> bool:
+        """Whether a step is solved again until its configuration settles (:attr:`BodyPair.search`)."""
+        return isinstance(self.pair, BodyPair) and self.pair.search == "until_settled"
 
     @property
     def slave_surface(self) -> str:

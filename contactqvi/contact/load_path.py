@@ -18,12 +18,21 @@ contact states are carried over node by node (a node new to the contact starts a
 not in contact). The SCD solver is rebuilt for the new contact nodes; a multigrid
 Newton-step solver is set up once per load path and kept, its levels updated for the
 searched A (:func:`_path_levels`).
+
+A search before a step uses the configuration of the step before, so the contact
+geometry of a step lags by one step. Pairs with ``search = "until_settled"`` remove the
+lag (:func:`_settle`): after a step converged, the pairs are searched again in the
+configuration it reached and the step is solved again from there, the slip still
+measured from the step before, until a solve changes the displacement by at most
+``geometry_tol`` times the step's increment (Code_Aster's geometric loop,
+``REAC_GEOM = 'AUTOMATIQUE'``, with its test on the displacement).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import logging
+import math
 import typing
 
 from mpi4py import MPI
@@ -38,6 +47,7 @@ from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult, SCDNewtonSolver, newton_step_solver
 from contactqvi.load_steps import LoadStep, check_steps
+from contactqvi.result import Status, Timings
 
 __all__ = ["LoadStep", "Resume", "check_steps", "contact_resultants", "solve_load_path"]
 
@@ -47,6 +57,12 @@ StepCallback = typing.Callable[[int, "LoadStep", PETSc.Vec, SCDNewtonResult], No
 
 #: The states of a contact node that touches its master surface.
 TOUCHING = (State.SLIDING, State.STICKING, State.WEAK_STICKING)
+#: ``search = "until_settled"``: a step's configuration has settled when a solve after a
+#: search changes the displacement by at most this times the step's increment (max norms).
+GEOMETRY_TOL = 1e-3
+#: ... and when it has not after this many searches in the step's own configuration, the
+#: step fails (``diverged_max_it``).
+MAX_SEARCHES = 10
 
 
 @dataclasses.dataclass(frozen=True)
@@ -111,7 +127,6 @@ def solve_load_path(
     carried = _path_levels(problem, parameters, prefix) if displacement is not None else None
     try:
         for index in range(first, len(steps)):
-            step = steps[index]
             if index > 0 and displacement is not None and solver is not None:
                 carried = solver.release_step_solver()
                 solver.destroy()  # the search replaces the contact nodes and changes A
@@ -121,10 +136,11 @@ def solve_load_path(
             if solver is None:
                 solver, carried = SCDNewtonSolver(problem, parameters, prefix=prefix, step_solver=carried), None
             result = solver.solve(u, atol=target, stop=stop)
+            solver, result = _settle(problem, steps, index, u, previous, displacement, solver, result, stop)
             results.append(result)
             target, states = (result.target if index == 0 else target), result.states
             if on_step is not None:
-                on_step(index, step, u, result)
+                on_step(index, steps[index], u, result)
             if not result.converged:
                 break
     finally:
@@ -186,6 +202,14 @@ def _node_states(problem: ContactProblem, node_states: np.ndarray) -> np.ndarray
     return np.where(states < 0, State.NO_CONTACT, states).astype(np.int8)
 
 
+def _local_node_states(problem: ContactProblem, states: np.ndarray) -> np.ndarray:
+    """States per local node (-1: no contact node) of the states of the problem's contact nodes."""
+    node_states = np.full(problem.V.dofmap.index_map.size_local + problem.V.dofmap.index_map.num_ghosts, -1,
+                          dtype=np.int8)
+    node_states[problem.contact_blk] = states
+    return node_states
+
+
 def _search(problem: ContactProblem, step: LoadStep, u: PETSc.Vec | None, displacement: fem.Function,
             previous: PETSc.Vec, states: np.ndarray, resume: Resume | None,
             step_solver: NewtonStepSolver | None) -> np.ndarray:
@@ -200,17 +224,102 @@ def _search(problem: ContactProblem, step: LoadStep, u: PETSc.Vec | None, displa
         node_states = resume.node_states
     else:
         problem.physical_displacement(u, displacement)
-        node_states = np.full(len(displacement.x.array) // 3, -1, dtype=np.int8)
-        node_states[problem.contact_blk] = states
-    change = problem.search(displacement, change=step_solver is not None)
+        node_states = _local_node_states(problem, states)
+    _search_in(problem, displacement, step_solver)
+    problem.solver_variables(displacement, previous)
+    return _node_states(problem, node_states)
+
+
+def _search_in(problem: ContactProblem, configuration: fem.Function, step_solver: NewtonStepSolver | None) -> None:
+    """Search the problem again in x + ``configuration`` and update ``step_solver``'s levels (if any)."""
+    change = problem.search(configuration, change=step_solver is not None)
     if change is not None:
         step_solver.update_operator(change, grown=True)
         change.destroy()
-    problem.solver_variables(displacement, previous)
     logger.info("contact search in the deformed configuration: %d contact nodes, %.2f s (search) + %.2f s "
                 "(change of variables)", problem.n_contact, problem.setup_seconds["contact_search"],
                 problem.setup_seconds["change_of_variables"])
-    return _node_states(problem, node_states)
+
+
+def _settle(problem: ContactProblem, steps: typing.Sequence[LoadStep], index: int, u: PETSc.Vec,
+            previous: PETSc.Vec, before: fem.Function, solver: SCDNewtonSolver, result: SCDNewtonResult,
+            stop: typing.Callable[[], bool] | None) -> tuple[SCDNewtonSolver, SCDNewtonResult]:
+    """Search step ``index`` again in the configuration its solution ``u`` reached and solve it
+    again from there, until a solve changes the displacement by at most :data:`GEOMETRY_TOL`
+    times the step's increment from ``before`` (the step before's displacement; zero before
+    the first step), at most :data:`MAX_SEARCHES` times; nothing when no pair of the problem is
+    searched ``"until_settled"``.
+
+    The slip stays measured from ``before`` (its u~ in the new variables goes to
+    ``previous``); each solve starts from the last solution and stops at the first one's
+    target ||y^||. A step's result sums the iterations of its solves. Returns the solver of the
+    last solve (``solver`` is destroyed) and the step's result: the last solve's, with the
+    iterations, timings and history of all of them, ``diverged_max_it`` if the
+    configuration did not settle.
+    """
+    if not problem.settles_geometry:
+        return solver, result
+    solves, change, status, target = [result], math.inf, result.status, result.target
+    reached = problem.physical_displacement(u, fem.Function(problem.V))  # the configuration searched in
+    work = reached.x.petsc_vec.duplicate()
+    try:
+        while result.converged:
+            work.waxpy(-1.0, before.x.petsc_vec, reached.x.petsc_vec)
+            increment = work.norm(PETSc.NormType.NORM_INFINITY)
+            if change <= GEOMETRY_TOL * increment:
+                break
+            if len(solves) > MAX_SEARCHES:
+                logger.warning("step %d: the configuration did not settle in %d searches (last change %.3g m "
+                               "of an increment of %.3g m)", index + 1, MAX_SEARCHES, change, increment)
+                status = Status.DIVERGED_MAX_IT
+                break
+            solver = _search_reached(problem, steps, index, u, previous, before, reached, solver)
+            result = solver.solve(u, atol=target, stop=stop)
+            solves.append(result)
+            status = result.status
+            reached.x.petsc_vec.copy(work)
+            problem.physical_displacement(u, reached)
+            work.axpy(-1.0, reached.x.petsc_vec)
+            change = work.norm(PETSc.NormType.NORM_INFINITY)
+            logger.info("step %d, search %d in the configuration it reached: the displacement changed by %.3g m "
+                        "(%.3g of the step's increment)", index + 1, len(solves) - 1, change,
+                        change / increment if increment > 0.0 else math.inf)
+    finally:
+        work.destroy()
+    return solver, _merged(solves, status)
+
+
+def _search_reached(problem: ContactProblem, steps: typing.Sequence[LoadStep], index: int, u: PETSc.Vec,
+                    previous: PETSc.Vec, before: fem.Function, reached: fem.Function,
+                    solver: SCDNewtonSolver) -> SCDNewtonSolver:
+    """Search step ``index`` again in x + ``reached``, set it with the slip from ``before``
+    (the step before's displacement), put ``reached`` into ``u`` (new variables) and return
+    a new solver for it, which takes over ``solver``'s multigrid levels (``solver`` is
+    destroyed)."""
+    step, last = steps[index], steps[index - 1] if index > 0 else LoadStep(0.0)
+    step_solver = solver.release_step_solver()
+    solver.destroy()
+    _search_in(problem, reached, step_solver)
+    problem.set_step(last.load, last.translation)  # the slip of the step from the step before
+    problem.solver_variables(before, previous)
+    problem.set_step(step.load, step.translation, previous if index > 0 else None)
+    problem.solver_variables(reached, u)
+    u.axpy(1.0, problem.shift)
+    return SCDNewtonSolver(problem, solver.parameters, prefix=solver.prefix, step_solver=step_solver)
+
+
+def _merged(solves: list[SCDNewtonResult], status: Status) -> SCDNewtonResult:
+    """One step's result of several solves: the last one's solution and ``status``, the first
+    one's target, the iterations and timings added, the history entries marked with their
+    ``search``."""
+    timings = Timings()
+    for solve in solves:
+        for phase, seconds in solve.timings.items():
+            timings[phase] = timings.get(phase, 0.0) + seconds
+    return dataclasses.replace(
+        solves[-1], status=status, target=solves[0].target, iterations=sum(r.iterations for r in solves),
+        inner_iterations=sum(r.inner_iterations for r in solves), timings=timings,
+        history=[{**entry, "search": j} for j, solve in enumerate(solves) for entry in solve.history])
 
 
 def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, previous: PETSc.Vec, states: np.ndarray) -> None:

@@ -193,6 +193,12 @@ class ContactProblem(PETScOwner):
         """Whether a pair is searched again before every load step (:meth:`search`)."""
         return self.elastic is not None
 
+    @property
+    def settles_geometry(self) -> bool:
+        """Whether a load step is searched and solved again in the configuration it reached
+        until that configuration settles (a pair with ``search = "until_settled"``)."""
+        return any(i.settles for i in self.interfaces)
+
     def search(self, displacement: fem.Function, *, change: bool = False) -> PETSc.Mat | None:
         """Search the pairs searched each step again in the configuration x + ``displacement``
         (global components), and rebuild the nodal data and the change of variables from it:

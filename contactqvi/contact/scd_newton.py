@@ -228,6 +228,7 @@ class SCDNewtonSolver(PETScOwner):
             (:meth:`release_step_solver`), its levels updated for the searched A.
 
     Attributes:
+        parameters, prefix: the checked parameters and the options prefix.
         step_solver: the linear solver of the Newton steps (KSP and preconditioner reuse).
     """
 
@@ -235,6 +236,7 @@ class SCDNewtonSolver(PETScOwner):
                  step_solver: NewtonStepSolver | None = None):
         self.problem = problem
         self.parameters = p = PARAMETERS.check(parameters)
+        self.prefix = prefix
         A = problem.A
         self._newton = NewtonMatrix(A, problem.contact_blk)
         self._near_nullspace = problem.near_nullspace()  # for AMG; the rows of J off the contact are A's
