@@ -31,7 +31,7 @@ import pytest
 
 from dolfinx import fem
 
-from contactqvi.contact import LoadStep, solve_load_path
+from contactqvi.contact import LoadStep, load_path, solve_load_path
 from contactqvi.contact.interface import BodyPair
 from contactqvi.contact.load_path import contact_resultants
 from contactqvi.contact.nodal import State
@@ -39,6 +39,7 @@ from contactqvi.contact.problem import assemble_contact_problem
 from contactqvi.elasticity import body_materials
 from contactqvi.laws import Coulomb
 from contactqvi.meshes import boundary_facets, read_gmsh, split_by_body
+from contactqvi.result import Status
 
 MESH = pathlib.Path(__file__).resolve().parent.parent / "meshes" / "sliding_blocks.geo"
 FRICTION = 0.2
@@ -85,6 +86,7 @@ def _slide(blocks, search: str) -> list[dict]:
             excess = np.linalg.norm(result.friction_force, axis=1) - FRICTION * result.normal_force
             rows.append({
                 "converged": result.converged,
+                "status": result.status,
                 "on_master": comm.allreduce(forces[master].sum(axis=0), op=MPI.SUM),
                 "on_slave": np.array(contact_resultants(problem, result)["pair_forces"][pair.name]),
                 "master_centroid": _centroid(comm, x[master], forces[master]),
@@ -136,6 +138,16 @@ def test_a_pair_searched_until_settled_has_no_lag(blocks):
             assert row["bound_excess"] <= 1e-8 * slave[2], (k, row)
             assert -slave[0] >= 0.99 * FRICTION * slave[2], (k, row)
             assert abs(before["master_centroid"] - before["slave_centroid"]) >= 0.05  # the lag it removes
+
+
+def test_a_configuration_that_does_not_settle_fails_its_step(blocks, monkeypatch):
+    """When the searches allowed do not settle the configuration, the step is reported as not
+    converged (``diverged_max_it``) and the load path stops there."""
+    monkeypatch.setattr(load_path, "GEOMETRY_TOL", 0.0)  # no change is ever small enough
+    monkeypatch.setattr(load_path, "MAX_SEARCHES", 1)
+    rows = _slide(blocks, "until_settled")
+    assert len(rows) == 1
+    assert rows[0]["status"] == Status.DIVERGED_MAX_IT and rows[0]["searches"] == 2
 
 
 def test_a_pair_searched_once_keeps_the_reference_coupling(blocks):
