@@ -28,6 +28,7 @@ from petsc4py import PETSc
 
 import numpy as np
 import pytest
+from petsc_audit import assert_frees_petsc_objects
 
 from dolfinx import fem
 
@@ -148,6 +149,25 @@ def test_a_configuration_that_does_not_settle_fails_its_step(blocks, monkeypatch
     rows = _slide(blocks, "until_settled")
     assert len(rows) == 1
     assert rows[0]["status"] == Status.DIVERGED_MAX_IT and rows[0]["searches"] == 2
+
+
+def test_searches_until_settled_free_their_petsc_objects(blocks, mpi_tmp_path):
+    """Three steps searched until settled with the multigrid levels kept across the searches:
+    after ``destroy()`` nothing is alive."""
+    msh, tags, cell_tags = blocks
+
+    def run():
+        young, poisson = body_materials(msh, cell_tags, {"lower": (1e9, 0.3), "upper": (1e9, 0.3)})
+        pair = BodyPair("upper.interface", "lower.interface", Coulomb(FRICTION), search="until_settled")
+        problem = assemble_contact_problem(msh, tags, young, poisson, {}, [pair], clamped=["lower.bottom"],
+                                           cell_tags=cell_tags, moved=["upper.top"])
+        u = problem.A.createVecRight()
+        steps = [LoadStep(1.0, (s, 0.0, -DELTA)) for s in SLIDES[:3]]
+        results = solve_load_path(problem, steps, u, {"pc": "gamg"}, prefix="settle_", from_rest=True)
+        assert all(r.converged for r in results) and max(e["search"] for e in results[1].history) >= 1
+        return [u, problem]
+
+    assert_frees_petsc_objects(run, mpi_tmp_path)
 
 
 def test_a_pair_searched_once_keeps_the_reference_coupling(blocks):

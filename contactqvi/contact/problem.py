@@ -222,6 +222,9 @@ class ContactProblem(PETScOwner):
             obj.destroy()
         fields, variables_seconds = _timed(self.comm, _contact_fields, self.elastic, interfaces, True)
         searched = fields.pop("A")
+        # PETSc 3.22's MatAXPY with a different pattern drops A's near-nullspace without
+        # releasing it (a leak of one null space per search): release it first
+        self.A.setNearNullSpace(PETSc.NullSpace())
         self.A.axpy(-1.0, searched, _DIFFERENT)  # old - new, on the union of both patterns
         difference = _nonzeros(self.A, -1.0) if change else None
         self.A.zeroEntries()
