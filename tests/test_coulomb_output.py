@@ -204,6 +204,17 @@ def test_bodies_picture(solution, mpi_tmp_path):
         assert len(np.unique(np.round(drawn * 32), axis=0)) > 20  # a colour map, not one colour
 
 
+def test_bodies_picture_magnifies_small_displacements_only():
+    """``bodies.png`` magnifies an elastic displacement to a tenth of the bodies' size and draws
+    a slide larger than that true to scale."""
+    from contactqvi.contact.figures import _displacement_scale
+
+    points = np.array([[0.0, 0.0, 0.0], [3.6, 1.0, 1.0]])
+    assert _displacement_scale(points, np.array([[0.0, 0.0, -1e-4], [0.0, 0.0, 0.0]])) == pytest.approx(3600.0)
+    assert _displacement_scale(points, np.array([[0.6, 0.0, -1e-3], [0.0, 0.0, 0.0]])) == 1.0
+    assert _displacement_scale(points, np.zeros((2, 3))) == 1.0
+
+
 def test_bodies_picture_looks_at_the_largest_stress_and_spans_its_decades():
     """The camera of ``bodies.png`` is on the side of the largest stress (a quarter model's
     contact lies at its symmetry planes, x = y = 0 here, which a view from the positive

@@ -140,8 +140,7 @@ def _draw_bodies(path: pathlib.Path, dataset: Dataset) -> None:
 
     points, u = dataset.points, dataset.point_data["displacement"]
     stress = dataset.cell_data["von_mises"]
-    largest = float(np.linalg.norm(u, axis=1).max(initial=0.0))
-    scale = 0.1 * float(np.ptp(points, axis=0).max()) / largest if largest > 0.0 else 1.0
+    scale = _displacement_scale(points, u)
     grid = pyvista.UnstructuredGrid({dataset.cell_type: dataset.cells}, points + scale * u)
     name = "von Mises stress [Pa]"
     grid.cell_data[name] = stress
@@ -164,6 +163,13 @@ def _draw_bodies(path: pathlib.Path, dataset: Dataset) -> None:
     import matplotlib.image
 
     matplotlib.image.imsave(path, image, format="png")
+
+
+def _displacement_scale(points: np.ndarray, u: np.ndarray) -> float:
+    """Factor on the displacement drawn: the largest one magnified to a tenth of the bodies'
+    size, but never shrunk (a block slid by more than that is drawn where it is)."""
+    largest = float(np.linalg.norm(u, axis=1).max(initial=0.0))
+    return max(0.1 * float(np.ptp(points, axis=0).max()) / largest, 1.0) if largest > 0.0 else 1.0
 
 
 #: Stresses spanning more than this factor are coloured on a log scale (contact stresses are
