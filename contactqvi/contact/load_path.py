@@ -24,7 +24,7 @@ geometry of a step lags by one step. Pairs with ``search = "until_settled"`` rem
 lag (:func:`_settle`): after a step converged, the pairs are searched again in the
 configuration it reached and the step is solved again from there, the slip still
 measured from the step before, until a solve changes the displacement by at most
-``geometry_tol`` times the step's increment (Code_Aster's geometric loop,
+:data:`GEOMETRY_TOL` times the step's increment (Code_Aster's geometric loop,
 ``REAC_GEOM = 'AUTOMATIQUE'``, with its test on the displacement).
 """
 
@@ -252,10 +252,9 @@ def _settle(problem: ContactProblem, steps: typing.Sequence[LoadStep], index: in
 
     The slip stays measured from ``before`` (its u~ in the new variables goes to
     ``previous``); each solve starts from the last solution and stops at the first one's
-    target ||y^||. A step's result sums the iterations of its solves. Returns the solver of the
-    last solve (``solver`` is destroyed) and the step's result: the last solve's, with the
-    iterations, timings and history of all of them, ``diverged_max_it`` if the
-    configuration did not settle.
+    target ||y^||. Returns the solver of the last solve (``solver`` is destroyed) and the
+    step's result: the last solve's, with the iterations, timings and history of all of
+    them, ``diverged_max_it`` if the configuration did not settle.
     """
     if not problem.settles_geometry:
         return solver, result
@@ -297,7 +296,7 @@ def _search_reached(problem: ContactProblem, steps: typing.Sequence[LoadStep], i
     a new solver for it, which takes over ``solver``'s multigrid levels (``solver`` is
     destroyed)."""
     step, last = steps[index], steps[index - 1] if index > 0 else LoadStep(0.0)
-    step_solver = solver.release_step_solver()
+    parameters, prefix, step_solver = solver.parameters, solver.prefix, solver.release_step_solver()
     solver.destroy()
     _search_in(problem, reached, step_solver)
     problem.set_step(last.load, last.translation)  # the slip of the step from the step before
@@ -305,7 +304,7 @@ def _search_reached(problem: ContactProblem, steps: typing.Sequence[LoadStep], i
     problem.set_step(step.load, step.translation, previous if index > 0 else None)
     problem.solver_variables(reached, u)
     u.axpy(1.0, problem.shift)
-    return SCDNewtonSolver(problem, solver.parameters, prefix=solver.prefix, step_solver=step_solver)
+    return SCDNewtonSolver(problem, parameters, prefix=prefix, step_solver=step_solver)
 
 
 def _merged(solves: list[SCDNewtonResult], status: Status) -> SCDNewtonResult:
