@@ -32,12 +32,11 @@ from dolfinx import mesh as dmesh
 from contactqvi import tables
 from contactqvi.case import Body, ContactCase, ContactPair, check_groups, check_solver
 from contactqvi.contact.checkpoint import Checkpoint, CheckpointWriter, read_checkpoint, remove_checkpoints
-from contactqvi.contact.load_path import LoadStep, solve_load_path
+from contactqvi.contact.load_path import SOLVER_PARAMETERS, LoadStep, solve_load_path
 from contactqvi.contact.figures import plot_contact_states, plot_deformed_bodies
 from contactqvi.contact.postprocess import ContactResultsWriter
 from contactqvi.contact.interface import BodyPair, ObstaclePair
 from contactqvi.contact.problem import ContactProblem, assemble_contact_problem, build_contact_problem
-from contactqvi.contact import scd_newton
 from contactqvi.contact.scd_newton import SCDNewtonResult
 from contactqvi.linalg import default_options
 from contactqvi.elasticity import body_materials
@@ -143,7 +142,7 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
         The summary (also in ``output/summary.json``) and the exit code (:data:`EXIT_CODES`):
         0 when every step converged, 1 when one did not, 3 when interrupted.
     """
-    parameters = check_solver(case, scd_newton.PARAMETERS)
+    parameters = check_solver(case, SOLVER_PARAMETERS)
     _check_output(comm, output)
     checkpoint = _checkpoint(case, output, comm, restart)
     if checkpoint is not None and checkpoint.step == len(case.steps):

@@ -26,7 +26,7 @@ from contactqvi.case import (
     load_case,
     parse_case,
 )
-from contactqvi.contact import scd_newton
+from contactqvi.contact.load_path import SOLVER_PARAMETERS
 from contactqvi import case as case_module
 from contactqvi.laws import LAWS, Coulomb
 from contactqvi.parameters import ParameterError
@@ -252,13 +252,16 @@ def test_bad_input_raises_a_named_error(changes, text):
         ({"tol": 2.0}, "solver.tol: must be in (0, 1), got 2.0"),
         ({"pc": "lux"}, "solver.pc: must be one of gamg, paper, hypre, lu, got 'lux' (did you mean 'lu'?)"),
         ({"max_iterations": 0}, "solver.max_iterations: must be >= 1, got 0"),
+        ({"geometry_tol": -1e-3}, "solver.geometry_tol: must be in [0, 1], got -0.001"),
+        ({"max_searches": 2.5}, "solver.max_searches: must be an integer, got 2.5"),
     ],
 )
 def test_bad_solver_value_is_named_by_its_key_path(solver, text):
-    """Values are checked by the solver's own Parameters table, named under ``solver.``
-    (by the runner, before the mesh is read: the case layer does not import solvers)."""
+    """Values are checked by the solver's own Parameters table (the SCD solver's and the load
+    path's), named under ``solver.`` (by the runner, before the mesh is read: the case layer
+    does not import solvers)."""
     with pytest.raises(ParameterError) as info:
-        check_solver(parse_case(_with(BASE, ("solver", solver))), scd_newton.PARAMETERS)
+        check_solver(parse_case(_with(BASE, ("solver", solver))), SOLVER_PARAMETERS)
     assert str(info.value) == text and info.value.name == text.split(": ")[0]
 
 

@@ -32,7 +32,7 @@ from petsc_audit import assert_frees_petsc_objects
 
 from dolfinx import fem
 
-from contactqvi.contact import LoadStep, load_path, solve_load_path
+from contactqvi.contact import LoadStep, solve_load_path
 from contactqvi.contact.interface import BodyPair
 from contactqvi.contact.load_path import contact_resultants
 from contactqvi.contact.nodal import State
@@ -60,7 +60,7 @@ def _centroid(comm: MPI.Comm, x: np.ndarray, forces: np.ndarray) -> float:
     return moment / total
 
 
-def _slide(blocks, search: str) -> list[dict]:
+def _slide(blocks, search: str, parameters: dict | None = None) -> list[dict]:
     """Per step: the centroids of the normal forces on the slave and on the master nodes,
     the contact forces on both sides, the Coulomb bound's excess at the sliding nodes and
     the solver status."""
@@ -101,7 +101,7 @@ def _slide(blocks, search: str) -> list[dict]:
 
         u = problem.A.createVecRight()
         try:
-            solve_load_path(problem, steps, u, {"pc": "lu"}, on_step=record, from_rest=True)
+            solve_load_path(problem, steps, u, {"pc": "lu", **(parameters or {})}, on_step=record, from_rest=True)
         finally:
             u.destroy()
     return rows
@@ -141,12 +141,10 @@ def test_a_pair_searched_until_settled_has_no_lag(blocks):
             assert abs(before["master_centroid"] - before["slave_centroid"]) >= 0.05  # the lag it removes
 
 
-def test_a_configuration_that_does_not_settle_fails_its_step(blocks, monkeypatch):
+def test_a_configuration_that_does_not_settle_fails_its_step(blocks):
     """When the searches allowed do not settle the configuration, the step is reported as not
     converged (``diverged_max_it``) and the load path stops there."""
-    monkeypatch.setattr(load_path, "GEOMETRY_TOL", 0.0)  # no change is ever small enough
-    monkeypatch.setattr(load_path, "MAX_SEARCHES", 1)
-    rows = _slide(blocks, "until_settled")
+    rows = _slide(blocks, "until_settled", {"geometry_tol": 0.0, "max_searches": 1})  # no change is small enough
     assert len(rows) == 1
     assert rows[0]["status"] == Status.DIVERGED_MAX_IT and rows[0]["searches"] == 2
 

@@ -24,8 +24,9 @@ geometry of a step lags by one step. Pairs with ``search = "until_settled"`` rem
 lag (:func:`_settle`): after a step converged, the pairs are searched again in the
 configuration it reached and the step is solved again from there, the slip still
 measured from the step before, until a solve changes the displacement by at most
-:data:`GEOMETRY_TOL` times the step's increment (Code_Aster's geometric loop,
-``REAC_GEOM = 'AUTOMATIQUE'``, with its test on the displacement).
+``geometry_tol`` times the step's increment (:data:`PATH_PARAMETERS`; Code_Aster's
+geometric loop, ``REAC_GEOM = 'AUTOMATIQUE'`` with ``RESI_GEOM``, tested on the
+displacement).
 """
 
 from __future__ import annotations
@@ -47,9 +48,11 @@ from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult, SCDNewtonSolver, newton_step_solver
 from contactqvi.load_steps import LoadStep, check_steps
+from contactqvi.parameters import Parameter, Parameters
 from contactqvi.result import Status, Timings
 
-__all__ = ["LoadStep", "Resume", "check_steps", "contact_resultants", "solve_load_path"]
+__all__ = ["PATH_PARAMETERS", "SOLVER_PARAMETERS", "LoadStep", "Resume", "check_steps", "contact_resultants",
+           "solve_load_path"]
 
 logger = logging.getLogger(__name__)
 
@@ -57,12 +60,16 @@ StepCallback = typing.Callable[[int, "LoadStep", PETSc.Vec, SCDNewtonResult], No
 
 #: The states of a contact node that touches its master surface.
 TOUCHING = (State.SLIDING, State.STICKING, State.WEAK_STICKING)
-#: ``search = "until_settled"``: a step's configuration has settled when a solve after a
-#: search changes the displacement by at most this times the step's increment (max norms).
-GEOMETRY_TOL = 1e-3
-#: ... and when it has not after this many searches in the step's own configuration, the
-#: step fails (``diverged_max_it``).
-MAX_SEARCHES = 10
+#: The load path's own parameters, given with the SCD solver's (``[solver]`` of a case file).
+PATH_PARAMETERS = Parameters(
+    geometry_tol=Parameter(1e-3, "search = until_settled: a step has settled when a solve after a search changes the "
+                           "displacement by at most this times the step's increment (max norms)",
+                           minimum=0.0, maximum=1.0),
+    max_searches=Parameter(10, "search = until_settled: searches in a step's own configuration before the step "
+                           "fails (diverged_max_it)", type=int, minimum=1),
+)
+#: Everything the ``[solver]`` table of a case file may hold: the SCD solver's parameters and the path's.
+SOLVER_PARAMETERS = Parameters({**PARAMETERS, **PATH_PARAMETERS})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -106,7 +113,8 @@ def solve_load_path(
         problem, steps: the contact problem (its step is set here) and the load path.
         u: initial guess of the first step (shifted displacements); holds the last
             step's solution on return.
-        parameters, prefix: SCD Newton parameters, PETSc options prefix of the Newton-step KSP.
+        parameters, prefix: SCD Newton parameters and the path's (:data:`SOLVER_PARAMETERS`),
+            PETSc options prefix of the Newton-step KSP.
         on_step: called after each step with (index, step, u, result), e.g. to write output.
         from_rest: start the first step from the body at rest (u~ = 0) instead of ``u``.
         resume: continue after the steps of a checkpoint instead (``u`` is then ignored).
@@ -118,6 +126,7 @@ def solve_load_path(
     Returns the results of the steps solved (after ``resume.done``); the last one failed if not converged.
     """
     check_steps(steps)
+    parameters, path = _split(parameters)
     results: list[SCDNewtonResult] = []
     first, target = (0, 0.0) if resume is None else (resume.done, resume.target)
     solver: SCDNewtonSolver | None = None
@@ -128,15 +137,13 @@ def solve_load_path(
     try:
         for index in range(first, len(steps)):
             if index > 0 and displacement is not None and solver is not None:
-                carried = solver.release_step_solver()
-                solver.destroy()  # the search replaces the contact nodes and changes A
-                solver = None
+                carried, solver = _released(solver), None
             states = _start(problem, steps, index, first, u, previous, states, from_rest, displacement, resume,
                             carried)
             if solver is None:
                 solver, carried = SCDNewtonSolver(problem, parameters, prefix=prefix, step_solver=carried), None
             result = solver.solve(u, atol=target, stop=stop)
-            solver, result = _settle(problem, steps, index, u, previous, displacement, solver, result, stop)
+            solver, result = _settle(problem, steps, index, u, previous, displacement, solver, result, stop, path)
             results.append(result)
             target, states = (result.target if index == 0 else target), result.states
             if on_step is not None:
@@ -148,6 +155,20 @@ def solve_load_path(
             if owner is not None:
                 owner.destroy()
     return results
+
+
+def _split(parameters: dict[str, typing.Any] | None) -> tuple[dict[str, typing.Any], dict[str, typing.Any]]:
+    """The SCD solver's parameters and the path's (:data:`PATH_PARAMETERS`, checked) of ``parameters``."""
+    given = dict(parameters or {})
+    return given, PATH_PARAMETERS.check({name: given.pop(name) for name in PATH_PARAMETERS if name in given})
+
+
+def _released(solver: SCDNewtonSolver) -> NewtonStepSolver | None:
+    """Destroy ``solver`` before a search (which replaces the contact nodes and changes A) and
+    return its Newton-step solver if that keeps multigrid levels (updated to A), else None."""
+    step_solver = solver.release_step_solver()
+    solver.destroy()
+    return step_solver
 
 
 def _path_levels(problem: ContactProblem, parameters: dict | None, prefix: str) -> NewtonStepSolver | None:
@@ -243,12 +264,13 @@ def _search_in(problem: ContactProblem, configuration: fem.Function, step_solver
 
 def _settle(problem: ContactProblem, steps: typing.Sequence[LoadStep], index: int, u: PETSc.Vec,
             previous: PETSc.Vec, before: fem.Function, solver: SCDNewtonSolver, result: SCDNewtonResult,
-            stop: typing.Callable[[], bool] | None) -> tuple[SCDNewtonSolver, SCDNewtonResult]:
+            stop: typing.Callable[[], bool] | None,
+            path: dict[str, typing.Any]) -> tuple[SCDNewtonSolver, SCDNewtonResult]:
     """Search step ``index`` again in the configuration its solution ``u`` reached and solve it
-    again from there, until a solve changes the displacement by at most :data:`GEOMETRY_TOL`
+    again from there, until a solve changes the displacement by at most ``geometry_tol``
     times the step's increment from ``before`` (the step before's displacement; zero before
-    the first step), at most :data:`MAX_SEARCHES` times; nothing when no pair of the problem is
-    searched ``"until_settled"``.
+    the first step), at most ``max_searches`` times (``path``: :data:`PATH_PARAMETERS`);
+    nothing when no pair of the problem is searched ``"until_settled"``.
 
     The slip stays measured from ``before`` (its u~ in the new variables goes to
     ``previous``); each solve starts from the last solution and stops at the first one's
@@ -265,11 +287,11 @@ def _settle(problem: ContactProblem, steps: typing.Sequence[LoadStep], index: in
         while result.converged:
             work.waxpy(-1.0, before.x.petsc_vec, reached.x.petsc_vec)
             increment = work.norm(PETSc.NormType.NORM_INFINITY)
-            if change <= GEOMETRY_TOL * increment:
+            if change <= path["geometry_tol"] * increment:
                 break
-            if len(solves) > MAX_SEARCHES:
+            if len(solves) > path["max_searches"]:
                 logger.warning("step %d: the configuration did not settle in %d searches (last change %.3g m "
-                               "of an increment of %.3g m)", index + 1, MAX_SEARCHES, change, increment)
+                               "of an increment of %.3g m)", index + 1, path["max_searches"], change, increment)
                 status = Status.DIVERGED_MAX_IT
                 break
             solver = _search_reached(problem, steps, index, u, previous, before, reached, solver)
@@ -296,8 +318,7 @@ def _search_reached(problem: ContactProblem, steps: typing.Sequence[LoadStep], i
     a new solver for it, which takes over ``solver``'s multigrid levels (``solver`` is
     destroyed)."""
     step, last = steps[index], steps[index - 1] if index > 0 else LoadStep(0.0)
-    parameters, prefix, step_solver = solver.parameters, solver.prefix, solver.release_step_solver()
-    solver.destroy()
+    parameters, prefix, step_solver = solver.parameters, solver.prefix, _released(solver)
     _search_in(problem, reached, step_solver)
     problem.set_step(last.load, last.translation)  # the slip of the step from the step before
     problem.solver_variables(before, previous)
