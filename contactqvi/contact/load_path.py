@@ -223,14 +223,6 @@ def _node_states(problem: ContactProblem, node_states: np.ndarray) -> np.ndarray
     return np.where(states < 0, State.NO_CONTACT, states).astype(np.int8)
 
 
-def _local_node_states(problem: ContactProblem, states: np.ndarray) -> np.ndarray:
-    """States per local node (-1: no contact node) of the states of the problem's contact nodes."""
-    node_states = np.full(problem.V.dofmap.index_map.size_local + problem.V.dofmap.index_map.num_ghosts, -1,
-                          dtype=np.int8)
-    node_states[problem.contact_blk] = states
-    return node_states
-
-
 def _search(problem: ContactProblem, step: LoadStep, u: PETSc.Vec | None, displacement: fem.Function,
             previous: PETSc.Vec, states: np.ndarray, resume: Resume | None,
             step_solver: NewtonStepSolver | None) -> np.ndarray:
@@ -245,7 +237,8 @@ def _search(problem: ContactProblem, step: LoadStep, u: PETSc.Vec | None, displa
         node_states = resume.node_states
     else:
         problem.physical_displacement(u, displacement)
-        node_states = _local_node_states(problem, states)
+        node_states = np.full(len(displacement.x.array) // 3, -1, dtype=np.int8)
+        node_states[problem.contact_blk] = states
     _search_in(problem, displacement, step_solver)
     problem.solver_variables(displacement, previous)
     return _node_states(problem, node_states)
