@@ -60,7 +60,7 @@ def _centroid(comm: MPI.Comm, x: np.ndarray, forces: np.ndarray) -> float:
     return moment / total
 
 
-def _slide(blocks, search: str, parameters: dict | None = None) -> list[dict]:
+def _slide(blocks, search: str, parameters: dict | None = None, slides: tuple[float, ...] = SLIDES) -> list[dict]:
     """Per step: the centroids of the normal forces on the slave and on the master nodes,
     the contact forces on both sides, the Coulomb bound's excess at the sliding nodes and
     the solver status."""
@@ -68,7 +68,7 @@ def _slide(blocks, search: str, parameters: dict | None = None) -> list[dict]:
     comm = msh.comm
     young, poisson = body_materials(msh, cell_tags, {"lower": (1e9, 0.3), "upper": (1e9, 0.3)})
     pair = BodyPair("upper.interface", "lower.interface", Coulomb(FRICTION), search=search)
-    steps = [LoadStep(1.0, (s, 0.0, -DELTA)) for s in SLIDES]
+    steps = [LoadStep(1.0, (s, 0.0, -DELTA)) for s in slides]
     rows = []
     with assemble_contact_problem(msh, tags, young, poisson, {}, [pair], clamped=["lower.bottom"],
                                   cell_tags=cell_tags, moved=["upper.top"]) as problem:
@@ -139,6 +139,16 @@ def test_a_pair_searched_until_settled_has_no_lag(blocks):
             assert row["bound_excess"] <= 1e-8 * slave[2], (k, row)
             assert -slave[0] >= 0.99 * FRICTION * slave[2], (k, row)
             assert abs(before["master_centroid"] - before["slave_centroid"]) >= 0.05  # the lag it removes
+
+
+def test_a_step_that_does_not_move_is_settled_without_a_search(blocks):
+    """Held at the same position, a step's displacement changes by round-off only once the
+    step before has settled (the second step still settles the first one's remainder,
+    1e-3 of its increment): it keeps that configuration instead of chasing round-off (which
+    fails any relative test) until ``max_searches``."""
+    rows = _slide(blocks, "until_settled", slides=(0.0, 0.0, 0.0))
+    assert [r["converged"] for r in rows] == [True] * 3
+    assert rows[2]["searches"] == 1
 
 
 def test_a_configuration_that_does_not_settle_fails_its_step(blocks):

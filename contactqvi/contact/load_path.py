@@ -68,6 +68,9 @@ PATH_PARAMETERS = Parameters(
     max_searches=Parameter(10, "search = until_settled: searches in a step's own configuration before the step "
                            "fails (diverged_max_it)", type=int, minimum=1),
 )
+#: A step whose displacement increment is below this fraction of the displacement has not
+#: moved (round-off): its configuration is the settled one of the step before.
+STILL = 1e-9
 #: Everything the ``[solver]`` table of a case file may hold: the SCD solver's parameters and the path's.
 SOLVER_PARAMETERS = Parameters({**PARAMETERS, **PATH_PARAMETERS})
 
@@ -263,7 +266,8 @@ def _settle(problem: ContactProblem, steps: typing.Sequence[LoadStep], index: in
     again from there, until a solve changes the displacement by at most ``geometry_tol``
     times the step's increment from ``before`` (the step before's displacement; zero before
     the first step), at most ``max_searches`` times (``path``: :data:`PATH_PARAMETERS`);
-    nothing when no pair of the problem is searched ``"until_settled"``.
+    nothing when the step did not move (:data:`STILL`) or no pair of the problem is searched
+    ``"until_settled"``.
 
     The slip stays measured from ``before`` (its u~ in the new variables goes to
     ``previous``); each solve starts from the last solution and stops at the first one's
@@ -280,7 +284,8 @@ def _settle(problem: ContactProblem, steps: typing.Sequence[LoadStep], index: in
         while result.converged:
             work.waxpy(-1.0, before.x.petsc_vec, reached.x.petsc_vec)
             increment = work.norm(PETSc.NormType.NORM_INFINITY)
-            if change <= path["geometry_tol"] * increment:
+            still = increment <= STILL * reached.x.petsc_vec.norm(PETSc.NormType.NORM_INFINITY)
+            if still or change <= path["geometry_tol"] * increment:
                 break
             if len(solves) > path["max_searches"]:
                 logger.warning("step %d: the configuration did not settle in %d searches (last change %.3g m "
