@@ -6,8 +6,10 @@ Units are SI as everywhere in contactqvi: stresses in Pa, forces in N.
   von Mises stress as cell-wise constant (DG0) fields, the cell averages of sigma(u).
 * :func:`reaction_forces`: the force each supported boundary exerts on the body,
   from the residual r(v) = a(u, v) - l(v) assembled without boundary conditions
-  (independent of any assembled, constrained or rotated matrix): at the dofs of a
-  support r is the support's reaction, so its sum over them is the resultant.
+  (independent of any assembled, constrained or rotated matrix): at a constrained
+  dof r is the reaction there; each prescribed component's reaction belongs to the
+  supports that prescribe that component at that node, shared equally when several
+  do, so the reactions do not depend on the order of the supports.
 * :func:`applied_force`: the resultant of tractions and body force.
 
 Global equilibrium: reactions + contact force + applied force = 0, up to the
@@ -44,9 +46,15 @@ class ElasticBody:
         young, poisson: E (Pa) and nu.
         facet_tags: facet tags with boundary names (:mod:`contactqvi.meshes`).
         supports: boundaries with a Dirichlet condition (clamped or prescribed
-            components), whose reaction forces are reported, in this order.
+            components), whose reaction forces are reported (in this order; the
+            values do not depend on it).
         tractions: surface traction (Pa) per boundary name, at load factor 1.
         body_force: volume force density (N/m^3) at load factor 1, or None.
+        prescribed: the components (0, 1, 2 for x, y, z) each support prescribes,
+            ``{name: (1,)}`` for a roller holding y. A support not listed prescribes
+            the components constrained at every one of its nodes (:func:`reaction_forces`;
+            what the case gives unless all its nodes also lie on supports that
+            prescribe more).
     """
 
     young: float
@@ -55,6 +63,7 @@ class ElasticBody:
     supports: tuple[str, ...] = ("dirichlet",)
     tractions: dict[str, Vector3] = dataclasses.field(default_factory=dict)
     body_force: Vector3 | None = None
+    prescribed: dict[str, tuple[int, ...]] = dataclasses.field(default_factory=dict)
 
 
 def von_mises(sigma: np.ndarray) -> np.ndarray:
@@ -125,9 +134,19 @@ def reaction_forces(
 ) -> dict[str, np.ndarray]:
     """Reaction force (N, global components) of each support of ``body`` on it.
 
-    The residual r(v) = a(u, v) - l(v) is assembled without boundary conditions
-    and summed over the constrained dofs of each support's nodes; a node on two
-    supports counts for the first in ``body.supports``. Collective.
+    The residual r(v) = a(u, v) - l(v) is assembled without boundary conditions; at a
+    constrained dof it is the reaction there. Each prescribed component's reaction at
+    a node belongs to the supports that prescribe that component there (a node on a
+    y-roller and a face with prescribed x and z gives r_y to the roller and r_x, r_z
+    to the face); where several supports prescribe the same component at a node (a
+    clamped face and a roller meeting at an edge, two clamped faces at a corner) its
+    reaction is split equally among them: no support is preferred, so no tie needs
+    breaking (a rule by the number of components held would still need one between
+    two clamped faces), and mirror-image supports get mirror-image reactions. The
+    reactions therefore do not depend on the order of ``body.supports``, and they add
+    up to r summed over all constrained dofs of the supports' nodes, whatever the
+    split. What a support prescribes: ``body.prescribed``, else the components
+    constrained at every one of its nodes. Collective.
 
     Args:
         u: displacement (global components; for a contact problem the physical
@@ -137,38 +156,92 @@ def reaction_forces(
         dirichlet_dofs_loc: local unrolled indices of the constrained dofs (global
             components, e.g. ``ContactProblem.dirichlet_dofs_loc``); the free
             components of a support node (a roller) carry other forces, such as
-            contact. None: every component of the supports' nodes.
+            contact. None: the components the supports prescribe at their nodes
+            (all three for a support not in ``body.prescribed``).
         nodal_forces: (owned nodes, 3) other forces on the nodes (N, global components),
             taken off the residual: what of them acts on a constrained component goes
             straight into the support (a contact force on a prescribed component of a
             master node, which the discrete problem does not see).
+
+    Raises:
+        ParameterError: a constrained component of a support node that no support
+            prescribes (``body.prescribed`` disagrees with ``dirichlet_dofs_loc``).
     """
     V = u.function_space
-    msh = V.mesh
-    mu, lmbda = lame_parameters(body.young, body.poisson)
-    v = ufl.TestFunction(V)
-    residual_form = fem.form(ufl.inner(stress(u, mu, lmbda), strain(v)) * ufl.dx - _load_form(msh, v, body, load_factor))
-    residual = fem.assemble_vector(residual_form)
-    residual.scatter_reverse(la.InsertMode.add)
-    n_owned = V.dofmap.index_map.size_local
-    values = residual.array[: 3 * n_owned].reshape(n_owned, 3)
+    comm = V.mesh.comm
+    values = _nodal_residual(u, body, load_factor)
     if nodal_forces is not None:
         values = values - nodal_forces
-    if dirichlet_dofs_loc is not None:
-        constrained = np.zeros(residual.array.size, dtype=bool)
-        constrained[dirichlet_dofs_loc] = True
-        values = values * constrained[: 3 * n_owned].reshape(n_owned, 3)
+    on_support = _support_nodes(V, body)
+    constrained = None if dirichlet_dofs_loc is None else _owned_components(dirichlet_dofs_loc, len(on_support))
+    prescribes = _prescribed_components(body, on_support, constrained, comm)
+    if constrained is None:  # what the supports prescribe at their nodes
+        constrained = on_support.astype(np.int64) @ prescribes.astype(np.int64) > 0
+    rows = np.flatnonzero(on_support.any(axis=1))
+    shares = _shares(on_support[rows], prescribes, constrained[rows], comm)
+    totals = comm.allreduce(np.einsum("nkc,nc->kc", shares, values[rows]), op=MPI.SUM)
+    return {name: totals[k] for k, name in enumerate(body.supports)}
+
+
+def _nodal_residual(u: fem.Function, body: ElasticBody, load_factor: float) -> np.ndarray:
+    """r = a(u, .) - l(.) assembled without boundary conditions at the owned nodes (owned nodes, 3; N)."""
+    V = u.function_space
+    mu, lmbda = lame_parameters(body.young, body.poisson)
+    v = ufl.TestFunction(V)
+    residual_form = ufl.inner(stress(u, mu, lmbda), strain(v)) * ufl.dx - _load_form(V.mesh, v, body, load_factor)
+    residual = fem.assemble_vector(fem.form(residual_form))
+    residual.scatter_reverse(la.InsertMode.add)
+    n_owned = V.dofmap.index_map.size_local
+    return residual.array[: 3 * n_owned].reshape(n_owned, 3).copy()
+
+
+def _support_nodes(V: fem.FunctionSpace, body: ElasticBody) -> np.ndarray:
+    """(owned nodes, supports) mask: the owned nodes of each of ``body.supports``. Collective."""
+    msh = V.mesh
     fdim = msh.topology.dim - 1
     msh.topology.create_connectivity(fdim, msh.topology.dim)
-    counted = np.zeros(n_owned, dtype=bool)
-    reactions = {}
-    for name in body.supports:
+    n_owned = V.dofmap.index_map.size_local
+    on_support = np.zeros((n_owned, len(body.supports)), dtype=bool)
+    for k, name in enumerate(body.supports):
         blk = fem.locate_dofs_topological(V, fdim, boundary_facets(body.facet_tags, name))
-        blk = blk[blk < n_owned]
-        blk = blk[~counted[blk]]
-        counted[blk] = True
-        reactions[name] = msh.comm.allreduce(values[blk].sum(axis=0), op=MPI.SUM)
-    return reactions
+        on_support[blk[blk < n_owned], k] = True
+    return on_support
+
+
+def _owned_components(dofs_loc: np.ndarray, n_owned: int) -> np.ndarray:
+    """(owned nodes, 3) mask of the components among ``dofs_loc`` (local unrolled indices)."""
+    constrained = np.zeros(3 * n_owned, dtype=bool)
+    constrained[dofs_loc[dofs_loc < 3 * n_owned]] = True
+    return constrained.reshape(n_owned, 3)
+
+
+def _prescribed_components(body: ElasticBody, on_support: np.ndarray, constrained: np.ndarray | None,
+                           comm: MPI.Comm) -> np.ndarray:
+    """(supports, 3) mask of the components each support prescribes: ``body.prescribed``, else
+    those ``constrained`` at every one of its nodes (on all ranks; all three if None). Collective."""
+    prescribes = np.ones((len(body.supports), 3), dtype=bool)
+    if constrained is not None:
+        free_nodes = comm.allreduce(on_support.T.astype(np.int64) @ (~constrained).astype(np.int64), op=MPI.SUM)
+        sizes = comm.allreduce(on_support.sum(axis=0), op=MPI.SUM)
+        prescribes = (free_nodes == 0) & (sizes > 0)[:, None]
+    for k, name in enumerate(body.supports):
+        if name in body.prescribed:
+            components = list(body.prescribed[name])
+            require(set(components) <= {0, 1, 2}, f"prescribed.{name}",
+                    f"components must be 0, 1 or 2, got {components!r}")
+            prescribes[k] = np.isin(np.arange(3), components)
+    return prescribes
+
+
+def _shares(on_support: np.ndarray, prescribes: np.ndarray, constrained: np.ndarray, comm: MPI.Comm) -> np.ndarray:
+    """(nodes, supports, 3): each support's share of each constrained component of the
+    nodes, 1 / (number of the node's supports that prescribe it) or 0. Collective."""
+    claims = on_support[:, :, None] & prescribes[None] & constrained[:, None, :]
+    claimants = claims.sum(axis=1)
+    unclaimed = comm.allreduce(int(np.count_nonzero(constrained & (claimants == 0))), op=MPI.SUM)
+    require(unclaimed == 0, "prescribed", f"{unclaimed} constrained components of support nodes are prescribed "
+            "by no support")
+    return claims / np.maximum(claimants, 1)[:, None, :]
 
 
 def applied_force(msh: dmesh.Mesh, body: ElasticBody, load_factor: float = 1.0) -> np.ndarray:

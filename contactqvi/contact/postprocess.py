@@ -21,10 +21,13 @@ owned cells, ParaView appends them into the dataset a serial run writes):
 
 Summary entries (:func:`contact_summary`), SI units listed under ``units``: total
 contact force of the obstacle on the body (N, global components), reaction force
-of each support (N), applied force (N) and the relative equilibrium error of
-their sum, contact/sticking/sliding areas (m^2, lumped nodal areas by state),
-node counts per state, the largest contact pressure and von Mises stress (Pa),
-the global l2 norm of u~ (m; the number demos print to compare runs).
+of each support (N; where supports meet, each prescribed component's reaction goes to
+the groups prescribing it, shared equally, :func:`~contactqvi.postprocess.reaction_forces`,
+so it does not depend on the order of the groups), applied force (N) and the relative
+equilibrium error of their sum, each body's force balance (several bodies),
+contact/sticking/sliding areas (m^2, lumped nodal areas by state), node counts per
+state, the largest contact pressure and von Mises stress (Pa), the global l2 norm of
+u~ (m; the number demos print to compare runs).
 """
 
 from __future__ import annotations
