@@ -11,6 +11,8 @@ partition on every run, and no ghost cells unless asked for.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
+import itertools
 import math
 import os
 import pathlib
@@ -23,7 +25,7 @@ import numpy as np
 from dolfinx import graph
 from dolfinx import mesh as dmesh
 
-from contactqvi.parameters import require
+from contactqvi.parameters import ParameterError, require
 
 __all__ = [
     "BOX_BOUNDARIES",
@@ -33,6 +35,8 @@ __all__ = [
     "create_contact_body",
     "create_unit_square",
     "create_unit_interval",
+    "SEPARATE_BODIES",
+    "SharedNodes",
     "read_gmsh",
     "split_by_body",
     "tag_of",
@@ -226,10 +230,19 @@ def read_gmsh(
 
     Physical groups of dimension gdim-1 become facet tags and those of dimension
     gdim cell tags; their gmsh names become ``facet_tags.names`` and
-    ``cell_tags.names`` (``dict[str, int]``).
+    ``cell_tags.names`` (``dict[str, int]``). The nodes that cells of two physical
+    volumes share become ``cell_tags.shared_nodes`` (a list of :class:`SharedNodes`;
+    legal in one body of several volumes, an error for bodies: :func:`split_by_body`).
 
     Returns:
         ``(mesh, facet_tags, cell_tags)``.
+
+    Raises:
+        ParameterError: (``mesh``) on every rank when the file is missing or gmsh cannot
+            read it, and before the mesh is distributed when DOLFINx cannot take the
+            model (a gmsh volume in two physical volumes, facets of a group with a node
+            in no cell: they ended in an MPI abort or a heap corruption), naming the
+            groups, the counts and where.
     """
     import gmsh
 
@@ -243,27 +256,16 @@ def read_gmsh(
     if not initialised:
         gmsh.initialize(interruptible=False)
     gmsh.option.setNumber("General.Terminal", 0)
-    names: dict[str, int] = {}
-    volumes: dict[str, int] = {}
-    counts: dict[str, int] = {}
     try:
-        error = None
+        model, error = None, None
         if comm.rank == 0:
             try:  # gmsh's errors (a bad script, a missing Include) happen on rank 0 only: shared below
-                gmsh.open(str(path))
-                if path.suffix == ".geo":
-                    gmsh.model.mesh.generate(gdim)
-                for dim, tag in gmsh.model.getPhysicalGroups(gdim - 1):
-                    name = gmsh.model.getPhysicalName(dim, tag) or str(tag)
-                    names[name] = tag
-                    counts[name] = sum(len(gmsh.model.mesh.getElements(dim, entity)[1][0])
-                                       for entity in gmsh.model.getEntitiesForPhysicalGroup(dim, tag))
-                volumes = {gmsh.model.getPhysicalName(dim, tag) or str(tag): tag
-                           for dim, tag in gmsh.model.getPhysicalGroups(gdim)}
+                model = _read_model(path, gdim)
             except Exception as exc:
                 error = f"gmsh cannot read {str(path)!r}: {exc}"
-        names, volumes, counts, error = comm.bcast((names, volumes, counts, error), root=0)
+        model, error = comm.bcast((model, error), root=0)
         require(error is None, "mesh", error or "")
+        require(model.fault is None, "mesh", model.fault or "")
         # Facet tags are distributed with the cells; with GhostMode.none DOLFINx 0.9 lost a whole
         # group now and then on 2 ranks (inclined_block.geo), so gmsh meshes keep shared-facet ghosts.
         partitioner = cell_partitioner(comm, dmesh.GhostMode.shared_facet)
@@ -271,13 +273,170 @@ def read_gmsh(
     finally:
         if not initialised:
             gmsh.finalize()
-    facet_tags.names, cell_tags.names = names, volumes
+    facet_tags.names, cell_tags.names = model.facet_groups, model.volumes
+    cell_tags.shared_nodes = model.shared
     n_owned_facets = msh.topology.index_map(gdim - 1).size_local
-    for name, tag in names.items():
+    for name, tag in model.facet_groups.items():
         found = comm.allreduce(int(np.count_nonzero(facet_tags.find(tag) < n_owned_facets)), op=MPI.SUM)
-        require(found == counts[name], "mesh", f"physical group {name!r}: {found} of its {counts[name]} facets "
-                "arrived after distributing the mesh")
+        require(found == model.facet_counts[name], "mesh", f"physical group {name!r}: {found} of its "
+                f"{model.facet_counts[name]} facets arrived after distributing the mesh")
     return msh, facet_tags, cell_tags
+
+
+@dataclasses.dataclass(frozen=True)
+class _GmshModel:
+    """What rank 0 reads from a gmsh model before DOLFINx distributes it.
+
+    Attributes:
+        facet_groups, volumes: physical groups of dimension gdim-1 and gdim, name -> tag.
+        facet_counts: number of facets of each facet group.
+        shared: the nodes that cells of two physical volumes share.
+        fault: why DOLFINx cannot take the model (error text), or None.
+    """
+
+    facet_groups: dict[str, int]
+    volumes: dict[str, int]
+    facet_counts: dict[str, int]
+    shared: list[SharedNodes]
+    fault: str | None
+
+
+def _read_model(path: pathlib.Path, gdim: int) -> _GmshModel:
+    """Open ``path`` in gmsh (rank 0 only; a ``.geo`` script is meshed) and check its mesh."""
+    import gmsh
+
+    gmsh.open(str(path))
+    if path.suffix == ".geo":
+        gmsh.model.mesh.generate(gdim)
+    groups = {dim: {gmsh.model.getPhysicalName(dim, tag) or str(tag): tag
+                    for _, tag in gmsh.model.getPhysicalGroups(dim)} for dim in (gdim - 1, gdim)}
+    facets = {name: _element_rows(gdim - 1, tag) for name, tag in groups[gdim - 1].items()}
+    cells = {name: _element_rows(gdim, tag) for name, tag in groups[gdim].items()}
+    entities = {name: np.asarray(gmsh.model.getEntitiesForPhysicalGroup(gdim, tag), dtype=np.int64)
+                for name, tag in groups[gdim].items()}
+    node_tags, node_x, _ = gmsh.model.mesh.getNodes()
+    nodes = _Nodes(np.asarray(node_tags, dtype=np.int64), np.asarray(node_x, dtype=float).reshape(-1, 3))
+    shared, fault = _mesh_faults(facets, cells, entities, nodes)
+    counts = {name: sum(len(rows) for rows in facets[name]) for name in facets}
+    return _GmshModel(groups[gdim - 1], groups[gdim], counts, shared, fault)
+
+
+def _element_rows(dim: int, tag: int) -> list[np.ndarray]:
+    """Node tags of the elements of physical group ``(dim, tag)``: one array per gmsh entity
+    and element type, one row per element."""
+    import gmsh
+
+    rows = []
+    for entity in gmsh.model.getEntitiesForPhysicalGroup(dim, tag):
+        types, _, nodes = gmsh.model.mesh.getElements(dim, entity)
+        rows += [np.asarray(tags, dtype=np.int64).reshape(-1, gmsh.model.mesh.getElementProperties(kind)[3])
+                 for kind, tags in zip(types, nodes)]
+    return rows
+
+
+@dataclasses.dataclass(frozen=True)
+class _Nodes:
+    """The nodes of a gmsh model: tags and coordinates (one row each)."""
+
+    tags: np.ndarray
+    x: np.ndarray
+
+    def box(self, tags: np.ndarray) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        """Corners of the bounding box of the nodes ``tags``; round-off around 0 printed as 0."""
+        order = np.argsort(self.tags)
+        x = self.x[order[np.searchsorted(self.tags, tags, sorter=order)]]
+        x = np.where(np.abs(x) < 1e-12 * max(float(np.abs(self.x).max()), 1e-300), 0.0, x)
+        return tuple(map(float, x.min(axis=0))), tuple(map(float, x.max(axis=0)))
+
+
+@dataclasses.dataclass(frozen=True)
+class SharedNodes:
+    """Nodes that cells of two physical volumes share: two bodies that are not separate meshes.
+
+    Attributes:
+        first, second: names of the physical volumes.
+        count: number of shared nodes.
+        lower, upper: corners of their bounding box (x, y, z).
+    """
+
+    first: str
+    second: str
+    count: int
+    lower: tuple[float, ...]
+    upper: tuple[float, ...]
+
+    def __str__(self) -> str:
+        return (f"physical volumes {self.first!r} and {self.second!r} share {self.count} nodes "
+                f"({_box_text(self.lower, self.upper)})")
+
+
+#: What the errors about bodies that share nodes advise (a gmsh script's fixes).
+SEPARATE_BODIES = (
+    "each body must be a mesh of its own, touching the others without common nodes. gmsh merges coincident "
+    "nodes of volumes extruded with Layers{} (a structured extrusion) where they touch, and joins volumes "
+    "by Coherence or BooleanFragments: start the bodies a small gap apart (e.g. 1e-6 m: the contact closes "
+    "it), or extrude without Layers{}, and do not use Coherence or BooleanFragments across bodies"
+)
+
+
+def _box_text(lower: typing.Sequence[float], upper: typing.Sequence[float]) -> str:
+    """``x = 0, y in [0, 0.2], z = 0``: where a set of nodes lies."""
+    return ", ".join(f"{axis} = {low:.4g}" if low == high else f"{axis} in [{low:.4g}, {high:.4g}]"
+                     for axis, low, high in zip("xyz", lower, upper))
+
+
+def _mesh_faults(facets: dict[str, list[np.ndarray]], cells: dict[str, list[np.ndarray]],
+                 entities: dict[str, np.ndarray], nodes: _Nodes) -> tuple[list[SharedNodes], str | None]:
+    """The nodes shared by physical volumes, and the error text of a model DOLFINx cannot take.
+
+    gmshio gives DOLFINx the cells of every physical volume, so a gmsh volume in two of them
+    gives each of its cells twice (a heap corruption in 0.9), and the facets of every facet
+    group: one with a node in no cell has no rank to go to (``MPI_ERR_RANK``, an abort).
+    Shared nodes alone are legal (one body of several volumes); with loose facets they are
+    the likely cause (an extrusion with Layers{} merged one body's nodes into another's).
+    """
+    for first, second in itertools.combinations(entities, 2):
+        common = np.intersect1d(entities[first], entities[second])
+        if len(common):
+            return [], (f"gmsh volume {int(common[0])} is in the physical volumes {first!r} and {second!r}: "
+                        "each cell must be in one physical volume")
+    used = {name: np.unique(np.concatenate([np.empty(0, np.int64)] + [r.ravel() for r in rows]))
+            for name, rows in cells.items()}
+    shared = _shared_nodes(used, nodes)
+    loose = _loose_facets(facets, np.unique(np.concatenate([np.empty(0, np.int64), *used.values()])), nodes)
+    if loose is None:
+        return shared, None
+    if shared:
+        return shared, f"{'; '.join(map(str, shared))}, and {loose}: {SEPARATE_BODIES}"
+    return shared, (f"{loose}: each facet of a physical group must be a face of a cell of a physical volume "
+                    "(is the group on a volume that is in no Physical Volume?)")
+
+
+def _shared_nodes(used: dict[str, np.ndarray], nodes: _Nodes) -> list[SharedNodes]:
+    """The nodes of the cells of two physical volumes, for each pair of volumes that has some."""
+    every = np.concatenate([np.empty(0, np.int64), *used.values()])
+    tags, counts = np.unique(every, return_counts=True)
+    several = tags[counts > 1]
+    shared = []
+    for first, second in itertools.combinations(used, 2) if len(several) else ():
+        common = np.intersect1d(np.intersect1d(used[first], several, assume_unique=True), used[second],
+                                assume_unique=True)
+        if len(common):
+            shared.append(SharedNodes(first, second, len(common), *nodes.box(common)))
+    return shared
+
+
+def _loose_facets(facets: dict[str, list[np.ndarray]], used: np.ndarray, nodes: _Nodes) -> str | None:
+    """Text naming the facets of each group that have a node in no cell, and where; None if none has."""
+    loose = {name: [r[~np.isin(r, used).all(axis=1)] for r in rows] for name, rows in facets.items()}
+    counts = {name: sum(len(r) for r in rows) for name, rows in loose.items()}
+    totals = {name: sum(len(r) for r in rows) for name, rows in facets.items()}
+    named = [f"{name!r} ({counts[name]} of {totals[name]})" for name in sorted(counts) if counts[name]]
+    if not named:
+        return None
+    orphans = np.setdiff1d(np.concatenate([r.ravel() for rows in loose.values() for r in rows]), used)
+    return (f"{sum(counts.values())} facets of the physical groups {', '.join(named)} have nodes in no cell "
+            f"({len(orphans)} nodes, {_box_text(*nodes.box(orphans))})")
 
 
 def split_by_body(msh: dmesh.Mesh, facet_tags: dmesh.MeshTags, cell_tags: dmesh.MeshTags) -> dmesh.MeshTags:
@@ -287,7 +446,14 @@ def split_by_body(msh: dmesh.Mesh, facet_tags: dmesh.MeshTags, cell_tags: dmesh.
     the boundary of body ``b`` gets the name ``"b.g"``, so one gmsh group (e.g.
     ``"top"``) can span several bodies and each body's part is addressed on its own.
     Groups with no facets on a body get no name for it.
+
+    Raises:
+        ParameterError: (``mesh``) if two bodies share nodes (``cell_tags.shared_nodes``
+            of :func:`read_gmsh`): naming them, how many nodes and where, on every rank.
     """
+    shared = getattr(cell_tags, "shared_nodes", [])
+    if shared:
+        raise ParameterError("mesh", f"{'; '.join(map(str, shared))}: {SEPARATE_BODIES}")
     tdim = msh.topology.dim
     msh.topology.create_connectivity(tdim - 1, tdim)
     f2c = msh.topology.connectivity(tdim - 1, tdim)
