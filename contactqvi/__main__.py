@@ -35,7 +35,7 @@ def demo_directory() -> pathlib.Path | None:
 
 
 def run(argv: list[str]) -> int:
-    """``run CASE.toml --output DIR [--restart] [--no-plot] [--log-level L] [-petsc_options]``."""
+    """``run CASE.toml --output DIR [--restart] [--stop-after K] [--no-plot] [--log-level L] [-petsc_options]``."""
     from mpi4py import MPI
 
     from contactqvi import cli
@@ -51,10 +51,14 @@ def run(argv: list[str]) -> int:
     parser.add_argument("--restart", action="store_true",
                         help="continue after the last complete checkpoint in --output (any number of ranks; "
                              "from step 1 when there is none)")
+    parser.add_argument("--stop-after", type=int, metavar="K",
+                        help="stop after step K with its checkpoint, as if interrupted (exit 3); continue with "
+                             "--restart")
     try:
         args = cli.parse_args(parser, argv)
         case = load_case(args.case)
-        _, code = run_case(case, args.output, MPI.COMM_WORLD, plot=not args.no_plot, restart=args.restart)
+        _, code = run_case(case, args.output, MPI.COMM_WORLD, plot=not args.no_plot, restart=args.restart,
+                           stop_after=args.stop_after)
     except ParameterError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_CODES["bad input"]

@@ -33,6 +33,7 @@ from contactqvi import tables
 from contactqvi.case import Body, ContactCase, ContactPair, check_groups, check_solver
 from contactqvi.contact.checkpoint import Checkpoint, CheckpointWriter, read_checkpoint, remove_checkpoints
 from contactqvi.contact.load_path import SOLVER_PARAMETERS, LoadStep, solve_load_path
+from contactqvi.contact.path_state import PathState
 from contactqvi.contact.figures import plot_contact_states, plot_deformed_bodies
 from contactqvi.contact.postprocess import ContactResultsWriter
 from contactqvi.contact.interface import BodyPair, ObstaclePair
@@ -121,7 +122,8 @@ def _pair(pair: ContactPair) -> ObstaclePair | BodyPair:
 
 
 def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
-             plot: bool = True, restart: bool = False) -> tuple[dict[str, typing.Any], int]:
+             plot: bool = True, restart: bool = False,
+             stop_after: int | None = None) -> tuple[dict[str, typing.Any], int]:
     """Solve the case's load path and write the results to ``output``.
 
     The first step starts from the body at rest (``solver.start = "rest"``, the
@@ -133,7 +135,8 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
     (:mod:`contactqvi.contact.checkpoint`). With ``restart`` the run continues after the
     last complete checkpoint of ``output`` (on any number of ranks; from step 1 when
     there is none): the output files keep the steps before it and the summary its
-    counts. SIGTERM and SIGINT (a batch system's time limit, Ctrl-C) stop the run at
+    counts. With ``stop_after`` = k the run stops after step k as if interrupted there
+    (status ``interrupted``, its checkpoint kept), to be continued with ``restart``. SIGTERM and SIGINT (a batch system's time limit, Ctrl-C) stop the run at
     the next Newton step: the summary is written with ``status = "interrupted"`` and the
     last checkpoint is kept. The output directory is checked to be writable, and the
     checkpoint to belong to this case, before the mesh is read.
@@ -143,26 +146,30 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
         0 when every step converged, 1 when one did not, 3 when interrupted.
     """
     parameters = check_solver(case, SOLVER_PARAMETERS)
+    require(stop_after is None or stop_after >= 1, "--stop-after", f"must be a step number >= 1, got {stop_after}")
+    steps = case.steps[:stop_after]
     _check_output(comm, output)
     checkpoint = _checkpoint(case, output, comm, restart)
-    if checkpoint is not None and checkpoint.step == len(case.steps):
-        logger.info("the checkpoint in %s holds every step: nothing to solve", output)
+    if checkpoint is not None and checkpoint.step >= len(steps):
+        logger.info("the checkpoint in %s holds every step asked for: nothing to solve", output)
         status = Status[checkpoint.summary["status"].upper()]
         return checkpoint.summary, EXIT_CODES["converged" if status.converged else "not converged"]
     with default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, _stop_signals() as stop:
         logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks",
                     problem.n_contact, problem.n_free, len(case.steps), comm.size)
         recorder = _StepRecorder(case, problem, output, checkpoint, stop)
-        resume = None if checkpoint is None else checkpoint.resume(problem)
-        u = problem.A.createVecRight()
+        state = PathState.at_rest(problem) if checkpoint is None else checkpoint.resume(problem)
+        first, u = state.done, problem.A.createVecRight()
         try:
-            results = solve_load_path(problem, case.steps, u, parameters, PREFIX, recorder.record,
-                                      case.solver.get("start", "rest") == "rest", resume, recorder.stop_requested)
-            code = _exit_code(results, len(case.steps) - (0 if resume is None else resume.done))
+            results = solve_load_path(problem, steps, u, parameters, PREFIX, recorder.record,
+                                      case.solver.get("start", "rest") == "rest", state, recorder.stop_requested)
+            code = _exit_code(results, len(steps) - first)
+            if code == EXIT_CODES["converged"] and len(steps) < len(case.steps):
+                recorder.stopped(len(steps))
+                code = EXIT_CODES["interrupted"]
         finally:
-            for vec in (u, None if resume is None else resume.previous):
-                if vec is not None:
-                    vec.destroy()
+            for owner in (u, state):
+                owner.destroy()
             recorder.writer.close()  # keeps every converged step, also when a later one raised
     if plot and recorder.writer.last is not None:
         _draw_figures(recorder.writer, recorder.summary, comm)
@@ -187,16 +194,22 @@ class _StepRecorder:
         self.problem, self._stop = problem, stop
         self.summary = _start_summary(case, problem, checkpoint)
         self.writer = ContactResultsWriter(output, problem.comm, keep=0 if checkpoint is None else checkpoint.step)
-        self.checkpoints = (CheckpointWriter(output, problem) if checkpoint is None
-                            else CheckpointWriter(output, problem, checkpoint.target, checkpoint.step))
+        self.checkpoints = CheckpointWriter(output, problem, 0 if checkpoint is None else checkpoint.step)
+
+    def stopped(self, step: int) -> None:
+        """The run stopped after ``step`` as asked (``stop_after``): the summary says ``interrupted``."""
+        logger.info("stopped after step %d as asked; continue with --restart", step)
+        self.summary["status"] = str(Status.INTERRUPTED)
+        tables.write_summary(self.problem.comm, self.writer.out / "summary.json", self.summary)
 
     def stop_requested(self) -> bool:
         """Whether a signal arrived on any rank (collective)."""
         return self.problem.comm.allreduce(self._stop.is_set(), op=MPI.LOR)
 
-    def record(self, index: int, step: LoadStep, u: PETSc.Vec, result: SCDNewtonResult) -> None:
-        """Write step ``index``'s results (if it converged), the summary, and its checkpoint
-        (if it converged); an :class:`OutputError` if the output cannot be written."""
+    def record(self, index: int, step: LoadStep, u: PETSc.Vec, result: SCDNewtonResult, state: PathState) -> None:
+        """Write step ``index``'s results (if it converged), the summary, and the path's
+        ``state`` as a checkpoint (if it converged); an :class:`OutputError` if the output
+        cannot be written."""
         entry = {"step": index + 1, "load": step.load, "translation": list(step.translation), **result.summary()}
         if index == 0 or self.problem.searched_each_step:  # the search this step's problem comes from
             entry.update(p=self.problem.n_contact, search_seconds=dict(self.problem.setup_seconds))
@@ -209,7 +222,7 @@ class _StepRecorder:
             summary["status"] = str(result.status)
             tables.write_summary(self.problem.comm, writer.out / "summary.json", summary)
             if result.converged:
-                self.checkpoints.write(index + 1, u, writer.last.displacement, result, summary)
+                self.checkpoints.write(state, summary)
         except OSError as exc:
             raise OutputError(f"output: writing step {index + 1} to {writer.out} failed ({exc}); the last "
                               f"complete checkpoint, of step {self.checkpoints.step}, is kept") from exc

@@ -79,7 +79,7 @@ def _slide(blocks, search: str, parameters: dict | None = None, slides: tuple[fl
         reference = V.tabulate_dof_coordinates()[:n_owned]
         displacement = fem.Function(V)
 
-        def record(index, step, u, result):
+        def record(index, step, u, result, state):
             x = reference + problem.physical_displacement(u, displacement).x.array.reshape(-1, 3)[:n_owned]
             forces = problem.nodal_contact_forces(result.normal_force, result.friction_force)
             slave = problem.contact_blk

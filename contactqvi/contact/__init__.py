@@ -6,6 +6,7 @@ from contactqvi.contact.interface import BodyPair, Interface, ObstaclePair
 from contactqvi.contact.load_path import LoadStep, contact_resultants, solve_load_path
 from contactqvi.contact.mortar import MortarCoupling, mortar_coupling
 from contactqvi.contact.newton_step_solver import NEWTON_STEP_SOLVERS, NewtonStepSolver
+from contactqvi.contact.path_state import PathState
 from contactqvi.contact.nodal import (
     Normal,
     State,
@@ -30,6 +31,7 @@ __all__ = [
     "NewtonStepSolver",
     "Normal",
     "ObstaclePair",
+    "PathState",
     "SCDNewtonResult",
     "SCDNewtonSolver",
     "State",

@@ -1,5 +1,7 @@
 """Checkpoints of a load path: what a run needs to continue after its last converged step.
 
+A checkpoint is the load path's :class:`~contactqvi.contact.path_state.PathState` after
+a converged step, written whole (its fields and where each is read are listed there).
 After every converged load step the runner writes, into ``OUTPUT/checkpoint/``
 (adios4dolfinx, ADIOS2 BP4):
 
@@ -7,13 +9,12 @@ After every converged load step the runner writes, into ``OUTPUT/checkpoint/``
   on any number of ranks, for users who want the fields without the case file);
 * ``step_0007.bp`` after step 7: ``displacement`` (u~, global components, m),
   ``solver_variables`` (u - d, the SCD solver's unknowns: nodal frames at the contact
-  nodes, the mortar relative displacement at slave nodes of body pairs; this is what
-  the next step starts from, :func:`~contactqvi.contact.load_path.solve_load_path`;
-  a problem searched each step starts from ``displacement`` instead, searched again in
-  that configuration) and ``contact_state`` (the :class:`~contactqvi.contact.nodal.State` of each contact
-  node, -1 elsewhere: the next step's predictor keeps the touching nodes);
-* ``checkpoint.json``, written last and atomically: the step, its file, the first
-  step's stopping target and the summary so far.
+  nodes, the mortar relative displacement at slave nodes of body pairs) and
+  ``contact_state`` (the :class:`~contactqvi.contact.nodal.State` of each contact
+  node, -1 elsewhere);
+* ``checkpoint.json``, written last and atomically: the step, its file, the step's load
+  factor and translation (the obstacles' position the next step's slip is measured
+  from), the first step's stopping target and the summary so far.
 
 A checkpoint exists only once ``checkpoint.json`` names it: a step file being written
 when the run died is never read, and the one before is removed only after the marker
@@ -22,7 +23,7 @@ has moved on. The fields are written against the mesh's input cell order
 ``read_function`` fills them into the mesh that the case file builds on any number of
 ranks (N-to-M restart). On the same number of ranks the partition and the dof
 numbering are those of the interrupted run and the restored vectors are bitwise
-the ones it held.
+the ones it held; the marker's numbers are exact (JSON keeps a float's shortest repr).
 """
 
 from __future__ import annotations
@@ -42,9 +43,8 @@ import numpy as np
 import adios4dolfinx
 from dolfinx import fem
 
-from contactqvi.contact.load_path import Resume
+from contactqvi.contact.path_state import PathState
 from contactqvi.contact.problem import ContactProblem
-from contactqvi.contact.scd_newton import SCDNewtonResult
 from contactqvi.parameters import ParameterError
 from contactqvi.tables import atomic_path, prepare_output_dir, to_builtin, write_summary
 
@@ -63,40 +63,39 @@ class Checkpoint:
     Attributes:
         step: number of converged load steps it holds (1-based index of the last).
         path: its step file (``step_XXXX.bp``).
+        load, translation: load factor and translation (m) of that step.
         target: the first step's stopping target ||y^|| (N), the accuracy of every later step.
         summary: ``summary.json`` as it was after that step.
     """
 
     step: int
     path: pathlib.Path
+    load: float
+    translation: tuple[float, float, float]
     target: float
     summary: dict[str, typing.Any]
 
-    def resume(self, problem: ContactProblem) -> Resume:
-        """The load path's state after :attr:`step`, read into ``problem``'s vectors (collective).
-
-        A problem searched each step resumes from the physical displacement (its variables
-        follow from the search in that configuration); any other from its solver variables.
-        """
+    def resume(self, problem: ContactProblem) -> PathState:
+        """The load path's state after :attr:`step`, read into ``problem``'s space (collective;
+        the caller destroys it)."""
+        state = PathState.at_rest(problem)
         V = problem.V
         S, node_of_dof = _state_space(V)
-        states = fem.Function(S, name="contact_state")
-        read = [states] + [fem.Function(V, name="displacement" if problem.searched_each_step else "solver_variables")]
-        for f in read:
+        states, variables = fem.Function(S, name="contact_state"), fem.Function(V, name="solver_variables")
+        for f in (states, variables, state.displacement):
             adios4dolfinx.read_function(self.path, f, engine=_ENGINE, time=float(self.step), name=f.name)
-        node_state = np.full(V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts, -1, dtype=np.int8)
-        node_state[node_of_dof] = np.rint(states.x.array)
-        if problem.searched_each_step:
-            return Resume(done=self.step, previous=None, displacement=read[1], node_states=node_state,
-                          target=self.target)
-        missing = problem.comm.allreduce(int(np.count_nonzero(node_state[problem.contact_blk] < 0)), op=MPI.SUM)
-        if missing:
+        state.node_states[node_of_dof] = np.rint(states.x.array)
+        n_owned = state.variables.getLocalSize()
+        state.variables.array[:] = variables.x.array[:n_owned]
+        state.done, state.load, state.translation = self.step, self.load, np.array(self.translation)
+        state.target = self.target
+        missing = problem.comm.allreduce(int(np.count_nonzero(state.node_states[problem.contact_blk] < 0)),
+                                         op=MPI.SUM)
+        if missing and not problem.searched_each_step:  # a search finds its own contact nodes
+            state.destroy()
             raise ParameterError("--restart", f"{missing} contact nodes of the case have no state in the checkpoint "
                                  f"{self.path}: it was written for another contact surface")
-        previous = problem.A.createVecRight()
-        previous.array[:] = read[1].x.array[: previous.getLocalSize()]
-        return Resume(done=self.step, previous=previous, displacement=None, node_states=node_state,
-                      target=self.target)
+        return state
 
 
 def remove_checkpoints(comm: MPI.Comm, output: str | os.PathLike) -> None:
@@ -122,7 +121,11 @@ def read_checkpoint(comm: MPI.Comm, output: str | os.PathLike, case: dict[str, t
                          if to_builtin(case.get(k)) != summary.get("case", {}).get(k))
         raise ParameterError("--restart", f"the checkpoint in {marker.parent} was written for another case "
                              f"(different: {', '.join(changed) or 'the case'}); use a new --output directory")
-    return Checkpoint(int(data["step"]), marker.parent / data["file"], float(data["target"]), summary)
+    if "translation" not in data:
+        raise ParameterError("--restart", f"the checkpoint in {marker.parent} was written by an older contactqvi "
+                             "without the obstacles' position; use a new --output directory")
+    return Checkpoint(int(data["step"]), marker.parent / data["file"], float(data["load"]),
+                      tuple(float(t) for t in data["translation"]), float(data["target"]), summary)
 
 
 class CheckpointWriter:
@@ -131,17 +134,13 @@ class CheckpointWriter:
     Args:
         output: the run's output directory.
         problem: the contact problem being solved.
-        target, step: the first step's stopping target and the last step checkpointed,
-            when a restart continues a checkpoint.
+        step: the last step checkpointed, when a restart continues a checkpoint.
     """
 
-    def __init__(self, output: str | os.PathLike, problem: ContactProblem, target: float | None = None,
-                 step: int = 0):
+    def __init__(self, output: str | os.PathLike, problem: ContactProblem, step: int = 0):
         self.directory = pathlib.Path(output) / DIRECTORY
-        self.target = target  # the first step's stopping target, known after it (or from a checkpoint)
         self.step = step  # the last step checkpointed (0: none yet)
         self.comm = problem.comm
-        self.problem = problem
         V = problem.V
         S, self._node_of_dof = _state_space(V)
         self._variables = fem.Function(V, name="solver_variables")
@@ -152,27 +151,23 @@ class CheckpointWriter:
             with atomic_path(self.comm, mesh_file) as tmp:
                 adios4dolfinx.write_mesh_input_order(tmp, V.mesh, engine=_ENGINE)
 
-    def write(self, step: int, u: PETSc.Vec, displacement: fem.Function, result: SCDNewtonResult,
-              summary: dict[str, typing.Any]) -> None:
-        """Checkpoint after ``step`` converged steps: ``u`` the solver's solution (shifted),
-        ``displacement`` u~ (global components), ``result`` the step's, ``summary`` the run's."""
-        problem = self.problem
-        if step == 1:
-            self.target = result.target
-        n_owned = u.getLocalSize()
-        self._variables.x.array[:n_owned] = u.array - problem.shift.array  # u~ in the solver's variables
+    def write(self, state: PathState, summary: dict[str, typing.Any]) -> None:
+        """Checkpoint the load path's ``state`` after its last converged step; ``summary`` the run's."""
+        n_owned = state.variables.getLocalSize()
+        self._variables.x.array[:n_owned] = state.variables.array
         self._variables.x.scatter_forward()
-        node_state = np.full(self._variables.x.array.size // 3, -1.0)
-        node_state[problem.contact_blk] = result.states
-        self._states.x.array[:] = node_state[self._node_of_dof]
+        self._states.x.array[:] = state.node_states[self._node_of_dof]
         self._states.x.scatter_forward()
-        name = f"step_{step:04d}.bp"
+        name = f"step_{state.done:04d}.bp"
         with atomic_path(self.comm, self.directory / name) as tmp:
-            for f in (displacement, self._variables, self._states):  # appended to a new file
-                adios4dolfinx.write_function_on_input_mesh(tmp, f, engine=_ENGINE, time=float(step), name=f.name)
+            for f in (state.displacement, self._variables, self._states):  # appended to a new file
+                adios4dolfinx.write_function_on_input_mesh(tmp, f, engine=_ENGINE, time=float(state.done),
+                                                           name=f.name)
         write_summary(self.comm, self.directory / _MARKER,
-                      {"step": step, "file": name, "target": self.target, "summary": summary})
-        self.step = step
+                      {"step": state.done, "file": name, "load": state.load,
+                       "translation": [float(t) for t in state.translation], "target": state.target,
+                       "summary": summary})
+        self.step = state.done
         if self.comm.rank == 0:  # the marker has moved on: older step files are garbage
             for old in self.directory.glob("step_*.bp"):
                 if old.name != name:

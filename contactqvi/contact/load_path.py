@@ -8,7 +8,10 @@ k - 1 relative to the obstacle's tangential motion c_k - c_{k-1}
 by the SCD semismooth* Newton method from the previous step's solution, with the
 nodes that touched the obstacle moved along with it (no slip increment); the
 first step starts from the given guess, or a load path continues after the steps
-of a checkpoint (:class:`Resume`, :mod:`contactqvi.contact.checkpoint`).
+of a checkpoint (:mod:`contactqvi.contact.checkpoint`). All that a step reads from
+the steps before is one :class:`~contactqvi.contact.path_state.PathState`, updated
+after each converged step and checkpointed whole, so a restarted path is the
+uninterrupted one.
 
 Body pairs searched each step are found again before every step after the first,
 in the configuration the step before ended in
@@ -45,18 +48,19 @@ from dolfinx import fem
 
 from contactqvi.contact.newton_step_solver import NewtonStepSolver
 from contactqvi.contact.nodal import State
+from contactqvi.contact.path_state import PathState
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult, SCDNewtonSolver, newton_step_solver
 from contactqvi.load_steps import LoadStep, check_steps
 from contactqvi.parameters import Parameter, Parameters
 from contactqvi.result import Status, Timings
 
-__all__ = ["PATH_PARAMETERS", "SOLVER_PARAMETERS", "LoadStep", "Resume", "check_steps", "contact_resultants",
+__all__ = ["PATH_PARAMETERS", "SOLVER_PARAMETERS", "LoadStep", "PathState", "check_steps", "contact_resultants",
            "solve_load_path"]
 
 logger = logging.getLogger(__name__)
 
-StepCallback = typing.Callable[[int, "LoadStep", PETSc.Vec, SCDNewtonResult], None]
+StepCallback = typing.Callable[[int, LoadStep, PETSc.Vec, SCDNewtonResult, PathState], None]
 
 #: The states of a contact node that touches its master surface.
 TOUCHING = (State.SLIDING, State.STICKING, State.WEAK_STICKING)
@@ -75,29 +79,6 @@ STILL = 1e-9
 SOLVER_PARAMETERS = Parameters({**PARAMETERS, **PATH_PARAMETERS})
 
 
-@dataclasses.dataclass(frozen=True)
-class Resume:
-    """Where a load path continues: after its first ``done`` steps, which converged.
-
-    Attributes:
-        done: number of steps solved before.
-        previous: u~ = u - d of step ``done`` in the solver's variables (owned by the
-            caller); None when the problem is searched each step (it follows from
-            ``displacement`` after the search).
-        displacement: the physical displacement of step ``done`` (global components)
-            when the problem is searched each step, else None.
-        node_states: :class:`~contactqvi.contact.nodal.State` at step ``done`` of each
-            local node, -1 where it was no contact node.
-        target: the first step's stopping target ||y^|| (N), the accuracy of every later step.
-    """
-
-    done: int
-    previous: PETSc.Vec | None
-    displacement: fem.Function | None
-    node_states: np.ndarray
-    target: float
-
-
 def solve_load_path(
     problem: ContactProblem,
     steps: typing.Sequence[LoadStep],
@@ -106,7 +87,7 @@ def solve_load_path(
     prefix: str = "coulomb_",
     on_step: StepCallback | None = None,
     from_rest: bool = False,
-    resume: Resume | None = None,
+    state: PathState | None = None,
     stop: typing.Callable[[], bool] | None = None,
 ) -> list[SCDNewtonResult]:
     """Solve the steps in turn with one SCD Newton solver (one per step when the problem is
@@ -118,43 +99,43 @@ def solve_load_path(
             step's solution on return.
         parameters, prefix: SCD Newton parameters and the path's (:data:`SOLVER_PARAMETERS`),
             PETSc options prefix of the Newton-step KSP.
-        on_step: called after each step with (index, step, u, result), e.g. to write output.
+        on_step: called after each step with (index, step, u, result, state), e.g. to write
+            output and checkpoints (``state``: after the last converged step).
         from_rest: start the first step from the body at rest (u~ = 0) instead of ``u``.
-        resume: continue after the steps of a checkpoint instead (``u`` is then ignored).
+        state: the path's state to continue from, after its ``state.done`` steps (a
+            checkpoint's; ``u`` is then ignored), updated in place as steps converge
+            (owned by the caller); None: from step 1.
         stop: asked before each Newton step (collective); true ends the step as ``interrupted``.
 
     Every later step stops at the first step's target ||y^|| (``atol`` of ``solve``) if its
     own test asks for more: a small increment is not solved to ``rtol`` of its own small start.
 
-    Returns the results of the steps solved (after ``resume.done``); the last one failed if not converged.
+    Returns the results of the steps solved (after ``state.done``); the last one failed if not converged.
     """
     check_steps(steps)
     parameters, path = _split(parameters)
     results: list[SCDNewtonResult] = []
-    first, target = (0, 0.0) if resume is None else (resume.done, resume.target)
+    own, state = state is None, PathState.at_rest(problem) if state is None else state
     solver: SCDNewtonSolver | None = None
-    previous = u.duplicate() if resume is None or resume.previous is None else resume.previous.copy()
-    states = None if resume is None else _node_states(problem, resume.node_states)
-    displacement = fem.Function(problem.V) if problem.searched_each_step else None
-    carried = _path_levels(problem, parameters, prefix) if displacement is not None else None
+    carried = _path_levels(problem, parameters, prefix) if problem.searched_each_step else None
     try:
-        for index in range(first, len(steps)):
-            if index > 0 and displacement is not None and solver is not None:
+        for index in range(state.done, len(steps)):
+            if problem.searched_each_step and solver is not None:
                 carried, solver = _released(solver), None
-            states = _start(problem, steps, index, first, u, previous, states, from_rest, displacement, resume,
-                            carried)
+            _start(problem, steps[index], u, state, from_rest, carried)
             if solver is None:
                 solver, carried = SCDNewtonSolver(problem, parameters, prefix=prefix, step_solver=carried), None
-            result = solver.solve(u, atol=target, stop=stop)
-            solver, result = _settle(problem, steps, index, u, previous, displacement, solver, result, stop, path)
+            result = solver.solve(u, atol=state.target, stop=stop)
+            solver, result = _settle(problem, steps[index], u, state, solver, result, stop, path)
             results.append(result)
-            target, states = (result.target if index == 0 else target), result.states
+            if result.converged:
+                state.record(problem, u, result)
             if on_step is not None:
-                on_step(index, steps[index], u, result)
+                on_step(index, steps[index], u, result, state)
             if not result.converged:
                 break
     finally:
-        for owner in (previous, solver, carried):
+        for owner in (solver, carried, state if own else None):
             if owner is not None:
                 owner.destroy()
     return results
@@ -195,56 +176,24 @@ def _path_levels(problem: ContactProblem, parameters: dict | None, prefix: str) 
     return None
 
 
-def _start(problem: ContactProblem, steps: typing.Sequence[LoadStep], index: int, first: int, u: PETSc.Vec,
-           previous: PETSc.Vec, states: np.ndarray | None, from_rest: bool, displacement: fem.Function | None,
-           resume: Resume | None, step_solver: NewtonStepSolver | None) -> np.ndarray | None:
-    """Set step ``index`` of a load path that began at ``first`` and put its initial guess in ``u``
-    (after a step: its solution ``u``, or ``previous`` of a checkpoint when ``index == first``);
-    a search updates the levels of ``step_solver`` (if any) for the new A.
-    Returns the contact states of the step before, carried over to the problem's contact nodes."""
-    step = steps[index]
-    logger.info("step %d: load factor %g, obstacle translation %s m", index + 1, step.load,
+def _start(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState, from_rest: bool,
+           step_solver: NewtonStepSolver | None) -> None:
+    """Set ``step``, the one after ``state``'s, and put its initial guess in ``u``: the guess
+    given (or rest) for the first step, else the predictor of :func:`_continue`; a problem
+    searched each step is searched first in the configuration of the step before, which
+    updates the levels of ``step_solver`` (if any) for the new A."""
+    logger.info("step %d: load factor %g, obstacle translation %s m", state.done + 1, step.load,
                 np.array2string(np.asarray(step.translation), precision=4))
-    if index == 0:
+    if state.done == 0:
         problem.set_step(step.load, step.translation)
         if from_rest:
             problem.shift.copy(u)  # u~ = 0
-        return states
-    if index > first:
-        previous.waxpy(-1.0, problem.shift, u)  # u~ of the last step, solver variables
-    if displacement is not None:
-        states = _search(problem, steps[index - 1], u if index > first else None, displacement, previous, states,
-                         resume, step_solver)
-    _continue(problem, step, u, previous, states)
-    return states
-
-
-def _node_states(problem: ContactProblem, node_states: np.ndarray) -> np.ndarray:
-    """The states of the problem's contact nodes from states per local node (-1: none there,
-    taken as not in contact)."""
-    states = node_states[problem.contact_blk]
-    return np.where(states < 0, State.NO_CONTACT, states).astype(np.int8)
-
-
-def _search(problem: ContactProblem, step: LoadStep, u: PETSc.Vec | None, displacement: fem.Function,
-            previous: PETSc.Vec, states: np.ndarray, resume: Resume | None,
-            step_solver: NewtonStepSolver | None) -> np.ndarray:
-    """Search the problem again in the configuration of the last step (``step``, solution
-    ``u``; None: the checkpoint's ``resume``), update ``step_solver``'s levels (if any) for
-    the new A, and put its u~ into ``previous`` in the new variables. Returns the contact
-    states carried over node by node."""
-    if u is None:
-        problem.set_step(step.load, step.translation)  # the last step's load factor and translation
-        resume.displacement.x.petsc_vec.copy(displacement.x.petsc_vec)
-        displacement.x.scatter_forward()
-        node_states = resume.node_states
-    else:
-        problem.physical_displacement(u, displacement)
-        node_states = np.full(len(displacement.x.array) // 3, -1, dtype=np.int8)
-        node_states[problem.contact_blk] = states
-    _search_in(problem, displacement, step_solver)
-    problem.solver_variables(displacement, previous)
-    return _node_states(problem, node_states)
+        return
+    if problem.searched_each_step:
+        problem.set_step(state.load, state.translation)  # the step before: its prescribed and moved parts
+        _search_in(problem, state.displacement, step_solver)
+        problem.solver_variables(state.displacement, state.variables)
+    _continue(problem, step, u, state)
 
 
 def _search_in(problem: ContactProblem, configuration: fem.Function, step_solver: NewtonStepSolver | None) -> None:
@@ -258,26 +207,26 @@ def _search_in(problem: ContactProblem, configuration: fem.Function, step_solver
                 problem.setup_seconds["change_of_variables"])
 
 
-def _settle(problem: ContactProblem, steps: typing.Sequence[LoadStep], index: int, u: PETSc.Vec,
-            previous: PETSc.Vec, before: fem.Function, solver: SCDNewtonSolver, result: SCDNewtonResult,
-            stop: typing.Callable[[], bool] | None,
+def _settle(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState, solver: SCDNewtonSolver,
+            result: SCDNewtonResult, stop: typing.Callable[[], bool] | None,
             path: dict[str, typing.Any]) -> tuple[SCDNewtonSolver, SCDNewtonResult]:
-    """Search step ``index`` again in the configuration its solution ``u`` reached and solve it
-    again from there, until a solve changes the displacement by at most ``geometry_tol``
-    times the step's increment from ``before`` (the step before's displacement; zero before
-    the first step), at most ``max_searches`` times (``path``: :data:`PATH_PARAMETERS`);
-    nothing when the step did not move (:data:`STILL`) or no pair of the problem is searched
-    ``"until_settled"``.
+    """Search ``step``, the one after ``state``'s, again in the configuration its solution ``u``
+    reached and solve it again from there, until a solve changes the displacement by at most
+    ``geometry_tol`` times the step's increment from ``state.displacement`` (the step before's;
+    zero before the first step), at most ``max_searches`` times (``path``:
+    :data:`PATH_PARAMETERS`); nothing when the step did not move (:data:`STILL`) or no pair
+    of the problem is searched ``"until_settled"``.
 
-    The slip stays measured from ``before`` (its u~ in the new variables goes to
-    ``previous``); each solve starts from the last solution and stops at the first one's
-    target ||y^||. Returns the solver of the last solve (``solver`` is destroyed) and the
+    The slip stays measured from the step before (its u~ in the new variables goes to
+    ``state.variables``); each solve starts from the last solution and stops at the first
+    one's target ||y^||. Returns the solver of the last solve (``solver`` is destroyed) and the
     step's result: the last solve's, with the iterations, timings and history of all of
     them, ``diverged_max_it`` if the configuration did not settle.
     """
     if not problem.settles_geometry:
         return solver, result
     solves, change, status, target = [result], math.inf, result.status, result.target
+    index, before = state.done, state.displacement
     reached = problem.physical_displacement(u, fem.Function(problem.V))  # the configuration searched in
     work = reached.x.petsc_vec.duplicate()
     try:
@@ -292,7 +241,7 @@ def _settle(problem: ContactProblem, steps: typing.Sequence[LoadStep], index: in
                                "of an increment of %.3g m)", index + 1, path["max_searches"], change, increment)
                 status = Status.DIVERGED_MAX_IT
                 break
-            solver = _search_reached(problem, steps, index, u, previous, before, reached, solver)
+            solver = _search_reached(problem, step, u, state, reached, solver)
             result = solver.solve(u, atol=target, stop=stop)
             solves.append(result)
             status = result.status
@@ -308,19 +257,17 @@ def _settle(problem: ContactProblem, steps: typing.Sequence[LoadStep], index: in
     return solver, _merged(solves, status)
 
 
-def _search_reached(problem: ContactProblem, steps: typing.Sequence[LoadStep], index: int, u: PETSc.Vec,
-                    previous: PETSc.Vec, before: fem.Function, reached: fem.Function,
+def _search_reached(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState, reached: fem.Function,
                     solver: SCDNewtonSolver) -> SCDNewtonSolver:
-    """Search step ``index`` again in x + ``reached``, set it with the slip from ``before``
-    (the step before's displacement), put ``reached`` into ``u`` (new variables) and return
-    a new solver for it, which takes over ``solver``'s multigrid levels (``solver`` is
-    destroyed)."""
-    step, last = steps[index], steps[index - 1] if index > 0 else LoadStep(0.0)
+    """Search ``step`` again in x + ``reached``, set it with the slip from the step before
+    (``state``, whose u~ in the new variables goes to ``state.variables``), put ``reached``
+    into ``u`` (new variables) and return a new solver for it, which takes over ``solver``'s
+    multigrid levels (``solver`` is destroyed)."""
     parameters, prefix, step_solver = solver.parameters, solver.prefix, _released(solver)
     _search_in(problem, reached, step_solver)
-    problem.set_step(last.load, last.translation)  # the slip of the step from the step before
-    problem.solver_variables(before, previous)
-    problem.set_step(step.load, step.translation, previous if index > 0 else None)
+    problem.set_step(state.load, state.translation)  # the step before: its prescribed and moved parts
+    problem.solver_variables(state.displacement, state.variables)
+    problem.set_step(step.load, step.translation, state.variables, state.translation)
     problem.solver_variables(reached, u)
     u.axpy(1.0, problem.shift)
     return SCDNewtonSolver(problem, parameters, prefix=prefix, step_solver=step_solver)
@@ -340,13 +287,12 @@ def _merged(solves: list[SCDNewtonResult], status: Status) -> SCDNewtonResult:
         history=[{**entry, "search": j} for j, solve in enumerate(solves) for entry in solve.history])
 
 
-def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, previous: PETSc.Vec, states: np.ndarray) -> None:
-    """Set ``step`` after the step whose u~ (solver variables) is ``previous`` and whose contact
-    nodes ended in ``states``; ``u`` gets the predictor: u~ of that step, the touching nodes
-    moved along with their master surface (no slip increment)."""
-    problem.set_step(step.load, step.translation, previous)
-    u.waxpy(1.0, problem.shift, previous)
-    touching = np.isin(states, TOUCHING)
+def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState) -> None:
+    """Set ``step`` after ``state``'s step, the slip measured from it; ``u`` gets the predictor:
+    u~ of that step, its touching nodes moved along with their master surface (no slip increment)."""
+    problem.set_step(step.load, step.translation, state.variables, state.translation)
+    u.waxpy(1.0, problem.shift, state.variables)
+    touching = np.isin(state.contact_states(problem), TOUCHING)
     u.array.reshape(-1, 3)[problem.contact_blk[touching], :2] = 0.0
 
 

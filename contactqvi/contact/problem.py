@@ -274,20 +274,23 @@ class ContactProblem(PETScOwner):
 
     def set_step(
         self, load_factor: float = 1.0, translation: typing.Sequence[float] = (0.0, 0.0, 0.0),
-        previous: PETSc.Vec | None = None,
+        previous: PETSc.Vec | None = None, previous_translation: typing.Sequence[float] = (0.0, 0.0, 0.0),
     ) -> None:
         """Shift and load of a load step: tractions, body force and prescribed displacements
-        times ``load_factor``,
-        the obstacles translated by ``translation`` (total, m), slip measured from the
-        physical displacement ``previous`` (nodal frames; None: from rest) and from the
-        obstacles' position of the step before (tangential obstacle motion per node;
-        a master body moves with the solution, its slip is in w itself).
+        times ``load_factor``, the obstacles and moved groups translated by ``translation``
+        (total, m); slip measured from the step before: from its displacement ``previous``
+        (u~ in the solver's variables; None: from rest) and from the obstacles' position
+        ``previous_translation`` (the tangential obstacle motion per node; a master body
+        moves with the solution, its slip is in w itself). Both come from the load path's
+        :class:`~contactqvi.contact.path_state.PathState`; nothing of the step before is
+        read from the problem itself.
         """
         translation = np.asarray(translation, dtype=float)
+        motion = translation - np.asarray(previous_translation, dtype=float)
         on_obstacle = self._per_node(lambda i, nodes: np.full(len(nodes), i.obstacle is not None), 1) > 0
-        moved = on_obstacle[:, None] * (self.frames[:, :2, :] @ (translation - self.translation))
+        moved = on_obstacle[:, None] * (self.frames[:, :2, :] @ motion)
         along = self.comm.allreduce(float(np.abs(moved[self.rollers, 0]).max(initial=0.0)), op=MPI.MAX)
-        require(along <= 1e-12 * max(float(np.linalg.norm(translation - self.translation)), 1e-300),
+        require(along <= 1e-12 * max(float(np.linalg.norm(motion)), 1e-300),
                 "steps.translation", "the obstacle must not move along a component prescribed on contact nodes")
         nodal = np.zeros((len(self.contact_blk), 3))
         if previous is not None:
@@ -503,7 +506,8 @@ def assemble_contact_problem(
         V=V, load=fields["applied"].duplicate(), shift=fields["applied"].duplicate(),
         contact_facets=np.unique(np.concatenate(
             [boundary_facets(facet_tags, i.slave_surface) for i in interfaces])).astype(np.int32),
-        body=ElasticBody(young, poisson, facet_tags, supports, dict(tractions), body_force),
+        body=ElasticBody(young, poisson, facet_tags, supports, dict(tractions), body_force,
+                         prescribed=_prescribed_components(clamped, displacements or {}, moved)),
         dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32), node_body=node_body,
         n_free=comm.allreduce(3 * index_map.size_local - len(owned_dirichlet), op=MPI.SUM),
         setup_seconds={"contact_search": search_seconds, "change_of_variables": variables_seconds},
@@ -698,6 +702,17 @@ def _change_of_variables(N: PETSc.Mat, rotation: PETSc.Mat, owned_dirichlet: np.
     for obj in (free, NR):
         obj.destroy()
     return transform
+
+
+def _prescribed_components(clamped: typing.Sequence[str], displacements: dict[str, dict[int, float]],
+                           moved: typing.Sequence[str]) -> dict[str, tuple[int, ...]]:
+    """The components (0, 1, 2) each support prescribes: all three on clamped and moved
+    groups, the given ones on a group with prescribed displacements (several entries of
+    one group: the union)."""
+    prescribed = {name: {0, 1, 2} for name in [*clamped, *moved]}
+    for name, components in displacements.items():
+        prescribed.setdefault(name, set()).update(components)
+    return {name: tuple(sorted(components)) for name, components in prescribed.items()}
 
 
 def _check_held(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, cell_tags: dmesh.MeshTags,

@@ -1,0 +1,100 @@
+"""The state of a quasi-static load path between two steps: all that a step reads from the step before.
+
+A load step of :func:`~contactqvi.contact.load_path.solve_load_path` depends on the
+steps before it only through a :class:`PathState`, which the path updates after each
+converged step (:meth:`PathState.record`) and a checkpoint writes and reads whole
+(:mod:`contactqvi.contact.checkpoint`), so that a restart continues with exactly the
+state the uninterrupted run had. What each field is read for:
+
+==================  ===========================================================================
+field               read by
+==================  ===========================================================================
+``done``            the load path: the next step to solve
+``load``,           :meth:`~contactqvi.contact.problem.ContactProblem.set_step` of the next step:
+``translation``     the obstacles' tangential motion since the step before (its slip reference
+                    on a rigid obstacle), and the search of a pair searched each step: the
+                    prescribed and moved parts of ``displacement`` at the step before
+``variables``       the next step's slip reference and predictor (``_continue``); a problem
+                    searched each step recomputes it from ``displacement`` after its search
+``displacement``    the configuration x + u~ in which pairs searched each step are searched
+                    before the next step; with ``until_settled``, the reference of the next
+                    step's increment (``_settle``)
+``node_states``     the predictor: touching nodes start the next step without a slip increment
+``target``          the stopping target ||y^|| of every later step (the first step's)
+==================  ===========================================================================
+
+The Newton-step solver's preconditioner is not part of the state: it is solver data,
+set up again by a restarted run (a direct solver, or one set up per Newton step, gives
+the restarted run bitwise; a multigrid hierarchy kept between steps agrees with the
+uninterrupted run's to round-off, so its Krylov counts may differ by one).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import typing
+
+from petsc4py import PETSc
+
+import numpy as np
+
+from dolfinx import fem
+
+from contactqvi.contact.nodal import State
+from contactqvi.contact.problem import ContactProblem
+from contactqvi.contact.scd_newton import SCDNewtonResult
+from contactqvi.lifetime import PETScOwner
+
+__all__ = ["PathState"]
+
+
+@dataclasses.dataclass
+class PathState(PETScOwner):
+    """A load path after its first ``done`` steps, which converged.
+
+    Attributes:
+        done: number of converged steps.
+        load: load factor of step ``done`` (0 at rest).
+        translation: total translation of the obstacles and moved groups at step ``done`` (m).
+        variables: u~ = u - d of step ``done`` in the problem's current solver variables.
+        displacement: u~ of step ``done`` in global components (m; ghosts updated).
+        node_states: :class:`~contactqvi.contact.nodal.State` of each local node (ghosts
+            included) at step ``done``; -1 where it was no contact node.
+        target: the first step's stopping target ||y^|| (N); 0 before it.
+    """
+
+    done: int
+    load: float
+    translation: np.ndarray
+    variables: PETSc.Vec
+    displacement: fem.Function
+    node_states: np.ndarray
+    target: float
+
+    @classmethod
+    def at_rest(cls, problem: ContactProblem) -> PathState:
+        """The state before the first step: the bodies at rest, the obstacles where meshed."""
+        index_map = problem.V.dofmap.index_map
+        return cls(done=0, load=0.0, translation=np.zeros(3), variables=problem.A.createVecRight(),
+                   displacement=fem.Function(problem.V, name="displacement"),
+                   node_states=np.full(index_map.size_local + index_map.num_ghosts, -1, dtype=np.int8), target=0.0)
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [self.variables]
+
+    def record(self, problem: ContactProblem, u: PETSc.Vec, result: SCDNewtonResult) -> None:
+        """The state after the step just solved: ``problem`` set at that step, ``u`` its
+        solution (shifted, solver variables), ``result`` its converged result."""
+        self.done += 1
+        self.load, self.translation = problem.load_factor, problem.translation.copy()
+        self.variables.waxpy(-1.0, problem.shift, u)
+        problem.physical_displacement(u, self.displacement)
+        self.node_states[:] = -1
+        self.node_states[problem.contact_blk] = result.states
+        if self.done == 1:
+            self.target = result.target
+
+    def contact_states(self, problem: ContactProblem) -> np.ndarray:
+        """The states of ``problem``'s contact nodes (a node without one is not in contact)."""
+        states = self.node_states[problem.contact_blk]
+        return np.where(states < 0, State.NO_CONTACT, states).astype(np.int8)
