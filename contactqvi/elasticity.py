@@ -18,6 +18,8 @@ from contactqvi.meshes import tag_of
 from contactqvi.parameters import require, require_positive
 
 __all__ = [
+    "body_force_form",
+    "body_forces",
     "body_materials",
     "lame_parameters",
     "orthonormalize",
@@ -29,6 +31,9 @@ __all__ = [
 
 
 Modulus = float | fem.Function
+
+#: A volume force density (N/m^3): one vector for all cells, or one per body (cell group name).
+BodyForce = tuple[float, ...] | dict[str, tuple[float, ...]]
 
 
 def lame_parameters(young: Modulus, poisson: Modulus) -> tuple[Modulus, Modulus]:
@@ -92,11 +97,12 @@ def stress(u: ufl.core.expr.Expr, mu: float, lmbda: float) -> ufl.core.expr.Expr
 
 def elasticity_forms(
     V: fem.FunctionSpace,
-    young: float,
-    poisson: float,
+    young: Modulus,
+    poisson: Modulus,
     facet_tags: dmesh.MeshTags,
     tractions: dict[str, tuple[float, ...]],
-    body_force: tuple[float, ...] | None = None,
+    body_force: BodyForce | None = None,
+    cell_tags: dmesh.MeshTags | None = None,
 ) -> tuple[fem.Form, fem.Form]:
     """Compiled bilinear form a(u, v) = (sigma(u), eps(v)) and load l(v).
 
@@ -104,10 +110,12 @@ def elasticity_forms(
 
     Args:
         V: vector Lagrange space.
-        young, poisson: E and nu.
+        young, poisson: E and nu (numbers or DG0 functions, :func:`body_materials`).
         facet_tags: facet tags with boundary names (see :mod:`contactqvi.meshes`).
         tractions: surface traction vector per boundary name.
-        body_force: volume force density (or None).
+        body_force: volume force density f (N/m^3), one vector or one per body
+            ``{body: f}`` (:func:`body_forces`), or None.
+        cell_tags: named cell groups, one per body (needed for a force per body).
     """
     mu, lmbda = lame_parameters(young, poisson)
     msh = V.mesh
@@ -118,17 +126,66 @@ def elasticity_forms(
     zero = fem.Constant(msh, np.zeros(gdim, dtype=PETSc.ScalarType))
     L = ufl.inner(zero, v) * ufl.dx
     if body_force is not None:
-        L += ufl.inner(_vector_constant(msh, body_force, "body_force"), v) * ufl.dx
+        L += body_force_form(msh, v, body_force, cell_tags)
     for name, traction in tractions.items():
         L += ufl.inner(_vector_constant(msh, traction, f"traction[{name}]"), v) * ds(tag_of(facet_tags, name))
     return fem.form(a), fem.form(L)
 
 
-def _vector_constant(msh: dmesh.Mesh, value: tuple[float, ...], name: str) -> fem.Constant:
+def body_force_form(
+    msh: dmesh.Mesh, v: ufl.core.expr.Expr, body_force: BodyForce, cell_tags: dmesh.MeshTags | None = None,
+) -> ufl.Form:
+    """The body-force term (f, v) of the load over the mesh, UFL (not compiled).
+
+    One vector f (N/m^3) is a constant; a dict ``{body: f}`` becomes the cell-wise (DG0)
+    field of :func:`body_forces`, so the term is one integral over all cells whatever the
+    number of bodies (DOLFINx 0.9 compiles a form only if all its cell integrals share
+    their subdomain data, which integrals ``dx(tag)`` beside the plain ``dx`` of the
+    stiffness and tractions would not).
+    """
+    if not isinstance(body_force, dict):
+        return ufl.inner(_vector_constant(msh, body_force, "body_force"), v) * ufl.dx
+    require(cell_tags is not None, "body_force", "a force per body needs the bodies' cell groups (cell_tags)")
+    return ufl.inner(body_forces(msh, cell_tags, body_force), v) * ufl.dx
+
+
+def body_forces(msh: dmesh.Mesh, cell_tags: dmesh.MeshTags, forces: dict[str, tuple[float, ...]]) -> fem.Function:
+    """Volume force densities of several bodies as one cell-wise (DG0) vector function.
+
+    Args:
+        msh: mesh of all bodies.
+        cell_tags: named cell groups (``cell_tags.names``), one per body.
+        forces: body name -> f (N/m^3); bodies not listed carry none.
+
+    Returns:
+        The field named ``body_force``: f of its body in each cell, 0 in the others.
+
+    Raises:
+        ParameterError: a body not in ``cell_tags`` or a force of the wrong length or not
+            finite (``body_force[name]``).
+    """
+    gdim = msh.geometry.dim
+    f = fem.Function(fem.functionspace(msh, ("DG", 0, (gdim,))), name="body_force")
+    names = getattr(cell_tags, "names", {})
+    values = f.x.array.reshape(-1, gdim)
+    for name, force in forces.items():
+        require(name in names, f"body_force[{name}]",
+                f"no cell group {name!r} in the mesh; it has: {', '.join(sorted(names)) or 'none'}")
+        values[cell_tags.find(names[name])] = _checked_vector(msh, force, f"body_force[{name}]")
+    f.x.scatter_forward()
+    return f
+
+
+def _checked_vector(msh: dmesh.Mesh, value: tuple[float, ...], name: str) -> np.ndarray:
+    """``value`` as an array of the mesh's dimension; wrong lengths and non-finite entries raise."""
     array = np.asarray(value, dtype=PETSc.ScalarType)
     require(array.shape == (msh.geometry.dim,), name, f"must have {msh.geometry.dim} components, got {value!r}")
     require(bool(np.all(np.isfinite(array))), name, f"must be finite, got {value!r}")
-    return fem.Constant(msh, array)
+    return array
+
+
+def _vector_constant(msh: dmesh.Mesh, value: tuple[float, ...], name: str) -> fem.Constant:
+    return fem.Constant(msh, _checked_vector(msh, value, name))
 
 
 def rigid_motions_nullspace(V: fem.FunctionSpace, node_body: np.ndarray | None = None) -> PETSc.NullSpace:

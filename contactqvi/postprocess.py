@@ -10,7 +10,8 @@ Units are SI as everywhere in contactqvi: stresses in Pa, forces in N.
   dof r is the reaction there; each prescribed component's reaction belongs to the
   supports that prescribe that component at that node, shared equally when several
   do, so the reactions do not depend on the order of the supports.
-* :func:`applied_force`: the resultant of tractions and body force.
+* :func:`applied_force`: the resultant of tractions and body force (with a force per
+  body: of each body's own, :attr:`ElasticBody.body_force`).
 
 Global equilibrium: reactions + contact force + applied force = 0, up to the
 residual left at free dofs by the solver.
@@ -29,7 +30,7 @@ import ufl
 from dolfinx import fem, la
 from dolfinx import mesh as dmesh
 
-from contactqvi.elasticity import lame_parameters, strain, stress
+from contactqvi.elasticity import BodyForce, body_force_form, lame_parameters, strain, stress
 from contactqvi.meshes import boundary_facets, tag_of
 from contactqvi.parameters import require
 
@@ -49,12 +50,14 @@ class ElasticBody:
             components), whose reaction forces are reported (in this order; the
             values do not depend on it).
         tractions: surface traction (Pa) per boundary name, at load factor 1.
-        body_force: volume force density (N/m^3) at load factor 1, or None.
+        body_force: volume force density (N/m^3) at load factor 1: one vector, or one
+            per body ``{body: f}`` (cell group names of ``cell_tags``), or None.
         prescribed: the components (0, 1, 2 for x, y, z) each support prescribes,
             ``{name: (1,)}`` for a roller holding y. A support not listed prescribes
             the components constrained at every one of its nodes (:func:`reaction_forces`;
             what the case gives unless all its nodes also lie on supports that
             prescribe more).
+        cell_tags: named cell groups, one per body (for a body force per body), or None.
     """
 
     young: float
@@ -62,8 +65,9 @@ class ElasticBody:
     facet_tags: dmesh.MeshTags
     supports: tuple[str, ...] = ("dirichlet",)
     tractions: dict[str, Vector3] = dataclasses.field(default_factory=dict)
-    body_force: Vector3 | None = None
+    body_force: BodyForce | None = None
     prescribed: dict[str, tuple[int, ...]] = dataclasses.field(default_factory=dict)
+    cell_tags: dmesh.MeshTags | None = None
 
 
 def von_mises(sigma: np.ndarray) -> np.ndarray:
@@ -121,7 +125,7 @@ def _load_form(msh: dmesh.Mesh, v: ufl.core.expr.Expr, body: ElasticBody, load_f
     zero = fem.Constant(msh, np.zeros(3, dtype=PETSc.ScalarType))
     form = ufl.inner(zero, v) * ufl.dx
     if body.body_force is not None:
-        form += factor * ufl.inner(fem.Constant(msh, np.asarray(body.body_force, dtype=PETSc.ScalarType)), v) * ufl.dx
+        form += factor * body_force_form(msh, v, body.body_force, body.cell_tags)
     for name, traction in body.tractions.items():
         t = fem.Constant(msh, np.asarray(traction, dtype=PETSc.ScalarType))
         form += factor * ufl.inner(t, v) * ds(tag_of(body.facet_tags, name))

@@ -86,7 +86,8 @@ def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
 
 
 def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
-    """The contact problem of a case with ``[[bodies]]`` and ``[[contacts]]``."""
+    """The contact problem of a case with ``[[bodies]]`` and ``[[contacts]]``; each body's
+    ``boundary.body_force`` (N/m^3) acts on its own cells."""
     msh, facet_tags, cell_tags = read_gmsh(case.mesh.file, comm)
     for i, body in enumerate(case.bodies):
         if body.name not in cell_tags.names:
@@ -94,8 +95,6 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
             hint = f" (did you mean {close[0]!r}?)" if close else ""
             raise ParameterError(f"bodies[{i}].name", f"no physical volume {body.name!r} in the mesh{hint}; it has: "
                                  f"{', '.join(sorted(cell_tags.names))}")
-        require(body.boundary.body_force is None, f"bodies[{i}].boundary.body_force",
-                "body forces are supported for one body only")
     tags = split_by_body(msh, facet_tags, cell_tags)
     check_groups(case, tags.names)
     young, poisson = body_materials(msh, cell_tags, {b.name: (b.material.young, b.material.poisson)
@@ -109,8 +108,9 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
                      for group, d in b.boundary.displacement.items()}
     tractions = {f"{b.name}.{group}": t for b in case.bodies for group, t in b.boundary.traction.items()}
     moved = [name for b in case.bodies for name in qualified(b, b.boundary.moved)]
+    body_force = {b.name: b.boundary.body_force for b in case.bodies if b.boundary.body_force is not None}
     pairs = [_pair(pair) for pair in case.contacts]
-    return assemble_contact_problem(msh, tags, young, poisson, tractions, pairs, clamped,
+    return assemble_contact_problem(msh, tags, young, poisson, tractions, pairs, clamped, body_force or None,
                                     displacements=displacements, cell_tags=cell_tags, moved=moved)
 
 

@@ -115,8 +115,9 @@ def contact_summary(
 def _body_equilibrium(problem: ContactProblem, reactions: dict[str, np.ndarray],
                       pair_forces: dict[str, list[float]]) -> dict[str, float]:
     """Relative force balance of each body (groups named ``"body.group"``): its tractions,
-    the reactions of its supports and the contact forces on it (a pair's force acts on
-    its slave body and, opposite, on its master body)."""
+    its body force (``problem.body.body_force``, one per body: its weight), the reactions
+    of its supports and the contact forces on it (a pair's force acts on its slave body
+    and, opposite, on its master body)."""
     def body_of(group: str) -> str:
         return group.split(".", 1)[0]
 
@@ -125,6 +126,10 @@ def _body_equilibrium(problem: ContactProblem, reactions: dict[str, np.ndarray],
     for group, traction in body.tractions.items():
         alone = dataclasses.replace(body, tractions={group: traction}, body_force=None)
         totals.setdefault(body_of(group), []).append(applied_force(msh, alone, problem.load_factor))
+    if isinstance(body.body_force, dict):
+        for name, force in body.body_force.items():
+            alone = dataclasses.replace(body, tractions={}, body_force={name: force})
+            totals.setdefault(name, []).append(applied_force(msh, alone, problem.load_factor))
     for group, reaction in reactions.items():
         totals.setdefault(body_of(group), []).append(np.asarray(reaction))
     for interface in problem.interfaces:

@@ -55,7 +55,7 @@ from dolfinx import fem
 from dolfinx import mesh as dmesh
 
 from contactqvi.contact.interface import BodyPair, Interface, ObstaclePair, Pair, build_interfaces, search_again
-from contactqvi.elasticity import elasticity_forms, orthonormalize, rigid_motions_nullspace
+from contactqvi.elasticity import BodyForce, elasticity_forms, orthonormalize, rigid_motions_nullspace
 from contactqvi.laws import ContactLaw, Frictionless, NodalLaw, StackedLaw
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import assemble_system, default_options, nonzero_rows
@@ -468,7 +468,7 @@ def assemble_contact_problem(
     tractions: dict[str, Vector3],
     pairs: typing.Sequence[Pair],
     clamped: typing.Sequence[str] = (),
-    body_force: Vector3 | None = None,
+    body_force: BodyForce | None = None,
     displacements: dict[str, dict[int, float]] | None = None,
     cell_tags: dmesh.MeshTags | None = None,
     moved: typing.Sequence[str] = (),
@@ -478,6 +478,8 @@ def assemble_contact_problem(
     Args as in :func:`build_contact_problem`, and: ``young``, ``poisson`` numbers or DG0
     functions; ``pairs`` the contact pairs (:mod:`contactqvi.contact.interface`);
     ``cell_tags`` one named cell group per body (each gets its own rigid-body modes);
+    ``body_force`` one vector (N/m^3) for all bodies or one per body, ``{body: f}``
+    (:func:`~contactqvi.elasticity.body_forces`; each body's weight enters its balance);
     ``moved`` groups whose displacement is the step's translation (not scaled).
 
     Raises ``ParameterError`` as :func:`~contactqvi.contact.interface.build_interfaces`,
@@ -485,7 +487,7 @@ def assemble_contact_problem(
     """
     require(msh.geometry.dim == 3, "mesh", "the contact problem is three-dimensional")
     V = fem.functionspace(msh, ("Lagrange", 1, (3,)))
-    a, L = elasticity_forms(V, young, poisson, facet_tags, tractions, body_force)
+    a, L = elasticity_forms(V, young, poisson, facet_tags, tractions, body_force, cell_tags)
     msh.topology.create_connectivity(msh.topology.dim - 1, msh.topology.dim)  # for the facet dofs
     bcs, moved_bc = _dirichlet_conditions(V, facet_tags, clamped, displacements or {}, moved)
     dirichlet_dofs_loc = np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs] + [np.empty(0, np.int32)]))
@@ -507,7 +509,8 @@ def assemble_contact_problem(
         contact_facets=np.unique(np.concatenate(
             [boundary_facets(facet_tags, i.slave_surface) for i in interfaces])).astype(np.int32),
         body=ElasticBody(young, poisson, facet_tags, supports, dict(tractions), body_force,
-                         prescribed=_prescribed_components(clamped, displacements or {}, moved)),
+                         prescribed=_prescribed_components(clamped, displacements or {}, moved),
+                         cell_tags=cell_tags),
         dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32), node_body=node_body,
         n_free=comm.allreduce(3 * index_map.size_local - len(owned_dirichlet), op=MPI.SUM),
         setup_seconds={"contact_search": search_seconds, "change_of_variables": variables_seconds},
