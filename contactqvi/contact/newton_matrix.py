@@ -118,6 +118,15 @@ class NewtonMatrix(PETScOwner):
             _insert_rows(self.J, self._rows_of_A)
             self._holds_J = False
 
+    def refresh(self) -> None:
+        """A's storage was overwritten by a new stiffness of the same pattern (the Jacobian of a
+        nonlinear f at a new iterate): keep its values on the rows J changes, as at construction."""
+        self._holds_J = False
+        fresh = _rows_of(self.J, self._coupled)
+        fresh.copy(self._rows_of_A, _SAME)
+        fresh.copy(self.rows, _SAME)
+        fresh.destroy()
+
     def undone(self) -> PETSc.Mat:
         """A minus the J of the last :meth:`assemble` (zero before the first), on the pattern
         of ``rows``: the storage's change from that J back to A (:meth:`restore`; a new matrix)."""

@@ -161,6 +161,13 @@ class NewtonStepSolver(PETScOwner):
             structure = PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN if grown else PETSc.Mat.Structure.SUBSET
             self.galerkin.update(change, structure)
 
+    def operator_replaced(self) -> None:
+        """The operator changed everywhere (the Jacobian of a nonlinear f at a new iterate):
+        the preconditioner keeps nothing, the next solve sets it up on its J."""
+        if self.galerkin is not None:
+            self._discard_set_up()
+        self._pc_kinds = None
+
     def _discard_set_up(self) -> None:
         """Drop the multigrid set-up after a solve of more than ``rebuild_iterations`` Krylov iterations.
 

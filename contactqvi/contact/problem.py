@@ -54,10 +54,12 @@ import dolfinx.la
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 
+from contactqvi.contact.hyperelastic import HyperelasticSystem, create_hyperelastic_system
 from contactqvi.contact.interface import BodyPair, Interface, ObstaclePair, Pair, build_interfaces, search_again
 from contactqvi.elasticity import BodyForce, elasticity_forms, orthonormalize, rigid_motions_nullspace
 from contactqvi.laws import ContactLaw, Frictionless, NodalLaw, StackedLaw
 from contactqvi.lifetime import PETScOwner
+from contactqvi.materials import Material
 from contactqvi.linalg import assemble_system, default_options, nonzero_rows
 from contactqvi.meshes import boundary_facets
 from contactqvi.obstacles import Obstacle, Plane
@@ -137,6 +139,9 @@ class ContactProblem(PETScOwner):
             with the loads (``change_of_variables``).
         elastic: A_K and the loads before the change of variables when a pair is searched
             again before every load step (:meth:`search`), else None.
+        hyperelastic: the nonlinear f and its Jacobian of a hyperelastic body (finite strain,
+            :mod:`contactqvi.contact.hyperelastic`): A is then the Jacobian at the last
+            iterate, not a constant; None for linear elasticity (f(u) = A u - l).
     """
 
     V: fem.FunctionSpace
@@ -167,6 +172,7 @@ class ContactProblem(PETScOwner):
     translation: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
     setup_seconds: dict[str, float] = dataclasses.field(default_factory=dict)
     elastic: ElasticSystem | None = None
+    hyperelastic: HyperelasticSystem | None = None
 
     @property
     def comm(self) -> MPI.Comm:
@@ -179,7 +185,8 @@ class ContactProblem(PETScOwner):
 
     def petsc_objects(self) -> list[typing.Any]:
         """A, the load vectors, R, N, T and c (copies by ``dataclasses.replace`` share them)."""
-        objects = (self.A, self.applied, self.load, self.shift, self.elastic, *self._variables_objects())
+        objects = (self.A, self.applied, self.load, self.shift, self.elastic, self.hyperelastic,
+                   *self._variables_objects())
         return [obj for obj in objects if obj is not None]
 
     def _variables_objects(self) -> list[typing.Any]:
@@ -258,6 +265,31 @@ class ContactProblem(PETScOwner):
             self.rotation.multTranspose(local, out)
         local.destroy()
         return out
+
+    def residual(self, u: PETSc.Vec, out: PETSc.Vec) -> None:
+        """f(u) of a hyperelastic problem into ``out``: R^T r_K(u~) at the current step, the
+        prescribed rows u_i - l_i as in the linear problem (:mod:`contactqvi.contact.hyperelastic`)."""
+        system = self.hyperelastic
+        self.physical_displacement(u, system.displacement)
+        r = system.assemble_residual(self.load_factor)
+        if self.rotation is None:
+            out.array[:] = r.array_r[: out.getLocalSize()]
+        else:
+            self.rotation.multTranspose(r, out)
+        prescribed = system.prescribed
+        out.array[prescribed] = u.array_r[prescribed] - self.load.array_r[prescribed]
+
+    def tangent(self, u: PETSc.Vec) -> None:
+        """The Jacobian of a hyperelastic problem's f at u, R^T K_T(u~) R, into the storage of A."""
+        system = self.hyperelastic
+        self.physical_displacement(u, system.displacement)
+        if self.rotation is None:
+            system.assemble_tangent(self.A)
+            return
+        rotated = system.assemble_tangent(system.stiffness).PtAP(self.rotation)
+        self.A.zeroEntries()
+        self.A.axpy(1.0, rotated, _SUBSET)
+        rotated.destroy()
 
     def gap(self, translation: typing.Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
         """Gap of each owned contact node (m), obstacles translated by ``translation``."""
@@ -427,6 +459,7 @@ def build_contact_problem(
     body_force: Vector3 | None = None,
     displacements: dict[str, dict[int, float]] | None = None,
     moved: typing.Sequence[str] = (),
+    material: Material | None = None,
 ) -> ContactProblem:
     """Assemble the GE (6.3) for a body against a rigid obstacle, at load factor 1.
 
@@ -447,6 +480,7 @@ def build_contact_problem(
         body_force: volume force density (N/m^3).
         displacements: prescribed components per boundary name, ``{name: {component: value (m)}}``.
         moved: boundaries moved rigidly with the obstacle's translation.
+        material: a hyperelastic material (finite strain), or None: linear elasticity.
 
     Raises:
         ParameterError: bad values, unknown boundary names, or a contact node inside
@@ -457,7 +491,7 @@ def build_contact_problem(
     obstacle = Plane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)) if obstacle is None else obstacle
     pair = ObstaclePair(contact, obstacle, law)
     return assemble_contact_problem(msh, facet_tags, young, poisson, tractions, [pair], clamped, body_force,
-                                    displacements, moved=moved)
+                                    displacements, moved=moved, material=material)
 
 
 def assemble_contact_problem(
@@ -472,6 +506,7 @@ def assemble_contact_problem(
     displacements: dict[str, dict[int, float]] | None = None,
     cell_tags: dmesh.MeshTags | None = None,
     moved: typing.Sequence[str] = (),
+    material: Material | None = None,
 ) -> ContactProblem:
     """Assemble the GE (6.3) of one or several bodies with contact pairs, at load factor 1.
 
@@ -480,7 +515,7 @@ def assemble_contact_problem(
     ``cell_tags`` one named cell group per body (each gets its own rigid-body modes);
     ``body_force`` one vector (N/m^3) for all bodies or one per body, ``{body: f}``
     (:func:`~contactqvi.elasticity.body_forces`; each body's weight enters its balance);
-    ``moved`` groups whose displacement is the step's translation (not scaled).
+    ``moved`` groups moved by the step's translation (not scaled); ``material`` hyperelastic or None.
 
     Raises ``ParameterError`` as :func:`~contactqvi.contact.interface.build_interfaces`,
     and for nonzero prescribed components on contact nodes or a body nothing holds.
@@ -517,7 +552,22 @@ def assemble_contact_problem(
         elastic=elastic if searched else None, **fields,
     )
     problem.set_step()
+    problem.hyperelastic = _hyperelastic_system(problem, material, young, poisson, L, bcs)
     return problem
+
+
+def _hyperelastic_system(problem: ContactProblem, material: Material | None, young: float | fem.Function,
+                         poisson: float | fem.Function, load: fem.Form,
+                         bcs: list[fem.DirichletBC]) -> HyperelasticSystem | None:
+    """The finite-strain f of ``problem`` (:mod:`contactqvi.contact.hyperelastic`; rigid obstacles
+    only), or None for a linear ``material`` (None)."""
+    if material is None:
+        return None
+    require(all(i.obstacle is not None for i in problem.interfaces), "material",
+            "finite strain is solved against rigid obstacles only (contact between bodies in the current "
+            "configuration is not yet implemented): use linear elasticity for body pairs")
+    return create_hyperelastic_system(problem.V, material, young, poisson, load, bcs, problem.dirichlet_dofs_loc,
+                                      problem.rotation)
 
 
 def _nonzeros(M: PETSc.Mat, scale: float) -> PETSc.Mat:

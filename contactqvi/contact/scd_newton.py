@@ -377,10 +377,28 @@ class SCDNewtonSolver(PETScOwner):
         return GraphPoint(float(np.sqrt(self.gamma**2 + 1.0) * diff.norm()), v, z)
 
     def _graph_point(self, u: PETSc.Vec, r: PETSc.Vec, dhat: PETSc.Vec) -> GraphPoint:
-        """r = A u - l into ``r``, then the approximation step at u (d^ into ``dhat``)."""
+        """r = f(u) into ``r``, then the approximation step at u (d^ into ``dhat``)."""
+        self.smooth_part(u, r)
+        return self.approximation_step(r, u, dhat)
+
+    def smooth_part(self, u: PETSc.Vec, r: PETSc.Vec) -> None:
+        """f(u) of 0 in f(u) + Q(u) into ``r``: A u - l (6.3), or the residual of a hyperelastic
+        body (:mod:`contactqvi.contact.hyperelastic`; Sect. 5 takes any smooth f)."""
+        if self.problem.hyperelastic is not None:
+            self.problem.residual(u, r)
+            return
         self._newton.mult_stiffness(u, r)
         r.axpy(-1.0, self.problem.load)
-        return self.approximation_step(r, u, dhat)
+
+    def linearise(self, u: PETSc.Vec) -> None:
+        """grad f at u of (5.4) into A's storage when f is nonlinear (a hyperelastic body):
+        the tangent at the iterate, whose rows the Newton matrix then changes; the
+        preconditioner keeps nothing of the last one. A linear f has grad f = A: nothing to do."""
+        if self.problem.hyperelastic is None:
+            return
+        self.problem.tangent(u)
+        self._newton.refresh()
+        self.step_solver.operator_replaced()
 
     def residual(self, u: PETSc.Vec) -> GraphPoint:
         """The graph point of (6.17) at u alone: ||y^|| is the accuracy measure."""
@@ -490,18 +508,24 @@ class SCDNewtonSolver(PETScOwner):
 
     # -- step 5: globalisation -----------------------------------------------------------
     def line_search(self, u: PETSc.Vec, norm: float, k: int) -> tuple[float | None, GraphPoint | None]:
-        """Non-monotone line search of Sect. 7 along du from u, with r(u + a du) = r + a A du.
+        """Non-monotone line search of Sect. 7 along du from u, with r(u + a du) = r + a A du
+        for a linear f, else f evaluated at the trial point (a trial where f is undefined, an
+        inverted element, gives NaN and is rejected like any other).
 
         Accepts the first step size alpha with ||y^(u + alpha du)|| <= (1 + 0.1/(k+1) - 0.1 alpha) ||y^(u)||
         and leaves the trial point in the work vectors ``u_trial``, ``r_trial``, ``d_trial``.
         Returns ``(alpha, graph point)``, or ``(None, None)`` when no step size is accepted.
         """
-        w = self._work
-        self._newton.mult_stiffness(w.du, w.Adu)
+        w, linear = self._work, self.problem.hyperelastic is None
+        if linear:
+            self._newton.mult_stiffness(w.du, w.Adu)
         bound = 1.0 + 0.1 / (k + 1)
         for alpha in self._steps:
             w.u_trial.waxpy(alpha, w.du, u)
-            w.r_trial.waxpy(alpha, w.Adu, w.r)
+            if linear:
+                w.r_trial.waxpy(alpha, w.Adu, w.r)
+            else:
+                self.smooth_part(w.u_trial, w.r_trial)
             point = self.approximation_step(w.r_trial, w.u_trial, w.d_trial)
             if point.norm <= (bound - 0.1 * alpha) * norm:
                 return float(alpha), point
@@ -588,6 +612,7 @@ class SCDNewtonSolver(PETScOwner):
                 _log_iteration(entry)
                 break
             with result.timings.phase("newton_matrix"):
+                self.linearise(u)
                 J = self.newton_system(*self.generalized_derivative(point, normal, tangential), u)
             kinds = np.concatenate([normal, tangential])
             settled = alpha == 1.0 and comm.allreduce(np.array_equal(kinds, kinds_previous), op=MPI.LAND)

@@ -1,0 +1,149 @@
+"""The nonlinear f of the GE 0 in f(u) + Q(u) for a hyperelastic body (finite strain).
+
+Seed 000 states the SCD semismooth* Newton method for 0 in f(x) + Q(x) with f smooth
+(Sect. 5: the approximation step (5.2)-(5.3), the Newton system (5.4) with the
+Jacobian of f); the contact problem (6.3) takes f(u) = A u - l. For a hyperelastic
+body (:mod:`contactqvi.materials`) f is the residual of the nonlinear equilibrium in
+the problem's variables u (shifted, nodal frames; :mod:`contactqvi.contact.problem`):
+
+    f(u) = R^T r_K(u~),   u~ = R (u - d) (+ the prescribed values),
+    r_K(u~)(v) = int P(F) : grad v dX - lambda l(v),   F = I + grad u~,
+
+P = d psi / d F the first Piola-Kirchhoff stress of the material's strain energy and l
+the dead load of tractions and body force at load factor 1 (the same form as the linear
+problem's); on a prescribed dof f has the linear problem's identity row u_i - l_i. Its
+Jacobian is R^T K_T(u~) R with K_T = d r_K / d u~ (``ufl.derivative``, identity rows
+and columns at prescribed dofs), written into the storage of the problem's A, whose
+pattern it shares. This module assembles r_K and K_T; the problem maps them to its
+variables (:meth:`~contactqvi.contact.problem.ContactProblem.residual`,
+:meth:`~contactqvi.contact.problem.ContactProblem.tangent`). At u~ = 0 the tangent is the linear stiffness: a hyperelastic body
+and a linear one of the same E and nu agree at small strain. The derivation of the
+Newton step, gamma and the line search for a nonlinear f: docs/finite_strain.md.
+
+Contact is measured as in the linear problem, in the reference configuration's nodal
+frames with the gap g + n . u: exact for a plane obstacle (a flat rigid foundation),
+whatever the strain. Curved obstacles and body pairs in the current configuration are
+not yet part of the finite-strain problem (the problem builder refuses body pairs).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import typing
+
+from petsc4py import PETSc
+
+import numpy as np
+import ufl
+
+import dolfinx.fem.petsc
+import dolfinx.la
+from dolfinx import fem
+
+from contactqvi.elasticity import Modulus, lame_parameters
+from contactqvi.lifetime import PETScOwner
+from contactqvi.linalg import reassemble_matrix
+from contactqvi.materials import Material
+
+__all__ = ["HyperelasticSystem", "create_hyperelastic_system"]
+
+#: Quadrature of the stress: exact for the linear part on P1 tetrahedra and Q1 hexahedra
+#: (2 x 2 x 2 Gauss points); UFL's estimate for ln J and F^-T would be far higher.
+QUADRATURE_DEGREE = 2
+
+
+@dataclasses.dataclass
+class HyperelasticSystem(PETScOwner):
+    """The residual f(u) and its Jacobian of a hyperelastic body, compiled once.
+
+    Attributes:
+        material: the strain-energy density.
+        displacement: u~ (global components) of the last evaluation.
+        residual_form, tangent_form: r_K(u~)(v) without the load, and d r_K / d u~.
+        bcs: the problem's Dirichlet conditions (their rows are the prescribed values').
+        external: the dead load l at load factor 1 (not lifted; zero at prescribed dofs).
+        internal: work vector of r_K (ghosted).
+        stiffness: K_T in global components when the problem has nodal frames (A = R^T K_T R),
+            else None (K_T is assembled into A itself).
+        dirichlet_owned: owned local dofs (global components) with prescribed values.
+        prescribed: owned local rows of A (solver variables) that are prescribed rows.
+    """
+
+    material: Material
+    displacement: fem.Function
+    residual_form: fem.Form
+    tangent_form: fem.Form
+    bcs: list[fem.DirichletBC]
+    external: PETSc.Vec
+    internal: PETSc.Vec
+    stiffness: PETSc.Mat | None
+    dirichlet_owned: np.ndarray
+    prescribed: np.ndarray
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [self.stiffness, self.internal, self.external]
+
+    def assemble_residual(self, load_factor: float) -> PETSc.Vec:
+        """r_K at :attr:`displacement` (global components, zero on the prescribed rows) into
+        :attr:`internal`, which is returned."""
+        r = self.internal
+        with r.localForm() as local:
+            local.set(0.0)
+        dolfinx.fem.petsc.assemble_vector(r, self.residual_form)
+        r.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        r.axpy(-load_factor, self.external)
+        r.array[self.dirichlet_owned] = 0.0
+        return r
+
+    def assemble_tangent(self, out: PETSc.Mat) -> PETSc.Mat:
+        """K_T at :attr:`displacement` (identity rows and columns at prescribed dofs) into ``out``
+        (of the linear stiffness' pattern), which is returned."""
+        return reassemble_matrix(out, self.tangent_form, self.bcs)
+
+
+def create_hyperelastic_system(
+    V: fem.FunctionSpace, material: Material, young: Modulus, poisson: Modulus, load: fem.Form,
+    bcs: list[fem.DirichletBC], dirichlet_dofs_loc: np.ndarray, rotation: PETSc.Mat | None,
+) -> HyperelasticSystem:
+    """The hyperelastic residual and tangent of ``material`` on V (compiled here, once).
+
+    Args:
+        V: the displacement space; young, poisson: E (Pa) and nu of the linearisation.
+        load: the compiled dead load l(v) (tractions, body force) at load factor 1.
+        bcs, dirichlet_dofs_loc: the problem's Dirichlet conditions and their local dofs.
+        rotation: R of the problem's nodal frames, or None.
+    """
+    mu, lmbda = lame_parameters(young, poisson)
+    u, v = fem.Function(V, name="displacement"), ufl.TestFunction(V)
+    F = ufl.variable(ufl.Identity(V.mesh.geometry.dim) + ufl.grad(u))
+    P = ufl.diff(material.strain_energy(F, mu, lmbda), F)
+    residual = ufl.inner(P, ufl.grad(v)) * ufl.dx(metadata={"quadrature_degree": QUADRATURE_DEGREE})
+    tangent = ufl.derivative(residual, u, ufl.TrialFunction(V))
+    residual_form, tangent_form = fem.form(residual), fem.form(tangent)
+    index_map, bs = V.dofmap.index_map, V.dofmap.index_map_bs
+    n_owned = index_map.size_local * bs
+    dirichlet_owned = dirichlet_dofs_loc[dirichlet_dofs_loc < n_owned].astype(np.int32)
+    external = dolfinx.la.create_petsc_vector(index_map, bs)
+    with external.localForm() as local:
+        local.set(0.0)
+    dolfinx.fem.petsc.assemble_vector(external, load)
+    external.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    external.array[dirichlet_owned] = 0.0
+    stiffness = None if rotation is None else dolfinx.fem.petsc.create_matrix(tangent_form)
+    return HyperelasticSystem(material, u, residual_form, tangent_form, list(bcs), external, external.duplicate(),
+                              stiffness, dirichlet_owned, _prescribed_rows(external, dirichlet_owned, rotation))
+
+
+def _prescribed_rows(like: PETSc.Vec, dirichlet_owned: np.ndarray, rotation: PETSc.Mat | None) -> np.ndarray:
+    """Owned local rows of the solver's variables that hold a prescribed dof (the nodal
+    frames are aligned with the prescribed components, so R^T maps one onto one)."""
+    if rotation is None:
+        return dirichlet_owned
+    marker, rotated = like.duplicate(), rotation.createVecRight()
+    marker.set(0.0)
+    marker.array[dirichlet_owned] = 1.0
+    rotation.multTranspose(marker, rotated)
+    rows = np.flatnonzero(np.abs(rotated.array_r) > 0.5).astype(np.int32)
+    for vec in (marker, rotated):
+        vec.destroy()
+    return rows

@@ -1,0 +1,44 @@
+"""The material interface: a strain-energy density of the deformation gradient, in UFL."""
+
+from __future__ import annotations
+
+import abc
+import typing
+
+import ufl
+
+from contactqvi.parameters import require_choice
+
+__all__ = ["MATERIALS", "Material", "create_material"]
+
+#: Hyperelastic materials by name, registered by defining a subclass of :class:`Material`.
+MATERIALS: dict[str, type[Material]] = {}
+
+
+class Material(abc.ABC):
+    """A hyperelastic material: strain energy psi(F) per unit reference volume (J/m^3).
+
+    Its Lamé parameters (mu, lambda) are those of its linearisation at F = I, computed
+    from Young's modulus and Poisson's ratio by
+    :func:`~contactqvi.elasticity.lame_parameters`.
+    """
+
+    name: typing.ClassVar[str]
+
+    def __init_subclass__(cls, **kwargs: typing.Any) -> None:
+        super().__init_subclass__(**kwargs)
+        MATERIALS[cls.name] = cls
+
+    @abc.abstractmethod
+    def strain_energy(self, F: ufl.core.expr.Expr, mu: typing.Any, lmbda: typing.Any) -> ufl.core.expr.Expr:
+        """psi(F) for the Lamé parameters ``mu``, ``lmbda`` (numbers or UFL expressions)."""
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
+
+
+def create_material(name: str, path: str = "material.model") -> Material:
+    """The material called ``name``; a :class:`~contactqvi.parameters.ParameterError` named
+    ``path`` for an unknown one."""
+    require_choice(path, name, MATERIALS)
+    return MATERIALS[name]()

@@ -1,0 +1,24 @@
+"""Compressible neo-Hookean material (Ciarlet's form, as in the FEniCS hyperelasticity demos)."""
+
+from __future__ import annotations
+
+import typing
+
+import ufl
+
+from contactqvi.materials.base import Material
+
+__all__ = ["NeoHookean"]
+
+
+class NeoHookean(Material):
+    """psi = mu/2 (I_C - 3) - mu ln J + lambda/2 (ln J)^2, I_C = tr(F^T F), J = det F.
+
+    P = mu (F - F^-T) + lambda ln J F^-T; rubber-like, polyconvex, psi -> infinity as J -> 0.
+    """
+
+    name = "neo_hookean"
+
+    def strain_energy(self, F: ufl.core.expr.Expr, mu: typing.Any, lmbda: typing.Any) -> ufl.core.expr.Expr:
+        J = ufl.det(F)
+        return mu / 2 * (ufl.tr(F.T * F) - 3) - mu * ufl.ln(J) + lmbda / 2 * ufl.ln(J) ** 2
