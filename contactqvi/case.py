@@ -123,6 +123,7 @@ import typing
 from contactqvi import obstacles
 from contactqvi.laws import LAWS, ContactLaw, create_law, parameter_names
 from contactqvi.load_steps import SEARCHES
+from contactqvi.materials import MATERIALS
 from contactqvi.load_steps import LoadStep as Step
 from contactqvi.parameters import (
     ParameterError,
@@ -193,15 +194,19 @@ class MeshSource:
 
 @dataclasses.dataclass(frozen=True)
 class Material:
-    """``[material]``: isotropic linear elasticity.
+    """``[material]``: isotropic elasticity, small strain (linear) or hyperelastic.
 
     Attributes:
-        young: Young's modulus E (Pa), > 0.
+        young: Young's modulus E (Pa), > 0 (of the linearisation at rest).
         poisson: Poisson's ratio nu, in (-1, 0.5).
+        model: None (linear elasticity, small strain) or a hyperelastic material of
+            :data:`contactqvi.materials.MATERIALS` (finite strain: ``"neo_hookean"``,
+            ``"saint_venant_kirchhoff"``); one body against rigid obstacles.
     """
 
     young: float
     poisson: float
+    model: str | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -565,7 +570,9 @@ def _check_material(material: Material, path: str) -> Material:
     require_positive(f"{path}.young", young)
     poisson = require_number(f"{path}.poisson", material.poisson)
     require(-1.0 < poisson < 0.5, f"{path}.poisson", f"must lie in (-1, 0.5), got {material.poisson!r}")
-    return Material(young, poisson)
+    if material.model is not None:
+        require_choice(f"{path}.model", material.model, ["linear", *MATERIALS])
+    return Material(young, poisson, None if material.model == "linear" else material.model)
 
 
 def _check_boundary(boundary: Boundary, path: str, supported: bool = True) -> Boundary:
@@ -626,8 +633,10 @@ def _check_bodies(bodies: typing.Sequence[Body]) -> tuple[Body, ...]:
         name = _name(body.name, f"{path}.name")
         require("." not in name, f"{path}.name", f"must not contain '.', got {name!r}")
         require(name not in [b.name for b in checked], f"{path}.name", f"body {name!r} listed twice")
-        checked.append(Body(name, _check_material(body.material, f"{path}.material"),
-                            _check_boundary(body.boundary, f"{path}.boundary", supported=False)))
+        material = _check_material(body.material, f"{path}.material")
+        require(material.model is None, f"{path}.material.model", "finite strain is solved for one body against "
+                "rigid obstacles ([material] of a case without [[bodies]]); several bodies: linear elasticity")
+        checked.append(Body(name, material, _check_boundary(body.boundary, f"{path}.boundary", supported=False)))
     supported = any(b.boundary.clamped or b.boundary.displacement or b.boundary.moved for b in checked)
     require(supported, "bodies", "no body has a clamped group or a prescribed displacement; at least one "
             "must be held (the others may be held by contact)")

@@ -31,6 +31,7 @@ from dolfinx import fem, la
 from dolfinx import mesh as dmesh
 
 from contactqvi.elasticity import BodyForce, body_force_form, lame_parameters, strain, stress
+from contactqvi.materials import Material
 from contactqvi.meshes import boundary_facets, tag_of
 from contactqvi.parameters import require
 
@@ -58,6 +59,8 @@ class ElasticBody:
             what the case gives unless all its nodes also lie on supports that
             prescribe more).
         cell_tags: named cell groups, one per body (for a body force per body), or None.
+        material: a hyperelastic material (finite strain: the residual of P(F), the Cauchy
+            stress P F^T / det F), or None for linear elasticity.
     """
 
     young: float
@@ -68,6 +71,7 @@ class ElasticBody:
     body_force: BodyForce | None = None
     prescribed: dict[str, tuple[int, ...]] = dataclasses.field(default_factory=dict)
     cell_tags: dmesh.MeshTags | None = None
+    material: Material | None = None
 
 
 def von_mises(sigma: np.ndarray) -> np.ndarray:
@@ -89,7 +93,7 @@ class StressFields:
         von_mises: DG0 function named ``von_mises`` (Pa).
     """
 
-    def __init__(self, u: fem.Function, young: float, poisson: float):
+    def __init__(self, u: fem.Function, young: float, poisson: float, material: Material | None = None):
         msh = u.function_space.mesh
         require(msh.geometry.dim == 3, "mesh", "stress_fields: three-dimensional bodies only")
         mu, lmbda = lame_parameters(young, poisson)
@@ -97,7 +101,8 @@ class StressFields:
         Q = fem.functionspace(msh, ("DG", 0))
         self._n_cells = msh.topology.index_map(msh.topology.dim).size_local
         self._volume = fem.assemble_vector(fem.form(ufl.TestFunction(Q) * ufl.dx)).array[: self._n_cells]
-        self._integral = fem.form(ufl.inner(stress(u, mu, lmbda), ufl.TestFunction(W)) * ufl.dx)
+        sigma = stress(u, mu, lmbda) if material is None else material.cauchy_stress(u, mu, lmbda)
+        self._integral = fem.form(ufl.inner(sigma, ufl.TestFunction(W)) * ufl.dx)
         self.stress = fem.Function(W, name="stress")
         self.von_mises = fem.Function(Q, name="von_mises")
 
@@ -192,7 +197,9 @@ def _nodal_residual(u: fem.Function, body: ElasticBody, load_factor: float) -> n
     V = u.function_space
     mu, lmbda = lame_parameters(body.young, body.poisson)
     v = ufl.TestFunction(V)
-    residual_form = ufl.inner(stress(u, mu, lmbda), strain(v)) * ufl.dx - _load_form(V.mesh, v, body, load_factor)
+    internal = (ufl.inner(stress(u, mu, lmbda), strain(v)) if body.material is None
+                else ufl.inner(body.material.first_piola(u, mu, lmbda), ufl.grad(v)))
+    residual_form = internal * ufl.dx - _load_form(V.mesh, v, body, load_factor)
     residual = fem.assemble_vector(fem.form(residual_form))
     residual.scatter_reverse(la.InsertMode.add)
     n_owned = V.dofmap.index_map.size_local

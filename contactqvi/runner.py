@@ -40,6 +40,7 @@ from contactqvi.contact.interface import BodyPair, ObstaclePair
 from contactqvi.contact.problem import ContactProblem, assemble_contact_problem, build_contact_problem
 from contactqvi.contact.scd_newton import SCDNewtonResult
 from contactqvi.linalg import default_options
+from contactqvi.materials import create_material
 from contactqvi.elasticity import body_materials
 from contactqvi.meshes import create_contact_body, read_gmsh, split_by_body
 from contactqvi.parameters import ParameterError, require
@@ -82,6 +83,7 @@ def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
         law=c.law, clamped=b.clamped, contact=c.surface,
         obstacle=case.obstacle.create(), body_force=b.body_force,
         displacements={name: d.components() for name, d in b.displacement.items()}, moved=b.moved,
+        material=None if case.material.model is None else create_material(case.material.model),
     )
 
 

@@ -18,6 +18,8 @@ the contact pressure must be uniform and equal to -P33 to 1e-8, in every step.
 
 from __future__ import annotations
 
+import pathlib
+
 from mpi4py import MPI
 
 import numpy as np
@@ -100,3 +102,46 @@ def test_a_hyperelastic_body_at_small_strain_is_the_linear_one():
     size = comm.allreduce(float(np.abs(linear["u"]).max(initial=0.0)), op=MPI.MAX)
     difference = comm.allreduce(float(np.abs(neo["u"] - linear["u"]).max(initial=0.0)), op=MPI.MAX)
     assert difference <= 1e-3 * size, difference / size
+
+
+def test_a_case_file_with_a_hyperelastic_material(mpi_tmp_path):
+    """``[material] model = "neo_hookean"``: the paper's box (2 x 1 x 0.99 m above a gap of
+    1 cm) pushed down 0.3 m onto the foundation: at the end uniaxial stress with s = 0.7/0.99;
+    the top's reaction is P33 times its area, the largest von Mises stress the Cauchy
+    stress |P33| / a^2, and the summary's equilibrium holds."""
+    from contactqvi.case import parse_case
+    from contactqvi.runner import run_case
+
+    case = parse_case({
+        "mesh": {"box": {"lev": 1, "geometry": "d1"}},
+        "material": {"young": YOUNG, "poisson": POISSON, "model": "neo_hookean"},
+        "boundary": {"displacement": {"dirichlet": {"x": 0.0}, "front": {"y": 0.0}, "top": {"z": -COMPRESSION}}},
+        "contact": {"surface": "contact", "law": "frictionless"},
+        "obstacle": {"type": "plane", "point": [0.0, 0.0, 0.0], "normal": [0.0, 0.0, 1.0]},
+        "steps": [{"load": (k + 1) / STEPS} for k in range(STEPS)],
+        "solver": {"pc": "lu"},
+    })
+    summary, code = run_case(case, mpi_tmp_path / "out", plot=False)
+    assert code == 0, summary["status"]
+    a, P33 = neo_hookean((1.0 - COMPRESSION) / 0.99)
+    last = summary["steps"][-1]
+    assert abs(last["reaction_forces"]["top"][2] - 2.0 * P33) <= 1e-8 * abs(2.0 * P33)
+    assert abs(last["contact_force"][2] + 2.0 * P33) <= 1e-8 * abs(2.0 * P33)
+    assert abs(last["max_von_mises"] - abs(P33) / a**2) <= 1e-8 * abs(P33)
+    assert last["equilibrium_error"] <= 1e-10
+
+
+def test_bad_material_models_are_named_errors():
+    from contactqvi.case import parse_case
+    from contactqvi.parameters import ParameterError
+
+    base = {"mesh": {"box": {"lev": 1, "geometry": "d1"}}, "boundary": {"clamped": ["dirichlet"]},
+            "contact": {"surface": "contact", "law": "frictionless"}, "steps": [{"load": 1.0}],
+            "obstacle": {"type": "plane", "point": [0.0, 0.0, 0.0], "normal": [0.0, 0.0, 1.0]}}
+    with pytest.raises(ParameterError, match=r"material\.model: .*neo_hookean"):
+        parse_case({**base, "material": {"young": YOUNG, "poisson": POISSON, "model": "neo_hooke"}})
+    bodies = {"mesh": {"file": "patch_blocks.geo"}, "steps": [{"load": 1.0}],
+              "bodies": [{"name": "a", "material": {"young": YOUNG, "poisson": POISSON, "model": "neo_hookean"},
+                          "boundary": {"clamped": ["bottom"]}}]}
+    with pytest.raises(ParameterError, match=r"bodies\[0\]\.material\.model: finite strain"):
+        parse_case(bodies, pathlib.Path(__file__).resolve().parent.parent / "meshes")

@@ -115,9 +115,7 @@ def create_hyperelastic_system(
     """
     mu, lmbda = lame_parameters(young, poisson)
     u, v = fem.Function(V, name="displacement"), ufl.TestFunction(V)
-    F = ufl.variable(ufl.Identity(V.mesh.geometry.dim) + ufl.grad(u))
-    P = ufl.diff(material.strain_energy(F, mu, lmbda), F)
-    residual = ufl.inner(P, ufl.grad(v)) * ufl.dx(metadata={"quadrature_degree": QUADRATURE_DEGREE})
+    residual = ufl.inner(material.first_piola(u, mu, lmbda), ufl.grad(v)) * ufl.dx(metadata={"quadrature_degree": QUADRATURE_DEGREE})
     tangent = ufl.derivative(residual, u, ufl.TrialFunction(V))
     residual_form, tangent_form = fem.form(residual), fem.form(tangent)
     index_map, bs = V.dofmap.index_map, V.dofmap.index_map_bs

@@ -552,22 +552,23 @@ def assemble_contact_problem(
         elastic=elastic if searched else None, **fields,
     )
     problem.set_step()
-    problem.hyperelastic = _hyperelastic_system(problem, material, young, poisson, L, bcs)
+    _make_hyperelastic(problem, material, young, poisson, L, bcs)
     return problem
 
 
-def _hyperelastic_system(problem: ContactProblem, material: Material | None, young: float | fem.Function,
-                         poisson: float | fem.Function, load: fem.Form,
-                         bcs: list[fem.DirichletBC]) -> HyperelasticSystem | None:
-    """The finite-strain f of ``problem`` (:mod:`contactqvi.contact.hyperelastic`; rigid obstacles
-    only), or None for a linear ``material`` (None)."""
+def _make_hyperelastic(problem: ContactProblem, material: Material | None, young: float | fem.Function,
+                       poisson: float | fem.Function, load: fem.Form, bcs: list[fem.DirichletBC]) -> None:
+    """Give ``problem`` the finite-strain f of a hyperelastic ``material`` (its ``hyperelastic``
+    system, :mod:`contactqvi.contact.hyperelastic`, and the material of its volume results);
+    rigid obstacles only. Nothing for a linear material (None)."""
     if material is None:
-        return None
+        return
     require(all(i.obstacle is not None for i in problem.interfaces), "material",
             "finite strain is solved against rigid obstacles only (contact between bodies in the current "
             "configuration is not yet implemented): use linear elasticity for body pairs")
-    return create_hyperelastic_system(problem.V, material, young, poisson, load, bcs, problem.dirichlet_dofs_loc,
-                                      problem.rotation)
+    problem.hyperelastic = create_hyperelastic_system(problem.V, material, young, poisson, load, bcs,
+                                                      problem.dirichlet_dofs_loc, problem.rotation)
+    problem.body = dataclasses.replace(problem.body, material=material)
 
 
 def _nonzeros(M: PETSc.Mat, scale: float) -> PETSc.Mat:

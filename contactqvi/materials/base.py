@@ -33,6 +33,16 @@ class Material(abc.ABC):
     def strain_energy(self, F: ufl.core.expr.Expr, mu: typing.Any, lmbda: typing.Any) -> ufl.core.expr.Expr:
         """psi(F) for the Lamé parameters ``mu``, ``lmbda`` (numbers or UFL expressions)."""
 
+    def first_piola(self, u: ufl.core.expr.Expr, mu: typing.Any, lmbda: typing.Any) -> ufl.core.expr.Expr:
+        """P = d psi / d F at F = I + grad u (Pa), by UFL's differentiation of psi."""
+        F = ufl.variable(ufl.Identity(u.ufl_shape[0]) + ufl.grad(u))
+        return ufl.diff(self.strain_energy(F, mu, lmbda), F)
+
+    def cauchy_stress(self, u: ufl.core.expr.Expr, mu: typing.Any, lmbda: typing.Any) -> ufl.core.expr.Expr:
+        """sigma = P F^T / det F at F = I + grad u (Pa): the true stress in the deformed body."""
+        F = ufl.Identity(u.ufl_shape[0]) + ufl.grad(u)
+        return self.first_piola(u, mu, lmbda) * F.T / ufl.det(F)
+
     def __repr__(self) -> str:
         return f"{type(self).__name__}()"
 
