@@ -245,8 +245,10 @@ def test_tributary_patches_of_triangles():
     owner = patches.cells[:, 0]
     assert np.array_equal(patches.cell_data["contact_state"], state[owner])
     assert np.array_equal(patches.cell_data["contact_pair"], pair[owner])
-    assert area @ patches.cell_data["is_sliding"] == pytest.approx(1.0)  # node 1: 2/3, node 3: 1/3
-    assert area @ patches.cell_data["is_sticking"] == pytest.approx(1.0 / 3.0)
+    # node 1: 2/3, node 3: 1/3; node 2 has no contact law: its patches take the shares of
+    # their facet's other nodes (first facet: 1/2 sliding, 1/2 sticking; second: sliding)
+    assert area @ patches.cell_data["is_sliding"] == pytest.approx(1.5)
+    assert area @ patches.cell_data["is_sticking"] == pytest.approx(0.5)
     normals = np.cross(*np.moveaxis(patches.points[patches.cells[:, [1, 3]]] - patches.points[owner][:, None], 1, 0))
     assert np.all(normals[:, 2] > 0)  # oriented as the facets
 

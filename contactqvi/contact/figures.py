@@ -26,8 +26,10 @@ import numpy as np
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 
+from contactqvi.contact.interface import BodyPair, Pair
 from contactqvi.contact.nodal import State
-from contactqvi.contact.surface import STATE_NAMES, ContactSurface, vertex_blocks
+from contactqvi.contact.problem import ContactProblem
+from contactqvi.contact.surface import ContactSurface, state_names, vertex_blocks
 from contactqvi.paraview import Dataset, gather_pieces
 from contactqvi.tables import GATHER_MAX_NODES, atomic_path
 
@@ -39,12 +41,15 @@ logger = logging.getLogger(__name__)
 _STATE_COLOURS = ["#d9d9d9", "#e69f00", "#0072b2", "#f0e442", "#56b4e9", "#cc79a7", "#009e73"]
 
 
-def plot_contact_states(path: str | os.PathLike, surface: ContactSurface) -> bool:
+def plot_contact_states(path: str | os.PathLike, surface: ContactSurface, step: int | None = None) -> bool:
     """PNG of the contact surfaces coloured by contact state (seed 000, Fig. 2), one panel per pair.
 
     The tributary patch of each node (:class:`~contactqvi.contact.surface.TributaryPatches`)
-    gets its state's colour. Each contact pair's slave surface is seen along its mean
-    normal, with axes in m (global x1, x2 ... when the normal is a coordinate axis).
+    gets its state's colour, the states named for the pair's law
+    (:func:`~contactqvi.contact.surface.state_names`: frictionless contact is "in contact").
+    Each contact pair's slave surface is seen along its mean normal, with axes in m (global
+    x1, x2 ... when the normal is a coordinate axis). The title names the load step (``step``,
+    else the problem's load factor and obstacle translation) and the pair(s), slave on master.
     Returns whether the PNG was written: not for surfaces of more than
     ``GATHER_MAX_NODES`` nodes, nor when matplotlib fails (a figure never ends a run).
     Collective.
@@ -54,10 +59,11 @@ def plot_contact_states(path: str | os.PathLike, surface: ContactSurface) -> boo
         logger.info("%s is skipped: %d surface nodes > %d (drawn on one rank)", path, surface.n_nodes, GATHER_MAX_NODES)
         return False
     dataset = gather_pieces(comm, surface.dataset())
-    names = [interface.pair.name for interface in surface.problem.interfaces]
+    pairs = [interface.pair for interface in surface.problem.interfaces]
     vertices = 4 if surface.mesh.topology.cell_type == dmesh.CellType.quadrilateral else 3
+    title = f"Contact states, {_step_text(surface.problem, step)}"
     return _draw_on_rank_0(comm, path, lambda tmp: _draw_states(
-        tmp, dataset, _facet_pair(dataset.cell_data["contact_pair"], vertices), names))
+        tmp, dataset, _facet_pair(dataset.cell_data["contact_pair"], vertices), pairs, title))
 
 
 def plot_deformed_bodies(path: str | os.PathLike, displacement: fem.Function, von_mises: fem.Function) -> bool:
@@ -199,6 +205,35 @@ def _camera_direction(centres: np.ndarray, stress: np.ndarray) -> np.ndarray:
     return direction / np.linalg.norm(direction)
 
 
+def _step_text(problem: ContactProblem, step: int | None) -> str:
+    """``step 6``, or without a step number the load factor and, if moved, the obstacles' translation."""
+    if step is not None:
+        return f"step {step}"
+    moved = np.any(problem.translation != 0.0)
+    return f"load factor {problem.load_factor:g}" + (
+        f", obstacles moved by ({', '.join(f'{t:.3g}' for t in problem.translation)}) m" if moved else "")
+
+
+def _pair_text(pair: Pair) -> str:
+    """A contact pair in an engineer's words: ``upper.interface on lower.interface``,
+    ``contact on the sphere`` (the obstacle's kind)."""
+    if isinstance(pair, BodyPair):
+        return f"{pair.slave} on {pair.master}"
+    return f"{pair.surface} on the {type(pair.obstacle).__name__.lower()}"
+
+
+def _state_labels(frictional: set[bool]) -> dict[State, str]:
+    """Legend text of the states the laws of the pairs drawn can give (``frictional``: their
+    ``law.frictional``), a state named differently by the two kinds named both ways."""
+    labels: dict[State, list[str]] = {}
+    for kind in sorted(frictional, reverse=True):
+        for state, name in state_names(kind).items():
+            labels.setdefault(state, [])
+            if name not in labels[state]:
+                labels[state].append(name + (" (frictionless pairs)" if len(frictional) > 1 and not kind else ""))
+    return {state: " / ".join(names) for state, names in sorted(labels.items())}
+
+
 def _facet_pair(pair: np.ndarray, vertices: int) -> np.ndarray:
     """The pair of each patch's facet: patches come in runs of ``vertices`` per facet, and a
     node without a contact law (-1, a supported node) takes the pair of its facet's other nodes."""
@@ -244,7 +279,7 @@ def _zoom_to_contact(ax: typing.Any, plane: np.ndarray, state: np.ndarray) -> bo
     return True
 
 
-def _draw_states(path: pathlib.Path, dataset: Dataset, pair: np.ndarray, names: list[str]) -> None:
+def _draw_states(path: pathlib.Path, dataset: Dataset, pair: np.ndarray, pairs: list[Pair], title: str) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -252,32 +287,35 @@ def _draw_states(path: pathlib.Path, dataset: Dataset, pair: np.ndarray, names: 
     from matplotlib.collections import PolyCollection
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
+    shown = [k for k in range(len(pairs)) if np.any(pair == k)]
+    labels = _state_labels({pairs[k].law.frictional for k in shown})
+    listed = np.array(list(labels), dtype=int)  # the states the laws can give, coloured in this order
+    colour_of = np.zeros(len(State), dtype=int)
+    colour_of[listed] = np.arange(len(listed))
     state = dataset.cell_data["contact_state"]
-    n_states = len(State)
-    present = np.isin(np.arange(n_states), state)
-    cmap = ListedColormap(_STATE_COLOURS[:n_states])
-    norm = BoundaryNorm(np.arange(n_states + 1) - 0.5, n_states)
-    shown = [k for k in range(len(names)) if np.any(pair == k)]
+    cmap = ListedColormap([_STATE_COLOURS[s] for s in listed])
+    norm = BoundaryNorm(np.arange(len(listed) + 1) - 0.5, len(listed))
     columns = 1 if len(shown) == 1 else 2
     rows = -(-len(shown) // columns)
     fig, axes = plt.subplots(rows, columns, figsize=(10.5 if columns == 1 else 14.0, 1.3 + 5.0 * rows),
                              layout="constrained", squeeze=False)
     for ax, k in zip(axes.ravel(), shown):
-        plane, labels = _plan_view(dataset.points[dataset.cells[pair == k]])
-        patches = PolyCollection(plane, array=state[pair == k], cmap=cmap, norm=norm, edgecolors="face", linewidths=0.3)
+        plane, axis_labels = _plan_view(dataset.points[dataset.cells[pair == k]])
+        patches = PolyCollection(plane, array=colour_of[state[pair == k]], cmap=cmap, norm=norm, edgecolors="face",
+                                 linewidths=0.3)
         ax.add_collection(patches)
         ax.autoscale_view()
         ax.set_aspect("equal")
-        ax.set_xlabel(labels[0])
-        ax.set_ylabel(labels[1])
-        title = f"contact {names[k]}" if len(names) > 1 else "one colour per node's tributary area"
+        ax.set_xlabel(axis_labels[0])
+        ax.set_ylabel(axis_labels[1])
+        panel = _pair_text(pairs[k]) if len(shown) > 1 else "one colour per node's tributary area"
         zoomed = _zoom_to_contact(ax, plane, state[pair == k])
-        ax.set_title(title + (", zoomed on the contact zone" if zoomed else ""))
+        ax.set_title(panel + (", zoomed on the contact zone" if zoomed else ""))
     for ax in axes.ravel()[len(shown):]:
         ax.set_axis_off()
-    fig.suptitle("Contact states (seed 000, Table 1)")
-    bar = fig.colorbar(patches, ax=axes.ravel().tolist(), ticks=np.arange(n_states), fraction=0.05, pad=0.02)
-    bar.ax.set_yticklabels([f"{s.value} {STATE_NAMES[s]}" + ("" if present[s] else " (none)") for s in State])
+    fig.suptitle(f"{title}: {_pair_text(pairs[shown[0]])}" if len(shown) == 1 else title)
+    bar = fig.colorbar(patches, ax=axes.ravel().tolist(), ticks=np.arange(len(listed)), fraction=0.05, pad=0.02)
+    bar.ax.set_yticklabels([text + ("" if np.any(state == s) else " (none)") for s, text in labels.items()])
     bar.ax.tick_params(length=0)
     fig.savefig(path, dpi=150, format="png")
     plt.close(fig)

@@ -51,6 +51,7 @@ from contactqvi.contact.nodal import State
 from contactqvi.contact.path_state import PathState
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult, SCDNewtonSolver, newton_step_solver
+from contactqvi.contact.surface import contact_facet_areas
 from contactqvi.load_steps import LoadStep, check_steps
 from contactqvi.parameters import Parameter, Parameters
 from contactqvi.result import Status, Timings
@@ -297,36 +298,35 @@ def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: Path
 
 
 def contact_resultants(problem: ContactProblem, result: SCDNewtonResult) -> dict[str, typing.Any]:
-    """Contact forces (N, global components) and contact, sticking and sliding areas (m^2,
-    lumped nodal areas by state) of a solved step.
+    """Contact forces (N, global components) and contact, sticking and sliding areas (m^2) of a solved step.
 
     ``pair_forces``: per contact pair, the force of the master side (obstacle or body) on
-    the slave body; ``contact_force``: the total force of the rigid obstacles on the
-    bodies (forces between bodies cancel in the global balance).
+    the slave body; ``contact_force``: their sum over all pairs, the total force of the
+    master sides on the slave bodies; ``obstacle_force``: the part of it from rigid
+    obstacles (forces between bodies cancel in the global balance, so this is the one the
+    equilibrium of all bodies together has). ``contact_area``: the area of the slave
+    facets in contact (:func:`~contactqvi.contact.surface.contact_facet_areas`);
+    ``sticking_area`` and ``sliding_area`` split it by the states of the facets' nodes and
+    add up to it.
     """
     forces = np.column_stack([result.friction_force, result.normal_force])  # nodal frames
     nodal = np.einsum("ij,ijk->ik", forces, problem.frames) if len(forces) else np.zeros((0, 3))
     pair_forces = {}
-    total = np.zeros(3)
+    total, obstacles = np.zeros(3), np.zeros(3)
     for k, interface in enumerate(problem.interfaces):
         force = problem.comm.allreduce(nodal[problem.interface_of_node == k].sum(axis=0), op=MPI.SUM)
         pair_forces[interface.pair.name] = force.tolist()
+        total += force
         if interface.obstacle is not None:
-            total += force
-    area = problem.contact_area
-    sticking = np.isin(result.states, (State.STICKING, State.WEAK_STICKING))
-    sliding = result.states == State.SLIDING
-    comm = problem.comm
-
-    def total_area(mask: np.ndarray) -> float:
-        return comm.allreduce(float(area[mask].sum()), op=MPI.SUM)
-
+            obstacles += force
+    sticking, sliding = problem.comm.allreduce(contact_facet_areas(problem, result.states), op=MPI.SUM)
     return {
         "contact_force": total.tolist(),
+        "obstacle_force": obstacles.tolist(),
         "pair_forces": pair_forces,
-        "contact_area": total_area(sticking | sliding),
-        "sticking_area": total_area(sticking),
-        "sliding_area": total_area(sliding),
-        "units": {"contact_force": "N", "pair_forces": "N", "contact_area": "m^2", "sticking_area": "m^2",
-                  "sliding_area": "m^2"},
+        "contact_area": float(sticking + sliding),
+        "sticking_area": float(sticking),
+        "sliding_area": float(sliding),
+        "units": {"contact_force": "N", "obstacle_force": "N", "pair_forces": "N", "contact_area": "m^2",
+                  "sticking_area": "m^2", "sliding_area": "m^2"},
     }

@@ -12,22 +12,24 @@ owned cells, ParaView appends them into the dataset a serial run writes):
   ``contact_pressure [Pa]``, ``friction_traction [Pa]``, ``slip [m]``,
   ``tangential_displacement [m]``, ``gap [m]``. Cell data, the value of the
   patch's node, so ParaView draws categories without blending them:
-  ``contact_state`` (:class:`State` value) and the 0/1 indicators ``is_open``,
-  ``is_sliding``, ``is_sticking``; integrating an indicator over the surface gives
-  that area.
+  ``contact_state`` (:class:`State` value) and the indicators ``is_open``,
+  ``is_sliding``, ``is_sticking`` (0/1; at a supported node the share of its facet's
+  nodes in that state); integrating an indicator over the surface gives that area.
 * ``solution.npz``: ``x`` (N, 3) and ``u`` (N, 3), the displacement u~ gathered on
   rank 0, for at most :data:`contactqvi.tables.GATHER_MAX_NODES` nodes unless
   asked for.
 
-Summary entries (:func:`contact_summary`), SI units listed under ``units``: total
-contact force of the obstacle on the body (N, global components), reaction force
+Summary entries (:func:`contact_summary`; each defined in README.md, Results), SI units
+listed under ``units``: total contact force, the sum over the contact pairs of the master
+side's force on the slave body (N, global components; per pair ``pair_forces``), reaction force
 of each support (N; where supports meet, each prescribed component's reaction goes to
 the groups prescribing it, shared equally, :func:`~contactqvi.postprocess.reaction_forces`,
 so it does not depend on the order of the groups), applied force (N) and the relative
-equilibrium error of their sum, each body's force balance (several bodies),
-contact/sticking/sliding areas (m^2, lumped nodal areas by state), node counts per
-state, the largest contact pressure and von Mises stress (Pa), the global l2 norm of
-u~ (m; the number demos print to compare runs).
+equilibrium error of their sum with the rigid obstacles' forces, each body's force
+balance (several bodies), contact/sticking/sliding areas (m^2, the slave facets by the
+share of their nodes in each state, :func:`~contactqvi.contact.surface.contact_facet_areas`),
+node counts per state (named for each pair's law), the largest contact pressure and von
+Mises stress (Pa), the global l2 norm of u~ (m; the number demos print to compare runs).
 """
 
 from __future__ import annotations
@@ -49,7 +51,7 @@ from contactqvi.contact.load_path import contact_resultants
 from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult
-from contactqvi.contact.surface import STATE_NAMES, UNITS, ContactSurface, labelled
+from contactqvi.contact.surface import STATE_NAMES, UNITS, ContactSurface, labelled, state_names
 from contactqvi.paraview import MeshPiece, VTXDatasetWriter
 from contactqvi.postprocess import StressFields, applied_force, reaction_forces
 from contactqvi.tables import prepare_output_dir, write_solution_npz
@@ -85,13 +87,13 @@ def contact_summary(
                                 problem.nodal_contact_forces(result.normal_force, result.friction_force))
     applied = applied_force(problem.V.mesh, problem.body, problem.load_factor)
     resultants = contact_resultants(problem, result)
-    contact_force = np.asarray(resultants["contact_force"])
-    total = sum(reactions.values(), np.zeros(3)) + contact_force + applied
-    scale = max([np.linalg.norm(applied), np.linalg.norm(contact_force)] + [np.linalg.norm(r) for r in reactions.values()])
-    counts = comm.allreduce(np.bincount(result.states.astype(np.int64), minlength=len(State)), op=MPI.SUM)
+    obstacle_force = np.asarray(resultants["obstacle_force"])  # forces between bodies cancel in the sum
+    total = sum(reactions.values(), np.zeros(3)) + obstacle_force + applied
+    scale = max([np.linalg.norm(applied), np.linalg.norm(obstacle_force)]
+                + [np.linalg.norm(r) for r in reactions.values()])
     pressure = result.normal_force / problem.contact_area
     summary = {
-        "contact_force": contact_force.tolist(),
+        "contact_force": resultants["contact_force"],
         "pair_forces": resultants["pair_forces"],
         "reaction_forces": {name: r.tolist() for name, r in reactions.items()},
         "applied_force": applied.tolist(),
@@ -99,7 +101,7 @@ def contact_summary(
         "contact_area": resultants["contact_area"],
         "sticking_area": resultants["sticking_area"],
         "sliding_area": resultants["sliding_area"],
-        "state_counts": {STATE_NAMES[s]: int(counts[s]) for s in State},
+        "state_counts": _state_counts(problem, result.states),
         "max_contact_pressure": comm.allreduce(float(pressure.max(initial=0.0)), op=MPI.MAX),
         "displacement_norm": displacement.x.petsc_vec.norm(),
     }
@@ -110,6 +112,21 @@ def contact_summary(
         summary["max_von_mises"] = comm.allreduce(float(von_mises.x.array[:n_cells].max(initial=0.0)), op=MPI.MAX)
     summary["units"] = {name: UNITS[name] for name in summary if name in UNITS}
     return summary
+
+
+def _state_counts(problem: ContactProblem, states: np.ndarray) -> dict[str, int]:
+    """Number of contact nodes in each state, named for the law of each node's pair
+    (:func:`~contactqvi.contact.surface.state_names`: a frictionless pair's touching nodes
+    are "in contact", not "sliding"). Collective."""
+    frictional = np.array([interface.pair.law.frictional for interface in problem.interfaces], dtype=bool)
+    of_node = frictional[problem.interface_of_node]
+    counts: dict[str, int] = {}
+    for kind in sorted(set(frictional.tolist())):
+        per_state = problem.comm.allreduce(np.bincount(states[of_node == kind].astype(np.int64), minlength=len(State)),
+                                           op=MPI.SUM)
+        for state, name in state_names(kind).items():
+            counts[name] = counts.get(name, 0) + int(per_state[state])
+    return counts
 
 
 def _body_equilibrium(problem: ContactProblem, reactions: dict[str, np.ndarray],

@@ -39,13 +39,16 @@ __all__ = [
     "UNITS",
     "ContactSurface",
     "ContactSurfaceFields",
+    "FRICTIONLESS_STATE_NAMES",
     "TributaryPatches",
+    "contact_facet_areas",
     "labelled",
+    "state_names",
     "vertex_blocks",
 ]
 
-#: Names of the contact states (seed 000, Table 1), by :class:`State` value; "grazing":
-#: touching with zero normal force.
+#: Names of the contact states (seed 000, Table 1) of a law with friction, by :class:`State`
+#: value; "grazing": touching with zero normal force. A frictionless law's: :func:`state_names`.
 STATE_NAMES = {
     State.NO_CONTACT: "no contact",
     State.SLIDING: "sliding",
@@ -55,6 +58,23 @@ STATE_NAMES = {
     State.WEAK_CONTACT_STICKING: "grazing, at rest",
     State.SEPARATED_STICKING: "separated, sticking (Tresca)",
 }
+#: Names of the states a frictionless law gives (slip bound 0: a touching node is in contact,
+#: neither sliding nor sticking); the others cannot occur without friction.
+FRICTIONLESS_STATE_NAMES = {
+    State.NO_CONTACT: "no contact",
+    State.SLIDING: "in contact",
+    State.WEAK_CONTACT_SLIDING: "grazing, moving",
+    State.WEAK_CONTACT_STICKING: "grazing, at rest",
+}
+
+
+def state_names(frictional: bool) -> dict[State, str]:
+    """Names of the states a contact law can give, as figures and ``summary.json`` show them:
+    :data:`STATE_NAMES` for a law with friction (``law.frictional``), else
+    :data:`FRICTIONLESS_STATE_NAMES`."""
+    return STATE_NAMES if frictional else FRICTIONLESS_STATE_NAMES
+
+
 #: States counted as sticking and as sliding in areas and indicators; all others are open.
 STICKING_STATES = (State.STICKING, State.WEAK_STICKING)
 SLIDING_STATES = (State.SLIDING,)
@@ -82,6 +102,45 @@ UNITS = {
     "equilibrium_error": "1",
     "displacement_norm": "m",
 }
+
+
+def contact_facet_areas(problem: ContactProblem, states: np.ndarray) -> np.ndarray:
+    """Sticking and sliding area (m^2) of this rank's owned slave facets, in the reference
+    configuration: ``[sticking, sliding]``. Not collective.
+
+    Each facet counts by the share of its nodes that stick, and that slide: a facet all of
+    whose nodes touch counts wholly, one that the edge of the contact zone runs through
+    (some nodes open) by the share of its nodes that touch, i.e. the integral of the P1
+    interpolant of the nodes' 0/1 indicator over a triangle (which puts the edge half way
+    between the last node in contact and the first open one, on average). Supported nodes
+    (all three components prescribed; they have no contact law) take no part, so a slave
+    surface entirely in contact counts its whole area; a slave node that found no master
+    facet counts as open, and a facet of supported nodes only counts nothing.
+
+    Args:
+        problem: the contact problem.
+        states: :class:`State` of each owned contact node (``problem.contact_blk``).
+    """
+    V = problem.V
+    msh = V.mesh
+    fdim = msh.topology.dim - 1
+    code = la.vector(V.dofmap.index_map, bs=1)  # per node: 0 supported, 1 open, 2 sliding, 3 sticking
+    supported = np.bincount(problem.dirichlet_dofs_loc // 3, minlength=len(code.array)) == 3
+    code.array[:] = np.where(supported, 0.0, 1.0)
+    code.array[problem.contact_blk] = np.select([np.isin(states, STICKING_STATES), np.isin(states, SLIDING_STATES)],
+                                                [3.0, 2.0], 1.0)
+    code.scatter_forward()
+    msh.topology.create_connectivity(fdim, 0)
+    facets = problem.contact_facets[problem.contact_facets < msh.topology.index_map(fdim).size_local]
+    quadrilateral = msh.topology.cell_type == dmesh.CellType.hexahedron
+    node_blk = vertex_blocks(V)[msh.topology.connectivity(fdim, 0).array.reshape(-1, 4 if quadrilateral else 3)[facets]]
+    x = V.tabulate_dof_coordinates()[node_blk]
+    diagonals = (x[:, 3] - x[:, 0], x[:, 2] - x[:, 1]) if quadrilateral else (x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+    area = 0.5 * np.linalg.norm(np.cross(*diagonals), axis=1)  # tensor-product quadrilaterals: diagonals 0-3, 1-2
+    node_code = code.array[node_blk]
+    share = area / np.maximum(np.count_nonzero(node_code > 0, axis=1), 1)
+    sticking, sliding = (np.count_nonzero(node_code == code_of_state, axis=1) for code_of_state in (3, 2))
+    return np.array([share @ sticking, share @ sliding])
 
 
 def labelled(name: str) -> str:
@@ -200,20 +259,27 @@ class TributaryPatches:
 
     def dataset(self, point_data: dict[str, np.ndarray], state: np.ndarray, pair: np.ndarray) -> Dataset:
         """Point data (at the vertices) extended; cell data: ``state`` and ``pair`` of each patch's
-        vertex and 0/1 indicators."""
+        vertex and the indicators ``is_open``, ``is_sliding``, ``is_sticking``: 0/1 by the
+        vertex's state, and on the patch of a vertex without contact law (``pair`` -1, a
+        supported node) the share of its facet's other nodes in that state, as
+        :func:`contact_facet_areas` counts them (on facets whose patches have equal areas,
+        e.g. triangles and parallelograms, integrating an indicator gives that area)."""
         state = state[self.vertex].astype(np.int32)
+        pair = np.rint(pair[self.vertex]).astype(np.int32)
+        law = (pair >= 0).reshape(len(self._cells), -1)
+        indicators = {}
+        for name, states in (("is_sliding", SLIDING_STATES), ("is_sticking", STICKING_STATES)):
+            on = np.isin(state, states).reshape(law.shape) & law
+            share = np.count_nonzero(on, axis=1) / np.maximum(np.count_nonzero(law, axis=1), 1)
+            indicators[name] = np.where(law, on, share[:, None]).ravel()
+        indicators["is_open"] = 1.0 - indicators["is_sliding"] - indicators["is_sticking"]
         return Dataset(
             points=self.points,
             cells=self.cells,
             cell_type=9,  # VTK_QUAD
             point_data={name: self.extend(values) for name, values in point_data.items()},
-            cell_data={
-                "contact_state": state,
-                "contact_pair": np.rint(pair[self.vertex]).astype(np.int32),
-                "is_open": (~np.isin(state, STICKING_STATES + SLIDING_STATES)).astype(np.int32),
-                "is_sliding": np.isin(state, SLIDING_STATES).astype(np.int32),
-                "is_sticking": np.isin(state, STICKING_STATES).astype(np.int32),
-            },
+            cell_data={"contact_state": state, "contact_pair": pair,
+                       **{name: indicators[name] for name in ("is_open", "is_sliding", "is_sticking")}},
             duplicate=self.duplicate,
         )
 
