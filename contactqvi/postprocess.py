@@ -101,8 +101,11 @@ class StressFields:
         Q = fem.functionspace(msh, ("DG", 0))
         self._n_cells = msh.topology.index_map(msh.topology.dim).size_local
         self._volume = fem.assemble_vector(fem.form(ufl.TestFunction(Q) * ufl.dx)).array[: self._n_cells]
-        sigma = stress(u, mu, lmbda) if material is None else material.cauchy_stress(u, mu, lmbda)
-        self._integral = fem.form(ufl.inner(sigma, ufl.TestFunction(W)) * ufl.dx)
+        if material is None:
+            integral = ufl.inner(stress(u, mu, lmbda), ufl.TestFunction(W)) * ufl.dx
+        else:
+            integral = ufl.inner(material.cauchy_stress(u, mu, lmbda), ufl.TestFunction(W)) * material.dx()
+        self._integral = fem.form(integral)
         self.stress = fem.Function(W, name="stress")
         self.von_mises = fem.Function(Q, name="von_mises")
 
@@ -197,9 +200,11 @@ def _nodal_residual(u: fem.Function, body: ElasticBody, load_factor: float) -> n
     V = u.function_space
     mu, lmbda = lame_parameters(body.young, body.poisson)
     v = ufl.TestFunction(V)
-    internal = (ufl.inner(stress(u, mu, lmbda), strain(v)) if body.material is None
-                else ufl.inner(body.material.first_piola(u, mu, lmbda), ufl.grad(v)))
-    residual_form = internal * ufl.dx - _load_form(V.mesh, v, body, load_factor)
+    if body.material is None:
+        internal = ufl.inner(stress(u, mu, lmbda), strain(v)) * ufl.dx
+    else:
+        internal = ufl.inner(body.material.first_piola(u, mu, lmbda), ufl.grad(v)) * body.material.dx()
+    residual_form = internal - _load_form(V.mesh, v, body, load_factor)
     residual = fem.assemble_vector(fem.form(residual_form))
     residual.scatter_reverse(la.InsertMode.add)
     n_owned = V.dofmap.index_map.size_local

@@ -145,3 +145,36 @@ def test_bad_material_models_are_named_errors():
                           "boundary": {"clamped": ["bottom"]}}]}
     with pytest.raises(ParameterError, match=r"bodies\[0\]\.material\.model: finite strain"):
         parse_case(bodies, pathlib.Path(__file__).resolve().parent.parent / "meshes")
+
+
+def test_a_frictional_finite_strain_path_is_in_balance_and_restarts_exactly(mpi_tmp_path):
+    """A neo-Hookean box clamped at one end, pressed and sheared onto the foundation with
+    Coulomb friction (not homogeneous): every step in balance (reactions from the nonlinear
+    residual, integrated as the solver's), and stopped after step 3 and restarted, the
+    uninterrupted run's counts and solution (the path state carries a finite-strain run too)."""
+    import json
+
+    from contactqvi.case import parse_case
+    from contactqvi.runner import run_case
+
+    case = parse_case({
+        "mesh": {"box": {"lev": 1, "geometry": "d3"}},
+        "material": {"young": YOUNG, "poisson": POISSON, "model": "neo_hookean"},
+        "boundary": {"clamped": ["dirichlet"], "traction": {"top": [2e5, 0.0, -1e6]}},
+        "contact": {"surface": "contact", "law": "coulomb", "friction": 0.3},
+        "obstacle": {"type": "plane", "point": [0.0, 0.0, 0.0], "normal": [0.0, 0.0, 1.0]},
+        "steps": [{"load": (k + 1) / 6} for k in range(6)], "solver": {"pc": "lu"},
+    })
+    whole, code = run_case(case, mpi_tmp_path / "whole", plot=False)
+    assert code == 0 and max(step["equilibrium_error"] for step in whole["steps"]) <= 1e-10
+    force = np.array(whole["steps"][-1]["contact_force"])
+    assert 0.05 * force[2] < np.hypot(*force[:2]) <= 0.3 * force[2]  # sheared, within the friction cone
+    run_case(case, mpi_tmp_path / "restarted", plot=False, stop_after=3)
+    restarted, code = run_case(case, mpi_tmp_path / "restarted", plot=False, restart=True)
+    assert code == 0
+    counts = [[(s["iterations"], s["inner_iterations"]) for s in r["steps"]] for r in (whole, restarted)]
+    assert counts[0] == counts[1]
+    if MPI.COMM_WORLD.rank == 0:
+        ua, ub = (np.load(mpi_tmp_path / d / "solution.npz")["u"] for d in ("whole", "restarted"))
+        assert np.abs(ua - ub).max() <= 1e-12 * np.abs(ua).max()
+    assert json.loads((mpi_tmp_path / "restarted" / "summary.json").read_text())["restarts"][0]["after_step"] == 3

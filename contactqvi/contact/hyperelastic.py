@@ -47,9 +47,6 @@ from contactqvi.materials import Material
 
 __all__ = ["HyperelasticSystem", "create_hyperelastic_system"]
 
-#: Quadrature of the stress: exact for the linear part on P1 tetrahedra and Q1 hexahedra
-#: (2 x 2 x 2 Gauss points); UFL's estimate for ln J and F^-T would be far higher.
-QUADRATURE_DEGREE = 2
 
 
 @dataclasses.dataclass
@@ -115,7 +112,7 @@ def create_hyperelastic_system(
     """
     mu, lmbda = lame_parameters(young, poisson)
     u, v = fem.Function(V, name="displacement"), ufl.TestFunction(V)
-    residual = ufl.inner(material.first_piola(u, mu, lmbda), ufl.grad(v)) * ufl.dx(metadata={"quadrature_degree": QUADRATURE_DEGREE})
+    residual = ufl.inner(material.first_piola(u, mu, lmbda), ufl.grad(v)) * material.dx()
     tangent = ufl.derivative(residual, u, ufl.TrialFunction(V))
     residual_form, tangent_form = fem.form(residual), fem.form(tangent)
     index_map, bs = V.dofmap.index_map, V.dofmap.index_map_bs

@@ -24,6 +24,10 @@ class Material(abc.ABC):
     """
 
     name: typing.ClassVar[str]
+    #: Quadrature degree of the stress integrals (residual, tangent, reactions, stress
+    #: averages): exact for the linear part on P1 tetrahedra and Q1 hexahedra (2 x 2 x 2
+    #: Gauss points); UFL's estimate for ln J and F^-T would be far higher.
+    quadrature_degree: typing.ClassVar[int] = 2
 
     def __init_subclass__(cls, **kwargs: typing.Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -42,6 +46,10 @@ class Material(abc.ABC):
         """sigma = P F^T / det F at F = I + grad u (Pa): the true stress in the deformed body."""
         F = ufl.Identity(u.ufl_shape[0]) + ufl.grad(u)
         return self.first_piola(u, mu, lmbda) * F.T / ufl.det(F)
+
+    def dx(self) -> ufl.Measure:
+        """The cell measure of this material's stress integrals (:attr:`quadrature_degree`)."""
+        return ufl.dx(metadata={"quadrature_degree": self.quadrature_degree})
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}()"
