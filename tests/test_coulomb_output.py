@@ -161,13 +161,15 @@ def test_write_contact_results(solution, mpi_tmp_path):
     assert surface.cells.shape == (4 * n_facets, 4)
     assert set(surface.point_data) == {f"{name} [{UNITS[name]}]"
                                        for name in FIELDS - {"contact_state", "contact_pair", "nodal_area"}}
-    assert set(surface.cell_data) == {"contact_state", "contact_pair", "is_open", "is_sliding", "is_sticking"}
+    assert set(surface.cell_data) == {"contact_state", "contact_pair", "is_open", "is_in_contact", "is_sliding",
+                                      "is_sticking"}
     area = _patch_areas(surface)
     assert area.sum() == pytest.approx(2.0, rel=1e-12)
     cells = surface.cell_data
     assert np.array_equal(cells["is_open"] + cells["is_sliding"] + cells["is_sticking"], np.ones(len(area)))
     assert area @ cells["is_sticking"] == pytest.approx(summary["sticking_area"], rel=1e-12)
     assert area @ cells["is_sliding"] == pytest.approx(summary["sliding_area"], rel=1e-12)
+    assert area @ cells["is_in_contact"] == pytest.approx(summary["contact_area"], rel=1e-12)
     # Bilinear pressure on rectangles: its integral is the total normal force (lumped areas).
     pressure = surface.point_data["contact_pressure [Pa]"][surface.cells].mean(axis=1)
     assert area @ pressure == pytest.approx(summary["contact_force"][2], rel=1e-12)

@@ -13,7 +13,7 @@ owned cells, ParaView appends them into the dataset a serial run writes):
   ``tangential_displacement [m]``, ``gap [m]``. Cell data, the value of the
   patch's node, so ParaView draws categories without blending them:
   ``contact_state`` (:class:`State` value) and the indicators ``is_open``,
-  ``is_sliding``, ``is_sticking`` (0/1; at a supported node the share of its facet's
+  ``is_in_contact``, ``is_sliding``, ``is_sticking`` (0/1; at a supported node the share of its facet's
   nodes in that state); integrating an indicator over the surface gives that area.
 * ``solution.npz``: ``x`` (N, 3) and ``u`` (N, 3), the displacement u~ gathered on
   rank 0, for at most :data:`contactqvi.tables.GATHER_MAX_NODES` nodes unless

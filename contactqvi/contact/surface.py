@@ -259,7 +259,8 @@ class TributaryPatches:
 
     def dataset(self, point_data: dict[str, np.ndarray], state: np.ndarray, pair: np.ndarray) -> Dataset:
         """Point data (at the vertices) extended; cell data: ``state`` and ``pair`` of each patch's
-        vertex and the indicators ``is_open``, ``is_sliding``, ``is_sticking``: 0/1 by the
+        vertex and the indicators ``is_open``, ``is_in_contact`` (sticking or sliding: the
+        one that names a frictionless pair's contact), ``is_sliding``, ``is_sticking``: 0/1 by the
         vertex's state, and on the patch of a vertex without contact law (``pair`` -1, a
         supported node) the share of its facet's other nodes in that state, as
         :func:`contact_facet_areas` counts them (on facets whose patches have equal areas,
@@ -272,14 +273,15 @@ class TributaryPatches:
             on = np.isin(state, states).reshape(law.shape) & law
             share = np.count_nonzero(on, axis=1) / np.maximum(np.count_nonzero(law, axis=1), 1)
             indicators[name] = np.where(law, on, share[:, None]).ravel()
-        indicators["is_open"] = 1.0 - indicators["is_sliding"] - indicators["is_sticking"]
+        indicators["is_in_contact"] = indicators["is_sliding"] + indicators["is_sticking"]
+        indicators["is_open"] = 1.0 - indicators["is_in_contact"]
         return Dataset(
             points=self.points,
             cells=self.cells,
             cell_type=9,  # VTK_QUAD
             point_data={name: self.extend(values) for name, values in point_data.items()},
-            cell_data={"contact_state": state, "contact_pair": pair,
-                       **{name: indicators[name] for name in ("is_open", "is_sliding", "is_sticking")}},
+            cell_data={"contact_state": state, "contact_pair": pair, **{
+                name: indicators[name] for name in ("is_open", "is_in_contact", "is_sliding", "is_sticking")}},
             duplicate=self.duplicate,
         )
 
