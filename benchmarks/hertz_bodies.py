@@ -53,7 +53,7 @@ def run(mesh: str, comm: MPI.Comm) -> dict:
         problem_seconds = {f"{name}_s": seconds for name, seconds in problem.setup_seconds.items()}
         searches = []  # the search before each later step: contact search + change of variables (s)
 
-        def record(index, step, u, result) -> None:
+        def record(index, step, u, result, state) -> None:
             if index > 0:
                 searches.append(sum(problem.setup_seconds.values()))
 
@@ -99,7 +99,7 @@ def mindlin(mesh: str, comm: MPI.Comm) -> list[dict]:
     rows = []
     with build_problem(case, comm) as problem:
 
-        def record(index, step, u, result) -> None:
+        def record(index, step, u, result, state) -> None:
             force = np.einsum("ij,ijk->k", np.column_stack([result.friction_force, result.normal_force]), problem.frames)
             force = 2.0 * comm.allreduce(force, op=MPI.SUM)
             sticking = np.isin(result.states, (State.STICKING, State.WEAK_STICKING))

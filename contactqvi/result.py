@@ -52,6 +52,9 @@ class Status(enum.IntEnum):
     DIVERGED_DTOL = -8
     #: stopped from outside (SIGTERM, SIGINT) before the stopping test held
     INTERRUPTED = -9
+    #: the residual is not defined at the iterate (PETSc's SNES_DIVERGED_FUNCTION_DOMAIN):
+    #: an inverted element (det F <= 0) of a hyperelastic body
+    DIVERGED_FUNCTION_DOMAIN = -10
 
     @property
     def converged(self) -> bool:

@@ -254,7 +254,8 @@ def _draw_figures(writer: ContactResultsWriter, summary: dict[str, typing.Any], 
     """``contact_states.png`` and ``bodies.png`` of the last step written, and whether each
     was drawn in the summary."""
     last = writer.last
-    summary["plot"] = plot_contact_states(writer.out / "contact_states.png", last.surface)
+    step = next(entry["step"] for entry in reversed(summary["steps"]) if entry["converged"])
+    summary["plot"] = plot_contact_states(writer.out / "contact_states.png", last.surface, step)
     summary["bodies_plot"] = plot_deformed_bodies(writer.out / "bodies.png", last.displacement, last.von_mises)
     tables.write_summary(comm, writer.out / "summary.json", summary)
 

@@ -55,9 +55,10 @@ CLOSED_FORMS = {"neo_hookean": (NeoHookean(), neo_hookean), "saint_venant_kirchh
                                                                                        saint_venant_kirchhoff)}
 
 
-def _compressed_block(material, compression: float, steps: int, lev: int = 1) -> list[dict]:
+def _compressed_block(material, compression: float, steps: int, lev: int = 1,
+                      parameters: dict | None = None) -> list[dict]:
     """Solve the compression in ``steps`` equal load steps; per step the displacement, the
-    contact nodes' coordinates, pressures and the Newton count."""
+    contact nodes' coordinates, pressures, the Newton count and the result (failed steps too)."""
     comm = MPI.COMM_WORLD
     msh, tags = create_contact_body(comm, lev, lambda x, y: np.zeros_like(x), length=1.0, width=1.0, height=1.0)
     problem = build_contact_problem(msh, tags, YOUNG, POISSON, {}, Frictionless(), clamped=(), contact="contact",
@@ -66,15 +67,15 @@ def _compressed_block(material, compression: float, steps: int, lev: int = 1) ->
     rows = []
 
     def record(index, step, u, result, state):
-        assert result.converged, result.status
         x = problem.V.tabulate_dof_coordinates()[: problem.V.dofmap.index_map.size_local]
         rows.append({"load": step.load, "x": x, "u": state.displacement.x.array.reshape(-1, 3)[: len(x)].copy(),
-                     "pressure": result.normal_force / problem.contact_area, "iterations": result.iterations})
+                     "pressure": result.normal_force / problem.contact_area, "iterations": result.iterations,
+                     "result": result})
 
     with problem:
         u = problem.A.createVecRight()
-        solve_load_path(problem, [LoadStep((k + 1) / steps) for k in range(steps)], u, {"pc": "lu"},
-                        on_step=record, from_rest=True)
+        solve_load_path(problem, [LoadStep((k + 1) / steps) for k in range(steps)], u,
+                        {"pc": "lu", **(parameters or {})}, on_step=record, from_rest=True)
         u.destroy()
     return rows
 
@@ -84,6 +85,7 @@ def test_uniaxial_compression_on_a_rigid_plane_is_the_closed_form(name):
     material, closed_form = CLOSED_FORMS[name]
     comm = MPI.COMM_WORLD
     for row in _compressed_block(material, COMPRESSION, STEPS):
+        assert row["result"].converged, row["result"].status
         s = 1.0 - COMPRESSION * row["load"]
         a, P33 = closed_form(s)
         exact = row["x"] * np.array([a - 1.0, a - 1.0, s - 1.0])
@@ -178,3 +180,20 @@ def test_a_frictional_finite_strain_path_is_in_balance_and_restarts_exactly(mpi_
         ua, ub = (np.load(mpi_tmp_path / d / "solution.npz")["u"] for d in ("whole", "restarted"))
         assert np.abs(ua - ub).max() <= 1e-12 * np.abs(ua).max()
     assert json.loads((mpi_tmp_path / "restarted" / "summary.json").read_text())["restarts"][0]["after_step"] == 3
+
+
+def test_a_step_that_inverts_elements_is_cut_until_it_converges():
+    """Half the height in one step: the guess (the prescribed top moved at once) inverts the top
+    cells (diverged_function_domain), the step is halved and grows back; it ends at the
+    closed form. With one halving allowed the path stops, reported as not converged."""
+    comm = MPI.COMM_WORLD
+    (row,) = _compressed_block(NeoHookean(), 0.5, 1, parameters={"max_iterations": 20})
+    result = row["result"]
+    assert result.converged, result.status
+    attempts = {(entry["substep"], entry["substep_load"], entry["substep_status"]) for entry in result.history}
+    assert (0, 1.0, "diverged_function_domain") in attempts and len(attempts) > 2
+    a, _ = neo_hookean(0.5)
+    error = comm.allreduce(float(np.abs(row["u"] - row["x"] * np.array([a - 1.0, a - 1.0, -0.5])).max()), op=MPI.MAX)
+    assert error <= 1e-8 * 0.5
+    (row,) = _compressed_block(NeoHookean(), 0.5, 1, parameters={"max_iterations": 20, "max_cuts": 1})
+    assert not row["result"].converged

@@ -68,7 +68,7 @@ def main() -> int:
         t0, c0 = time.perf_counter(), time.process_time()
         step_forces = []
 
-        def record_force(index, step, u, result) -> None:
+        def record_force(index, step, u, result, state) -> None:
             forces = contact_resultants(problem, result)
             step_forces.append(np.sum(list(forces["pair_forces"].values()), axis=0).tolist() if case.bodies
                                else forces["contact_force"])

@@ -62,6 +62,7 @@ class Checkpoint:
 
     Attributes:
         step: number of converged load steps it holds (1-based index of the last).
+        solved: number of converged solves (steps and parts of cut steps).
         path: its step file (``step_XXXX.bp``).
         load, translation: load factor and translation (m) of that step.
         target: the first step's stopping target ||y^|| (N), the accuracy of every later step.
@@ -69,6 +70,7 @@ class Checkpoint:
     """
 
     step: int
+    solved: int
     path: pathlib.Path
     load: float
     translation: tuple[float, float, float]
@@ -87,7 +89,8 @@ class Checkpoint:
         state.node_states[node_of_dof] = np.rint(states.x.array)
         n_owned = state.variables.getLocalSize()
         state.variables.array[:] = variables.x.array[:n_owned]
-        state.done, state.load, state.translation = self.step, self.load, np.array(self.translation)
+        state.done, state.solved = self.step, self.solved
+        state.load, state.translation = self.load, np.array(self.translation)
         state.target = self.target
         missing = problem.comm.allreduce(int(np.count_nonzero(state.node_states[problem.contact_blk] < 0)),
                                          op=MPI.SUM)
@@ -121,10 +124,10 @@ def read_checkpoint(comm: MPI.Comm, output: str | os.PathLike, case: dict[str, t
                          if to_builtin(case.get(k)) != summary.get("case", {}).get(k))
         raise ParameterError("--restart", f"the checkpoint in {marker.parent} was written for another case "
                              f"(different: {', '.join(changed) or 'the case'}); use a new --output directory")
-    if "translation" not in data:
+    if "solved" not in data:
         raise ParameterError("--restart", f"the checkpoint in {marker.parent} was written by an older contactqvi "
                              "without the obstacles' position; use a new --output directory")
-    return Checkpoint(int(data["step"]), marker.parent / data["file"], float(data["load"]),
+    return Checkpoint(int(data["step"]), int(data["solved"]), marker.parent / data["file"], float(data["load"]),
                       tuple(float(t) for t in data["translation"]), float(data["target"]), summary)
 
 
@@ -164,7 +167,7 @@ class CheckpointWriter:
                 adios4dolfinx.write_function_on_input_mesh(tmp, f, engine=_ENGINE, time=float(state.done),
                                                            name=f.name)
         write_summary(self.comm, self.directory / _MARKER,
-                      {"step": state.done, "file": name, "load": state.load,
+                      {"step": state.done, "solved": state.solved, "file": name, "load": state.load,
                        "translation": [float(t) for t in state.translation], "target": state.target,
                        "summary": summary})
         self.step = state.done

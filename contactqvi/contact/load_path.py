@@ -30,6 +30,14 @@ measured from the step before, until a solve changes the displacement by at most
 ``geometry_tol`` times the step's increment (:data:`PATH_PARAMETERS`; Code_Aster's
 geometric loop, ``REAC_GEOM = 'AUTOMATIQUE'`` with ``RESI_GEOM``, tested on the
 displacement).
+
+A step that does not converge (and was not interrupted) is cut: its first half, from the
+last converged state (:class:`~contactqvi.contact.path_state.PathState`), is solved
+instead, halved again if that fails too, up to ``max_cuts`` halvings in a row
+(:data:`PATH_PARAMETERS`; by default only for hyperelastic bodies); after each part that
+converges the next one is twice as large, up to the rest of the step. The step's result
+holds all its parts and attempts (history entries marked ``substep``, ``substep_load``,
+``substep_status``); the path stops when the cuts are used up.
 """
 
 from __future__ import annotations
@@ -51,6 +59,7 @@ from contactqvi.contact.nodal import State
 from contactqvi.contact.path_state import PathState
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult, SCDNewtonSolver, newton_step_solver
+from contactqvi.lifetime import PETScOwner
 from contactqvi.contact.surface import contact_facet_areas
 from contactqvi.load_steps import LoadStep, check_steps
 from contactqvi.parameters import Parameter, Parameters
@@ -65,6 +74,8 @@ StepCallback = typing.Callable[[int, LoadStep, PETSc.Vec, SCDNewtonResult, PathS
 
 #: The states of a contact node that touches its master surface.
 TOUCHING = (State.SLIDING, State.STICKING, State.WEAK_STICKING)
+#: ``max_cuts`` of a hyperelastic body when not given (Code_Aster's SUBD_NIVEAU counts alike).
+HYPERELASTIC_CUTS = 4
 #: The load path's own parameters, given with the SCD solver's (``[solver]`` of a case file).
 PATH_PARAMETERS = Parameters(
     geometry_tol=Parameter(1e-3, "search = until_settled: a step has settled when a solve after a search changes the "
@@ -72,6 +83,10 @@ PATH_PARAMETERS = Parameters(
                            minimum=0.0, maximum=1.0),
     max_searches=Parameter(10, "search = until_settled: searches in a step's own configuration before the step "
                            "fails (diverged_max_it)", type=int, minimum=1),
+    max_cuts=Parameter(None, "a load step that does not converge is cut in half and retried from the last "
+                       "converged state, at most this many halvings in a row (the step grows back after each "
+                       f"success); None: {HYPERELASTIC_CUTS} for a hyperelastic body, 0 for linear elasticity",
+                       type=int, minimum=0, optional=True),
 )
 #: A step whose displacement increment is below this fraction of the displacement has not
 #: moved (round-off): its configuration is the settled one of the step before.
@@ -92,7 +107,8 @@ def solve_load_path(
     stop: typing.Callable[[], bool] | None = None,
 ) -> list[SCDNewtonResult]:
     """Solve the steps in turn with one SCD Newton solver (one per step when the problem is
-    searched each step); stop at the first that fails.
+    searched each step); a step that does not converge is cut (module docstring); stop at
+    the first that fails with its cuts used up.
 
     Args:
         problem, steps: the contact problem (its step is set here) and the load path.
@@ -117,29 +133,97 @@ def solve_load_path(
     parameters, path = _split(parameters)
     results: list[SCDNewtonResult] = []
     own, state = state is None, PathState.at_rest(problem) if state is None else state
-    solver: SCDNewtonSolver | None = None
-    carried = _path_levels(problem, parameters, prefix) if problem.searched_each_step else None
     try:
-        for index in range(state.done, len(steps)):
-            if problem.searched_each_step and solver is not None:
-                carried, solver = _released(solver), None
-            _start(problem, steps[index], u, state, from_rest, carried)
-            if solver is None:
-                solver, carried = SCDNewtonSolver(problem, parameters, prefix=prefix, step_solver=carried), None
-            result = solver.solve(u, atol=state.target, stop=stop)
-            solver, result = _settle(problem, steps[index], u, state, solver, result, stop, path)
-            results.append(result)
-            if result.converged:
-                state.record(problem, u, result)
-            if on_step is not None:
-                on_step(index, steps[index], u, result, state)
-            if not result.converged:
-                break
+        with _StepSolver(problem, parameters, prefix, path, stop, None if from_rest else u) as solve:
+            index, cuts, attempts = state.done, 0, []
+            while index < len(steps):
+                step = _toward(state, steps[index], cuts)
+                result = solve(step, u, state, from_rest)
+                attempts.append((step, result))
+                cuts = _cuts_after(problem, u, state, index, step, result, cuts, solve.cuts_allowed)
+                if cuts is not None:
+                    continue
+                results.append(_cut(attempts, result.status) if len(attempts) > 1 else result)
+                attempts, cuts = [], 0
+                if on_step is not None:
+                    on_step(index, steps[index], u, results[-1], state)
+                if not result.converged:
+                    break
+                index += 1
     finally:
-        for owner in (solver, carried, state if own else None):
-            if owner is not None:
-                owner.destroy()
+        if own:
+            state.destroy()
     return results
+
+
+def _cuts_after(problem: ContactProblem, u: PETSc.Vec, state: PathState, index: int, step: LoadStep,
+                result: SCDNewtonResult, cuts: int, allowed: int) -> int | None:
+    """Record a converged solve of (a part, after ``cuts`` halvings, of) step ``index`` in
+    ``state``, and return the halvings of the next part: one fewer after a part that
+    converged (0: the rest of the step), one more after a failure while ``allowed``; None
+    when the step is done (solved whole, failed with its cuts used up, or interrupted)."""
+    if result.converged:
+        state.record(problem, u, result, complete=cuts == 0)
+        return cuts - 1 if cuts > 0 else None  # a part of the step: grow back toward its end
+    if result.status == Status.INTERRUPTED or cuts >= allowed:
+        return None
+    logger.warning("step %d: %s at load factor %g; cut to %g of what remains of it", index + 1, result.status,
+                   step.load, 0.5 ** (cuts + 1))
+    return cuts + 1
+
+
+class _StepSolver(PETScOwner):
+    """Solves the load steps of one path: the SCD solver (one per step when the problem is
+    searched each step) and the multigrid levels it carries, the first step's initial
+    guess for a retry (``initial``, copied; None: from rest), and the halvings a failed
+    step may take (``cuts_allowed``, ``max_cuts`` of ``path`` or its default)."""
+
+    def __init__(self, problem: ContactProblem, parameters: dict[str, typing.Any], prefix: str,
+                 path: dict[str, typing.Any], stop: typing.Callable[[], bool] | None, initial: PETSc.Vec | None):
+        self.problem, self.parameters, self.prefix, self.path, self.stop = problem, parameters, prefix, path, stop
+        self.initial = None if initial is None else initial.copy()
+        self.solver: SCDNewtonSolver | None = None
+        self.carried = _path_levels(problem, parameters, prefix) if problem.searched_each_step else None
+        default_cuts = HYPERELASTIC_CUTS if problem.hyperelastic is not None else 0
+        self.cuts_allowed = path["max_cuts"] if path["max_cuts"] is not None else default_cuts
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [self.solver, self.carried, self.initial]
+
+    def __call__(self, step: LoadStep, u: PETSc.Vec, state: PathState, from_rest: bool) -> SCDNewtonResult:
+        """Solve ``step`` after ``state``'s (the predictor of :func:`_start`; a problem searched
+        each step searched first, and settled after); its solution in ``u``."""
+        problem = self.problem
+        if problem.searched_each_step and self.solver is not None:
+            self.carried, self.solver = _released(self.solver), None
+        if state.solved == 0 and self.initial is not None:
+            self.initial.copy(u)  # the given guess, also for a retry of the first step
+        _start(problem, step, u, state, from_rest, self.carried)
+        if self.solver is None:
+            self.solver = SCDNewtonSolver(problem, self.parameters, prefix=self.prefix, step_solver=self.carried)
+            self.carried = None
+        result = self.solver.solve(u, atol=state.target, stop=self.stop)
+        self.solver, result = _settle(problem, step, u, state, self.solver, result, self.stop, self.path)
+        return result
+
+
+def _toward(state: PathState, step: LoadStep, cuts: int) -> LoadStep:
+    """``step`` itself, or after ``cuts`` halvings the part 2^-cuts of the way to it from
+    ``state`` (load factor and translation interpolated)."""
+    if cuts == 0:
+        return step
+    fraction = 0.5**cuts
+    load = state.load + fraction * (step.load - state.load)
+    translation = state.translation + fraction * (np.asarray(step.translation) - state.translation)
+    return LoadStep(load, tuple(float(t) for t in translation))
+
+
+def _cut(attempts: list[tuple[LoadStep, SCDNewtonResult]], status: Status) -> SCDNewtonResult:
+    """One step's result of its parts and failed attempts (:func:`_merged`), each history entry
+    marked with its ``substep``, that part's load factor and its status."""
+    marks = [{"substep": j, "substep_load": step.load, "substep_status": str(result.status)}
+             for j, (step, result) in enumerate(attempts)]
+    return _merged([result for _, result in attempts], status, marks)
 
 
 def _split(parameters: dict[str, typing.Any] | None) -> tuple[dict[str, typing.Any], dict[str, typing.Any]]:
@@ -185,7 +269,7 @@ def _start(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSta
     updates the levels of ``step_solver`` (if any) for the new A."""
     logger.info("step %d: load factor %g, obstacle translation %s m", state.done + 1, step.load,
                 np.array2string(np.asarray(step.translation), precision=4))
-    if state.done == 0:
+    if state.solved == 0:
         problem.set_step(step.load, step.translation)
         if from_rest:
             problem.shift.copy(u)  # u~ = 0
@@ -274,10 +358,12 @@ def _search_reached(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state
     return SCDNewtonSolver(problem, parameters, prefix=prefix, step_solver=step_solver)
 
 
-def _merged(solves: list[SCDNewtonResult], status: Status) -> SCDNewtonResult:
+def _merged(solves: list[SCDNewtonResult], status: Status,
+            marks: list[dict[str, typing.Any]] | None = None) -> SCDNewtonResult:
     """One step's result of several solves: the last one's solution and ``status``, the first
     one's target, the iterations and timings added, the history entries marked with their
-    ``search``."""
+    solve's ``marks`` (default: the ``search`` they followed)."""
+    marks = [{"search": j} for j in range(len(solves))] if marks is None else marks
     timings = Timings()
     for solve in solves:
         for phase, seconds in solve.timings.items():
@@ -285,7 +371,7 @@ def _merged(solves: list[SCDNewtonResult], status: Status) -> SCDNewtonResult:
     return dataclasses.replace(
         solves[-1], status=status, target=solves[0].target, iterations=sum(r.iterations for r in solves),
         inner_iterations=sum(r.inner_iterations for r in solves), timings=timings,
-        history=[{**entry, "search": j} for j, solve in enumerate(solves) for entry in solve.history])
+        history=[{**entry, **mark} for mark, solve in zip(marks, solves) for entry in solve.history])
 
 
 def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState) -> None:

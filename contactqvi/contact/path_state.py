@@ -10,10 +10,13 @@ state the uninterrupted run had. What each field is read for:
 field               read by
 ==================  ===========================================================================
 ``done``            the load path: the next step to solve
+``solved``          the first solve starts from the given guess (or rest), any later one from
+                    the predictor
 ``load``,           :meth:`~contactqvi.contact.problem.ContactProblem.set_step` of the next step:
 ``translation``     the obstacles' tangential motion since the step before (its slip reference
                     on a rigid obstacle), and the search of a pair searched each step: the
-                    prescribed and moved parts of ``displacement`` at the step before
+                    prescribed and moved parts of ``displacement`` at the step before; a cut
+                    step (``max_cuts``) starts its parts from them
 ``variables``       the next step's slip reference and predictor (``_continue``); a problem
                     searched each step recomputes it from ``displacement`` after its search
 ``displacement``    the configuration x + u~ in which pairs searched each step are searched
@@ -54,8 +57,10 @@ class PathState(PETScOwner):
 
     Attributes:
         done: number of converged steps.
-        load: load factor of step ``done`` (0 at rest).
-        translation: total translation of the obstacles and moved groups at step ``done`` (m).
+        solved: number of converged solves: the steps and the parts of cut steps.
+        load: load factor of the last converged solve (0 at rest): step ``done``, or a part
+            of the step after it when that step was cut.
+        translation: total translation of the obstacles and moved groups there (m).
         variables: u~ = u - d of step ``done`` in the problem's current solver variables.
         displacement: u~ of step ``done`` in global components (m; ghosts updated).
         node_states: :class:`~contactqvi.contact.nodal.State` of each local node (ghosts
@@ -64,6 +69,7 @@ class PathState(PETScOwner):
     """
 
     done: int
+    solved: int
     load: float
     translation: np.ndarray
     variables: PETSc.Vec
@@ -75,23 +81,25 @@ class PathState(PETScOwner):
     def at_rest(cls, problem: ContactProblem) -> PathState:
         """The state before the first step: the bodies at rest, the obstacles where meshed."""
         index_map = problem.V.dofmap.index_map
-        return cls(done=0, load=0.0, translation=np.zeros(3), variables=problem.A.createVecRight(),
+        return cls(done=0, solved=0, load=0.0, translation=np.zeros(3), variables=problem.A.createVecRight(),
                    displacement=fem.Function(problem.V, name="displacement"),
                    node_states=np.full(index_map.size_local + index_map.num_ghosts, -1, dtype=np.int8), target=0.0)
 
     def petsc_objects(self) -> list[typing.Any]:
         return [self.variables]
 
-    def record(self, problem: ContactProblem, u: PETSc.Vec, result: SCDNewtonResult) -> None:
+    def record(self, problem: ContactProblem, u: PETSc.Vec, result: SCDNewtonResult, complete: bool = True) -> None:
         """The state after the step just solved: ``problem`` set at that step, ``u`` its
-        solution (shifted, solver variables), ``result`` its converged result."""
-        self.done += 1
+        solution (shifted, solver variables), ``result`` its converged result; ``complete``:
+        a whole load step, not a part of a cut one."""
+        self.done += int(complete)
+        self.solved += 1
         self.load, self.translation = problem.load_factor, problem.translation.copy()
         self.variables.waxpy(-1.0, problem.shift, u)
         problem.physical_displacement(u, self.displacement)
         self.node_states[:] = -1
         self.node_states[problem.contact_blk] = result.states
-        if self.done == 1:
+        if self.solved == 1:
             self.target = result.target
 
     def contact_states(self, problem: ContactProblem) -> np.ndarray:

@@ -335,7 +335,10 @@ class ContactProblem(PETScOwner):
         self.load.scale(load_factor)
         for t, b in zip(translation, self.translated):  # moved groups follow the translation
             self.load.axpy(t, b)
-        self.A.multAdd(self.shift, self.load, self.load)  # l = lambda l~ + sum_c t_c l~_c + A d
+        if self.hyperelastic is None:
+            self.A.multAdd(self.shift, self.load, self.load)  # l = lambda l~ + sum_c t_c l~_c + A d
+        else:  # f is evaluated at u - d itself (no shift of the load): d only on the identity rows, as A d there
+            self.load.axpy(1.0, self.shift)
         self.load_factor, self.translation = float(load_factor), translation
 
     def physical_displacement(self, u: PETSc.Vec, out: fem.Function) -> fem.Function:

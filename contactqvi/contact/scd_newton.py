@@ -560,7 +560,11 @@ class SCDNewtonSolver(PETScOwner):
 
     def _stopping_status(self, norm: float, norm0: float, target: float, k: int,
                          stop: typing.Callable[[], bool] | None) -> Status | None:  # fmt: skip
-        """Why the iteration ends before Newton step k (converged, out of iterations, or ``stop()``), or None."""
+        """Why the iteration ends before Newton step k (converged, out of iterations, f undefined at
+        the iterate, or ``stop()``), or None. The line search accepts finite residuals only, so
+        an undefined f (an inverted element of a hyperelastic body) is the initial guess's."""
+        if not np.isfinite(norm):
+            return Status.DIVERGED_FUNCTION_DOMAIN
         if norm <= target:
             return Status.CONVERGED_RTOL if norm <= self.parameters["rtol"] * norm0 else Status.CONVERGED_ATOL
         if k == self.parameters["max_iterations"]:
