@@ -200,7 +200,8 @@ class ContactResultsWriter:
         """What every step of ``problem`` writes into: made once."""
         self._problem = problem
         self._displacement = fem.Function(problem.V, name="displacement")
-        self._stress = StressFields(self._displacement, problem.body.young, problem.body.poisson)
+        self._stress = StressFields(self._displacement, problem.body.young, problem.body.poisson,
+                                    problem.body.material)
         self._body = MeshPiece(problem.V.mesh)
         self._surface = ContactSurface(problem)
         self._cell_data = {}
