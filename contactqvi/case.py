@@ -255,10 +255,14 @@ class Contact:
         surface: physical group of the contact surface.
         law: the contact law (:mod:`contactqvi.laws`), e.g. ``Coulomb(friction=0.23)``,
             ``Tresca(slip_bound=1e8)``, ``Frictionless()``.
+        search: ``"once"`` (gaps and normals of the reference configuration), or
+            ``"every_step"`` / ``"until_settled"``: found again in the deformed configuration
+            (finite displacements on a curved obstacle; :class:`ContactPair`).
     """
 
     surface: str
     law: ContactLaw | None = None
+    search: str = "once"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -312,10 +316,11 @@ class ContactPair:
         law: the contact law, as in :class:`Contact`.
         search_distance: reach of the contact search (m) > 0; None: each slave
             facet's longest edge.
-        search: when a ``master`` pair is searched: ``"every_step"`` (before every
-            load step after the first, in the configuration the step before ended in),
+        search: when the pair is searched: ``"every_step"`` (before every load step
+            after the first, in the configuration the step before ended in),
             ``"until_settled"`` (also after each step, which is solved again until its
-            configuration settles) or ``"once"`` (in the reference configuration only).
+            configuration settles) or ``"once"`` (in the reference configuration only);
+            None: ``"every_step"`` for a ``master``, ``"once"`` for an obstacle.
     """
 
     slave: str
@@ -323,7 +328,7 @@ class ContactPair:
     obstacle: ObstacleShape | None = None
     law: ContactLaw | None = None
     search_distance: float | None = None
-    search: str = "every_step"
+    search: str | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -614,7 +619,8 @@ def _check_boundary(boundary: Boundary, path: str, supported: bool = True) -> Bo
 def _check_contact(contact: Contact) -> Contact:
     _instance(contact, Contact, "contact")
     surface = _name(contact.surface, "contact.surface")
-    return Contact(surface, _check_law(contact.law, "contact"))
+    require_choice("contact.search", contact.search, SEARCHES)
+    return Contact(surface, _check_law(contact.law, "contact"), contact.search)
 
 
 def _check_law(law: ContactLaw | None, path: str) -> ContactLaw:
@@ -666,8 +672,9 @@ def _check_contacts(contacts: typing.Sequence[ContactPair], bodies: tuple[Body, 
         if distance is not None:
             distance = require_number(f"{path}.search_distance", distance)
             require_positive(f"{path}.search_distance", distance)
-        require_choice(f"{path}.search", pair.search, SEARCHES)
-        checked.append(ContactPair(pair.slave, pair.master, obstacle, law, distance, pair.search))
+        search = pair.search if pair.search is not None else ("once" if obstacle is not None else "every_step")
+        require_choice(f"{path}.search", search, SEARCHES)
+        checked.append(ContactPair(pair.slave, pair.master, obstacle, law, distance, search))
     return tuple(checked)
 
 

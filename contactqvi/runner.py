@@ -80,7 +80,7 @@ def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
     b, c = case.boundary, case.contact
     return build_contact_problem(
         msh, tags, case.material.young, case.material.poisson, dict(b.traction),
-        law=c.law, clamped=b.clamped, contact=c.surface,
+        law=c.law, clamped=b.clamped, contact=c.surface, search=c.search,
         obstacle=case.obstacle.create(), body_force=b.body_force,
         displacements={name: d.components() for name, d in b.displacement.items()}, moved=b.moved,
         material=None if case.material.model is None else create_material(case.material.model),
@@ -119,7 +119,7 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
 def _pair(pair: ContactPair) -> ObstaclePair | BodyPair:
     """The contact pair of a ``[[contacts]]`` entry."""
     if pair.obstacle is not None:
-        return ObstaclePair(pair.slave, pair.obstacle.create(), pair.law)
+        return ObstaclePair(pair.slave, pair.obstacle.create(), pair.law, pair.search)
     return BodyPair(pair.slave, pair.master, pair.law, pair.search_distance, pair.search)
 
 

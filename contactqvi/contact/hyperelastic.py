@@ -20,10 +20,11 @@ variables (:meth:`~contactqvi.contact.problem.ContactProblem.residual`,
 and a linear one of the same E and nu agree at small strain. The derivation of the
 Newton step, gamma and the line search for a nonlinear f: docs/finite_strain.md.
 
-Contact is measured as in the linear problem, in the reference configuration's nodal
-frames with the gap g + n . u: exact for a plane obstacle (a flat rigid foundation),
-whatever the strain. Curved obstacles and body pairs in the current configuration are
-not yet part of the finite-strain problem (the problem builder refuses body pairs).
+Contact is measured as in the linear problem, in nodal frames with the gap g + n . u
+linearised about the configuration of the last search: the reference one (exact for a
+plane obstacle, whatever the strain), or the current one for an obstacle pair searched
+each step (:class:`~contactqvi.contact.interface.ObstaclePair`). Body pairs at finite
+strain are not yet part of the problem (the problem builder refuses them).
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import reassemble_matrix
 from contactqvi.materials import Material
 
-__all__ = ["HyperelasticSystem", "create_hyperelastic_system"]
+__all__ = ["HyperelasticSystem", "create_hyperelastic_system", "prescribed_rows"]
 
 
 
@@ -60,10 +61,12 @@ class HyperelasticSystem(PETScOwner):
         bcs: the problem's Dirichlet conditions (their rows are the prescribed values').
         external: the dead load l at load factor 1 (not lifted; zero at prescribed dofs).
         internal: work vector of r_K (ghosted).
-        stiffness: K_T in global components when the problem has nodal frames (A = R^T K_T R),
-            else None (K_T is assembled into A itself).
+        stiffness: K_T in global components when the problem has nodal frames (A = R^T K_T R;
+            made at the first need, :meth:`global_stiffness`), else None (K_T is assembled
+            into A itself).
         dirichlet_owned: owned local dofs (global components) with prescribed values.
-        prescribed: owned local rows of A (solver variables) that are prescribed rows.
+        prescribed: owned local rows of A (solver variables) that are prescribed rows (of the
+            nodal frames of the last search, :func:`prescribed_rows`).
     """
 
     material: Material
@@ -91,6 +94,12 @@ class HyperelasticSystem(PETScOwner):
         r.axpy(-load_factor, self.external)
         r.array[self.dirichlet_owned] = 0.0
         return r
+
+    def global_stiffness(self) -> PETSc.Mat:
+        """K_T's matrix in global components (of the linear stiffness' pattern), made once."""
+        if self.stiffness is None:
+            self.stiffness = dolfinx.fem.petsc.create_matrix(self.tangent_form)
+        return self.stiffness
 
     def assemble_tangent(self, out: PETSc.Mat) -> PETSc.Mat:
         """K_T at :attr:`displacement` (identity rows and columns at prescribed dofs) into ``out``
@@ -124,12 +133,11 @@ def create_hyperelastic_system(
     dolfinx.fem.petsc.assemble_vector(external, load)
     external.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     external.array[dirichlet_owned] = 0.0
-    stiffness = None if rotation is None else dolfinx.fem.petsc.create_matrix(tangent_form)
     return HyperelasticSystem(material, u, residual_form, tangent_form, list(bcs), external, external.duplicate(),
-                              stiffness, dirichlet_owned, _prescribed_rows(external, dirichlet_owned, rotation))
+                              None, dirichlet_owned, prescribed_rows(external, dirichlet_owned, rotation))
 
 
-def _prescribed_rows(like: PETSc.Vec, dirichlet_owned: np.ndarray, rotation: PETSc.Mat | None) -> np.ndarray:
+def prescribed_rows(like: PETSc.Vec, dirichlet_owned: np.ndarray, rotation: PETSc.Mat | None) -> np.ndarray:
     """Owned local rows of the solver's variables that hold a prescribed dof (the nodal
     frames are aligned with the prescribed components, so R^T maps one onto one)."""
     if rotation is None:

@@ -48,11 +48,17 @@ class ObstaclePair:
         surface: facet group of the slave surface.
         obstacle: the obstacle in its initial position (moved by the load steps' translations).
         law: the contact law (:mod:`contactqvi.laws`), e.g. ``Coulomb(friction=0.3)``.
+        search: ``"once"``: gaps and normals of the reference configuration, the gap
+            linearised as g + n . u (exact for a plane; small displacements on a curved
+            obstacle); ``"every_step"``, ``"until_settled"``: found again in the deformed
+            configuration as a body pair is (:class:`BodyPair`), the gap linearised about it
+            (finite displacements on a curved obstacle).
     """
 
     surface: str
     obstacle: Obstacle
     law: ContactLaw = Frictionless()
+    search: str = "once"
 
     @property
     def name(self) -> str:
@@ -105,6 +111,8 @@ class Interface:
         coupling: the mortar rows C of a body pair; None for an obstacle.
         initial_gap: (m,) gap of the reference positions (m): to an obstacle before
             any translation of it; for a body pair weighted with the C of the last search.
+        searched_at: (m, 3) displacement of the slave nodes in the configuration an obstacle
+            pair was searched in (its gap is linearised about it), or None: the reference.
     """
 
     pair: Pair
@@ -113,6 +121,7 @@ class Interface:
     area: np.ndarray
     coupling: MortarCoupling | None
     initial_gap: np.ndarray
+    searched_at: np.ndarray | None = None
 
     @property
     def obstacle(self) -> Obstacle | None:
@@ -120,13 +129,13 @@ class Interface:
 
     @property
     def searched_each_step(self) -> bool:
-        """Whether the pair is searched again before every load step (:attr:`BodyPair.search`)."""
-        return isinstance(self.pair, BodyPair) and self.pair.search in ("every_step", "until_settled")
+        """Whether the pair is searched again before every load step (its ``search``)."""
+        return self.pair.search in ("every_step", "until_settled")
 
     @property
     def settles(self) -> bool:
-        """Whether a step is solved again until its configuration settles (:attr:`BodyPair.search`)."""
-        return isinstance(self.pair, BodyPair) and self.pair.search == "until_settled"
+        """Whether a step is solved again until its configuration settles (its ``search``)."""
+        return self.pair.search == "until_settled"
 
     @property
     def slave_surface(self) -> str:
@@ -134,11 +143,16 @@ class Interface:
         return self.pair.surface if isinstance(self.pair, ObstaclePair) else self.pair.slave
 
     def gap(self, x: np.ndarray, translation: np.ndarray) -> np.ndarray:
-        """Gap of each slave node (m) with the obstacle translated by ``translation``;
-        a body pair's weighted gap does not depend on it."""
+        """Gap of each slave node (m) at reference positions ``x`` with the obstacle translated
+        by ``translation``; a body pair's weighted gap does not depend on it. An obstacle pair
+        searched in a deformed configuration u_s gives g(x + u_s) - n . u_s, so that g + n . u
+        is the gap linearised about that configuration."""
         if self.obstacle is None:
             return self.initial_gap
-        return self.obstacle.translated(translation).distance(x)[0]
+        if self.searched_at is None:
+            return self.obstacle.translated(translation).distance(x)[0]
+        gap = self.obstacle.translated(translation).distance(x + self.searched_at)[0]
+        return gap - np.einsum("ij,ij->i", self.frames[:, 2], self.searched_at)
 
 
 def build_interfaces(
@@ -182,25 +196,36 @@ def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: t
     by the last step's discrete conditions is no error.
     """
     x = displacement.x.array.reshape(-1, 3)
-    return [_body_interface(V, facet_tags, i.pair, constrained, x) if i.searched_each_step else i
-            for i in interfaces]
+
+    def again(interface: Interface) -> Interface:
+        if isinstance(interface.pair, ObstaclePair):
+            return _obstacle_interface(V, facet_tags, interface.pair, constrained, x)
+        return _body_interface(V, facet_tags, interface.pair, constrained, x)
+
+    return [again(i) if i.searched_each_step else i for i in interfaces]
 
 
 def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: ObstaclePair,
-                        constrained: np.ndarray) -> Interface:
+                        constrained: np.ndarray, displacement: np.ndarray | None = None) -> Interface:
+    """An obstacle pair's interface in the reference configuration (checked: no node inside
+    the obstacle) or in x + ``displacement`` (local nodes, 3): the obstacle at rest, its
+    normals there; :meth:`Interface.gap` adds the translation of each step."""
+    require(pair.search in SEARCHES, f"{pair.name}: search", f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
     n_owned = V.dofmap.index_map.size_local
     excluded_blk = np.flatnonzero(constrained.all(axis=1))
     blk = fem.locate_dofs_topological(V, V.mesh.topology.dim - 1, boundary_facets(facet_tags, pair.surface))
     blk = np.setdiff1d(blk[blk < n_owned], excluded_blk).astype(np.int32)
+    searched_at = None if displacement is None else displacement[blk]
     x = V.tabulate_dof_coordinates()[blk]
-    gap, normal = pair.obstacle.distance(x)
+    gap, normal = pair.obstacle.distance(x if searched_at is None else x + searched_at)
     comm = V.mesh.comm
     undefined = comm.allreduce(int(np.count_nonzero(~np.isfinite(normal).all(axis=1))), op=MPI.SUM)
     require(undefined == 0, "obstacle", f"{undefined} contact nodes lie where the obstacle has no normal "
             "(a sphere's centre or a cylinder's axis)")
-    _check_overlap(comm, V, gap, "obstacle", "contact nodes lie inside the obstacle")
+    if searched_at is None:
+        _check_overlap(comm, V, gap, "obstacle", "contact nodes lie inside the obstacle")
     area = _lumped_area(V, facet_tags, pair.surface)[blk]
-    return Interface(pair, blk, tangent_frames(normal), area, None, gap)
+    return Interface(pair, blk, tangent_frames(normal), area, None, gap, searched_at)
 
 
 #: Initial penetrations of a slave node into a master body up to this fraction of the node's

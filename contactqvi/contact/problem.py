@@ -54,7 +54,7 @@ import dolfinx.la
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 
-from contactqvi.contact.hyperelastic import HyperelasticSystem, create_hyperelastic_system
+from contactqvi.contact.hyperelastic import HyperelasticSystem, create_hyperelastic_system, prescribed_rows
 from contactqvi.contact.interface import BodyPair, Interface, ObstaclePair, Pair, build_interfaces, search_again
 from contactqvi.elasticity import BodyForce, elasticity_forms, orthonormalize, rigid_motions_nullspace
 from contactqvi.laws import ContactLaw, Frictionless, NodalLaw, StackedLaw
@@ -240,6 +240,9 @@ class ContactProblem(PETScOwner):
             searched.destroy()
         for name, value in fields.items():
             setattr(self, name, value)
+        if self.hyperelastic is not None:  # the rows of the prescribed dofs in the new frames
+            h = self.hyperelastic
+            h.prescribed = prescribed_rows(h.external, h.dirichlet_owned, self.rotation)
         self.setup_seconds = {"contact_search": search_seconds, "change_of_variables": variables_seconds}
         return difference
 
@@ -286,7 +289,7 @@ class ContactProblem(PETScOwner):
         if self.rotation is None:
             system.assemble_tangent(self.A)
             return
-        rotated = system.assemble_tangent(system.stiffness).PtAP(self.rotation)
+        rotated = system.assemble_tangent(system.global_stiffness()).PtAP(self.rotation)
         self.A.zeroEntries()
         self.A.axpy(1.0, rotated, _SUBSET)
         rotated.destroy()
@@ -463,6 +466,7 @@ def build_contact_problem(
     displacements: dict[str, dict[int, float]] | None = None,
     moved: typing.Sequence[str] = (),
     material: Material | None = None,
+    search: str = "once",
 ) -> ContactProblem:
     """Assemble the GE (6.3) for a body against a rigid obstacle, at load factor 1.
 
@@ -484,6 +488,7 @@ def build_contact_problem(
         displacements: prescribed components per boundary name, ``{name: {component: value (m)}}``.
         moved: boundaries moved rigidly with the obstacle's translation.
         material: a hyperelastic material (finite strain), or None: linear elasticity.
+        search: when the contact is searched (:class:`~contactqvi.contact.interface.ObstaclePair`).
 
     Raises:
         ParameterError: bad values, unknown boundary names, or a contact node inside
@@ -492,7 +497,7 @@ def build_contact_problem(
     require(isinstance(law, ContactLaw), "law", f"must be a contact law of contactqvi.laws, got {law!r}")
     law = law.checked()  # before assembly; errors named by the parameter ("friction")
     obstacle = Plane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)) if obstacle is None else obstacle
-    pair = ObstaclePair(contact, obstacle, law)
+    pair = ObstaclePair(contact, obstacle, law, search)
     return assemble_contact_problem(msh, facet_tags, young, poisson, tractions, [pair], clamped, body_force,
                                     displacements, moved=moved, material=material)
 
@@ -566,6 +571,8 @@ def _make_hyperelastic(problem: ContactProblem, material: Material | None, young
     rigid obstacles only. Nothing for a linear material (None)."""
     if material is None:
         return
+    if problem.elastic is not None and problem.A is problem.elastic.stiffness:  # A_K, kept for the searches
+        problem.A = problem.A.duplicate(copy=True)
     require(all(i.obstacle is not None for i in problem.interfaces), "material",
             "finite strain is solved against rigid obstacles only (contact between bodies in the current "
             "configuration is not yet implemented): use linear elasticity for body pairs")
