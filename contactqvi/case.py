@@ -235,6 +235,8 @@ class Boundary:
         body_force: [fx, fy, fz] (N/m^3), scaled by the step's load; ``None``: none.
         moved: groups whose displacement is the step's ``translation`` (all three
             components, moved rigidly with the obstacles; not scaled by ``load``).
+        pressure: group -> pressure p (Pa, > 0 pushes into the body), scaled by the step's
+            load: the traction -p n, on the deformed surface for a hyperelastic material.
     """
 
     clamped: tuple[str, ...] = ()
@@ -242,6 +244,7 @@ class Boundary:
     traction: dict[str, Vector] = dataclasses.field(default_factory=dict)
     body_force: Vector | None = None
     moved: tuple[str, ...] = ()
+    pressure: dict[str, float] = dataclasses.field(default_factory=dict)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -456,8 +459,9 @@ def _parse_boundary(boundary: dict[str, typing.Any], path: str) -> Boundary:
             name: Displacement(**_table(value, f"{path}.displacement.{name}", Displacement))
             for name, value in groups.items()
         }
-    if "traction" in boundary:
-        boundary["traction"] = _table(boundary["traction"], f"{path}.traction")
+    for key in ("traction", "pressure"):
+        if key in boundary:
+            boundary[key] = _table(boundary[key], f"{path}.{key}")
     return Boundary(**boundary)
 
 
@@ -613,7 +617,10 @@ def _check_boundary(boundary: Boundary, path: str, supported: bool = True) -> Bo
                 f"group {name!r} already has a prescribed displacement")
     require(clamped or displacement or moved or not supported, path,
             "needs a clamped group or a prescribed displacement (rigid motions must be fixed)")
-    return Boundary(clamped, displacement, traction, body_force, moved)
+    _instance(boundary.pressure, dict, f"{path}.pressure")
+    pressure = {_name(name, f"{path}.pressure.{name}"): require_number(f"{path}.pressure.{name}", value)
+                for name, value in boundary.pressure.items()}
+    return Boundary(clamped, displacement, traction, body_force, moved, pressure)
 
 
 def _check_contact(contact: Contact) -> Contact:
@@ -787,6 +794,7 @@ def _boundary_uses(boundary: Boundary, path: str) -> list[tuple[str, str]]:
     uses = [(f"{path}.clamped[{i}]", name) for i, name in enumerate(boundary.clamped)]
     uses += [(f"{path}.displacement.{name}", name) for name in boundary.displacement]
     uses += [(f"{path}.moved[{i}]", name) for i, name in enumerate(boundary.moved)]
+    uses += [(f"{path}.pressure.{name}", name) for name in boundary.pressure]
     return uses + [(f"{path}.traction.{name}", name) for name in boundary.traction]
 
 

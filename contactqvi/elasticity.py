@@ -26,6 +26,7 @@ __all__ = [
     "strain",
     "stress",
     "elasticity_forms",
+    "pressure_form",
     "rigid_motions_nullspace",
 ]
 
@@ -103,10 +104,11 @@ def elasticity_forms(
     tractions: dict[str, tuple[float, ...]],
     body_force: BodyForce | None = None,
     cell_tags: dmesh.MeshTags | None = None,
+    pressures: dict[str, float] | None = None,
 ) -> tuple[fem.Form, fem.Form]:
     """Compiled bilinear form a(u, v) = (sigma(u), eps(v)) and load l(v).
 
-    l(v) = (f, v) + sum over named boundaries of (t, v)_boundary.
+    l(v) = (f, v) + sum over named boundaries of (t, v)_boundary - (p N, v)_boundary.
 
     Args:
         V: vector Lagrange space.
@@ -116,6 +118,8 @@ def elasticity_forms(
         body_force: volume force density f (N/m^3), one vector or one per body
             ``{body: f}`` (:func:`body_forces`), or None.
         cell_tags: named cell groups, one per body (needed for a force per body).
+        pressures: pressure p (Pa, > 0 pushes into the body) per boundary name: the traction
+            -p N of the reference normal here (:func:`pressure_form`).
     """
     mu, lmbda = lame_parameters(young, poisson)
     msh = V.mesh
@@ -129,7 +133,28 @@ def elasticity_forms(
         L += body_force_form(msh, v, body_force, cell_tags)
     for name, traction in tractions.items():
         L += ufl.inner(_vector_constant(msh, traction, f"traction[{name}]"), v) * ds(tag_of(facet_tags, name))
+    if pressures:
+        L += pressure_form(msh, v, facet_tags, pressures)
     return fem.form(a), fem.form(L)
+
+
+def pressure_form(msh: dmesh.Mesh, v: ufl.core.expr.Expr, facet_tags: dmesh.MeshTags, pressures: dict[str, float],
+                  u: ufl.core.expr.Expr | None = None) -> ufl.Form:
+    """The load of pressures p (Pa) on named boundaries, UFL (not compiled): on the reference
+    surface -(p N, v) (small strain), or with the displacement ``u`` the follower load
+    -(p J F^-T N, v) of the pressure on the deformed surface (Nanson's formula: n da =
+    J F^-T N dA), F = I + grad u."""
+    ds = ufl.Measure("ds", domain=msh, subdomain_data=facet_tags)
+    N = ufl.FacetNormal(msh)
+    if u is not None:
+        F = ufl.Identity(len(N)) + ufl.grad(u)
+        N = ufl.det(F) * ufl.inv(F).T * N
+    form = None
+    for name, value in pressures.items():
+        p = fem.Constant(msh, PETSc.ScalarType(value))
+        term = -p * ufl.inner(N, v) * ds(tag_of(facet_tags, name))
+        form = term if form is None else form + term
+    return form
 
 
 def body_force_form(

@@ -30,7 +30,7 @@ import ufl
 from dolfinx import fem, la
 from dolfinx import mesh as dmesh
 
-from contactqvi.elasticity import BodyForce, body_force_form, lame_parameters, strain, stress
+from contactqvi.elasticity import BodyForce, body_force_form, lame_parameters, pressure_form, strain, stress
 from contactqvi.materials import Material
 from contactqvi.meshes import boundary_facets, tag_of
 from contactqvi.parameters import require
@@ -61,6 +61,8 @@ class ElasticBody:
         cell_tags: named cell groups, one per body (for a body force per body), or None.
         material: a hyperelastic material (finite strain: the residual of P(F), the Cauchy
             stress P F^T / det F), or None for linear elasticity.
+        pressures: pressure (Pa, > 0 into the body) per boundary name, at load factor 1
+            (on the deformed surface for a hyperelastic body).
     """
 
     young: float
@@ -72,6 +74,7 @@ class ElasticBody:
     prescribed: dict[str, tuple[int, ...]] = dataclasses.field(default_factory=dict)
     cell_tags: dmesh.MeshTags | None = None
     material: Material | None = None
+    pressures: dict[str, float] = dataclasses.field(default_factory=dict)
 
 
 def von_mises(sigma: np.ndarray) -> np.ndarray:
@@ -126,8 +129,11 @@ def stress_fields(u: fem.Function, young: float, poisson: float) -> tuple[fem.Fu
     return StressFields(u, young, poisson).update()
 
 
-def _load_form(msh: dmesh.Mesh, v: ufl.core.expr.Expr, body: ElasticBody, load_factor: float) -> ufl.Form:
-    """l(v) = lambda ((f, v) + sum of (t, v) over the traction boundaries)."""
+def _load_form(msh: dmesh.Mesh, v: ufl.core.expr.Expr, body: ElasticBody, load_factor: float,
+               u: fem.Function | None = None) -> ufl.Form:
+    """l(v) = lambda ((f, v) + sum of (t, v) over the traction boundaries - the pressures'
+    load), the pressures on the surface deformed by ``u`` for a hyperelastic body
+    (:func:`~contactqvi.elasticity.pressure_form`)."""
     ds = ufl.Measure("ds", domain=msh, subdomain_data=body.facet_tags)
     factor = fem.Constant(msh, PETSc.ScalarType(load_factor))
     zero = fem.Constant(msh, np.zeros(3, dtype=PETSc.ScalarType))
@@ -137,6 +143,9 @@ def _load_form(msh: dmesh.Mesh, v: ufl.core.expr.Expr, body: ElasticBody, load_f
     for name, traction in body.tractions.items():
         t = fem.Constant(msh, np.asarray(traction, dtype=PETSc.ScalarType))
         form += factor * ufl.inner(t, v) * ds(tag_of(body.facet_tags, name))
+    if body.pressures:
+        follower = u if body.material is not None else None
+        form += factor * pressure_form(msh, v, body.facet_tags, body.pressures, follower)
     return form
 
 
@@ -204,7 +213,7 @@ def _nodal_residual(u: fem.Function, body: ElasticBody, load_factor: float) -> n
         internal = ufl.inner(stress(u, mu, lmbda), strain(v)) * ufl.dx
     else:
         internal = ufl.inner(body.material.first_piola(u, mu, lmbda), ufl.grad(v)) * body.material.dx()
-    residual_form = internal - _load_form(V.mesh, v, body, load_factor)
+    residual_form = internal - _load_form(V.mesh, v, body, load_factor, u)
     residual = fem.assemble_vector(fem.form(residual_form))
     residual.scatter_reverse(la.InsertMode.add)
     n_owned = V.dofmap.index_map.size_local
@@ -260,11 +269,13 @@ def _shares(on_support: np.ndarray, prescribes: np.ndarray, constrained: np.ndar
     return claims / np.maximum(claimants, 1)[:, None, :]
 
 
-def applied_force(msh: dmesh.Mesh, body: ElasticBody, load_factor: float = 1.0) -> np.ndarray:
-    """Resultant (N) of the tractions and the body force at ``load_factor``. Collective."""
+def applied_force(msh: dmesh.Mesh, body: ElasticBody, load_factor: float = 1.0,
+                  u: fem.Function | None = None) -> np.ndarray:
+    """Resultant (N) of the tractions, pressures and the body force at ``load_factor`` (a
+    hyperelastic body's pressures on the surface deformed by ``u``). Collective."""
     total = np.zeros(3)
     for i in range(3):
         direction = fem.Constant(msh, np.eye(3)[i].astype(PETSc.ScalarType))
-        value = fem.assemble_scalar(fem.form(_load_form(msh, direction, body, load_factor)))
+        value = fem.assemble_scalar(fem.form(_load_form(msh, direction, body, load_factor, u)))
         total[i] = msh.comm.allreduce(value, op=MPI.SUM)
     return total

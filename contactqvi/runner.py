@@ -84,6 +84,7 @@ def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
         obstacle=case.obstacle.create(), body_force=b.body_force,
         displacements={name: d.components() for name, d in b.displacement.items()}, moved=b.moved,
         material=None if case.material.model is None else create_material(case.material.model),
+        pressures=dict(b.pressure),
     )
 
 
@@ -109,11 +110,13 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
     displacements = {f"{b.name}.{group}": d.components() for b in case.bodies
                      for group, d in b.boundary.displacement.items()}
     tractions = {f"{b.name}.{group}": t for b in case.bodies for group, t in b.boundary.traction.items()}
+    pressures = {f"{b.name}.{group}": p for b in case.bodies for group, p in b.boundary.pressure.items()}
     moved = [name for b in case.bodies for name in qualified(b, b.boundary.moved)]
     body_force = {b.name: b.boundary.body_force for b in case.bodies if b.boundary.body_force is not None}
     pairs = [_pair(pair) for pair in case.contacts]
     return assemble_contact_problem(msh, tags, young, poisson, tractions, pairs, clamped, body_force or None,
-                                    displacements=displacements, cell_tags=cell_tags, moved=moved)
+                                    displacements=displacements, cell_tags=cell_tags, moved=moved,
+                                    pressures=pressures)
 
 
 def _pair(pair: ContactPair) -> ObstaclePair | BodyPair:

@@ -238,3 +238,37 @@ def test_contact_with_a_curved_obstacle_in_the_current_configuration():
     assert max(off for off, _ in settled) <= 1e-9, settled
     assert once[-1][0] >= 1e-3, once
     assert 0.005 <= settled[-1][1] / once[-1][1] - 1.0 <= 0.02, (settled[-1], once[-1])
+
+
+@pytest.mark.parametrize("model", [None, "neo_hookean"])
+def test_a_pressure_on_a_block_on_the_foundation(model, mpi_tmp_path):
+    """``[boundary.pressure] top = p``: a block on the frictionless foundation (rollers on two
+    sides) under a pressure on its top. Linear: the dead traction -p N, a force p A on the
+    foundation. Neo-Hookean: the pressure follows the deformed top, whose area grows by a^2
+    (Nanson), so P33 = -p a^2 at the axial stretch s where the closed form's P33(s) equals
+    it; the top sinks by (1 - s) H and the foundation carries p a^2 A, balanced to 1e-10."""
+    from contactqvi.case import parse_case
+    from contactqvi.runner import run_case
+
+    p = 2e6  # Pa, about 20 % compression of the neo-Hookean block
+    material = {"young": YOUNG, "poisson": POISSON, **({} if model is None else {"model": model})}
+    case = parse_case({
+        "mesh": {"box": {"lev": 1, "geometry": "d1"}},
+        "material": material,
+        "boundary": {"displacement": {"dirichlet": {"x": 0.0}, "front": {"y": 0.0}}, "pressure": {"top": p}},
+        "contact": {"surface": "contact", "law": "frictionless"},
+        "obstacle": {"type": "plane", "point": [0.0, 0.0, 0.01], "normal": [0.0, 0.0, 1.0]},
+        "steps": [{"load": (k + 1) / 4} for k in range(4)],
+        "solver": {"pc": "lu"},
+    })
+    summary, code = run_case(case, mpi_tmp_path / "out", plot=False)
+    assert code == 0, summary["status"]
+    last = summary["steps"][-1]
+    area = 2.0  # the box's top: 2 m x 1 m
+    if model is None:
+        expected = p * area
+    else:
+        s = scipy.optimize.brentq(lambda s: neo_hookean(s)[1] + p * neo_hookean(s)[0] ** 2, 0.3, 1.0, xtol=1e-15)
+        expected = p * neo_hookean(s)[0] ** 2 * area
+    assert abs(last["contact_force"][2] - expected) <= 1e-8 * expected, (last["contact_force"], expected)
+    assert last["equilibrium_error"] <= 1e-10

@@ -40,8 +40,9 @@ import ufl
 import dolfinx.fem.petsc
 import dolfinx.la
 from dolfinx import fem
+from dolfinx import mesh as dmesh
 
-from contactqvi.elasticity import Modulus, lame_parameters
+from contactqvi.elasticity import Modulus, lame_parameters, pressure_form
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import reassemble_matrix
 from contactqvi.materials import Material
@@ -67,6 +68,7 @@ class HyperelasticSystem(PETScOwner):
         dirichlet_owned: owned local dofs (global components) with prescribed values.
         prescribed: owned local rows of A (solver variables) that are prescribed rows (of the
             nodal frames of the last search, :func:`prescribed_rows`).
+        load_factor: the step's load factor in the forms (follower pressures).
     """
 
     material: Material
@@ -79,6 +81,7 @@ class HyperelasticSystem(PETScOwner):
     stiffness: PETSc.Mat | None
     dirichlet_owned: np.ndarray
     prescribed: np.ndarray
+    load_factor: fem.Constant
 
     def petsc_objects(self) -> list[typing.Any]:
         return [self.stiffness, self.internal, self.external]
@@ -87,6 +90,7 @@ class HyperelasticSystem(PETScOwner):
         """r_K at :attr:`displacement` (global components, zero on the prescribed rows) into
         :attr:`internal`, which is returned."""
         r = self.internal
+        self.load_factor.value = load_factor
         with r.localForm() as local:
             local.set(0.0)
         dolfinx.fem.petsc.assemble_vector(r, self.residual_form)
@@ -110,6 +114,7 @@ class HyperelasticSystem(PETScOwner):
 def create_hyperelastic_system(
     V: fem.FunctionSpace, material: Material, young: Modulus, poisson: Modulus, load: fem.Form,
     bcs: list[fem.DirichletBC], dirichlet_dofs_loc: np.ndarray, rotation: PETSc.Mat | None,
+    pressures: dict[str, float] | None = None, facet_tags: dmesh.MeshTags | None = None,
 ) -> HyperelasticSystem:
     """The hyperelastic residual and tangent of ``material`` on V (compiled here, once).
 
@@ -118,10 +123,19 @@ def create_hyperelastic_system(
         load: the compiled dead load l(v) (tractions, body force) at load factor 1.
         bcs, dirichlet_dofs_loc: the problem's Dirichlet conditions and their local dofs.
         rotation: R of the problem's nodal frames, or None.
+        pressures, facet_tags: pressures (Pa) on named boundaries, which ``load`` holds on the
+            reference surface: they follow the deformed surface here (the difference of
+            :func:`~contactqvi.elasticity.pressure_form` with and without u, times the load
+            factor :attr:`HyperelasticSystem.load_factor`).
     """
     mu, lmbda = lame_parameters(young, poisson)
     u, v = fem.Function(V, name="displacement"), ufl.TestFunction(V)
     residual = ufl.inner(material.first_piola(u, mu, lmbda), ufl.grad(v)) * material.dx()
+    load_factor = fem.Constant(V.mesh, PETSc.ScalarType(1.0))
+    if pressures:
+        msh = V.mesh
+        residual -= load_factor * (pressure_form(msh, v, facet_tags, pressures, u)
+                                   - pressure_form(msh, v, facet_tags, pressures))
     tangent = ufl.derivative(residual, u, ufl.TrialFunction(V))
     residual_form, tangent_form = fem.form(residual), fem.form(tangent)
     index_map, bs = V.dofmap.index_map, V.dofmap.index_map_bs
@@ -134,7 +148,8 @@ def create_hyperelastic_system(
     external.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     external.array[dirichlet_owned] = 0.0
     return HyperelasticSystem(material, u, residual_form, tangent_form, list(bcs), external, external.duplicate(),
-                              None, dirichlet_owned, prescribed_rows(external, dirichlet_owned, rotation))
+                              None, dirichlet_owned, prescribed_rows(external, dirichlet_owned, rotation),
+                              load_factor)
 
 
 def prescribed_rows(like: PETSc.Vec, dirichlet_owned: np.ndarray, rotation: PETSc.Mat | None) -> np.ndarray:

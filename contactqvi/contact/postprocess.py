@@ -85,7 +85,7 @@ def contact_summary(
         displacement = problem.physical_displacement(u, fem.Function(problem.V))
     reactions = reaction_forces(displacement, problem.body, problem.load_factor, problem.dirichlet_dofs_loc,
                                 problem.nodal_contact_forces(result.normal_force, result.friction_force))
-    applied = applied_force(problem.V.mesh, problem.body, problem.load_factor)
+    applied = applied_force(problem.V.mesh, problem.body, problem.load_factor, displacement)
     resultants = contact_resultants(problem, result)
     obstacle_force = np.asarray(resultants["obstacle_force"])  # forces between bodies cancel in the sum
     total = sum(reactions.values(), np.zeros(3)) + obstacle_force + applied
@@ -131,8 +131,8 @@ def _state_counts(problem: ContactProblem, states: np.ndarray) -> dict[str, int]
 
 def _body_equilibrium(problem: ContactProblem, reactions: dict[str, np.ndarray],
                       pair_forces: dict[str, list[float]]) -> dict[str, float]:
-    """Relative force balance of each body (groups named ``"body.group"``): its tractions,
-    its body force (``problem.body.body_force``, one per body: its weight), the reactions
+    """Relative force balance of each body (groups named ``"body.group"``): its tractions and
+    pressures, its body force (``problem.body.body_force``, one per body: its weight), the reactions
     of its supports and the contact forces on it (a pair's force acts on its slave body
     and, opposite, on its master body)."""
     def body_of(group: str) -> str:
@@ -140,13 +140,13 @@ def _body_equilibrium(problem: ContactProblem, reactions: dict[str, np.ndarray],
 
     totals: dict[str, list[np.ndarray]] = {}
     msh, body = problem.V.mesh, problem.body
-    for group, traction in body.tractions.items():
-        alone = dataclasses.replace(body, tractions={group: traction}, body_force=None)
-        totals.setdefault(body_of(group), []).append(applied_force(msh, alone, problem.load_factor))
+    loads = [(group, {"tractions": {group: traction}}) for group, traction in body.tractions.items()]
+    loads += [(group, {"pressures": {group: value}}) for group, value in body.pressures.items()]
     if isinstance(body.body_force, dict):
-        for name, force in body.body_force.items():
-            alone = dataclasses.replace(body, tractions={}, body_force={name: force})
-            totals.setdefault(name, []).append(applied_force(msh, alone, problem.load_factor))
+        loads += [(name, {"body_force": {name: force}}) for name, force in body.body_force.items()]
+    for group, load in loads:  # several bodies: linear elasticity, loads on the reference configuration
+        alone = dataclasses.replace(body, **{"tractions": {}, "pressures": {}, "body_force": None, **load})
+        totals.setdefault(body_of(group), []).append(applied_force(msh, alone, problem.load_factor))
     for group, reaction in reactions.items():
         totals.setdefault(body_of(group), []).append(np.asarray(reaction))
     for interface in problem.interfaces:

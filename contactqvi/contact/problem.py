@@ -286,6 +286,7 @@ class ContactProblem(PETScOwner):
         """The Jacobian of a hyperelastic problem's f at u, R^T K_T(u~) R, into the storage of A."""
         system = self.hyperelastic
         self.physical_displacement(u, system.displacement)
+        system.load_factor.value = self.load_factor
         if self.rotation is None:
             system.assemble_tangent(self.A)
             return
@@ -467,6 +468,7 @@ def build_contact_problem(
     moved: typing.Sequence[str] = (),
     material: Material | None = None,
     search: str = "once",
+    pressures: dict[str, float] | None = None,
 ) -> ContactProblem:
     """Assemble the GE (6.3) for a body against a rigid obstacle, at load factor 1.
 
@@ -489,6 +491,8 @@ def build_contact_problem(
         moved: boundaries moved rigidly with the obstacle's translation.
         material: a hyperelastic material (finite strain), or None: linear elasticity.
         search: when the contact is searched (:class:`~contactqvi.contact.interface.ObstaclePair`).
+        pressures: pressure (Pa, > 0 into the body) per boundary name, scaled by the load
+            factor; on the deformed surface for a hyperelastic ``material``.
 
     Raises:
         ParameterError: bad values, unknown boundary names, or a contact node inside
@@ -499,7 +503,8 @@ def build_contact_problem(
     obstacle = Plane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)) if obstacle is None else obstacle
     pair = ObstaclePair(contact, obstacle, law, search)
     return assemble_contact_problem(msh, facet_tags, young, poisson, tractions, [pair], clamped, body_force,
-                                    displacements, moved=moved, material=material)
+                                    displacements, moved=moved, material=material,
+                                    pressures=pressures)
 
 
 def assemble_contact_problem(
@@ -514,7 +519,7 @@ def assemble_contact_problem(
     displacements: dict[str, dict[int, float]] | None = None,
     cell_tags: dmesh.MeshTags | None = None,
     moved: typing.Sequence[str] = (),
-    material: Material | None = None,
+    material: Material | None = None, pressures: dict[str, float] | None = None,
 ) -> ContactProblem:
     """Assemble the GE (6.3) of one or several bodies with contact pairs, at load factor 1.
 
@@ -523,14 +528,14 @@ def assemble_contact_problem(
     ``cell_tags`` one named cell group per body (each gets its own rigid-body modes);
     ``body_force`` one vector (N/m^3) for all bodies or one per body, ``{body: f}``
     (:func:`~contactqvi.elasticity.body_forces`; each body's weight enters its balance);
-    ``moved`` groups moved by the step's translation (not scaled); ``material`` hyperelastic or None.
+    ``moved``, ``material``, ``pressures`` as in :func:`build_contact_problem`.
 
     Raises ``ParameterError`` as :func:`~contactqvi.contact.interface.build_interfaces`,
     and for nonzero prescribed components on contact nodes or a body nothing holds.
     """
     require(msh.geometry.dim == 3, "mesh", "the contact problem is three-dimensional")
     V = fem.functionspace(msh, ("Lagrange", 1, (3,)))
-    a, L = elasticity_forms(V, young, poisson, facet_tags, tractions, body_force, cell_tags)
+    a, L = elasticity_forms(V, young, poisson, facet_tags, tractions, body_force, cell_tags, pressures)
     msh.topology.create_connectivity(msh.topology.dim - 1, msh.topology.dim)  # for the facet dofs
     bcs, moved_bc = _dirichlet_conditions(V, facet_tags, clamped, displacements or {}, moved)
     dirichlet_dofs_loc = np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs] + [np.empty(0, np.int32)]))
@@ -552,20 +557,21 @@ def assemble_contact_problem(
         contact_facets=np.unique(np.concatenate(
             [boundary_facets(facet_tags, i.slave_surface) for i in interfaces])).astype(np.int32),
         body=ElasticBody(young, poisson, facet_tags, supports, dict(tractions), body_force,
-                         prescribed=_prescribed_components(clamped, displacements or {}, moved),
-                         cell_tags=cell_tags),
+                         _prescribed_components(clamped, displacements or {}, moved), cell_tags,
+                         pressures=dict(pressures or {})),
         dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32), node_body=node_body,
         n_free=comm.allreduce(3 * index_map.size_local - len(owned_dirichlet), op=MPI.SUM),
         setup_seconds={"contact_search": search_seconds, "change_of_variables": variables_seconds},
         elastic=elastic if searched else None, **fields,
     )
     problem.set_step()
-    _make_hyperelastic(problem, material, young, poisson, L, bcs)
+    _make_hyperelastic(problem, material, young, poisson, L, bcs, facet_tags)
     return problem
 
 
 def _make_hyperelastic(problem: ContactProblem, material: Material | None, young: float | fem.Function,
-                       poisson: float | fem.Function, load: fem.Form, bcs: list[fem.DirichletBC]) -> None:
+                       poisson: float | fem.Function, load: fem.Form, bcs: list[fem.DirichletBC],
+                       facet_tags: dmesh.MeshTags) -> None:
     """Give ``problem`` the finite-strain f of a hyperelastic ``material`` (its ``hyperelastic``
     system, :mod:`contactqvi.contact.hyperelastic`, and the material of its volume results);
     rigid obstacles only. Nothing for a linear material (None)."""
@@ -577,7 +583,8 @@ def _make_hyperelastic(problem: ContactProblem, material: Material | None, young
             "finite strain is solved against rigid obstacles only (contact between bodies in the current "
             "configuration is not yet implemented): use linear elasticity for body pairs")
     problem.hyperelastic = create_hyperelastic_system(problem.V, material, young, poisson, load, bcs,
-                                                      problem.dirichlet_dofs_loc, problem.rotation)
+                                                      problem.dirichlet_dofs_loc, problem.rotation,
+                                                      problem.body.pressures, facet_tags)
     problem.body = dataclasses.replace(problem.body, material=material)
 
 
