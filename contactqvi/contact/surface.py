@@ -267,7 +267,7 @@ class TributaryPatches:
         e.g. triangles and parallelograms, integrating an indicator gives that area)."""
         state = state[self.vertex].astype(np.int32)
         pair = np.rint(pair[self.vertex]).astype(np.int32)
-        law = (pair >= 0).reshape(len(self._cells), -1)
+        law = (pair >= 0).reshape(self._cells.shape)  # (facets, vertices): also for a rank without facets
         indicators = {}
         for name, states in (("is_sliding", SLIDING_STATES), ("is_sticking", STICKING_STATES)):
             on = np.isin(state, states).reshape(law.shape) & law
