@@ -1,6 +1,6 @@
 # contactqvi: two commands do everything on a fresh machine.
 #   make demo   install what is missing, run the flagship under mpirun -n 2
-#   make test   install what is missing, run the test suite serially and with 2 ranks, a subset with 3 and 4
+#   make test   install what is missing, run the test suite serially (2 workers), with 2 ranks, a subset with 3 and 4
 #   make container-check   build docker/Dockerfile (docker or podman), run the flagship and the tests inside
 #   make paraview          install ParaView 5.13 from Debian, render the standard views of a fresh result
 VENV    ?= .venv
@@ -34,14 +34,21 @@ demo: $(PY)
 
 test: test-serial test-mpi test-ranks
 
+# Every test serially, on WORKERS pytest-xdist processes (one per core); tests sharing a
+# module-scoped fixture stay on one worker (tests/conftest.py).
+WORKERS ?= 2
 test-serial: $(PY)
-	$(PY) -m pytest -q --color=no -p no:cacheprovider tests
+	$(PY) -m pytest -q --color=no -p no:cacheprovider -n $(WORKERS) --dist loadgroup tests
 
+# Every test on NP ranks except those marked serial (cannot run under mpirun) or one_rank
+# (serial arithmetic on every rank): README, "Tests and benchmarks".
 test-mpi: $(PY)
 	$(MPIRUN) $(PY) -m mpi4py -m pytest -q --color=no -p no:cacheprovider tests
 
-# 1 rank against 3 and 4 (ranks without contact facets, parallel output): a small, fast subset.
-RANK_TESTS ?= tests/test_ranks.py tests/test_output_parallel.py
+# 1 rank against 3 and 4 (ranks without contact facets, parallel output, a restart written on 1 rank
+# continued on 3): a small, fast subset.
+RANK_TESTS ?= tests/test_ranks.py tests/test_output_parallel.py \
+	tests/test_restart_paths.py::test_a_path_restarted_on_another_number_of_ranks
 test-ranks: $(PY)
 	$(MPIENV) mpirun -n 3 $(PY) -m mpi4py -m pytest -q --color=no -p no:cacheprovider $(RANK_TESTS)
 	$(MPIENV) mpirun -n 4 $(PY) -m mpi4py -m pytest -q --color=no -p no:cacheprovider $(RANK_TESTS)

@@ -1,4 +1,19 @@
-"""Shared fixtures: the same test files run serially and under ``mpirun -n 2``."""
+"""Shared fixtures, and the split of the suite between the runs of ``make test``.
+
+``make test`` runs every test serially (two pytest-xdist workers), then under
+``mpirun -n 2`` every test not marked below, then ``RANK_TESTS`` on 3 and 4 ranks.
+Running in parallel is the default; two markers (registered in pyproject.toml) take a
+test out of the ranks' runs:
+
+* ``serial``: the test cannot run under ``mpirun`` at all: it launches ``mpirun`` or a
+  new venv in a subprocess, reads a distributed matrix as if local were global, or
+  writes files the ranks would share into pytest's per-rank ``tmp_path``.
+* ``one_rank(reason=...)``: the test is correct on any number of ranks, but every rank
+  would repeat the same serial arithmetic (closed forms, nodal algebra, case-file
+  parsing, parameter tables, static checks of the source). ``tests/test_architecture.py``
+  checks that such a test reaches none of the names of code that runs differently in
+  parallel (``PARALLEL_NAMES`` there); the reason is required.
+"""
 
 from __future__ import annotations
 
@@ -15,6 +30,9 @@ import pytest
 
 # Tests create many prefixed solvers, some of whose defaults a direct solver ignores.
 PETSc.Options()["options_left"] = "no"
+
+#: Markers that take a test out of the runs on several ranks.
+ONE_RANK_MARKERS = ("serial", "one_rank")
 
 
 @pytest.fixture(autouse=True)
@@ -48,12 +66,29 @@ def load_demo():
     return load
 
 
+def _shares_a_module_fixture(item: pytest.Item) -> bool:
+    """Whether the test uses a fixture computed once per module (or class, package)."""
+    return any(d.scope in ("module", "class", "package") for defs in item._fixtureinfo.name2fixturedefs.values()
+               for d in defs)  # fmt: skip
+
+
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups
 def pytest_collection_modifyitems(config, items):
-    """Tests marked ``serial`` are deselected when running on more than one rank."""
+    """A ``one_rank`` marker needs its reason; on more than one rank the tests marked
+    ``serial`` or ``one_rank`` are deselected. Under pytest-xdist (``--dist loadgroup``)
+    the tests of a module that share a module-scoped fixture go to one worker, so that
+    the fixture (all shipped cases, say) is computed once; the other tests go one by one."""
+    for item in items:
+        mark = item.get_closest_marker("one_rank")
+        if mark is not None and not (mark.kwargs.get("reason") or (mark.args and mark.args[0])):
+            raise pytest.UsageError(f"{item.nodeid}: one_rank needs a reason, one_rank(reason=...)")
+        if config.pluginmanager.hasplugin("xdist") and _shares_a_module_fixture(item):
+            item.add_marker(pytest.mark.xdist_group(item.path.name))
     if MPI.COMM_WORLD.size == 1:
         return
-    selected = [item for item in items if "serial" not in item.keywords]
-    deselected = [item for item in items if "serial" in item.keywords]
+    selected = [item for item in items if not any(item.get_closest_marker(m) for m in ONE_RANK_MARKERS)]
+    deselected = [item for item in items if any(item.get_closest_marker(m) for m in ONE_RANK_MARKERS)]
     if deselected:
         config.hook.pytest_deselected(items=deselected)
         items[:] = selected
+

@@ -8,6 +8,8 @@
 * One lifetime rule: every class that keeps PETSc objects it creates, or has a
   ``destroy()``, derives from :class:`contactqvi.lifetime.PETScOwner`.
 * No function longer than 60 lines.
+* A test marked ``one_rank`` (left out of the runs on several ranks) reaches no code that runs
+  differently in parallel (:data:`PARALLEL_NAMES`), through its helpers, fixtures and values.
 
 Nothing is imported or run: the tests read the files.
 """
@@ -19,6 +21,8 @@ import dataclasses
 import pathlib
 
 import pytest
+
+pytestmark = pytest.mark.one_rank(reason="the source files read and checked statically: the same on every rank")
 
 PACKAGE = pathlib.Path(__file__).resolve().parent.parent / "contactqvi"
 SOLVER_PACKAGES = ("contactqvi.contact", "contactqvi.friction", "contactqvi.vi", "contactqvi.qvi")
@@ -214,3 +218,155 @@ def _long_functions(module: Module) -> list[str]:
 def test_no_function_is_longer_than_60_lines(name):
     long = _long_functions(MODULES[name])
     assert not long, f"{name}: {', '.join(long)}"
+
+
+# --- The split of the suite between its runs (tests/conftest.py) ---------------------------------
+
+TESTS = PACKAGE.parent / "tests"
+#: Names by which a test reaches code that runs differently on several ranks, and what differs.
+#: A test marked ``one_rank`` runs on one rank only, so it must reach none of them: not in its
+#: body, its decorators (parametrize), the fixtures it asks for, nor in the functions, fixtures
+#: and module-level values of its module, of conftest.py and of the test helpers it uses
+#: (followed to any depth). The library is not followed: its functions take a communicator,
+#: except those listed here that default to ``MPI.COMM_WORLD``. A helper called on
+#: ``MPI.COMM_SELF`` is serial arithmetic on every rank and allowed.
+PARALLEL_NAMES = {
+    "COMM_WORLD": "distributed meshes and vectors: ghosts, owned ranges, reductions, parallel assembly and solvers",
+    "mpi_tmp_path": "one directory written by every rank",
+    "load_demo": "the demos run on MPI.COMM_WORLD",
+    "run_case": "the case runner (MPI.COMM_WORLD by default): searches, output, checkpoints, restart",
+    "ContactResultsWriter": "ParaView output of the contact results (MPI.COMM_WORLD by default)",
+    "abort_on_error": "an error on one rank of several aborts the job (MPI.COMM_WORLD by default)",
+    "CheckpointWriter": "checkpoints written by every rank (adios4dolfinx)",
+    "read_checkpoint": "checkpoints read back on any number of ranks",
+    "BodyPair": "a body pair: its master surface searched across ranks",
+    "mortar_coupling": "mortar search and integration, master facets exchanged between ranks",
+    "search_again": "a contact search again in the deformed configuration, across ranks",
+    "VTXDatasetWriter": "VTX datasets, each rank its own block",
+    "write_vtx": "VTX output of Functions in parallel",
+    "write_vtx_dataset": "VTX output in parallel",
+    "write_xdmf": "XDMF output in parallel",
+    "gather_pieces": "gathering the ranks' pieces of a dataset",
+    "gather_vertex_values": "gathering a field on rank 0",
+    "write_solution_npz": "solution.npz gathered on rank 0",
+}
+#: Modules of tests/ that tests import helpers from.
+TEST_HELPERS = ("conftest", "law_checks", "friction_checks", "output_files", "petsc_audit")
+
+
+def _test_namespace(tree: ast.Module, helpers: dict[str, ast.Module]) -> dict[str, ast.AST]:
+    """What each name of a test module's top level stands for: a function, class or value
+    defined there, a helper imported from tests/ (``from law_checks import f``: f's definition;
+    ``import petsc_audit``: the whole module), or a fixture of conftest.py."""
+    namespace: dict[str, ast.AST] = {}
+    conftest = helpers.get("conftest")
+    if conftest is not None and conftest is not tree:
+        namespace.update({n.name: n for n in conftest.body if isinstance(n, ast.FunctionDef)})
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            namespace[node.name] = node
+        elif isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            namespace.update({n.id: node for t in targets for n in ast.walk(t) if isinstance(n, ast.Name)})
+        elif isinstance(node, ast.ImportFrom) and node.module in helpers and not node.level:
+            defined = {n.name: n for n in helpers[node.module].body if hasattr(n, "name")}
+            namespace.update({a.asname or a.name: defined.get(a.name, helpers[node.module]) for a in node.names})
+        elif isinstance(node, ast.Import):
+            namespace.update({a.asname or a.name: helpers[a.name] for a in node.names if a.name in helpers})
+    return namespace
+
+
+def _used_names(node: ast.AST) -> set[str]:
+    """Names, attributes and arguments (fixtures) appearing in ``node``."""
+    found = set()
+    for n in ast.walk(node):
+        if isinstance(n, ast.Name):
+            found.add(n.id)
+        elif isinstance(n, ast.Attribute):
+            found.add(n.attr)
+        elif isinstance(n, ast.arg):
+            found.add(n.arg)
+    return found
+
+
+def parallel_paths(source: str, helpers: dict[str, str] | None = None) -> dict[str, list[str]]:
+    """For each test function of ``source``: how it reaches :data:`PARALLEL_NAMES`, as
+    ``"helper -> fixture -> NAME"`` chains (empty: it stays serial arithmetic on every rank).
+
+    ``helpers`` maps the module names of tests/ (:data:`TEST_HELPERS`) to their sources."""
+    trees = {name: ast.parse(text) for name, text in (helpers or {}).items()}
+    tree = ast.parse(source)
+    namespaces = {id(t): _test_namespace(t, trees) for t in [tree, *trees.values()]}
+    owner = {id(n): t for t in [tree, *trees.values()] for n in ast.walk(t)}
+
+    def reach(node: ast.AST, seen: set[int], via: tuple[str, ...]) -> list[str]:
+        namespace = namespaces[id(owner[id(node)])]
+        chains = [" -> ".join([*via, name]) for name in sorted(_used_names(node)) if name in PARALLEL_NAMES]
+        for name in sorted(_used_names(node)):
+            target = namespace.get(name)
+            if target is not None and target is not node and id(target) not in seen:
+                seen.add(id(target))
+                chains += reach(target, seen, (*via, name))
+        return chains
+
+    return {node.name: reach(node, {id(node)}, ()) for node in ast.walk(tree)
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name.startswith("test")}  # fmt: skip
+
+
+def _one_rank_tests(tree: ast.Module) -> set[str]:
+    """Test functions marked ``one_rank``, on the function or on the whole module (``pytestmark``)."""
+
+    def marked(nodes) -> bool:
+        return any(isinstance(n, ast.Attribute) and n.attr == "one_rank" for d in nodes for n in ast.walk(d))
+
+    module = [n.value for n in tree.body if isinstance(n, ast.Assign)
+              and any(getattr(t, "id", "") == "pytestmark" for t in n.targets)]  # fmt: skip
+    return {node.name for node in ast.walk(tree) if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
+            and node.name.startswith("test") and (marked(module) or marked(node.decorator_list))}  # fmt: skip
+
+
+TEST_MODULES = sorted(TESTS.glob("test_*.py"))
+HELPER_SOURCES = {name: (TESTS / f"{name}.py").read_text() for name in TEST_HELPERS if (TESTS / f"{name}.py").exists()}
+
+
+def test_the_split_checker_sees_parallel_code():
+    """Planted examples: reached directly, through a module helper, a fixture, a parametrize
+    argument, a module-level value and a test helper; COMM_SELF and plain numpy stay serial."""
+    helpers = {"conftest": "import pytest\n@pytest.fixture\ndef world():\n    return MPI.COMM_WORLD\n",
+               "law_checks": "def check(u):\n    return MPI.COMM_WORLD.allreduce(u)\n"}  # fmt: skip
+    source = (
+        "import pytest\nfrom law_checks import check\nMESH = create_mesh(MPI.COMM_WORLD)\n"
+        "def _problem(comm):\n    return comm\n"
+        "def _world():\n    return _problem(MPI.COMM_WORLD)\n"
+        "@pytest.mark.one_rank(reason='planted')\ndef test_direct():\n    assert MPI.COMM_WORLD.size\n"
+        "def test_helper():\n    _world()\n"
+        "def test_fixture(world):\n    pass\n"
+        "def test_shared_dir(mpi_tmp_path):\n    pass\n"
+        "@pytest.mark.parametrize('comm', [MPI.COMM_WORLD])\ndef test_parametrized(comm):\n    pass\n"
+        "def test_module_value():\n    assert MESH\n"
+        "def test_test_helper():\n    check(1)\n"
+        "def test_runner(tmp_path):\n    run_case(case, tmp_path)\n"
+        "def test_serial(tmp_path):\n    _problem(MPI.COMM_SELF)\n    np.linalg.norm([1.0])\n"
+    )
+    paths = parallel_paths(source, helpers)
+    assert paths["test_direct"] == ["COMM_WORLD"]
+    assert paths["test_helper"] == ["_world -> COMM_WORLD"]
+    assert paths["test_fixture"] == ["world -> COMM_WORLD"]
+    assert paths["test_shared_dir"] == ["mpi_tmp_path"]
+    assert paths["test_parametrized"] == ["COMM_WORLD"]
+    assert paths["test_module_value"] == ["MESH -> COMM_WORLD"]
+    assert paths["test_test_helper"] == ["check -> COMM_WORLD"]
+    assert paths["test_runner"] == ["run_case"]
+    assert paths["test_serial"] == []
+    assert _one_rank_tests(ast.parse(source)) == {"test_direct"}
+    assert _one_rank_tests(ast.parse("import pytest\npytestmark = [pytest.mark.one_rank(reason='x')]\n"
+                                     "def test_a():\n    pass\n")) == {"test_a"}  # fmt: skip
+
+
+@pytest.mark.parametrize("path", TEST_MODULES, ids=lambda p: p.stem)
+def test_one_rank_tests_reach_no_parallel_code(path):
+    """A test taken out of the runs on several ranks (``one_rank``) would silently stop testing
+    the parallel code it reaches: it must reach none (:data:`PARALLEL_NAMES`); unmark it instead."""
+    paths = parallel_paths(path.read_text(), HELPER_SOURCES)
+    wrong = {name: paths[name] for name in sorted(_one_rank_tests(ast.parse(path.read_text()))) if paths[name]}
+    assert not wrong, f"{path.name}: tests marked one_rank reach parallel code: {wrong}"

@@ -59,6 +59,7 @@ def _geo_groups(path: pathlib.Path) -> list[str]:
         gmsh.finalize()
 
 
+@pytest.mark.one_rank(reason="case-file parsing and checks on dataclasses: no mesh")
 def test_every_case_is_shipped():
     assert {c.stem for c in CASES} >= {"paper_d3_L2", "arch_block", "hertz", "cattaneo_mindlin", "inclined_plane"}
 
@@ -79,6 +80,7 @@ def test_shipped_case_parses_and_names_groups_of_its_mesh(path):
         check_groups(case, meshes.BOX_BOUNDARIES)
 
 
+@pytest.mark.one_rank(reason="case-file parsing and checks on dataclasses: no mesh")
 def test_every_law_is_documented_with_its_keys():
     """The case-file documentation names every registered contact law and its keys."""
     for name, law in LAWS.items():
@@ -86,6 +88,7 @@ def test_every_law_is_documented_with_its_keys():
         assert all(f"``{key}``" in case_module.__doc__ for key in law.parameters)
 
 
+@pytest.mark.one_rank(reason="case-file parsing and checks on dataclasses: no mesh")
 def test_paper_case_is_the_demo_problem():
     """cases/paper_d3_L2.toml holds the data of demos/coulomb3d.py --geometry d3 --load L2 --lev 5."""
     case = load_case(ROOT / "cases" / "paper_d3_L2.toml")
@@ -99,6 +102,7 @@ def test_paper_case_is_the_demo_problem():
     assert case.solver == {"start": "contact"} and case.petsc == {}  # u0 = 0 shifted, as the demo
 
 
+@pytest.mark.one_rank(reason="case-file parsing and checks on dataclasses: no mesh")
 def test_case_built_in_python_equals_the_file():
     """The dataclasses are the API: the Hertz case written in Python is the file's case."""
     case = ContactCase(
@@ -115,6 +119,7 @@ def test_case_built_in_python_equals_the_file():
     assert case.groups == ["bottom", "symmetry_x", "symmetry_y", "contact"]
 
 
+@pytest.mark.one_rank(reason="case-file parsing and checks on dataclasses: no mesh")
 def test_values_are_normalised():
     case = parse_case(
         _with(BASE, ("obstacle", {"type": "cylinder", "point": [0, 0, -1], "axis": [0, 3, 4], "radius": 1}))
@@ -125,6 +130,7 @@ def test_values_are_normalised():
     assert case.obstacle.normal == (0.0, 0.0, 1.0) and case.steps == (Step(2.0, (0.0, 0.0, 0.0)),)
 
 
+@pytest.mark.one_rank(reason="case-file parsing and checks on dataclasses: no mesh")
 def test_obstacles_and_displacements_for_the_problem_builder():
     case = load_case(ROOT / "cases" / "hertz.toml")
     sphere = case.obstacle.create()
@@ -144,6 +150,7 @@ def test_obstacles_and_displacements_for_the_problem_builder():
     assert isinstance(cylinder, obstacles.Cylinder) and cylinder.distance(np.zeros((1, 3)))[0] == pytest.approx(0.5)
 
 
+@pytest.mark.one_rank(reason="case-file parsing and checks on dataclasses: no mesh")
 def test_solver_and_petsc_tables_pass_through():
     case = parse_case(_with(BASE, ("solver", {"pc": "lu", "max_iterations": 30}), ("petsc", {"ksp_monitor": True})))
     assert case.solver == {"pc": "lu", "max_iterations": 30}
@@ -168,7 +175,7 @@ BAD = [
     # unknown keys, with the closest valid name
     ((("matrial", {}),), "matrial: unknown key; did you mean 'material'?"),
     ((("obstacle", "nromal", [0, 0, 1]),), "obstacle.nromal: unknown key; did you mean 'normal'?"),
-    ((("contact", "mu", 0.2),), "contact.mu: unknown key; valid keys: surface, law, friction, slip_bound, friction_limit, pressure_scale"),
+    ((("contact", "mu", 0.2),), "contact.mu: unknown key; valid keys: surface, law, search, friction, slip_bound, friction_limit, pressure_scale"),
     ((("obstacle", "steps", []),),
      "obstacle.steps: unknown key; a key written after the header [obstacle] belongs to that table; move 'steps' above it"),
     ((("mesh", "box", "level", 3),), "mesh.box.level: unknown key; did you mean 'lev'?"),
@@ -237,6 +244,7 @@ BAD = [
 ]
 
 
+@pytest.mark.one_rank(reason="case-file parsing and checks on dataclasses: no mesh")
 @pytest.mark.parametrize("changes, text", BAD, ids=[text.split(":")[0] for _, text in BAD])
 def test_bad_input_raises_a_named_error(changes, text):
     with pytest.raises(ParameterError) as info:
@@ -245,6 +253,7 @@ def test_bad_input_raises_a_named_error(changes, text):
     assert info.value.name == text.split(": ")[0]
 
 
+@pytest.mark.one_rank(reason="case-file parsing and checks on dataclasses: no mesh")
 @pytest.mark.parametrize(
     "solver, text",
     [
@@ -265,6 +274,7 @@ def test_bad_solver_value_is_named_by_its_key_path(solver, text):
     assert str(info.value) == text and info.value.name == text.split(": ")[0]
 
 
+@pytest.mark.one_rank(reason="case-file parsing and checks on dataclasses: no mesh")
 def test_bad_values_in_python_are_named_by_their_key_path():
     sections = parse_case(BASE)
     kwargs = {f: getattr(sections, f) for f in ("mesh", "material", "boundary", "contact", "obstacle")}
@@ -276,6 +286,7 @@ def test_bad_values_in_python_are_named_by_their_key_path():
         ContactCase(**{**kwargs, "material": {"young": 1.0, "poisson": 0.3}})
 
 
+@pytest.mark.one_rank(reason="case-file parsing and checks on dataclasses: no mesh")
 def test_case_file_errors(tmp_path):
     """tmp_path differs per rank; each rank reads its own files."""
     with pytest.raises(ParameterError, match=r"^case: case file '.*missing\.toml' not found$"):
@@ -295,6 +306,7 @@ def test_case_file_errors(tmp_path):
     assert load_case(case).mesh.file == body  # relative to the case file
 
 
+@pytest.mark.one_rank(reason="case-file parsing and checks on dataclasses: no mesh")
 def test_check_groups_names_the_key_and_lists_the_mesh_groups():
     case = parse_case(_with(BASE, ("boundary", "traction", {"topp": [0, 0, -1]})))
     check_groups(case, ["contact", "dirichlet", "topp"])
@@ -337,6 +349,7 @@ def test_case_meshes_read_with_named_groups(name, groups):
         assert comm.allreduce(float(x[:, 2].max(initial=-1.0)), op=MPI.MAX) == pytest.approx(0.0, abs=1e-12)
 
 
+@pytest.mark.one_rank(reason="case-file parsing and checks on dataclasses: no mesh")
 def test_solver_start_is_checked():
     assert parse_case(_with(BASE, ("solver", {"start": "contact"}))).solver == {"start": "contact"}
     with pytest.raises(ParameterError, match=r"^solver.start: must be one of rest, contact, got 'zero'"):
@@ -356,6 +369,7 @@ BODIES = {
 }
 
 
+@pytest.mark.one_rank(reason="case-file parsing and checks on dataclasses: no mesh")
 @pytest.mark.parametrize("change, name, text", [
     (lambda d: d["contacts"][0].update(slave="uper.interface"), "contacts[0].slave", "unknown body 'uper'"),
     (lambda d: d["contacts"][0].update(master="lower"), "contacts[0].master", "must be 'body.group'"),

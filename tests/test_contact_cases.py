@@ -27,6 +27,7 @@ from petsc_audit import assert_frees_petsc_objects
 CASES = pathlib.Path(__file__).resolve().parent.parent / "cases"
 
 
+@pytest.mark.one_rank(reason="nodal frames and obstacle distances on numpy arrays")
 def test_frames_are_right_handed_and_e3_gives_the_identity():
     normals = np.random.default_rng(1).normal(size=(50, 3))
     normals = np.vstack([normals / np.linalg.norm(normals, axis=1)[:, None], np.eye(3)])
@@ -37,6 +38,7 @@ def test_frames_are_right_handed_and_e3_gives_the_identity():
     assert np.array_equal(tangent_frames(np.array([[0.0, 0.0, 1.0]]))[0], np.eye(3))
 
 
+@pytest.mark.one_rank(reason="nodal frames and obstacle distances on numpy arrays")
 def test_obstacle_distances():
     x = np.array([[0.0, 0.0, 3.0], [4.0, 0.0, 0.0], [0.0, 2.0, 1.0]])
     g, n = Sphere((0, 0, 0), 1.0).distance(x)
@@ -113,7 +115,7 @@ def test_repeated_step_leaves_the_solution_unchanged():
     problem = _paper_problem(2)
     snapshots = []
 
-    def keep(index, step, u, result):
+    def keep(index, step, u, result, state):
         snapshots.append(problem.physical_displacement(u, fem.Function(problem.V)).x.array.copy())
 
     u = problem.A.createVecRight()
@@ -134,7 +136,7 @@ def test_sphere_indentation_load_path():
     problem = _paper_problem(2, obstacle=Sphere((1.0, 0.5, -1.0), 1.0))
     forces, slacks = [], []
 
-    def record(index, step, u, result):
+    def record(index, step, u, result, state):
         forces.append(contact_resultants(problem, result))
         slack = data.FRICTION * result.normal_force - np.linalg.norm(result.friction_force, axis=1)
         scale = problem.comm.allreduce(float(result.normal_force.max(initial=0.0)), op=MPI.MAX)

@@ -37,6 +37,8 @@ from contactqvi.laws import (
 )
 from contactqvi.parameters import ParameterError
 
+pytestmark = pytest.mark.one_rank(reason="nodal algebra of the laws on numpy arrays: no mesh, no communicator")
+
 GAMMA, FRICTION = 3.0, 0.4
 COULOMB = Coulomb(FRICTION).lumped(1.0)
 #: One instance of every registered law (keyed by name), lumped to nodes of unit area; the resolvent

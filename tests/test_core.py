@@ -10,6 +10,8 @@ from contactqvi.linalg import KSP_PRESETS, preset
 from contactqvi.parameters import Parameter, ParameterError, Parameters
 from contactqvi.result import Result, Status
 
+pytestmark = pytest.mark.one_rank(reason="Status, Result, parameter tables and KSP presets as Python data: no communicator")
+
 TABLE = Parameters(
     tol=Parameter(0.1, "inner tolerance", minimum=0.0, maximum=1.0, exclusive=True),
     max_iterations=Parameter(100, "iteration limit", type=int, minimum=1),

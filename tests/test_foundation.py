@@ -28,6 +28,7 @@ TABLE2_SIZES = {3: (84, 1764), 4: (144, 3888), 5: (299, 11661), 6: (544, 27744),
                 8: (2112, 209088), 9: (4277, 603057), 10: (8320, 1622400)}
 
 
+@pytest.mark.one_rank(reason="a closed formula of the mesh sizes")
 @pytest.mark.parametrize("lev", sorted(TABLE2_SIZES))
 def test_table2_sizes_formula(lev):
     sizes = meshes.contact_body_sizes(lev)

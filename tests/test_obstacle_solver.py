@@ -88,6 +88,7 @@ def test_pdas_refactorisations_agree_with_snes_vi():
     assert msh.comm.allreduce(float(np.max(np.abs(problem.u.x.array[:n] - u_pdas[:n]))), op=MPI.MAX) < 1e-10
 
 
+@pytest.mark.one_rank(reason="the rho path's numbers, no mesh")
 def test_rho_path_ends_at_rho_min():
     assert rho_path(1.0, 1e-6, 10.0) == pytest.approx([10.0**-k for k in range(7)], rel=1e-12)
     assert rho_path(1.0, 5e-4, 10.0) == pytest.approx([1.0, 0.1, 0.01, 1e-3, 5e-4], rel=1e-12)

@@ -129,11 +129,13 @@ def _steps(summaries: dict[str, dict], name: str) -> list[dict]:
     return run["summary"]["steps"]
 
 
+@pytest.mark.one_rank(reason="case-file contents, no run")
 def test_every_shipped_case_is_guarded():
     """A new case file needs its counts in NEWTON_STEPS (and its coarse variant in COARSE)."""
     assert {path.stem for path in (ROOT / "cases").glob("*.toml")} == set(NEWTON_STEPS)
 
 
+@pytest.mark.one_rank(reason="case-file contents, no run")
 @pytest.mark.parametrize("name", sorted(NEWTON_STEPS))
 def test_shipped_case_needs_no_expert_settings(name):
     """Only the initial guess (``start``) may be chosen; no solver parameter, no PETSc option."""

@@ -47,6 +47,7 @@ def blocks():
     return msh, split_by_body(msh, facet_tags, cell_tags), cell_tags
 
 
+@pytest.mark.one_rank(reason="clipping and segment integrals of given triangles (numpy), no search")
 def test_clipping_and_segment_integrals_of_one_pair():
     triangle = np.array([[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]])
     polygon = np.zeros((1, 6, 2))
@@ -61,6 +62,7 @@ def test_clipping_and_segment_integrals_of_one_pair():
     assert np.allclose(M[0][:, [2, 0, 1]], np.eye(3) / 6.0, atol=1e-15)  # master vertex k is slave vertex (k+1) % 3
 
 
+@pytest.mark.one_rank(reason="clipping and segment integrals of given triangles (numpy), no search")
 def test_segment_integrals_of_random_pairs_sum_to_the_slave_weights():
     """Random slave and master triangles (about a third overlap, some touch at an edge): the
     pairs the separating-axis filter skips have no overlap (their clipped polygon has zero
