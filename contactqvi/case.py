@@ -258,14 +258,14 @@ class Contact:
         surface: physical group of the contact surface.
         law: the contact law (:mod:`contactqvi.laws`), e.g. ``Coulomb(friction=0.23)``,
             ``Tresca(slip_bound=1e8)``, ``Frictionless()``.
-        search: ``"once"`` (gaps and normals of the reference configuration), or
-            ``"every_step"`` / ``"until_settled"``: found again in the deformed configuration
-            (finite displacements on a curved obstacle; :class:`ContactPair`).
+        search: ``"once"`` (gaps and normals of the reference configuration; None means
+            it), or ``"every_step"`` / ``"until_settled"``: found again in the deformed
+            configuration (finite displacements on a curved obstacle; :class:`ContactPair`).
     """
 
     surface: str
     law: ContactLaw | None = None
-    search: str = "once"
+    search: str | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -626,7 +626,8 @@ def _check_boundary(boundary: Boundary, path: str, supported: bool = True) -> Bo
 def _check_contact(contact: Contact) -> Contact:
     _instance(contact, Contact, "contact")
     surface = _name(contact.surface, "contact.surface")
-    require_choice("contact.search", contact.search, SEARCHES)
+    if contact.search is not None:
+        require_choice("contact.search", contact.search, SEARCHES)
     return Contact(surface, _check_law(contact.law, "contact"), contact.search)
 
 

@@ -80,7 +80,7 @@ def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
     b, c = case.boundary, case.contact
     return build_contact_problem(
         msh, tags, case.material.young, case.material.poisson, dict(b.traction),
-        law=c.law, clamped=b.clamped, contact=c.surface, search=c.search,
+        law=c.law, clamped=b.clamped, contact=c.surface, search=c.search or "once",
         obstacle=case.obstacle.create(), body_force=b.body_force,
         displacements={name: d.components() for name, d in b.displacement.items()}, moved=b.moved,
         material=None if case.material.model is None else create_material(case.material.model),
