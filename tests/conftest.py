@@ -37,9 +37,17 @@ ONE_RANK_MARKERS = ("serial", "one_rank")
 
 @pytest.fixture(autouse=True)
 def _collect_and_synchronise():
-    """Free PETSc objects collectively and keep ranks in step between tests."""
+    """Free PETSc objects collectively and keep ranks in step between tests.
+
+    What survives the collection is then frozen (``gc.freeze``), so that the next
+    collection walks only what the next test made: walking everything alive (DOLFINx, UFL,
+    the sources test_architecture.py parsed, what earlier tests left in caches and module
+    fixtures) took 0.07-0.9 s per test, a third of the suite's time. Reference counting
+    still frees frozen objects; only a reference cycle among them that a later test drops
+    is never collected (its PETSc objects are then never destroyed, on any rank)."""
     yield
     gc.collect()
+    gc.freeze()
     MPI.COMM_WORLD.Barrier()
 
 
@@ -91,4 +99,3 @@ def pytest_collection_modifyitems(config, items):
     if deselected:
         config.hook.pytest_deselected(items=deselected)
         items[:] = selected
-
