@@ -648,8 +648,11 @@ def _check_bodies(bodies: typing.Sequence[Body]) -> tuple[Body, ...]:
         require("." not in name, f"{path}.name", f"must not contain '.', got {name!r}")
         require(name not in [b.name for b in checked], f"{path}.name", f"body {name!r} listed twice")
         material = _check_material(body.material, f"{path}.material")
-        require(material.model is None, f"{path}.material.model", "finite strain is solved for one body against "
-                "rigid obstacles ([material] of a case without [[bodies]]); several bodies: linear elasticity")
+        first = checked[0].material.model if checked else material.model
+        require(material.model == first, f"{path}.material.model",
+                f"all bodies take the same model (each its own young and poisson), got {material.model!r} here "
+                f"and {first!r} in bodies[0]: a stiff part beside a hyperelastic one can be "
+                "'saint_venant_kirchhoff' (linear elasticity at small strain, exact under large rotations)")
         checked.append(Body(name, material, _check_boundary(body.boundary, f"{path}.boundary", supported=False)))
     supported = any(b.boundary.clamped or b.boundary.displacement or b.boundary.moved for b in checked)
     require(supported, "bodies", "no body has a clamped group or a prescribed displacement; at least one "

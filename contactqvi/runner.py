@@ -40,7 +40,7 @@ from contactqvi.contact.interface import BodyPair, ObstaclePair
 from contactqvi.contact.problem import ContactProblem, assemble_contact_problem, build_contact_problem
 from contactqvi.contact.scd_newton import SCDNewtonResult
 from contactqvi.linalg import default_options
-from contactqvi.materials import create_material
+from contactqvi.materials import Material, create_material
 from contactqvi.elasticity import body_materials
 from contactqvi.meshes import create_contact_body, read_gmsh, split_by_body
 from contactqvi.parameters import ParameterError, require
@@ -83,8 +83,7 @@ def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
         law=c.law, clamped=b.clamped, contact=c.surface, search=c.search or "once",
         obstacle=case.obstacle.create(), body_force=b.body_force,
         displacements={name: d.components() for name, d in b.displacement.items()}, moved=b.moved,
-        material=None if case.material.model is None else create_material(case.material.model),
-        pressures=dict(b.pressure),
+        material=_material(case.material.model), pressures=dict(b.pressure),
     )
 
 
@@ -116,7 +115,12 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
     pairs = [_pair(pair) for pair in case.contacts]
     return assemble_contact_problem(msh, tags, young, poisson, tractions, pairs, clamped, body_force or None,
                                     displacements=displacements, cell_tags=cell_tags, moved=moved,
-                                    pressures=pressures)
+                                    material=_material(case.bodies[0].material.model), pressures=pressures)
+
+
+def _material(model: str | None) -> Material | None:
+    """The hyperelastic material called ``model``, or None for linear elasticity."""
+    return None if model is None else create_material(model)
 
 
 def _pair(pair: ContactPair) -> ObstaclePair | BodyPair:

@@ -106,7 +106,8 @@ def contact_summary(
         "displacement_norm": displacement.x.petsc_vec.norm(),
     }
     if problem.node_body is not None:
-        summary["body_equilibrium_errors"] = _body_equilibrium(problem, reactions, resultants["pair_forces"])
+        summary["body_equilibrium_errors"] = _body_equilibrium(problem, reactions, resultants["pair_forces"],
+                                                               displacement)
     if von_mises is not None:
         n_cells = von_mises.function_space.mesh.topology.index_map(3).size_local
         summary["max_von_mises"] = comm.allreduce(float(von_mises.x.array[:n_cells].max(initial=0.0)), op=MPI.MAX)
@@ -130,7 +131,7 @@ def _state_counts(problem: ContactProblem, states: np.ndarray) -> dict[str, int]
 
 
 def _body_equilibrium(problem: ContactProblem, reactions: dict[str, np.ndarray],
-                      pair_forces: dict[str, list[float]]) -> dict[str, float]:
+                      pair_forces: dict[str, list[float]], displacement: fem.Function) -> dict[str, float]:
     """Relative force balance of each body (groups named ``"body.group"``): its tractions and
     pressures, its body force (``problem.body.body_force``, one per body: its weight), the reactions
     of its supports and the contact forces on it (a pair's force acts on its slave body
@@ -144,9 +145,9 @@ def _body_equilibrium(problem: ContactProblem, reactions: dict[str, np.ndarray],
     loads += [(group, {"pressures": {group: value}}) for group, value in body.pressures.items()]
     if isinstance(body.body_force, dict):
         loads += [(name, {"body_force": {name: force}}) for name, force in body.body_force.items()]
-    for group, load in loads:  # several bodies: linear elasticity, loads on the reference configuration
+    for group, load in loads:  # pressures on the deformed surface at finite strain
         alone = dataclasses.replace(body, **{"tractions": {}, "pressures": {}, "body_force": None, **load})
-        totals.setdefault(body_of(group), []).append(applied_force(msh, alone, problem.load_factor))
+        totals.setdefault(body_of(group), []).append(applied_force(msh, alone, problem.load_factor, displacement))
     for group, reaction in reactions.items():
         totals.setdefault(body_of(group), []).append(np.asarray(reaction))
     for interface in problem.interfaces:

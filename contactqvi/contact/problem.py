@@ -270,30 +270,34 @@ class ContactProblem(PETScOwner):
         return out
 
     def residual(self, u: PETSc.Vec, out: PETSc.Vec) -> None:
-        """f(u) of a hyperelastic problem into ``out``: R^T r_K(u~) at the current step, the
-        prescribed rows u_i - l_i as in the linear problem (:mod:`contactqvi.contact.hyperelastic`)."""
+        """f(u) of a hyperelastic problem into ``out``: T^T r_K(u~) at the current step (T = R
+        without body pairs), the prescribed rows u_i - l_i as in the linear problem
+        (:mod:`contactqvi.contact.hyperelastic`)."""
         system = self.hyperelastic
         self.physical_displacement(u, system.displacement)
         r = system.assemble_residual(self.load_factor)
-        if self.rotation is None:
+        transform = self.transform if self.transform is not None else self.rotation
+        if transform is None:
             out.array[:] = r.array_r[: out.getLocalSize()]
         else:
-            self.rotation.multTranspose(r, out)
+            transform.multTranspose(r, out)
         prescribed = system.prescribed
         out.array[prescribed] = u.array_r[prescribed] - self.load.array_r[prescribed]
 
     def tangent(self, u: PETSc.Vec) -> None:
-        """The Jacobian of a hyperelastic problem's f at u, R^T K_T(u~) R, into the storage of A."""
+        """The Jacobian of a hyperelastic problem's f at u, T^T K_T(u~) T, into the storage of A."""
         system = self.hyperelastic
         self.physical_displacement(u, system.displacement)
         system.load_factor.value = self.load_factor
-        if self.rotation is None:
+        transform = self.transform if self.transform is not None else self.rotation
+        if transform is None:
             system.assemble_tangent(self.A)
             return
-        rotated = system.assemble_tangent(system.global_stiffness()).PtAP(self.rotation)
+        with default_options("", {"mat_product_clear": True}):
+            transformed = system.assemble_tangent(system.global_stiffness()).PtAP(transform)
         self.A.zeroEntries()
-        self.A.axpy(1.0, rotated, _SUBSET)
-        rotated.destroy()
+        self.A.axpy(1.0, transformed, _SUBSET)
+        transformed.destroy()
 
     def gap(self, translation: typing.Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
         """Gap of each owned contact node (m), obstacles translated by ``translation``."""
@@ -573,15 +577,12 @@ def _make_hyperelastic(problem: ContactProblem, material: Material | None, young
                        poisson: float | fem.Function, load: fem.Form, bcs: list[fem.DirichletBC],
                        facet_tags: dmesh.MeshTags) -> None:
     """Give ``problem`` the finite-strain f of a hyperelastic ``material`` (its ``hyperelastic``
-    system, :mod:`contactqvi.contact.hyperelastic`, and the material of its volume results);
-    rigid obstacles only. Nothing for a linear material (None)."""
+    system, :mod:`contactqvi.contact.hyperelastic`, and the material of its volume results).
+    Nothing for a linear material (None)."""
     if material is None:
         return
     if problem.elastic is not None and problem.A is problem.elastic.stiffness:  # A_K, kept for the searches
         problem.A = problem.A.duplicate(copy=True)
-    require(all(i.obstacle is not None for i in problem.interfaces), "material",
-            "finite strain is solved against rigid obstacles only (contact between bodies in the current "
-            "configuration is not yet implemented): use linear elasticity for body pairs")
     problem.hyperelastic = create_hyperelastic_system(problem.V, material, young, poisson, load, bcs,
                                                       problem.dirichlet_dofs_loc, problem.rotation,
                                                       problem.body.pressures, facet_tags)

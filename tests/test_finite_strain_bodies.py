@@ -1,0 +1,112 @@
+"""Contact between hyperelastic bodies (issue 36): the SCD semismooth* Newton method on
+f(u) = T^T r_K(u~), the mortar coupling searched in the deformed configuration.
+
+The finite-strain contact patch test: the two stacked unit blocks of the linear patch
+test (``meshes/patch_blocks.geo``, non-matching tetrahedral meshes), one neo-Hookean
+material, rollers on the symmetry planes and under the lower block, the top of the upper
+block moved down by 30 % of the height (0.6 m) in load steps, the outer lateral faces
+free. The deformation is homogeneous uniaxial stress with F = diag(a, a, s) in both
+blocks (docs/finite_strain.md, Sect. 6): u = ((a - 1) x, (a - 1) y, (s - 1) z), which P1
+tetrahedra represent exactly, and the contact traction is uniform: -P33 per unit
+reference area, the Cauchy stress -P33 / a^2 per unit deformed area.
+
+* searched once (the reference configuration): a homogeneous deformation maps the
+  projection along the normal onto itself, so the reference mortar coupling is the exact
+  one; the pressure is nominal (force per reference area D_ii);
+* ``search = "until_settled"``: D, M and the normals on the deformed surfaces, searched
+  again until the configuration settles; the pressure is the Cauchy traction (force per
+  deformed area).
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+
+from contactqvi.case import parse_case
+from contactqvi.contact import LoadStep, solve_load_path
+from contactqvi.contact.interface import BodyPair
+from contactqvi.contact.problem import assemble_contact_problem
+from contactqvi.elasticity import body_materials
+from contactqvi.laws import Coulomb, Frictionless
+from contactqvi.materials import NeoHookean
+from contactqvi.meshes import read_gmsh, split_by_body
+from contactqvi.parameters import ParameterError
+
+from test_finite_strain import POISSON, YOUNG, neo_hookean
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+MESH = ROOT / "meshes" / "patch_blocks.geo"
+HEIGHT = 2.0  # m, the two unit blocks
+COMPRESSION = 0.3  # of the height
+SUPPORTS = {"lower.bottom": {2: 0.0}, "lower.symmetry_x": {0: 0.0}, "lower.symmetry_y": {1: 0.0},
+            "upper.symmetry_x": {0: 0.0}, "upper.symmetry_y": {1: 0.0},
+            "upper.top": {2: -COMPRESSION * HEIGHT}}
+
+
+def _compressed_blocks(friction: float, search: str, steps: int) -> list[dict]:
+    """The patch blocks compressed in ``steps`` equal load steps; per step the errors of the
+    displacement (relative to the top's motion) and of the pressure (relative to the exact
+    one: nominal when searched once, Cauchy otherwise), the Newton count and the result."""
+    comm = MPI.COMM_WORLD
+    msh, facet_tags, cell_tags = read_gmsh(MESH, comm)
+    young, poisson = body_materials(msh, cell_tags, {"lower": (YOUNG, POISSON), "upper": (YOUNG, POISSON)})
+    law = Coulomb(friction) if friction > 0.0 else Frictionless()
+    pair = BodyPair("upper.interface", "lower.interface", law, search=search)
+    problem = assemble_contact_problem(msh, split_by_body(msh, facet_tags, cell_tags), young, poisson, {}, [pair],
+                                       displacements=SUPPORTS, cell_tags=cell_tags, material=NeoHookean())
+    rows = []
+
+    def record(index, step, u, result, state):
+        s = 1.0 - COMPRESSION * step.load
+        a, P33 = neo_hookean(s)
+        x = problem.V.tabulate_dof_coordinates()[: problem.V.dofmap.index_map.size_local]
+        error = np.abs(state.displacement.x.array.reshape(-1, 3)[: len(x)] - x * [a - 1.0, a - 1.0, s - 1.0])
+        exact = -P33 if search == "once" else -P33 / a**2
+        pressure = result.normal_force / problem.contact_area
+        rows.append({"load": step.load, "result": result, "contact_nodes": comm.allreduce(len(pressure)),
+                     "u": comm.allreduce(float(error.max(initial=0.0)), op=MPI.MAX) / (HEIGHT * (1.0 - s)),
+                     "p": comm.allreduce(float(np.abs(pressure - exact).max(initial=0.0)), op=MPI.MAX) / exact})
+
+    with problem:
+        u = problem.A.createVecRight()
+        solve_load_path(problem, [LoadStep((k + 1) / steps) for k in range(steps)], u, {"pc": "lu"},
+                        on_step=record, from_rest=True)
+        u.destroy()
+    return rows
+
+
+@pytest.mark.parametrize("friction, search, steps", [(0.0, "once", 20), (0.3, "until_settled", 10)])
+def test_finite_strain_contact_patch_test(friction, search, steps):
+    """Every step: the homogeneous displacement to 1e-8 and a uniform contact pressure equal
+    to the closed form to 1e-8, every slave node in contact (sticking with friction)."""
+    rows = _compressed_blocks(friction, search, steps)
+    assert len(rows) == steps
+    for row in rows:
+        assert row["result"].converged, (row["load"], row["result"].status)
+        assert row["u"] <= 1e-8, row
+        assert row["p"] <= 1e-8, row
+        states = np.bincount(row["result"].states, minlength=4)
+        assert states[0] == 0 and states.sum() == len(row["result"].states), states
+
+
+def test_bodies_of_a_case_file_take_one_model():
+    """A hyperelastic model on several bodies is accepted; two different models are a named error."""
+    def case(models):
+        return {
+            "mesh": {"file": str(MESH)},
+            "bodies": [{"name": name, "material": {"young": YOUNG, "poisson": POISSON, "model": model},
+                        "boundary": {"displacement": {"symmetry_x": {"x": 0.0}}}}
+                       for name, model in zip(("lower", "upper"), models)],
+            "contacts": [{"slave": "upper.interface", "master": "lower.interface", "law": "frictionless"}],
+        }
+
+    assert parse_case(case(["neo_hookean", "neo_hookean"])).bodies[1].material.model == "neo_hookean"
+    with pytest.raises(ParameterError, match=r"bodies\[1\]\.material\.model.*same model"):
+        parse_case(case(["neo_hookean", "saint_venant_kirchhoff"]))
+    with pytest.raises(ParameterError, match=r"bodies\[1\]\.material\.model"):
+        parse_case(case(["neo_hookean", None]))
