@@ -18,8 +18,6 @@ the contact pressure must be uniform and equal to -P33 to 1e-8, in every step.
 
 from __future__ import annotations
 
-import pathlib
-
 from mpi4py import MPI
 
 import numpy as np
@@ -142,11 +140,6 @@ def test_bad_material_models_are_named_errors():
             "obstacle": {"type": "plane", "point": [0.0, 0.0, 0.0], "normal": [0.0, 0.0, 1.0]}}
     with pytest.raises(ParameterError, match=r"material\.model: .*neo_hookean"):
         parse_case({**base, "material": {"young": YOUNG, "poisson": POISSON, "model": "neo_hooke"}})
-    bodies = {"mesh": {"file": "patch_blocks.geo"}, "steps": [{"load": 1.0}],
-              "bodies": [{"name": "a", "material": {"young": YOUNG, "poisson": POISSON, "model": "neo_hookean"},
-                          "boundary": {"clamped": ["bottom"]}}]}
-    with pytest.raises(ParameterError, match=r"bodies\[0\]\.material\.model: finite strain"):
-        parse_case(bodies, pathlib.Path(__file__).resolve().parent.parent / "meshes")
 
 
 def test_a_frictional_finite_strain_path_is_in_balance_and_restarts_exactly(mpi_tmp_path):

@@ -110,3 +110,32 @@ def test_bodies_of_a_case_file_take_one_model():
         parse_case(case(["neo_hookean", "saint_venant_kirchhoff"]))
     with pytest.raises(ParameterError, match=r"bodies\[1\]\.material\.model"):
         parse_case(case(["neo_hookean", None]))
+
+
+def test_two_body_hertz_at_a_small_load_is_the_linear_solution(mpi_tmp_path):
+    """cases/hertz_bodies.toml at 1e-3 of its indentation (1 um): both bodies neo-Hookean give
+    the linear solution's force P to 1e-3 (strains of 1e-3 at most; measured 3.0e-5), its
+    largest pressure likewise, both solves converged and in balance: the linear one to 1e-9,
+    the neo-Hookean one to 2e-5 (measured 5.6e-6): its residual cannot be resolved below eps
+    times stress terms of size mu |F| (``ContactProblem.force_scale``), and the solver stops at
+    its ``floor``, 45 eps of that."""
+    import tomllib
+
+    from contactqvi.runner import run_case
+
+    data = tomllib.loads((ROOT / "cases" / "hertz_bodies.toml").read_text())
+    data["steps"] = [{"load": 1e-3}]
+    results = {}
+    for model in (None, "neo_hookean"):
+        for body in data["bodies"]:
+            body["material"]["model"] = model
+        case = parse_case({**data, "bodies": [{**b, "material": {k: v for k, v in b["material"].items()
+                                                                 if v is not None}} for b in data["bodies"]]},
+                          ROOT / "cases")
+        summary, code = run_case(case, mpi_tmp_path / str(model), plot=False)
+        assert code == 0, summary["status"]
+        results[model] = summary["steps"][-1]
+        assert max(results[model]["body_equilibrium_errors"].values()) <= (1e-9 if model is None else 2e-5)
+    linear, neo = results[None], results["neo_hookean"]
+    assert abs(neo["contact_force"][2] / linear["contact_force"][2] - 1.0) <= 1e-3
+    assert abs(neo["max_contact_pressure"] / linear["max_contact_pressure"] - 1.0) <= 1e-3

@@ -92,7 +92,7 @@ def solve_tresca_fixed_point(
     with result.timings.phase("solve"), SCDNewtonSolver(tresca, p, prefix=prefix) as solver:
         slip_bound[:] = law.bound(-solver.residual(u).z[:, 2])  # theta does not depend on s
         norm = norm0 = solver.residual(u).norm  # of the Coulomb graph point (6.17) at u
-        target = max(p["rtol"] * norm0, p["floor"] * problem.load.norm(), p["atol"])
+        target = max(p["rtol"] * norm0, p["floor"] * problem.force_scale(), p["atol"])
         for j in range(max_iterations + 1):
             entry = {"j": j, "residual": norm, "relative_residual": norm / norm0 if norm0 else 0.0}
             result.history.append(entry)

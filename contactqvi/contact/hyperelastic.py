@@ -69,6 +69,13 @@ class HyperelasticSystem(PETScOwner):
         prescribed: owned local rows of A (solver variables) that are prescribed rows (of the
             nodal frames of the last search, :func:`prescribed_rows`).
         load_factor: the step's load factor in the forms (follower pressures).
+        force_scale: ||int mu div v dX|| (N): the size of the stress terms of r_K (mu F and
+            mu F^-T of a neo-Hookean body, mu times a node's share of the surface) whose
+            difference r_K is, so that floating point resolves r_K to about eps times it
+            whatever the strain: at 1e-6 strain the terms cancel to 1e-6 of their size and r_K
+            cannot be driven below about 1e-10 of the first residual. Measured: Newton stalls
+            at 0.5 eps (two-body Hertz at 1 um) and 1.2 eps (patch blocks at 1e-6 strain) of
+            it. The solver's ``floor`` (45 eps) is relative to this scale.
     """
 
     material: Material
@@ -82,6 +89,7 @@ class HyperelasticSystem(PETScOwner):
     dirichlet_owned: np.ndarray
     prescribed: np.ndarray
     load_factor: fem.Constant
+    force_scale: float
 
     def petsc_objects(self) -> list[typing.Any]:
         return [self.stiffness, self.internal, self.external]
@@ -149,7 +157,16 @@ def create_hyperelastic_system(
     external.array[dirichlet_owned] = 0.0
     return HyperelasticSystem(material, u, residual_form, tangent_form, list(bcs), external, external.duplicate(),
                               None, dirichlet_owned, prescribed_rows(external, dirichlet_owned, rotation),
-                              load_factor)
+                              load_factor, _force_scale(V, mu, material))
+
+
+def _force_scale(V: fem.FunctionSpace, mu: typing.Any, material: Material) -> float:
+    """||int mu div v dX|| (N) over the owned dofs (:attr:`HyperelasticSystem.force_scale`)."""
+    scale = dolfinx.fem.petsc.assemble_vector(fem.form(mu * ufl.div(ufl.TestFunction(V)) * material.dx()))
+    scale.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    norm = scale.norm()
+    scale.destroy()
+    return norm
 
 
 def prescribed_rows(like: PETSc.Vec, dirichlet_owned: np.ndarray, rotation: PETSc.Mat | None) -> np.ndarray:

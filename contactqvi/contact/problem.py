@@ -269,6 +269,13 @@ class ContactProblem(PETScOwner):
         local.destroy()
         return out
 
+    def force_scale(self) -> float:
+        """The size (N) of the terms whose difference f(u) is, to which floating point resolves f:
+        ||l|| for a linear f (A u - l, l = lambda l~ + A d), and at least the stress terms'
+        size for a hyperelastic one (:attr:`HyperelasticSystem.force_scale`). Collective."""
+        scale = self.load.norm()
+        return scale if self.hyperelastic is None else max(scale, self.hyperelastic.force_scale)
+
     def residual(self, u: PETSc.Vec, out: PETSc.Vec) -> None:
         """f(u) of a hyperelastic problem into ``out``: T^T r_K(u~) at the current step (T = R
         without body pairs), the prescribed rows u_i - l_i as in the linear problem

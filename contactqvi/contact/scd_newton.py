@@ -75,7 +75,8 @@ GRADED_RANGE = 8.0
 PARAMETERS = Parameters(
     rtol=Parameter(1e-12, "stop when ||y^(k)|| <= rtol ||y^(0)|| (Sect. 7)", minimum=0.0, maximum=1.0, exclusive=True),
     floor=Parameter(1e-14, "... or when ||y^(k)|| <= floor ||l||, l the load in the shifted variables (A u - l is "
-                    "evaluated to about eps ||l||; 0: off)", minimum=0.0, maximum=1.0),
+                    "evaluated to about eps ||l||; a hyperelastic f to about eps times its stress terms, "
+                    "ContactProblem.force_scale; 0: off)", minimum=0.0, maximum=1.0),
     atol=Parameter(0.0, "... or when ||y^(k)|| <= atol (N)", minimum=0.0),
     max_iterations=Parameter(100, "Newton iterations before giving up", type=int, minimum=1),
     tol=Parameter(0.1, "relative residual reduction of the inner Krylov solve (tol, Sect. 7)",
@@ -554,9 +555,12 @@ class SCDNewtonSolver(PETScOwner):
         up to 30 Newton steps with exact solves and took 53, 31 and 100 (failed) steps
         with GAMG on the medium mesh (now 7-8), and a step in which nothing touches and
         nothing is loaded never converged (now at k = 0): docs/coulomb.md, "The stopping test".
+        A hyperelastic f is a difference of stress terms of size mu |F| that cancel to
+        mu |grad u|, so its floor is relative to their size
+        (:meth:`~contactqvi.contact.problem.ContactProblem.force_scale`, docs/finite_strain.md).
         """
         p = self.parameters
-        return max(p["rtol"] * norm0, p["floor"] * self.problem.load.norm(), p["atol"])
+        return max(p["rtol"] * norm0, p["floor"] * self.problem.force_scale(), p["atol"])
 
     def _stopping_status(self, norm: float, norm0: float, target: float, k: int,
                          stop: typing.Callable[[], bool] | None) -> Status | None:  # fmt: skip
