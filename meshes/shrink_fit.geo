@@ -3,9 +3,9 @@
 // overlaps the ring by delta (radial interference) as meshed, to be declared in the case file
 // ([[contacts]] interference = delta; docs/press_fit.md). Cross-section meshed with triangles
 // of size h; both interface arcs get n_arc equal segments, so the two faceted surfaces are
-// similar polygons (n_arc = 0: size h_if along the arcs, non-matching), extruded along z in
-// nlay layers (tetrahedra). Bodies share no nodes. A variant sets its own values before
-// including this file (DefineConstant keeps them).
+// similar polygons (non-matching: n_arc = 0, size h_if along the arcs; or n_pin > 0 segments
+// on the pin's arc), extruded along z in nlay layers (tetrahedra). Bodies share no nodes.
+// A variant sets its own values before including this file (DefineConstant keeps them).
 // Volumes: "pin", "ring". Surfaces: "pin_outer" (pin's curved face), "ring_inner",
 // "ring_outer", "symmetry_x" (x = 0), "symmetry_y" (y = 0), "flat" (z = 0 and z = t).
 SetFactory("OpenCASCADE");
@@ -17,6 +17,7 @@ DefineConstant[
   h = {1.5e-3, Name "element size"},
   h_if = {0.7e-3, Name "element size at the interface"},
   n_arc = {32, Name "if > 0: both interface arcs get n_arc equal segments"},
+  n_pin = {0, Name "if > 0 (with n_arc > 0): the pin's arc gets n_pin segments (non-matching)"},
   nlay = {2, Name "layers along z"}
 ];
 rp = b + delta;
@@ -39,7 +40,11 @@ If (n_arc > 0)
   For i In {0 : #arcs[] - 1}
     bb[] = BoundingBox Curve{arcs[i]};
     If (bb[3] - bb[0] > eps && bb[4] - bb[1] > eps)
-      Transfinite Curve{arcs[i]} = n_arc + 1;
+      If (n_pin > 0 && bb[3] > b + eps)
+        Transfinite Curve{arcs[i]} = n_pin + 1;
+      Else
+        Transfinite Curve{arcs[i]} = n_arc + 1;
+      EndIf
     EndIf
   EndFor
 EndIf
