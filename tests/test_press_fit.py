@@ -37,7 +37,7 @@ from contactqvi.contact import LoadStep, solve_load_path
 from contactqvi.contact.load_path import contact_resultants
 from contactqvi.parameters import ParameterError
 from contactqvi.problems import press_fit
-from contactqvi.runner import build_problem
+from contactqvi.runner import build_problem, run_case
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 MESH = ROOT / "meshes" / "shrink_fit.geo"
@@ -69,14 +69,13 @@ def test_lame_meets_its_limits():
         2 * p * B**2 * C / (E_h * (C**2 - B**2)), rel=1e-14)
 
 
-def _geo(directory: pathlib.Path, delta: float, mesh: str, n_pin: int = 0) -> pathlib.Path:
-    """A variant of MESH with the pin ``delta`` oversize and its arc in ``n_pin`` segments
-    (0: as the ring's; written on rank 0)."""
-    path = directory / f"fit_{mesh}_{delta:g}_{n_pin}.geo"
+def _geo(directory: pathlib.Path, delta: float, mesh: str, **changes: float) -> pathlib.Path:
+    """A variant of MESH with the pin ``delta`` oversize, the gmsh values of ``MESHES[mesh]``
+    and ``changes`` (written on rank 0)."""
+    values = {"delta": delta, **MESHES[mesh], **changes}
+    path = directory / ("fit_" + "_".join(f"{key}{value:g}" for key, value in values.items()) + ".geo")
     if MPI.COMM_WORLD.rank == 0:
-        values = "".join(f"{key} = {value!r}; " for key, value in
-                         {"delta": delta, "n_pin": n_pin, **MESHES[mesh]}.items())
-        path.write_text(f'{values}\nInclude "{MESH}";\n')
+        path.write_text("".join(f"{key} = {value!r}; " for key, value in values.items()) + f'\nInclude "{MESH}";\n')
     MPI.COMM_WORLD.Barrier()
     return path
 
@@ -169,6 +168,37 @@ def test_a_fit_changed_by_the_faceting_is_reported(mpi_tmp_path, caplog):
     expected = delta + 2.0 / 3.0 * (sagitta(B, 16) - sagitta(B + delta, 17))
     assert float(match.group(1)) == pytest.approx(expected, rel=0.01)
     assert measured["force x"] > 2.0 * lame(delta, STEEL)["force x"]
+
+
+#: Push-out: the slice lengthened to a pin and a hub of length L = b in 4 layers, Coulomb
+#: friction, the pin's end faces moved along z by PUSH in the second step (the first: the fit).
+LENGTH, FRICTION, PUSH = B, 0.1, 5e-5
+
+
+def test_push_out_slides_at_the_coulomb_force(mpi_tmp_path):
+    """A steel pin 0.1 mm oversize in an aluminium hub of length L = b, the hub held along z
+    on its outer surface, its faces free; the pin's two end faces pushed 50 um along z after
+    the fit. Every contact node slides, and the axial force is the Coulomb force of the
+    contact pressure, mu p (pi / 2) b L on the quarter (mu p 2 pi b L whole), with p measured
+    as the pair force F_x / (b L) (to 0.5 %; -3e-4 measured). That p lies between Lamé's
+    plane-stress and plane-strain pressures (156.95 and 166.87 MPa; 162.9 measured): the
+    pin's ends keep its length, the hub's faces are free, so neither limit holds."""
+    rollers = {"symmetry_x": {"x": 0.0}, "symmetry_y": {"y": 0.0}}
+    case = _case(_geo(mpi_tmp_path, 1e-4, "coarse", t=LENGTH, nlay=4), STEEL, ALUMINIUM, 1e-4)
+    pin, hub = case["bodies"]
+    pin["boundary"]["displacement"] = {**rollers, "flat": {"z": PUSH}}
+    hub["boundary"]["displacement"] = {**rollers, "ring_outer": {"z": 0.0}}
+    case["contacts"][0].update(law="coulomb", friction=FRICTION)
+    case["steps"] = [{"load": 0.0}, {"load": 1.0}]
+    summary, code = run_case(parse_case(case), mpi_tmp_path / "push_out", plot=False)
+    assert code == 0
+    pushed = summary["steps"][-1]
+    assert {name: n for name, n in pushed["state_counts"].items() if n} == {"sliding": pushed["state_counts"]["sliding"]}
+    force = pushed["pair_forces"][PAIR]
+    pressure = force[0] / (B * LENGTH)
+    assert force[2] == pytest.approx(FRICTION * pressure * np.pi / 2 * B * LENGTH, rel=5e-3)
+    bounds = [press_fit.contact_pressure(1e-4, B, C, STEEL, ALUMINIUM, plane) for plane in ("stress", "strain")]
+    assert bounds[0] < pressure < bounds[1]
 
 
 @pytest.fixture(scope="module")

@@ -22,11 +22,13 @@ def plane_strain(young: float, poisson: float) -> tuple[float, float]:
     return young / (1.0 - poisson**2), poisson / (1.0 - poisson)
 
 
-def contact_pressure(delta: float, b: float, c: float, pin: Material, hub: Material) -> float:
+def contact_pressure(delta: float, b: float, c: float, pin: Material, hub: Material, plane: str = "strain") -> float:
     """p from delta = u_hub(b) - u_pin(b) (docs/press_fit.md, (3)):
     p = delta / (b / E_h' ((c^2 + b^2) / (c^2 - b^2) + nu_h') + b (1 - nu_p') / E_p');
-    one material: p = E' delta (c^2 - b^2) / (2 b c^2)."""
-    (E_h, nu_h), (E_p, nu_p) = plane_strain(*hub), plane_strain(*pin)
+    one material: p = E' delta (c^2 - b^2) / (2 b c^2). ``plane = "stress"``: with E, nu
+    themselves (a thin disc with free faces)."""
+    moduli = plane_strain if plane == "strain" else lambda young, poisson: (young, poisson)
+    (E_h, nu_h), (E_p, nu_p) = moduli(*hub), moduli(*pin)
     return delta / (b / E_h * ((c**2 + b**2) / (c**2 - b**2) + nu_h) + b * (1.0 - nu_p) / E_p)
 
 
