@@ -72,6 +72,7 @@ slave surface with a master surface (``"body.group"``) or with a rigid obstacle
     # search_distance = 0.01            # m; default: each slave facet's longest edge
     # search = "every_step"             # "until_settled": also after each step, solved again
     #                                   # until it settles; "once": the reference configuration
+    # interference = 1e-4               # m: the surfaces overlap by this as meshed (a press fit)
 
 Contact laws (:data:`contactqvi.laws.LAWS`; ``law`` may be left out for ``coulomb``),
 with the keys each takes beside ``law`` (checked by the law's class, errors named by
@@ -324,6 +325,9 @@ class ContactPair:
             ``"until_settled"`` (also after each step, which is solved again until its
             configuration settles) or ``"once"`` (in the reference configuration only);
             None: ``"every_step"`` for a ``master``, ``"once"`` for an obstacle.
+        interference: the overlap of the slave and master surfaces as meshed (m, >= 0;
+            a press or shrink fit), resolved in the first load step; body pairs only
+            (:class:`~contactqvi.contact.interface.BodyPair`, docs/press_fit.md). None: 0.
     """
 
     slave: str
@@ -332,6 +336,7 @@ class ContactPair:
     law: ContactLaw | None = None
     search_distance: float | None = None
     search: str | None = None
+    interference: float | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -685,8 +690,20 @@ def _check_contacts(contacts: typing.Sequence[ContactPair], bodies: tuple[Body, 
             require_positive(f"{path}.search_distance", distance)
         search = pair.search if pair.search is not None else ("once" if obstacle is not None else "every_step")
         require_choice(f"{path}.search", search, SEARCHES)
-        checked.append(ContactPair(pair.slave, pair.master, obstacle, law, distance, search))
+        checked.append(ContactPair(pair.slave, pair.master, obstacle, law, distance, search,
+                                   _check_interference(pair, path)))
     return tuple(checked)
+
+
+def _check_interference(pair: ContactPair, path: str) -> float | None:
+    """A pair's ``interference``: a number >= 0 (m), between meshed bodies only."""
+    if pair.interference is None:
+        return None
+    interference = require_number(f"{path}.interference", pair.interference)
+    require_positive(f"{path}.interference", interference, allow_zero=True)
+    require(pair.obstacle is None, f"{path}.interference", "an overlap is declared between meshed bodies only (a "
+            "'master' surface); a rigid obstacle's position is exact: move it or the body")
+    return interference
 
 
 def _check_obstacle(obstacle: ObstacleShape, path: str) -> ObstacleShape:

@@ -127,7 +127,7 @@ def _pair(pair: ContactPair) -> ObstaclePair | BodyPair:
     """The contact pair of a ``[[contacts]]`` entry."""
     if pair.obstacle is not None:
         return ObstaclePair(pair.slave, pair.obstacle.create(), pair.law, pair.search)
-    return BodyPair(pair.slave, pair.master, pair.law, pair.search_distance, pair.search)
+    return BodyPair(pair.slave, pair.master, pair.law, pair.search_distance, pair.search, pair.interference or 0.0)
 
 
 def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,

@@ -25,7 +25,7 @@ from contactqvi.laws import Coulomb
 from contactqvi.meshes import create_contact_body
 from contactqvi.obstacles import Plane
 from contactqvi.problems import coulomb as data
-from contactqvi.problems import hertz
+from contactqvi.problems import hertz, press_fit
 from contactqvi.runner import run_case
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
@@ -87,6 +87,7 @@ NEWTON_STEPS = {
     "inclined_plane": {1: [18, 7, 6, 6], 2: [18, 7, 6, 6]},
     "paper_d3_L2": {1: [8], 2: [9]},
     "patch_test": {1: [5], 2: [5]},
+    "shrink_fit": {1: [5], 2: [4]},
     "sliding_blocks": {1: [11, 14, 13, 14, 14, 14, 13, 5], 2: [11, 14, 13, 13, 14, 12, 13, 5]},
     "vice": {1: [8, 8], 2: [8, 7]},
 }
@@ -184,6 +185,19 @@ def test_hertz_case_meets_the_closed_form(summaries):
     assert abs(np.sqrt(4 * steps[-1]["contact_area"] / np.pi) - a) <= 0.5 * a / 8
     assert steps[-1]["max_contact_pressure"] == pytest.approx(hertz.peak_pressure(E, nu, R, delta), rel=0.10)
     assert np.allclose(forces / forces[-1], (depths / delta) ** 1.5, rtol=0.04)
+
+
+def test_shrink_fit_case_meets_lame(summaries):
+    """The steel pin 0.1 mm oversize in the aluminium ring: the pin's force on the quarter ring
+    is p b t along x and along y, p Lamé's pressure, within 1 % (measured +0.02 %)."""
+    case = load_case(ROOT / "cases" / "shrink_fit.toml")
+    (pin, ring), pair = case.bodies, case.contacts[0]
+    materials = [(body.material.young, body.material.poisson) for body in (pin, ring)]
+    b, c, t = 0.02, 0.04, 0.002  # meshes/shrink_fit.geo
+    p = press_fit.contact_pressure(pair.interference, b, c, *materials)
+    (step,) = _steps(summaries, "shrink_fit")
+    force = step["pair_forces"][f"{pair.slave}/{pair.master}"]
+    assert force[:2] == pytest.approx([p * b * t, p * b * t], rel=0.01)
 
 
 @pytest.mark.parametrize("name", ["cattaneo_mindlin", "cattaneo_mindlin_nu045"])

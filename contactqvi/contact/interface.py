@@ -20,6 +20,7 @@ differs is the discretisation behind them:
 from __future__ import annotations
 
 import dataclasses
+import logging
 import typing
 
 from mpi4py import MPI
@@ -38,6 +39,8 @@ from contactqvi.obstacles import Obstacle, tangent_frames
 from contactqvi.parameters import require
 
 __all__ = ["BodyPair", "Interface", "ObstaclePair", "build_interfaces", "search_again"]
+
+logger = logging.getLogger(__name__)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -82,6 +85,11 @@ class BodyPair:
             configuration it reached, until that configuration settles (no lag of one
             step: :func:`~contactqvi.contact.load_path.solve_load_path`); ``"once"``: only
             in the reference configuration (small sliding over the whole load path).
+        interference: the declared overlap of the two surfaces as meshed (m, >= 0; a press or
+            shrink fit): slave nodes may start up to this deep inside the master body (and
+            :data:`FACETING` of their size deeper), and some node must. The contact conditions
+            are those of the measured gaps from the first load step on, which resolves the
+            whole overlap (docs/press_fit.md).
     """
 
     slave: str
@@ -89,6 +97,7 @@ class BodyPair:
     law: ContactLaw = Frictionless()
     search_distance: float | None = None
     search: str = "every_step"
+    interference: float = 0.0
 
     @property
     def name(self) -> str:
@@ -244,6 +253,7 @@ def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: Body
     distance = pair.search_distance
     require(distance is None or distance > 0.0, f"{pair.name}: search_distance", f"must be > 0, got {distance!r}")
     require(pair.search in SEARCHES, f"{pair.name}: search", f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
+    require(pair.interference >= 0.0, f"{pair.name}: interference", f"must be >= 0, got {pair.interference!r}")
     coupling = mortar_coupling(V, slave, master, distance, np.flatnonzero(constrained.all(axis=1)), displacement)
     comm = V.mesh.comm
     if displacement is None:
@@ -256,19 +266,54 @@ def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: Body
     normal /= np.linalg.norm(normal, axis=1)[:, None]
     gap = np.einsum("ij,ij->i", normal, coupling.separation)
     if displacement is None:
-        _check_overlap(comm, V, gap, pair.name, f"nodes of {pair.slave!r} lie inside the body of {pair.master!r}",
-                       FACETING * np.sqrt(coupling.weight))
+        _check_interference(comm, V, gap, pair, coupling.weight)
     return Interface(pair, coupling.slave_blk, tangent_frames(normal), coupling.weight, coupling, gap)
 
 
+#: A declared interference is reported (a warning) when the surfaces as meshed overlap by more
+#: than this fraction more or less on average: the chords of curved surfaces lie inside them by
+#: h^2 / (8 R), which changes a small fit (docs/press_fit.md).
+MESHED_INTERFERENCE = 0.01
+
+
+def _check_interference(comm: MPI.Comm, V: fem.FunctionSpace, gap: np.ndarray, pair: BodyPair,
+                        weight: np.ndarray) -> None:
+    """Raise if the slave nodes of a body pair overlap the master body by more than its declared
+    interference plus the faceting allowance :data:`FACETING` sqrt(D_ii) of each node (m), or if a
+    declared interference is not in the mesh: no node overlaps by at least it less its allowance.
+    Warn if the mean overlap as meshed, -sum_i D_ii g_i / sum_i D_ii, differs from the declared
+    one by more than :data:`MESHED_INTERFERENCE` of it."""
+    declared, faceting = pair.interference, FACETING * np.sqrt(weight)
+    largest = comm.allreduce(float(faceting.max(initial=0.0)), op=MPI.MAX)
+    faceting_text = f"the faceting allowance {FACETING:g} x sqrt(D_ii) (up to {largest:.3e} m here)"
+    allowance = f"the declared interference {declared:.3e} m plus {faceting_text}" if declared > 0.0 else faceting_text
+    hint = "" if declared > 0.0 else "; for a press or shrink fit, declare the overlap as [[contacts]] interference (m)"
+    _check_overlap(comm, V, gap, pair.name, f"nodes of {pair.slave!r} lie inside the body of {pair.master!r} "
+                   f"by more than {allowance}", declared + faceting, hint)
+    if declared == 0.0:
+        return
+    reached = comm.allreduce(float(np.max(faceting - gap, initial=-np.inf)), op=MPI.MAX)
+    overlap = comm.allreduce(float(np.max(-gap, initial=0.0)), op=MPI.MAX)
+    require(reached >= declared, f"{pair.name}: interference", f"declared {declared:.3e} m, but the surfaces "
+            f"overlap by at most {overlap:.3e} m as meshed, less than it by more than {faceting_text}: "
+            "mesh the bodies overlapping by the interference, e.g. a pin of radius b + interference in a "
+            "hole of radius b")
+    mean = -comm.allreduce(float(weight @ gap), op=MPI.SUM) / comm.allreduce(float(weight.sum()), op=MPI.SUM)
+    if abs(mean / declared - 1.0) > MESHED_INTERFERENCE:
+        logger.warning("%s: the surfaces overlap by %.4e m on average as meshed, %+.1f %% of the declared "
+                       "interference %.4e m; the fit solved is the meshed one (chords lie inside a curved "
+                       "surface by h^2 / (8 R)): mesh both surfaces in equal segments (docs/press_fit.md)",
+                       pair.name, mean, 100.0 * (mean / declared - 1.0), declared)
+
+
 def _check_overlap(comm: MPI.Comm, V: fem.FunctionSpace, gap: np.ndarray, name: str, what: str,
-                   allowance: float | np.ndarray = 0.0) -> None:
+                   allowance: float | np.ndarray = 0.0, hint: str = "") -> None:
     """Raise if a gap is negative beyond round-off of the mesh size and ``allowance`` (m)."""
     x = V.mesh.geometry.x
     extent = comm.allreduce(float(np.ptp(x, axis=0).max()) if len(x) else 0.0, op=MPI.MAX)
     count = comm.allreduce(int(np.count_nonzero(gap < -1e-10 * extent - allowance)), op=MPI.SUM)
     worst = comm.allreduce(float(gap.min(initial=np.inf)), op=MPI.MIN)
-    require(count == 0, name, f"initial penetration: {count} {what}, the deepest by {-worst:.3e} m")
+    require(count == 0, name, f"initial penetration: {count} {what}, the deepest by {-worst:.3e} m{hint}")
 
 
 def _check_disjoint(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typing.Sequence[Pair],

@@ -1,0 +1,255 @@
+"""Press (shrink) fit: a declared interference against Lamé's closed form, and its bad input.
+
+``meshes/shrink_fit.geo``: a solid pin of radius b + delta in a ring with hole radius b and
+outer radius c (b = 20 mm, c = 40 mm), a quarter of a slice t = 2 mm thick with rollers on
+the symmetry planes and on both flat faces (plane strain), frictionless; the ring's inner
+surface is the slave. The meshes overlap by delta, declared as ``interference = delta``.
+The linear elastic solution (docs/press_fit.md) is Lamé's with E' = E / (1 - nu^2) and
+nu' = nu / (1 - nu): contact pressure p = delta / (b / E_h' ((c^2 + b^2) / (c^2 - b^2) + nu_h')
++ b (1 - nu_p') / E_p'), ring u_r(r) = p b^2 / (E_h' (c^2 - b^2)) ((1 - nu_h') r + (1 + nu_h')
+c^2 / r), pin surface u_r = -p b (1 - nu_p') / E_p' (the pin's radius is b + delta: its
+pressure p b / (b + delta) carries the ring's force, which makes this exact in linear theory).
+
+Compared, each within 1 %: the pressure from the pair force of the summary
+(``pair_forces``, the pin's force on the quarter ring: p b t along x and along y), the mean
+of the nodal contact pressures λ_i / D_ii (the summary's ``contact_pressure`` field) over
+the slave nodes more than 10° from the symmetry planes, and the mean radial displacement
+of the nodes more than 10° from them on the ring's inner and outer surface and on the pin's
+surface; for interferences of 0.01 % and 0.5 % of b, on a coarse and a finer mesh (both
+arcs in equal segments, so the faceted surfaces are similar polygons), one material
+(steel) and two (a steel pin in an aluminium ring).
+"""
+
+from __future__ import annotations
+
+import pathlib
+import re
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+
+from dolfinx import fem
+
+from contactqvi.case import parse_case
+from contactqvi.contact import LoadStep, solve_load_path
+from contactqvi.contact.load_path import contact_resultants
+from contactqvi.parameters import ParameterError
+from contactqvi.problems import press_fit
+from contactqvi.runner import build_problem, run_case
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+MESH = ROOT / "meshes" / "shrink_fit.geo"
+B, C, T = 0.02, 0.04, 0.002  # hole radius, ring outer radius, slice thickness (m), as in MESH
+STEEL, ALUMINIUM = (210e9, 0.3), (70e9, 0.33)  # (E (Pa), nu)
+#: gmsh parameters of MESH: element size, segments per interface arc, layers along z
+MESHES = {"coarse": {"h": 3e-3, "n_arc": 16, "nlay": 1}, "finer": {"h": 1.5e-3, "n_arc": 32, "nlay": 2}}
+#: radial interferences (m): 0.01 % and 0.5 % of b
+INTERFERENCES = (1e-4 * B, 5e-3 * B)
+#: nodes compared lie between these angles (degrees) from the x axis
+AWAY = (10.0, 80.0)
+PAIR = "ring.ring_inner/pin.pin_outer"
+
+
+@pytest.mark.one_rank(reason="closed forms only")
+def test_lame_meets_its_limits():
+    """The same-material limit p = E' delta (c^2 - b^2) / (2 b c^2) (432.7 MPa for the user's
+    steel pin 0.1 mm oversize, plane strain), the interference taken up by the two
+    displacements, and the ring's displacement at c, u(c) = 2 p b^2 c / (E_h' (c^2 - b^2))."""
+    E, _ = press_fit.plane_strain(*STEEL)
+    same = press_fit.contact_pressure(1e-4, B, C, STEEL, STEEL)
+    assert same == pytest.approx(E * 1e-4 * (C**2 - B**2) / (2 * B * C**2), rel=1e-14)
+    assert same == pytest.approx(432.69e6, rel=1e-4)
+    p = press_fit.contact_pressure(1e-4, B, C, STEEL, ALUMINIUM)
+    ring, pin = press_fit.ring_displacement(B, p, B, C, ALUMINIUM), press_fit.pin_displacement(p, B, STEEL)
+    assert ring - pin == pytest.approx(1e-4, rel=1e-14)
+    E_h, _ = press_fit.plane_strain(*ALUMINIUM)
+    assert press_fit.ring_displacement(C, p, B, C, ALUMINIUM) == pytest.approx(
+        2 * p * B**2 * C / (E_h * (C**2 - B**2)), rel=1e-14)
+
+
+def _geo(directory: pathlib.Path, delta: float, mesh: str, **changes: float) -> pathlib.Path:
+    """A variant of MESH with the pin ``delta`` oversize, the gmsh values of ``MESHES[mesh]``
+    and ``changes`` (written on rank 0)."""
+    values = {"delta": delta, **MESHES[mesh], **changes}
+    path = directory / ("fit_" + "_".join(f"{key}{value:g}" for key, value in values.items()) + ".geo")
+    if MPI.COMM_WORLD.rank == 0:
+        path.write_text("".join(f"{key} = {value!r}; " for key, value in values.items()) + f'\nInclude "{MESH}";\n')
+    MPI.COMM_WORLD.Barrier()
+    return path
+
+
+def _case(geo: pathlib.Path, pin: tuple[float, float], hub: tuple[float, float],
+          interference: float | None) -> dict:
+    """The case file of the fit, as the dict ``tomllib`` would read."""
+    rollers = {"symmetry_x": {"x": 0.0}, "symmetry_y": {"y": 0.0}, "flat": {"z": 0.0}}
+    bodies = [{"name": name, "material": {"young": E, "poisson": nu}, "boundary": {"displacement": rollers}}
+              for name, (E, nu) in (("pin", pin), ("ring", hub))]
+    contact = {"slave": "ring.ring_inner", "master": "pin.pin_outer", "law": "frictionless"}
+    if interference is not None:
+        contact["interference"] = interference
+    return {"mesh": {"file": str(geo)}, "bodies": bodies, "contacts": [contact]}
+
+
+def lame(delta: float, hub: tuple[float, float]) -> dict[str, float]:
+    """The quantities :func:`_measured` returns, by Lamé (a steel pin in ``hub``)."""
+    p = press_fit.contact_pressure(delta, B, C, STEEL, hub)
+    return {"force x": p, "force y": p, "nodal": p, "ring inner": press_fit.ring_displacement(B, p, B, C, hub),
+            "ring outer": press_fit.ring_displacement(C, p, B, C, hub), "pin": press_fit.pin_displacement(p, B, STEEL)}
+
+
+def _mean(comm: MPI.Comm, values: np.ndarray) -> float:
+    return comm.allreduce(float(values.sum()), op=MPI.SUM) / comm.allreduce(len(values), op=MPI.SUM)
+
+
+def _measured(case: dict, delta: float) -> dict[str, float]:
+    """Pressures and radial displacements of the solved fit (module docstring). Collective."""
+    comm = MPI.COMM_WORLD
+    with build_problem(parse_case(case), comm) as problem:
+        u = problem.A.createVecRight()
+        try:
+            result = solve_load_path(problem, [LoadStep(1.0)], u, from_rest=True)[-1]
+            assert result.converged
+            force = contact_resultants(problem, result)["pair_forces"][PAIR]
+            displacement = problem.physical_displacement(u, fem.Function(problem.V)).x.array.reshape(-1, 3)
+        finally:
+            u.destroy()
+        x = problem.V.tabulate_dof_coordinates()
+        n_owned = problem.V.dofmap.index_map.size_local
+        r, angle = np.hypot(x[:, 0], x[:, 1]), np.degrees(np.arctan2(x[:, 1], x[:, 0]))
+        away = (angle > AWAY[0]) & (angle < AWAY[1])
+        radial = np.einsum("ij,ij->i", displacement[:, :2], x[:, :2]) / np.maximum(r, 1e-300)
+        owned = np.arange(len(x)) < n_owned
+
+        def at(radius: float) -> float:
+            return _mean(comm, radial[owned & away & np.isclose(r, radius, rtol=0.0, atol=1e-9)])
+
+        slave = away[problem.contact_blk]
+        pressure = result.normal_force / problem.contact_area
+        return {"force x": force[0] / (B * T), "force y": force[1] / (B * T),
+                "nodal": _mean(comm, pressure[slave]),
+                "ring inner": at(B), "ring outer": at(C), "pin": at(B + delta)}
+
+
+@pytest.mark.parametrize("hub", [STEEL, ALUMINIUM], ids=["steel", "steel-in-aluminium"])
+@pytest.mark.parametrize("delta", INTERFERENCES, ids=["0.01%", "0.5%"])
+@pytest.mark.parametrize("mesh", sorted(MESHES))
+def test_press_fit_meets_lame(mpi_tmp_path, caplog, mesh, delta, hub):
+    """Pressure (from the pair force and the nodal mean) and the radial displacements of
+    the ring's surfaces and the pin's within 1 % of Lamé (module docstring); the surfaces
+    as meshed overlap by the declared interference (no warning)."""
+    measured = _measured(_case(_geo(mpi_tmp_path, delta, mesh), STEEL, hub, delta), delta)
+    expected = lame(delta, hub)
+    errors = {name: measured[name] / expected[name] - 1.0 for name in expected}
+    assert max(abs(e) for e in errors.values()) < 0.01, errors
+    assert not [r for r in caplog.records if r.levelname == "WARNING"]
+
+
+def sagitta(radius: float, segments: int) -> float:
+    """Depth (m) of the middle of a chord inside its circle: a quarter circle in ``segments`` chords."""
+    return radius * (1.0 - np.cos(np.pi / (4 * segments)))
+
+
+def test_a_fit_changed_by_the_faceting_is_reported(mpi_tmp_path, caplog):
+    """0.01 % of b (2 um) on the coarse mesh with the pin's arc in 17 segments against the
+    ring's 16: the ring's chords lie up to 24.1 um inside its circle, the pin's up to 21.3 um
+    inside its own, so the surfaces as meshed overlap by delta + 2/3 (24.1 - 21.3) um on
+    average (a chord's depth is parabolic), about twice the declared interference, and the
+    pressure comes out 2.4 times Lamé's: a warning states the mean overlap as meshed (within
+    1 % of that estimate)."""
+    delta = INTERFERENCES[0]
+    measured = _measured(_case(_geo(mpi_tmp_path, delta, "coarse", n_pin=17), STEEL, STEEL, delta), delta)
+    warnings = [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
+    assert len(warnings) == 1
+    match = re.match(rf"^{PAIR}: the surfaces overlap by (\S+) m on average as meshed, \+\d+\.\d % of the "
+                     r"declared interference 2\.0000e-06 m; .* mesh both surfaces in equal segments", warnings[0])
+    assert match, warnings[0]
+    expected = delta + 2.0 / 3.0 * (sagitta(B, 16) - sagitta(B + delta, 17))
+    assert float(match.group(1)) == pytest.approx(expected, rel=0.01)
+    assert measured["force x"] > 2.0 * lame(delta, STEEL)["force x"]
+
+
+#: Push-out: the slice lengthened to a pin and a hub of length L = b in 4 layers, Coulomb
+#: friction, the pin's end faces moved along z by PUSH in the second step (the first: the fit).
+LENGTH, FRICTION, PUSH = B, 0.1, 5e-5
+
+
+def test_push_out_slides_at_the_coulomb_force(mpi_tmp_path):
+    """A steel pin 0.1 mm oversize in an aluminium hub of length L = b, the hub held along z
+    on its outer surface, its faces free; the pin's two end faces pushed 50 um along z after
+    the fit. Every contact node slides, and the axial force is the Coulomb force of the
+    contact pressure, mu p (pi / 2) b L on the quarter (mu p 2 pi b L whole), with p measured
+    as the pair force F_x / (b L) (to 0.5 %; -3e-4 measured). That p lies between Lamé's
+    plane-stress and plane-strain pressures (156.95 and 166.87 MPa; 162.9 measured): the
+    pin's ends keep its length, the hub's faces are free, so neither limit holds."""
+    rollers = {"symmetry_x": {"x": 0.0}, "symmetry_y": {"y": 0.0}}
+    case = _case(_geo(mpi_tmp_path, 1e-4, "coarse", t=LENGTH, nlay=4), STEEL, ALUMINIUM, 1e-4)
+    pin, hub = case["bodies"]
+    pin["boundary"]["displacement"] = {**rollers, "flat": {"z": PUSH}}
+    hub["boundary"]["displacement"] = {**rollers, "ring_outer": {"z": 0.0}}
+    case["contacts"][0].update(law="coulomb", friction=FRICTION)
+    case["steps"] = [{"load": 0.0}, {"load": 1.0}]
+    summary, code = run_case(parse_case(case), mpi_tmp_path / "push_out", plot=False)
+    assert code == 0
+    pushed = summary["steps"][-1]
+    assert {name: n for name, n in pushed["state_counts"].items() if n} == {"sliding": pushed["state_counts"]["sliding"]}
+    force = pushed["pair_forces"][PAIR]
+    pressure = force[0] / (B * LENGTH)
+    assert force[2] == pytest.approx(FRICTION * pressure * np.pi / 2 * B * LENGTH, rel=5e-3)
+    bounds = [press_fit.contact_pressure(1e-4, B, C, STEEL, ALUMINIUM, plane) for plane in ("stress", "strain")]
+    assert bounds[0] < pressure < bounds[1]
+
+
+@pytest.fixture(scope="module")
+def overlapping(tmp_path_factory) -> pathlib.Path:
+    """The coarse mesh with the pin 0.1 mm oversize (0.5 % of b)."""
+    comm = MPI.COMM_WORLD
+    directory = pathlib.Path(comm.bcast(str(tmp_path_factory.mktemp("fit")) if comm.rank == 0 else None, root=0))
+    return _geo(directory, 1e-4, "coarse")
+
+
+def test_an_overlap_beyond_the_declared_interference_is_named(overlapping):
+    """Declared 0.05 mm where the meshes overlap by 0.1 mm: the nodes deeper than the
+    declared interference plus the faceting allowance are counted, the allowance stated."""
+    with pytest.raises(ParameterError, match=rf"^{PAIR}: initial penetration: \d+ nodes of 'ring.ring_inner' lie "
+                       r"inside the body of 'pin.pin_outer' by more than the declared interference 5.000e-05 m plus "
+                       r"the faceting allowance 0.02 x sqrt\(D_ii\) \(up to .* m here\), "
+                       r"the deepest by (9\.9\d\de-05|1\.00\de-04) m$"):
+        build_problem(parse_case(_case(overlapping, STEEL, STEEL, 5e-5)), MPI.COMM_WORLD)
+
+
+def test_an_undeclared_overlap_is_named_with_the_key_to_declare_it(overlapping):
+    """No interference declared: the overlap is an initial penetration beyond the faceting
+    allowance, and the message names the key that declares a fit."""
+    with pytest.raises(ParameterError, match=r"by more than the faceting allowance 0.02 x sqrt\(D_ii\) .*"
+                       r"declare the overlap as \[\[contacts\]\] interference \(m\)$"):
+        build_problem(parse_case(_case(overlapping, STEEL, STEEL, None)), MPI.COMM_WORLD)
+
+
+def test_a_declared_interference_missing_from_the_mesh_is_named(overlapping):
+    """Declared 0.3 mm where the meshes overlap by 0.1 mm: a fit the mesh does not model
+    would be solved as a smaller one, so it is an error."""
+    with pytest.raises(ParameterError, match=rf"^{PAIR}: interference: declared 3.000e-04 m, but the surfaces "
+                       r"overlap by at most (9\.9\d\de-05|1\.00\de-04) m as meshed"):
+        build_problem(parse_case(_case(overlapping, STEEL, STEEL, 3e-4)), MPI.COMM_WORLD)
+
+
+@pytest.mark.one_rank(reason="case-file parsing, no mesh")
+@pytest.mark.parametrize("value, message", [(-1e-4, r"must be >= 0 and finite, got -0.0001"),
+                                            ("0.1 mm", r"must be a finite number, got '0.1 mm'")])
+def test_a_bad_interference_is_named_before_the_mesh_is_read(value, message):
+    case = _case(MESH, STEEL, STEEL, value)
+    with pytest.raises(ParameterError, match=rf"^contacts\[0\]\.interference: {message}$"):
+        parse_case(case)
+
+
+@pytest.mark.one_rank(reason="case-file parsing, no mesh")
+def test_an_interference_with_an_obstacle_is_named():
+    case = _case(MESH, STEEL, STEEL, 1e-4)
+    del case["contacts"][0]["master"]
+    case["contacts"][0]["obstacle"] = {"type": "cylinder", "point": [0.0, 0.0, 0.0], "axis": [0.0, 0.0, 1.0],
+                                       "radius": B}
+    with pytest.raises(ParameterError, match=r"^contacts\[0\]\.interference: an overlap is declared between "
+                       r"meshed bodies only"):
+        parse_case(case)
