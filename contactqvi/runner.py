@@ -34,7 +34,8 @@ from contactqvi.case import Body, ContactCase, ContactPair, check_groups, check_
 from contactqvi.contact.checkpoint import Checkpoint, CheckpointWriter, read_checkpoint, remove_checkpoints
 from contactqvi.contact.load_path import SOLVER_PARAMETERS, LoadStep, solve_load_path
 from contactqvi.contact.path_state import PathState
-from contactqvi.contact.figures import plot_contact_states, plot_deformed_bodies
+from contactqvi.contact.figures import plot_contact_states, plot_deformed_bodies, plot_forces
+from contactqvi.contact.force_history import write_force_table
 from contactqvi.contact.postprocess import ContactResultsWriter
 from contactqvi.contact.interface import BodyPair, ObstaclePair
 from contactqvi.contact.problem import ContactProblem, assemble_contact_problem, build_contact_problem
@@ -230,6 +231,7 @@ class _StepRecorder:
             summary["steps"].append(entry)
             summary["status"] = str(result.status)
             tables.write_summary(self.problem.comm, writer.out / "summary.json", summary)
+            write_force_table(self.problem.comm, writer.out / "forces.csv", summary["steps"])
             if result.converged:
                 self.checkpoints.write(state, summary)
         except OSError as exc:
@@ -258,12 +260,15 @@ def _exit_code(results: list[SCDNewtonResult], remaining: int) -> int:
 
 
 def _draw_figures(writer: ContactResultsWriter, summary: dict[str, typing.Any], comm: MPI.Comm) -> None:
-    """``contact_states.png`` and ``bodies.png`` of the last step written, and whether each
-    was drawn in the summary."""
+    """``contact_states.png`` and ``bodies.png`` of the last step written, ``forces.png`` of the
+    path, and whether each was drawn in the summary."""
     last = writer.last
     step = next(entry["step"] for entry in reversed(summary["steps"]) if entry["converged"])
     summary["plot"] = plot_contact_states(writer.out / "contact_states.png", last.surface, step)
-    summary["bodies_plot"] = plot_deformed_bodies(writer.out / "bodies.png", last.displacement, last.von_mises)
+    touching = any(i.coupling is not None for i in last.surface.problem.interfaces)
+    summary["bodies_plot"] = plot_deformed_bodies(writer.out / "bodies.png", last.displacement, last.von_mises,
+                                                  touching)
+    summary["forces_plot"] = plot_forces(writer.out / "forces.png", summary["steps"], comm)
     tables.write_summary(comm, writer.out / "summary.json", summary)
 
 

@@ -209,11 +209,14 @@ def test_bodies_picture(solution, mpi_tmp_path):
 @pytest.mark.one_rank(reason="figure and patch geometry on small numpy arrays, drawn without a mesh")
 def test_bodies_picture_magnifies_small_displacements_only():
     """``bodies.png`` magnifies an elastic displacement to a tenth of the bodies' size and draws
-    a slide larger than that true to scale."""
+    one above 1 % of the size (a slide, finite strain) true to scale."""
     from contactqvi.contact.figures import _displacement_scale
 
     points = np.array([[0.0, 0.0, 0.0], [3.6, 1.0, 1.0]])
     assert _displacement_scale(points, np.array([[0.0, 0.0, -1e-4], [0.0, 0.0, 0.0]])) == pytest.approx(3600.0)
+    assert _displacement_scale(points, np.array([[0.0, 0.0, -0.035], [0.0, 0.0, 0.0]])) == pytest.approx(10.29,
+                                                                                                        rel=1e-3)
+    assert _displacement_scale(points, np.array([[0.0, 0.0, -0.037], [0.0, 0.0, 0.0]])) == 1.0
     assert _displacement_scale(points, np.array([[0.6, 0.0, -1e-3], [0.0, 0.0, 0.0]])) == 1.0
     assert _displacement_scale(points, np.zeros((2, 3))) == 1.0
 

@@ -4,7 +4,9 @@
   Fig. 2), with matplotlib (Agg, no display) from the tributary patches of every rank;
 * :func:`plot_deformed_bodies`: a 3D view of the deformed bodies coloured by von Mises
   stress, with pyvista (off screen, on a virtual X display made for the drawing when
-  there is none), from the owned boundary facets of every rank.
+  there is none), from the owned boundary facets of every rank;
+* :func:`plot_forces`: the contact forces and support reactions along the load path
+  (:mod:`contactqvi.contact.force_history`), from the summary.
 
 Only surfaces of at most :data:`contactqvi.tables.GATHER_MAX_NODES` nodes are drawn.
 A figure never ends a run: a failure is logged and the figure skipped.
@@ -26,6 +28,7 @@ import numpy as np
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 
+from contactqvi.contact.force_history import plot_force_history
 from contactqvi.contact.interface import BodyPair, Pair
 from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
@@ -33,7 +36,7 @@ from contactqvi.contact.surface import ContactSurface, state_names, vertex_block
 from contactqvi.paraview import Dataset, gather_pieces
 from contactqvi.tables import GATHER_MAX_NODES, atomic_path
 
-__all__ = ["plot_contact_states", "plot_deformed_bodies"]
+__all__ = ["plot_contact_states", "plot_deformed_bodies", "plot_forces"]
 
 logger = logging.getLogger(__name__)
 
@@ -66,13 +69,17 @@ def plot_contact_states(path: str | os.PathLike, surface: ContactSurface, step: 
         tmp, dataset, _facet_pair(dataset.cell_data["contact_pair"], vertices), pairs, title))
 
 
-def plot_deformed_bodies(path: str | os.PathLike, displacement: fem.Function, von_mises: fem.Function) -> bool:
-    """PNG of the bodies' boundary, deformed (magnified) and coloured by the von Mises stress.
+def plot_deformed_bodies(path: str | os.PathLike, displacement: fem.Function, von_mises: fem.Function,
+                         touching: bool = False) -> bool:
+    """PNG of the bodies' boundary, deformed and coloured by the von Mises stress.
 
     ``displacement``: P1 displacement (m); ``von_mises``: DG0 von Mises stress (Pa), each
-    boundary facet coloured by its cell's value. The displacement is magnified so that the
-    largest one is a tenth of the bodies' size (the factor is in the title). Returns whether
-    the PNG was written (not above ``GATHER_MAX_NODES`` boundary points). Collective.
+    boundary facet coloured by its cell's value. Drawn at true scale when bodies touch each
+    other (``touching``: a magnified displacement would draw them overlapping or apart where
+    they touch) or when the displacement is large (:func:`_displacement_scale`), else
+    magnified so that the largest displacement is a tenth of the bodies' size; the title
+    says which. Returns whether the PNG was written (not above ``GATHER_MAX_NODES``
+    boundary points). Collective.
     """
     comm = displacement.function_space.mesh.comm
     piece = _boundary_piece(displacement, von_mises)
@@ -81,7 +88,14 @@ def plot_deformed_bodies(path: str | os.PathLike, displacement: fem.Function, vo
         logger.info("%s is skipped: %d boundary points > %d (drawn on one rank)", path, points, GATHER_MAX_NODES)
         return False
     dataset = gather_pieces(comm, piece)
-    return _draw_on_rank_0(comm, path, lambda tmp: _draw_bodies(tmp, dataset))
+    return _draw_on_rank_0(comm, path, lambda tmp: _draw_bodies(tmp, dataset, touching))
+
+
+def plot_forces(path: str | os.PathLike, steps: typing.Sequence[dict[str, typing.Any]], comm: MPI.Comm) -> bool:
+    """PNG of the pairs' contact forces and the supports' reactions along the load path (the
+    summary's ``steps``; :func:`~contactqvi.contact.force_history.plot_force_history`). Returns
+    whether it was written. Collective."""
+    return _draw_on_rank_0(comm, path, lambda tmp: plot_force_history(tmp, steps))
 
 
 def _draw_on_rank_0(comm: MPI.Comm, path: str | os.PathLike, draw: typing.Callable[[pathlib.Path], None]) -> bool:
@@ -141,12 +155,13 @@ def _display() -> typing.Iterator[None]:
         server.wait(10)
 
 
-def _draw_bodies(path: pathlib.Path, dataset: Dataset) -> None:
+def _draw_bodies(path: pathlib.Path, dataset: Dataset, touching: bool) -> None:
     import pyvista
 
     points, u = dataset.points, dataset.point_data["displacement"]
     stress = dataset.cell_data["von_mises"]
-    scale = _displacement_scale(points, u)
+    scale = 1.0 if touching else _displacement_scale(points, u)
+    drawn = "true scale" if scale == 1.0 else f"displacement x {scale:.3g}"
     grid = pyvista.UnstructuredGrid({dataset.cell_type: dataset.cells}, points + scale * u)
     name = "von Mises stress [Pa]"
     grid.cell_data[name] = stress
@@ -156,7 +171,7 @@ def _draw_bodies(path: pathlib.Path, dataset: Dataset) -> None:
         try:
             plotter.add_mesh(grid, scalars=name, cmap="viridis", clim=limits, log_scale=log_scale, show_edges=True,
                              edge_color="#404040", line_width=0.3, scalar_bar_args={"vertical": True, "fmt": "%.3g"})
-            plotter.add_text(f"deformed bodies, displacement x {scale:.3g}; von Mises stress per cell"
+            plotter.add_text(f"deformed bodies ({drawn}); von Mises stress per cell"
                              + (" (log scale)" if log_scale else ""), font_size=12)
             # looking along -direction at the bodies (reset_camera keeps the direction and fits them in)
             plotter.camera_position = [tuple(_camera_direction(grid.cell_centers().points, stress)), (0.0, 0.0, 0.0),
@@ -171,11 +186,18 @@ def _draw_bodies(path: pathlib.Path, dataset: Dataset) -> None:
     matplotlib.image.imsave(path, image, format="png")
 
 
+#: Displacements above this fraction of the bodies' size are drawn at true scale (finite
+#: strain, large sliding: a magnified picture would be a different shape).
+TRUE_SCALE_FRACTION = 0.01
+
+
 def _displacement_scale(points: np.ndarray, u: np.ndarray) -> float:
-    """Factor on the displacement drawn: the largest one magnified to a tenth of the bodies'
-    size, but never shrunk (a block slid by more than that is drawn where it is)."""
+    """Factor on the displacement drawn: 1 when the largest displacement is above
+    :data:`TRUE_SCALE_FRACTION` of the bodies' size, else the factor that magnifies it to a
+    tenth of that size."""
     largest = float(np.linalg.norm(u, axis=1).max(initial=0.0))
-    return max(0.1 * float(np.ptp(points, axis=0).max()) / largest, 1.0) if largest > 0.0 else 1.0
+    size = float(np.ptp(points, axis=0).max())
+    return 0.1 * size / largest if 0.0 < largest < TRUE_SCALE_FRACTION * size else 1.0
 
 
 #: Stresses spanning more than this factor are coloured on a log scale (contact stresses are

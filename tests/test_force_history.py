@@ -1,0 +1,56 @@
+"""The forces of a load path as a table and a picture (``forces.csv``, ``forces.png``):
+the summary's numbers, one row per converged step, against what drives the path."""
+
+from __future__ import annotations
+
+import csv
+import pathlib
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+
+from contactqvi.case import load_case
+from contactqvi.contact.force_history import force_columns
+from contactqvi.runner import run_case
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+
+
+def test_forces_of_the_sliding_blocks_path(mpi_tmp_path):
+    """cases/sliding_blocks.toml: forces.csv holds, per step, exactly the summary's load,
+    translation, pair forces and reactions (floats written exactly), and forces.png is drawn
+    against the slide (x translation)."""
+    case = load_case(ROOT / "cases" / "sliding_blocks.toml")
+    summary, code = run_case(case, mpi_tmp_path / "slide", plot=True)
+    assert code == 0, summary["status"]
+    assert summary["forces_plot"] is True
+    if MPI.COMM_WORLD.rank != 0:
+        return
+    assert (mpi_tmp_path / "slide" / "forces.png").stat().st_size > 10_000
+    with open(mpi_tmp_path / "slide" / "forces.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == len(summary["steps"])
+    for row, step in zip(rows, summary["steps"]):
+        assert float(row["step"]) == step["step"] and float(row["load"]) == step["load"]
+        assert [float(row[f"translation_{a}"]) for a in "xyz"] == step["translation"]
+        for name, force in step["pair_forces"].items():
+            assert [float(row[f"{name} F_{a} [N]"]) for a in "xyz"] == force
+        for name, force in step["reaction_forces"].items():
+            assert [float(row[f"{name} R_{a} [N]"]) for a in "xyz"] == force
+
+
+@pytest.mark.one_rank(reason="columns of a summary's steps (lists of numbers), no mesh")
+def test_force_columns_leave_out_failed_steps():
+    steps = [{"step": 1, "load": 0.5, "converged": True, "translation": [0.0, 0.0, 0.0],
+              "pair_forces": {"a/b": [0.0, 0.0, 1.0]}, "reaction_forces": {"a.top": [0.0, 0.0, -1.0]}},
+             {"step": 2, "load": 1.0, "converged": False},
+             {"step": 2, "load": 1.0, "converged": True, "translation": [0.1, 0.0, 0.0],
+              "pair_forces": {"a/b": [-0.2, 0.0, 1.0]}, "reaction_forces": {"a.top": [0.2, 0.0, -1.0]}}]
+    columns = force_columns(steps)
+    assert columns["step"].tolist() == [1.0, 2.0]
+    assert columns["translation_x"].tolist() == [0.0, 0.1]
+    assert columns["a/b F_x [N]"].tolist() == [0.0, -0.2]
+    assert columns["a.top R_z [N]"].tolist() == [-1.0, -1.0]
+    assert np.all(np.isfinite(np.column_stack(list(columns.values()))))
