@@ -70,10 +70,12 @@ _WEIGHTS = np.full(3, 1.0 / 3.0)
 #: parallelogram and a triangle: psi_i phi_j^m is a polynomial of degree 4 on a flat pair (exact).
 AFFINE_DEGREE = 4
 #: ... and for a pair with a quadrilateral that is no parallelogram (distorted or warped): the
-#: inverse bilinear map makes psi_i phi_j^m no polynomial. On a flat interface of quadrilaterals
-#: moved by up to 0.3 of their size the linear fields are reproduced to 8e-8 (degree 6), 6e-10
-#: (8), 9e-13 (12, 33 points), 4e-16 (16) (tests/test_hex_mortar.py).
-QUADRILATERAL_DEGREE = 12
+#: inverse bilinear map makes psi_i phi_j^m no polynomial, and the rule's error decays with its
+#: degree. A flat interface of quadrilaterals moved by up to 0.3 of their size reproduces linear
+#: fields to 8e-8 (degree 6), 9e-13 (12), 4e-16 (16); triangles cut into three quadrilaterals
+#: (meshes/hex_on_split_tets.geo, as slave) to 3e-7 (12), 6e-9 (16), 5e-11 (20, 79 points),
+#: 3e-14 (30), and the patch test on them as master to 3e-8, 6e-10, 4e-12 (tests/test_hex_mortar.py).
+QUADRILATERAL_DEGREE = 20
 #: Slave nodes whose mortar segments give D_ii below this fraction of their lumped
 #: area are not coupled (they lie at the rim of the master's shadow).
 MIN_COVERAGE = 0.5
