@@ -3,7 +3,9 @@
 The contact conditions between a slave surface Gamma_s and a master surface
 Gamma_m are imposed weakly, tested with the dual (biorthogonal) basis psi_i of the
 slave nodes (Wohlmuth): on a linear triangle psi_i = 4 phi_i - 1, so that
-int_T psi_i phi_k = delta_ik int_T phi_k. The mortar matrices
+int_T psi_i phi_k = delta_ik int_T phi_k; on a bilinear quadrilateral (hexahedral
+meshes) psi = A phi with A = D_e M_e^{-1} from the facet's mass matrix
+(:mod:`contactqvi.contact.facets`). The mortar matrices
 
     D_ii = int_{Gamma_s} psi_i,        M_ij = int_{Gamma_s} psi_i (phi_j^m o pi),
 
@@ -19,12 +21,22 @@ that have a master facet, as int psi_i sum_k phi_k; with full coverage this is
 int phi_i (the lumped area), and sum_j C_ij = 1 always, so rigid translations
 of both bodies never open or close the interface.
 
-Segment-to-segment integration (Puso-Laursen): each slave triangle and each
-master triangle facing it are projected onto the slave triangle's plane, the
-master polygon is clipped by the slave triangle (Sutherland-Hodgman), the clipped
-polygon is split into a fan of triangles and integrated with a rule exact for
-quadratics (psi_i phi_j^m is quadratic on a flat pair). A flat non-matching
-interface is therefore integrated exactly.
+Segment-to-segment integration (Puso-Laursen): each slave facet and each master
+facet facing it (triangles or quadrilaterals, in any combination) are projected onto
+the slave facet's plane (a quadrilateral's mean plane, normal to its diagonals'
+cross product), the master polygon is clipped by the slave polygon
+(Sutherland-Hodgman, convex clippers), the clipped polygon is split into a fan of
+triangles and integrated there. The shape functions at a point of the plane are the
+barycentric coordinates of a projected triangle, or the bilinear shape functions at
+the reference coordinates of a projected quadrilateral (the inverse of its bilinear
+map, Newton's method); a slave quadrilateral's integrals take its true area element
+(the ratio of it to the plane's at the point). What is exact on a flat interface:
+psi_i phi_j^m is quadratic on a pair of triangles (rule of degree 2) and a polynomial
+of degree <= 4 on a pair of parallelograms or of a parallelogram and a triangle
+(degree 4), so such interfaces are integrated exactly; on a quadrilateral that is no
+parallelogram the inverse bilinear map is no polynomial, and a rule of degree 20
+(:data:`QUADRILATERAL_DEGREE`) meets the integrals to about 1e-12 on strongly
+distorted facets (a warped facet's area element too).
 
 Parallel search: each rank owns the slave facets of its cells; it receives from
 every rank the master facets that lie within ``search_distance`` of the bounding
@@ -381,7 +393,7 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
     """C = D^{-1} M, nodal normals and weighted gaps of a slave and a master surface.
 
     Args:
-        V: vector P1 space on a tetrahedral mesh holding both bodies.
+        V: vector P1 (tetrahedra) or Q1 (hexahedra) space on the mesh holding both bodies.
         slave_facets, master_facets: local facet indices of the two surfaces.
         search_distance: master facets farther than this from a slave facet
             (between bounding boxes, m) are not paired with it; None: the slave
