@@ -41,6 +41,7 @@ from contactqvi.contact.scd_newton import SCDNewtonSolver
 from contactqvi.elasticity import body_materials
 from contactqvi.laws import Coulomb
 from contactqvi.meshes import boundary_facets, read_gmsh, split_by_body
+from contactqvi.parameters import ParameterError
 from contactqvi.runner import run_case
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
@@ -103,6 +104,9 @@ def test_reference_coordinates_invert_the_bilinear_map():
     x2 = DISTORTED[None, :, :2]
     points = np.einsum("pqk,pkj->pqj", quadrilateral_shapes(xi), x2)
     assert np.abs(reference_coordinates(x2, points) - xi).max() < 1e-14
+    collapsed = np.zeros((1, 4, 2))  # all four vertices at one point: no map to invert
+    with np.errstate(all="ignore"), pytest.raises(ParameterError, match="mesh: the inverse of a contact facet"):
+        reference_coordinates(collapsed, points)
 
 
 #: A shear of the plane z = 0: it maps the rectangles of a grid onto parallelograms (area kept).

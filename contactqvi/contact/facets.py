@@ -23,6 +23,8 @@ from __future__ import annotations
 import basix
 import numpy as np
 
+from contactqvi.parameters import ParameterError
+
 __all__ = ["POLYGON_ORDER", "area_elements", "dual_coefficients", "nodal_integrals", "planar_jacobians",
            "quadrilateral_shapes", "reference_coordinates", "triangle_rule"]
 
@@ -72,7 +74,8 @@ def reference_coordinates(x2: np.ndarray, points: np.ndarray) -> np.ndarray:
     the parallelogram of v0, v1, v2 (exact when the quadrilateral is one).
 
     Raises:
-        ValueError: Newton's method did not converge (a degenerate or non-convex quadrilateral).
+        ParameterError: (``mesh``) Newton's method did not converge (a degenerate or
+            non-convex quadrilateral).
     """
     a, b, c = x2[:, None, 0], x2[:, None, 1] - x2[:, None, 0], x2[:, None, 2] - x2[:, None, 0]
     d = x2[:, None, 3] - x2[:, None, 2] - x2[:, None, 1] + x2[:, None, 0]
@@ -87,8 +90,8 @@ def reference_coordinates(x2: np.ndarray, points: np.ndarray) -> np.ndarray:
         xi -= np.stack([step_s, step_t], axis=-1)
         if np.all(np.abs(step_s) + np.abs(step_t) <= NEWTON_TOL):
             return xi
-    raise ValueError("facet: the inverse of a quadrilateral's bilinear map did not converge in "
-                     f"{NEWTON_MAX_IT} Newton iterations (degenerate or non-convex facet)")
+    raise ParameterError("mesh", "the inverse of a contact facet's bilinear map did not converge in "
+                         f"{NEWTON_MAX_IT} Newton iterations: a degenerate or non-convex quadrilateral")
 
 
 #: 3 x 3 Gauss points on the unit square and weights summing to 1: exact for bilinear x bilinear

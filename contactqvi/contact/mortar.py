@@ -371,8 +371,8 @@ class MortarCoupling:
 
 def _exchange_master(comm: MPI.Comm, slave: SurfaceFacets, master: SurfaceFacets,
                      master_glob: np.ndarray, padding: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Master triangles (coordinates, global node indices, normals) within ``padding`` of
-    this rank's slave triangles' bounding box, gathered from the ranks that own them."""
+    """Master facets (coordinates, global node indices, normals) within ``padding`` of
+    this rank's slave facets' bounding box, gathered from the ranks that own them."""
     if len(slave.x):
         box = np.concatenate([slave.x.min(axis=(0, 1)) - padding, slave.x.max(axis=(0, 1)) + padding])
     else:
@@ -447,13 +447,16 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
     return _restricted(coupling, np.einsum("ij,ij->i", n, separation[:, -3:]) <= reach)
 
 
-#: Candidate pairs integrated at a time by :func:`_overlapping` (bounds its work arrays to about 100 MB).
+#: Candidate pairs integrated at a time by :func:`_overlapping` (bounds its work arrays to about 100 MB)
+#: for two triangles (3 points per triangle of a clipped polygon); with a quadrilateral, whose
+#: rules have up to 79 points and up to 6 triangles per polygon, a 32nd of it.
 _CHUNK = 1 << 16
+_QUADRILATERAL_CHUNK = 1 << 11
 
 
 def _overlapping(slave: SurfaceFacets, master_x: np.ndarray, pairs_s: np.ndarray,
                  pairs_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The candidate pairs whose triangles overlap, with their :func:`segment_integrals`.
+    """The candidate pairs whose facets overlap, with their :func:`segment_integrals`.
 
     The candidates are the pairs within the search distance; most do not overlap
     (two-body Hertz medium mesh, search distance 5 mm: 20 000 of the 26 448 entries of
@@ -463,8 +466,9 @@ def _overlapping(slave: SurfaceFacets, master_x: np.ndarray, pairs_s: np.ndarray
     arrays stay bounded (all at once they took 390 MB on the fine mesh).
     """
     kept = []
-    for start in range(0, len(pairs_s), _CHUNK):
-        s, m = pairs_s[start:start + _CHUNK], pairs_m[start:start + _CHUNK]
+    chunk = _CHUNK if slave.x.shape[1] == master_x.shape[1] == 3 else _QUADRILATERAL_CHUNK
+    for start in range(0, len(pairs_s), chunk):
+        s, m = pairs_s[start:start + chunk], pairs_m[start:start + chunk]
         D, M = segment_integrals(slave.x[s], -slave.normal[s], master_x[m])
         overlap = np.any(M != 0.0, axis=(1, 2))
         kept.append((s[overlap], m[overlap], D[overlap], M[overlap]))
