@@ -217,16 +217,23 @@ def hex_blocks(meshes):
     return _blocks(meshes, MESH)
 
 
-@pytest.mark.parametrize("slave, master", [("upper", "lower"), ("lower", "upper")])
-def test_flat_non_matching_hexahedral_interface_is_integrated_exactly(hex_blocks, slave, master):
-    """sum_j C_ij x_j = x_i, rows sum to 1, gap 0, sum D_ii = the interface's area (squares)."""
-    msh, tags, _ = hex_blocks
+@pytest.mark.parametrize("mesh, slave, master, nodes, tolerance", [
+    (MESH, "upper", "lower", 36, 1e-14), (MESH, "lower", "upper", 25, 1e-14),
+    (SPLIT_TETS, "upper", "lower", 49, 1e-14), (SPLIT_TETS, "lower", "upper", None, 1e-9)])
+def test_flat_non_matching_hexahedral_interface(meshes, mesh, slave, master, nodes, tolerance):
+    """sum_j C_ij x_j = x_i, rows sum to 1, gap 0, sum D_ii = the interface's area. Exact where
+    the slave facets are parallelograms (squares; sum_j phi_j^m x_j = x holds pointwise on any
+    master facet); the split tetrahedra's quadrilaterals as slave to the degree-20 rule's
+    accuracy (measured 5e-11). ``nodes``: the slave's interface nodes, (n + 1)^2 on a
+    structured face of n x n cells (None: unstructured)."""
+    msh, tags, _ = _blocks(meshes, mesh)
     V = fem.functionspace(msh, ("Lagrange", 1, (3,)))
     coupling = mortar_coupling(V, boundary_facets(tags, f"{slave}.interface"),
                                boundary_facets(tags, f"{master}.interface"), 0.1)
     comm = msh.comm
-    assert comm.allreduce(len(coupling.slave_blk), op=MPI.SUM) == (36 if slave == "upper" else 25)
-    assert max(linear_field_errors(V, coupling)) < 1e-14
+    found = comm.allreduce(len(coupling.slave_blk), op=MPI.SUM)
+    assert (found == nodes) if nodes is not None else (found > 0)
+    assert max(linear_field_errors(V, coupling)) < tolerance
     assert comm.allreduce(float(coupling.weight.sum()), op=MPI.SUM) == pytest.approx(1.0, rel=1e-13)
 
 

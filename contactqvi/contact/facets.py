@@ -11,7 +11,7 @@ onto which both facets are projected), and on a slave facet the dual basis psi.
   x(xi) = sum_k phi_k(xi) x_k. A point of the plane has reference coordinates xi of
   the projected bilinear map, found by Newton's method (:func:`reference_coordinates`);
   on a parallelogram the map is affine and the first step is exact. The dual basis
-  psi = A phi with A = D_e M_e^{-1} (Popp, Gee, Wall 2009, eq. (26)), D_e = diag int phi_k,
+  psi = A phi with A = D_e M_e^{-1} (Popp, Gee, Wall 2009, IJNME 79), D_e = diag int phi_k,
   M_e = int phi_j phi_k over the facet with its true area element |x_xi x x_eta|
   (8 x 8 Gauss points: exact on a flat facet, whose area element is bilinear; on a facet
   warped by 0.3 of its size, whose area element is no polynomial, to 1e-15), so that
