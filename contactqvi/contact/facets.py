@@ -82,15 +82,16 @@ def reference_coordinates(x2: np.ndarray, points: np.ndarray) -> np.ndarray:
     a, b, c = x2[:, None, 0], x2[:, None, 1] - x2[:, None, 0], x2[:, None, 2] - x2[:, None, 0]
     d = x2[:, None, 3] - x2[:, None, 2] - x2[:, None, 1] + x2[:, None, 0]
     xi = np.full(points.shape, 0.5)
+    target = points - a
     for _ in range(NEWTON_MAX_IT):
         s, t = xi[..., 0, None], xi[..., 1, None]
-        residual = a + b * s + c * t + d * s * t - points
         x_s, x_t = b + d * t, c + d * s
+        residual = s * x_s + c * t - target  # a + b s + c t + d s t - point
         det = x_s[..., 0] * x_t[..., 1] - x_s[..., 1] * x_t[..., 0]
-        step_s = (x_t[..., 1] * residual[..., 0] - x_t[..., 0] * residual[..., 1]) / det
-        step_t = (x_s[..., 0] * residual[..., 1] - x_s[..., 1] * residual[..., 0]) / det
-        xi -= np.stack([step_s, step_t], axis=-1)
-        if np.all(np.abs(step_s) + np.abs(step_t) <= NEWTON_TOL):
+        step = np.stack([x_t[..., 1] * residual[..., 0] - x_t[..., 0] * residual[..., 1],
+                         x_s[..., 0] * residual[..., 1] - x_s[..., 1] * residual[..., 0]], axis=-1) / det[..., None]
+        xi -= step
+        if np.abs(step).max(initial=0.0) <= NEWTON_TOL:
             return xi
     raise ParameterError("mesh", "the inverse of a contact facet's bilinear map did not converge in "
                          f"{NEWTON_MAX_IT} Newton iterations: a degenerate or non-convex quadrilateral")
