@@ -251,7 +251,7 @@ PARALLEL_NAMES = {
     "write_solution_npz": "solution.npz gathered on rank 0",
 }
 #: Modules of tests/ that tests import helpers from.
-TEST_HELPERS = ("conftest", "law_checks", "friction_checks", "output_files", "petsc_audit")
+TEST_HELPERS = ("conftest", "law_checks", "friction_checks", "mortar_checks", "output_files", "petsc_audit")
 
 
 def _test_namespace(tree: ast.Module, helpers: dict[str, ast.Module]) -> dict[str, ast.AST]:

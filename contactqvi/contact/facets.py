@@ -1,0 +1,131 @@
+"""Reference geometry of contact facets: linear triangles and bilinear quadrilaterals.
+
+The mortar integrals (:mod:`contactqvi.contact.mortar`) need, on a slave or master
+facet, the shape functions phi at points given in a plane (the slave facet's plane,
+onto which both facets are projected), and on a slave facet the dual basis psi.
+
+* Triangles (facets of tetrahedra, vertices v0 v1 v2): phi are the barycentric
+  coordinates, affine in the plane; psi_i = 4 phi_i - 1.
+* Quadrilaterals (facets of hexahedra, DOLFINx's tensor-product order: v0 (0, 0),
+  v1 (1, 0), v2 (0, 1), v3 (1, 1); round the polygon v0 v1 v3 v2): the bilinear map
+  x(xi) = sum_k phi_k(xi) x_k. A point of the plane has reference coordinates xi of
+  the projected bilinear map, found by Newton's method (:func:`reference_coordinates`);
+  on a parallelogram the map is affine and the first step is exact. The dual basis
+  psi = A phi with A = D_e M_e^{-1} (Popp, Gee, Wall 2009, IJNME 79), D_e = diag int phi_k,
+  M_e = int phi_j phi_k over the facet with its true area element |x_xi x x_eta|
+  (8 x 8 Gauss points: exact on a flat facet, whose area element is bilinear; on a facet
+  warped by 0.3 of its size, whose area element is no polynomial, to 1e-15), so that
+  int psi_i phi_k = delta_ik int phi_k. On a parallelogram A is the tensor product of the
+  1D duals 2 phi_0 - phi_1: psi_0 = 4 phi_0 - 2 phi_1 - 2 phi_2 + phi_3.
+"""
+
+from __future__ import annotations
+
+import basix
+import numpy as np
+
+from contactqvi.parameters import ParameterError
+
+__all__ = ["POLYGON_ORDER", "area_elements", "dual_coefficients", "nodal_integrals", "planar_jacobians",
+           "quadrilateral_shapes", "reference_coordinates", "triangle_rule"]
+
+#: The vertices of a facet with n vertices in the order round its polygon.
+POLYGON_ORDER = {3: [0, 1, 2], 4: [0, 1, 3, 2]}
+#: Newton iterations of :func:`reference_coordinates` stop at this change of xi (reference units).
+NEWTON_TOL = 1e-14
+NEWTON_MAX_IT = 25
+
+
+def triangle_rule(degree: int) -> tuple[np.ndarray, np.ndarray]:
+    """Barycentric points (Q, 3) and weights (Q,) summing to 1 of basix's rule of ``degree``
+    on a triangle (exact for polynomials of that degree)."""
+    points, weights = basix.make_quadrature(basix.CellType.triangle, degree)
+    return np.column_stack([1.0 - points.sum(axis=1), points]), weights / weights.sum()
+
+
+def quadrilateral_shapes(xi: np.ndarray) -> np.ndarray:
+    """(..., 4) bilinear shape functions at reference points (..., 2), tensor-product order."""
+    s, t = xi[..., 0], xi[..., 1]
+    return np.stack([(1.0 - s) * (1.0 - t), s * (1.0 - t), (1.0 - s) * t, s * t], axis=-1)
+
+
+def _tangents(x: np.ndarray, xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """dx/dxi and dx/deta of the bilinear map of vertices x (P, 4, d) at points xi (P, Q, 2): (P, Q, d) each."""
+    s, t = xi[..., 0, None], xi[..., 1, None]
+    b, c = x[:, None, 1] - x[:, None, 0], x[:, None, 2] - x[:, None, 0]
+    d = x[:, None, 3] - x[:, None, 2] - x[:, None, 1] + x[:, None, 0]
+    return b + d * t, c + d * s
+
+
+def area_elements(x: np.ndarray, xi: np.ndarray) -> np.ndarray:
+    """(P, Q) area element |x_xi x x_eta| of quadrilaterals (P, 4, 3) at points xi (P, Q, 2)."""
+    x_s, x_t = _tangents(x, xi)
+    return np.linalg.norm(np.cross(x_s, x_t), axis=-1)
+
+
+def planar_jacobians(x2: np.ndarray, xi: np.ndarray) -> np.ndarray:
+    """(P, Q) |det| of the bilinear maps of planar quadrilaterals (P, 4, 2) at points xi (P, Q, 2)."""
+    x_s, x_t = _tangents(x2, xi)
+    return np.abs(x_s[..., 0] * x_t[..., 1] - x_s[..., 1] * x_t[..., 0])
+
+
+def reference_coordinates(x2: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Reference coordinates (P, Q, 2) of points (P, Q, 2) of the plane in the bilinear maps
+    of planar quadrilaterals (P, 4, 2): Newton's method, all points at once, started from
+    the centre (the first step is exact on a parallelogram; on the distorted facets of
+    meshes/hertz_bodies_hex_coarse.geo 6 iterations, 7 from the vertex v0).
+
+    Raises:
+        ParameterError: (``mesh``) Newton's method did not converge (a degenerate or
+            non-convex quadrilateral).
+    """
+    a, b, c = x2[:, None, 0], x2[:, None, 1] - x2[:, None, 0], x2[:, None, 2] - x2[:, None, 0]
+    d = x2[:, None, 3] - x2[:, None, 2] - x2[:, None, 1] + x2[:, None, 0]
+    xi = np.full(points.shape, 0.5)
+    target = points - a
+    for _ in range(NEWTON_MAX_IT):
+        s, t = xi[..., 0, None], xi[..., 1, None]
+        x_s, x_t = b + d * t, c + d * s
+        residual = s * x_s + c * t - target  # a + b s + c t + d s t - point
+        det = x_s[..., 0] * x_t[..., 1] - x_s[..., 1] * x_t[..., 0]
+        step = np.stack([x_t[..., 1] * residual[..., 0] - x_t[..., 0] * residual[..., 1],
+                         x_s[..., 0] * residual[..., 1] - x_s[..., 1] * residual[..., 0]], axis=-1) / det[..., None]
+        xi -= step
+        if np.abs(step).max(initial=0.0) <= NEWTON_TOL:
+            return xi
+    raise ParameterError("mesh", "the inverse of a contact facet's bilinear map did not converge in "
+                         f"{NEWTON_MAX_IT} Newton iterations: a degenerate or non-convex quadrilateral")
+
+
+#: 8 x 8 Gauss points on the unit square and weights summing to 1: exact for bilinear x bilinear
+#: x the (bilinear) area element of a flat quadrilateral; the mass matrix of one warped by 0.3 of
+#: its size to 1.4e-15 (3 x 3 points: 7.6e-6, 6 x 6: 3.3e-12), a few operations per facet.
+_GAUSS_POINTS, _GAUSS_WEIGHTS = basix.make_quadrature(basix.CellType.quadrilateral, 15)
+_GAUSS_WEIGHTS = _GAUSS_WEIGHTS / _GAUSS_WEIGHTS.sum()
+
+
+def _facet_mass(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Lumped masses D_e (P, 4) = int phi_k and mass matrices M_e (P, 4, 4) of quadrilaterals (P, 4, 3)."""
+    xi = np.broadcast_to(_GAUSS_POINTS, (len(x), *_GAUSS_POINTS.shape))
+    weights = area_elements(x, xi) * _GAUSS_WEIGHTS
+    phi = quadrilateral_shapes(_GAUSS_POINTS)
+    return np.einsum("pq,qk->pk", weights, phi), np.einsum("pq,qj,qk->pjk", weights, phi, phi)
+
+
+def nodal_integrals(x: np.ndarray) -> np.ndarray:
+    """(P, n) int phi_k of facets (P, n, 3): the lumped area of each vertex (area / 3 on a triangle)."""
+    if x.shape[1] == 3:
+        area = 0.5 * np.linalg.norm(np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]), axis=1)
+        return np.repeat(area[:, None] / 3.0, 3, axis=1)
+    return _facet_mass(x)[0]
+
+
+def dual_coefficients(x: np.ndarray) -> np.ndarray:
+    """(P, n, n) A with psi_i = sum_k A_ik phi_k, the dual basis of facets (P, n, 3):
+    int psi_i phi_k = delta_ik int phi_k. Triangles: A = 4 I - 1; quadrilaterals:
+    A = D_e M_e^{-1} (M_e is symmetric, so A = (M_e^{-1} D_e)^T)."""
+    n = x.shape[1]
+    if n == 3:
+        return np.broadcast_to(4.0 * np.eye(3) - 1.0, (len(x), 3, 3))
+    lumped, mass = _facet_mass(x)
+    return np.swapaxes(np.linalg.solve(mass, lumped[:, :, None] * np.eye(n)), 1, 2)
