@@ -54,14 +54,14 @@ CLOSED_FORMS = {"neo_hookean": (NeoHookean(), neo_hookean), "saint_venant_kirchh
 
 
 def _compressed_block(material, compression: float, steps: int, lev: int = 1,
-                      parameters: dict | None = None) -> list[dict]:
+                      parameters: dict | None = None, search: str = "once") -> list[dict]:
     """Solve the compression in ``steps`` equal load steps; per step the displacement, the
     contact nodes' coordinates, pressures, the Newton count and the result (failed steps too)."""
     comm = MPI.COMM_WORLD
     msh, tags = create_contact_body(comm, lev, lambda x, y: np.zeros_like(x), length=1.0, width=1.0, height=1.0)
     problem = build_contact_problem(msh, tags, YOUNG, POISSON, {}, Frictionless(), clamped=(), contact="contact",
                                     displacements={"dirichlet": {0: 0.0}, "front": {1: 0.0},
-                                                   "top": {2: -compression}}, material=material)
+                                                   "top": {2: -compression}}, material=material, search=search)
     rows = []
 
     def record(index, step, u, result, state):
@@ -93,6 +93,18 @@ def test_uniaxial_compression_on_a_rigid_plane_is_the_closed_form(name):
         spread = comm.allreduce(float(np.abs(p + P33).max(initial=0.0)), op=MPI.MAX)
         assert spread <= 1e-8 * abs(P33), (row["load"], spread, P33)
         assert row["iterations"] <= 8, row
+
+
+def test_a_searched_obstacle_gives_the_cauchy_pressure():
+    """Searched until settled, the obstacle's nodal areas are those of the deformed surface
+    (Nanson), so the contact pressure is the Cauchy traction -P33 / a^2 (uniform to 1e-8);
+    searched once it is the nominal -P33 (the test above)."""
+    comm = MPI.COMM_WORLD
+    rows = _compressed_block(NeoHookean(), COMPRESSION, 3, search="until_settled")
+    for row in rows:
+        a, P33 = neo_hookean(1.0 - COMPRESSION * row["load"])
+        spread = comm.allreduce(float(np.abs(row["pressure"] + P33 / a**2).max(initial=0.0)), op=MPI.MAX)
+        assert spread <= 1e-8 * abs(P33), (row["load"], spread)
 
 
 def test_a_hyperelastic_body_at_small_strain_is_the_linear_one():

@@ -196,29 +196,33 @@ def build_interfaces(
 
 
 def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: typing.Sequence[Interface],
-                 constrained: np.ndarray, displacement: fem.Function) -> list[Interface]:
+                 constrained: np.ndarray, displacement: fem.Function, finite_strain: bool = False) -> list[Interface]:
     """The interfaces with the pairs searched each step found again in the configuration
     x + ``displacement`` (the others as they are; collective).
 
-    Its slave nodes, mortar rows, normals and areas are those of that configuration; a
-    pair may find fewer nodes or none (the bodies moved apart), and a small overlap left
-    by the last step's discrete conditions is no error.
+    Its slave nodes, mortar rows, normals and areas are those of that configuration (an
+    obstacle's nodal areas: the deformed ones with ``finite_strain``, the reference ones of
+    small-strain theory otherwise); a pair may find fewer nodes or none (the bodies moved
+    apart), and a small overlap left by the last step's discrete conditions is no error.
     """
     x = displacement.x.array.reshape(-1, 3)
 
     def again(interface: Interface) -> Interface:
         if isinstance(interface.pair, ObstaclePair):
-            return _obstacle_interface(V, facet_tags, interface.pair, constrained, x)
+            return _obstacle_interface(V, facet_tags, interface.pair, constrained, x,
+                                       displacement if finite_strain else None)
         return _body_interface(V, facet_tags, interface.pair, constrained, x)
 
     return [again(i) if i.searched_each_step else i for i in interfaces]
 
 
 def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: ObstaclePair,
-                        constrained: np.ndarray, displacement: np.ndarray | None = None) -> Interface:
+                        constrained: np.ndarray, displacement: np.ndarray | None = None,
+                        deformed: fem.Function | None = None) -> Interface:
     """An obstacle pair's interface in the reference configuration (checked: no node inside
     the obstacle) or in x + ``displacement`` (local nodes, 3): the obstacle at rest, its
-    normals there; :meth:`Interface.gap` adds the translation of each step."""
+    normals there; :meth:`Interface.gap` adds the translation of each step. The nodal areas
+    are those of the surface deformed by ``deformed`` if given, else of the reference one."""
     require(pair.search in SEARCHES, f"{pair.name}: search", f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
     n_owned = V.dofmap.index_map.size_local
     excluded_blk = np.flatnonzero(constrained.all(axis=1))
@@ -233,7 +237,7 @@ def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: 
             "(a sphere's centre or a cylinder's axis)")
     if searched_at is None:
         _check_overlap(comm, V, gap, "obstacle", "contact nodes lie inside the obstacle")
-    area = _lumped_area(V, facet_tags, pair.surface)[blk]
+    area = _lumped_area(V, facet_tags, pair.surface, deformed)[blk]
     return Interface(pair, blk, tangent_frames(normal), area, None, gap, searched_at)
 
 
@@ -335,12 +339,19 @@ def _check_disjoint(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typ
                     "nodes of a pair; a node cannot be both")
 
 
-def _lumped_area(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, surface: str) -> np.ndarray:
-    """Lumped area of ``surface`` at each node (local, ghosts included; m^2)."""
+def _lumped_area(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, surface: str,
+                 deformed: fem.Function | None = None) -> np.ndarray:
+    """Lumped area of ``surface`` at each node (local, ghosts included; m^2), of the surface
+    deformed by the displacement ``deformed`` if given: da = J |F^-T N| dA (Nanson)."""
     msh = V.mesh
     Q = fem.functionspace(msh, ("Lagrange", 1))
     ds = ufl.Measure("ds", domain=msh, subdomain_data=facet_tags)
+    stretch = 1.0
+    if deformed is not None:
+        F = ufl.Identity(3) + ufl.grad(deformed)
+        pulled = ufl.inv(F).T * ufl.FacetNormal(msh)
+        stretch = ufl.det(F) * ufl.sqrt(ufl.dot(pulled, pulled))
     area = la.vector(Q.dofmap.index_map)
-    fem.assemble_vector(area.array, fem.form(ufl.TestFunction(Q) * ds(facet_tags.names[surface])))
+    fem.assemble_vector(area.array, fem.form(stretch * ufl.TestFunction(Q) * ds(facet_tags.names[surface])))
     area.scatter_reverse(la.InsertMode.add)
     return area.array
