@@ -267,7 +267,7 @@ def _draw_figures(writer: ContactResultsWriter, summary: dict[str, typing.Any], 
     summary["plot"] = plot_contact_states(writer.out / "contact_states.png", last.surface, step)
     touching = any(i.coupling is not None for i in last.surface.problem.interfaces)
     summary["bodies_plot"] = plot_deformed_bodies(writer.out / "bodies.png", last.displacement, last.von_mises,
-                                                  touching)
+                                                  touching, last.surface)
     summary["forces_plot"] = plot_forces(writer.out / "forces.png", summary["steps"], comm)
     tables.write_summary(comm, writer.out / "summary.json", summary)
 

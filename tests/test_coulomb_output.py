@@ -286,3 +286,25 @@ def test_contact_state_panel_zooms_on_a_small_contact_zone():
     assert ax.get_xlim() == (0.0, 1.5) and ax.get_ylim() == (0.0, 1.5)
     assert not _zoom_to_contact(ax, plane, np.full(len(plane), State.STICKING))
     plt.close(fig)
+
+
+@pytest.mark.one_rank(reason="figure geometry on small numpy arrays, drawn without a mesh")
+def test_contact_states_picture_unrolls_a_curved_surface():
+    """A quarter of a bore (radius 20 mm, 2 mm long, facets of 22.5 degrees) is drawn unrolled:
+    31.4 mm of arc by 2 mm along the axis, not its 28.3 mm chord; a flat surface keeps its plan
+    view in global axes."""
+    from contactqvi.contact.figures import _plan_view
+
+    theta = np.linspace(0.0, np.pi / 2, 5)
+    ring = np.array([[[0.02 * np.cos(t0), 0.02 * np.sin(t0), 0.0], [0.02 * np.cos(t1), 0.02 * np.sin(t1), 0.0],
+                      [0.02 * np.cos(t1), 0.02 * np.sin(t1), 0.002], [0.02 * np.cos(t0), 0.02 * np.sin(t0), 0.002]]
+                     for t0, t1 in zip(theta[:-1], theta[1:])])
+    plane, labels = _plan_view(ring)
+    assert np.ptp(plane[..., 0]) == pytest.approx(0.02 * np.pi / 2, rel=1e-9)
+    assert np.ptp(plane[..., 1]) == pytest.approx(0.002, rel=1e-9)
+    assert labels[0].startswith("arc length on radius 0.02")
+    flat = ring.copy()
+    flat[..., 2] = 0.0
+    flat[..., :2] = [[[0, 0], [1, 0], [1, 1], [0, 1]]]
+    plane, labels = _plan_view(flat)
+    assert labels == ["x1 [m]", "x2 [m]"]

@@ -70,8 +70,10 @@ def plot_contact_states(path: str | os.PathLike, surface: ContactSurface, step: 
 
 
 def plot_deformed_bodies(path: str | os.PathLike, displacement: fem.Function, von_mises: fem.Function,
-                         touching: bool = False) -> bool:
-    """PNG of the bodies' boundary, deformed and coloured by the von Mises stress.
+                         touching: bool = False, surface: ContactSurface | None = None) -> bool:
+    """PNG of the bodies' boundary, deformed and coloured by the von Mises stress, and beside it
+    the contact surfaces of ``surface`` (updated to the same step) deformed alike and coloured
+    by the contact pressure.
 
     ``displacement``: P1 displacement (m); ``von_mises``: DG0 von Mises stress (Pa), each
     boundary facet coloured by its cell's value. Drawn at true scale when bodies touch each
@@ -88,7 +90,8 @@ def plot_deformed_bodies(path: str | os.PathLike, displacement: fem.Function, vo
         logger.info("%s is skipped: %d boundary points > %d (drawn on one rank)", path, points, GATHER_MAX_NODES)
         return False
     dataset = gather_pieces(comm, piece)
-    return _draw_on_rank_0(comm, path, lambda tmp: _draw_bodies(tmp, dataset, touching))
+    contact = None if surface is None or surface.n_nodes > GATHER_MAX_NODES else gather_pieces(comm, surface.dataset())
+    return _draw_on_rank_0(comm, path, lambda tmp: _draw_bodies(tmp, dataset, touching, contact))
 
 
 def plot_forces(path: str | os.PathLike, steps: typing.Sequence[dict[str, typing.Any]], comm: MPI.Comm) -> bool:
@@ -155,7 +158,7 @@ def _display() -> typing.Iterator[None]:
         server.wait(10)
 
 
-def _draw_bodies(path: pathlib.Path, dataset: Dataset, touching: bool) -> None:
+def _draw_bodies(path: pathlib.Path, dataset: Dataset, touching: bool, contact: Dataset | None) -> None:
     import pyvista
 
     points, u = dataset.points, dataset.point_data["displacement"]
@@ -166,24 +169,58 @@ def _draw_bodies(path: pathlib.Path, dataset: Dataset, touching: bool) -> None:
     name = "von Mises stress [Pa]"
     grid.cell_data[name] = stress
     limits, log_scale = _stress_colour_range(stress)
+    camera = [tuple(_camera_direction(grid.cell_centers().points, stress)), (0.0, 0.0, 0.0), (0.0, 0.0, 1.0)]
     with _display():
-        plotter = pyvista.Plotter(off_screen=True, window_size=(1600, 1200))
+        plotter = pyvista.Plotter(off_screen=True, window_size=(1600 if contact is None else 2800, 1200),
+                                  shape=(1, 1 if contact is None else 2))
         try:
             plotter.add_mesh(grid, scalars=name, cmap="viridis", clim=limits, log_scale=log_scale, show_edges=True,
                              edge_color="#404040", line_width=0.3, scalar_bar_args={"vertical": True, "fmt": "%.3g"})
             plotter.add_text(f"deformed bodies ({drawn}); von Mises stress per cell"
                              + (" (log scale)" if log_scale else ""), font_size=12)
             # looking along -direction at the bodies (reset_camera keeps the direction and fits them in)
-            plotter.camera_position = [tuple(_camera_direction(grid.cell_centers().points, stress)), (0.0, 0.0, 0.0),
-                                       (0.0, 0.0, 1.0)]
+            plotter.camera_position = camera
             plotter.reset_camera()
             plotter.show_axes()
+            if contact is not None:
+                plotter.subplot(0, 1)
+                _add_contact_pressure(plotter, contact, scale, camera)
             image = plotter.screenshot(None, return_img=True)
         finally:
             plotter.close()
     import matplotlib.image
 
     matplotlib.image.imsave(path, image, format="png")
+
+
+def _add_contact_pressure(plotter: typing.Any, contact: Dataset, scale: float, camera: list) -> None:
+    """The contact surfaces (tributary patches) deformed by ``scale`` times their displacement,
+    coloured by the contact pressure, seen from the bodies' camera direction; only the patches
+    near the contact zone when it spans less than :data:`ZOOM_FRACTION` of the surfaces (a
+    Hertz zone on a large block)."""
+    import pyvista
+
+    pressure = contact.point_data["contact_pressure [Pa]"]
+    cells = contact.cells
+    centres = contact.points[cells].mean(axis=1)
+    touching = centres[pressure[cells].max(axis=1) > 0.0]
+    keep = np.ones(len(cells), dtype=bool)
+    zoomed = len(touching) > 0 and np.all(np.ptp(touching, axis=0) < ZOOM_FRACTION * np.ptp(centres, axis=0) + 1e-300)
+    if zoomed:
+        margin = 0.5 * float(np.ptp(touching, axis=0).max())
+        keep = np.all((centres >= touching.min(axis=0) - margin) & (centres <= touching.max(axis=0) + margin), axis=1)
+    used, kept = np.unique(cells[keep], return_inverse=True)  # only the points drawn (the camera fits them)
+    grid = pyvista.UnstructuredGrid({contact.cell_type: kept.reshape(-1, cells.shape[1])},
+                                    (contact.points + scale * contact.point_data["displacement [m]"])[used])
+    name = "contact pressure [Pa]"
+    grid.point_data[name] = pressure[used]
+    plotter.add_mesh(grid, scalars=name, cmap="inferno", clim=(0.0, max(float(pressure.max(initial=0.0)), 1.0)),
+                     lighting=False, scalar_bar_args={"vertical": True, "fmt": "%.3g"})
+    plotter.add_text("contact pressure on the deformed contact surfaces (slave side)"
+                     + (", zoomed on the contact zone" if zoomed else ""), font_size=12)
+    plotter.camera_position = camera
+    plotter.reset_camera()
+    plotter.show_axes()
 
 
 #: Displacements above this fraction of the bodies' size are drawn at true scale (finite
@@ -262,11 +299,25 @@ def _facet_pair(pair: np.ndarray, vertices: int) -> np.ndarray:
     return np.repeat(pair.reshape(-1, vertices).max(axis=1), vertices)
 
 
+#: A surface whose facet normals lie in one plane within this (the smallest eigenvalue of their
+#: area-weighted scatter, relative to the largest), but not in one direction, is drawn unrolled
+#: about the axis normal to that plane (a cylinder's arc by its length).
+CURVED = 1e-2
+
+
 def _plan_view(polygons: np.ndarray) -> tuple[np.ndarray, list[str]]:
-    """In-plane coordinates of ``polygons`` (n, 4, 3) seen along their mean normal, and axis labels."""
+    """In-plane coordinates of ``polygons`` (n, 4, 3) and axis labels: a flat surface (or a
+    doubly curved one, a Hertz zone) seen along its mean normal; a singly curved one (a bore, a
+    shaft, a roller's track: normals perpendicular to one axis) unrolled, along the axis and
+    by arc length on the circle fitted to it, so that a 90 degree arc of radius b is pi b / 2
+    long in the picture, not its chord."""
     from contactqvi.obstacles import tangent_frames
 
     areas = np.cross(polygons[:, 2] - polygons[:, 0], polygons[:, 3] - polygons[:, 1])
+    scatter = np.einsum("ni,nj->ij", areas, areas / np.maximum(np.linalg.norm(areas, axis=1), 1e-300)[:, None])
+    values, vectors = np.linalg.eigh(scatter)
+    if values[0] <= CURVED * values[2] < values[1]:  # normals spread in one plane only
+        return _unrolled(polygons, vectors[:, 0])
     mean_normal = areas.sum(axis=0)
     mean_normal /= np.linalg.norm(mean_normal)
     axis = np.argmax(np.abs(mean_normal))
@@ -278,6 +329,30 @@ def _plan_view(polygons: np.ndarray) -> tuple[np.ndarray, list[str]]:
         frame = tangent_frames(mean_normal[None])[0, :2]
         labels = [f"t{i + 1} = ({', '.join(f'{c:.2f}' for c in t)}) [m]" for i, t in enumerate(frame)]
     return polygons @ frame.T, labels
+
+
+def _unrolled(polygons: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, list[str]]:
+    """``polygons`` of a surface curved about ``axis`` unrolled: the arc length on the circle
+    fitted (least squares) to the points projected on the plane normal to it, from the mean
+    direction of the points, and the coordinate along the axis; the longer one first."""
+    from contactqvi.obstacles import tangent_frames
+
+    axis = axis / np.linalg.norm(axis)
+    e1, e2 = tangent_frames(axis[None])[0, :2]
+    points = polygons.reshape(-1, 3)
+    p, q = points @ e1, points @ e2
+    # x^2 + y^2 = 2 a x + 2 b y + c: centre (a, b), radius^2 = c + a^2 + b^2 (Kasa's fit)
+    (a, b, c), *_ = np.linalg.lstsq(np.column_stack([2 * p, 2 * q, np.ones_like(p)]), p**2 + q**2, rcond=None)
+    radius = float(np.sqrt(c + a * a + b * b))
+    angle = np.arctan2(q - b, p - a)
+    middle = np.arctan2(np.sin(angle).mean(), np.cos(angle).mean())
+    arc = radius * np.angle(np.exp(1j * (angle - middle)))
+    along = points @ axis
+    labels = [f"arc length on radius {radius:.4g} m [m]", f"along the axis ({', '.join(f'{v + 0.0:.2f}' for v in axis)}) [m]"]
+    coordinates = [arc, along]
+    if np.ptp(along) > np.ptp(arc):  # the longer extent across the picture
+        coordinates, labels = coordinates[::-1], labels[::-1]
+    return np.stack(coordinates, axis=-1).reshape(*polygons.shape[:2], 2), labels
 
 
 #: Zoom a panel onto the contact zone when the zone spans less than this fraction of the surface.

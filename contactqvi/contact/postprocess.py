@@ -272,7 +272,8 @@ def write_contact_results(
         summary["plot"] = plot_contact_states(writer.out / "contact_states.png", surface)
         if summary["plot"]:
             files.append("contact_states.png")
-        if plot_deformed_bodies(writer.out / "bodies.png", displacement, von_mises):
+        touching = any(i.coupling is not None for i in problem.interfaces)
+        if plot_deformed_bodies(writer.out / "bodies.png", displacement, von_mises, touching, surface):
             files.append("bodies.png")
     summary["files"] = files
     return summary
