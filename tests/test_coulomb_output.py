@@ -191,19 +191,21 @@ def test_demo_writes_contact_surface(mpi_tmp_path, load_demo):
 
 
 def test_bodies_picture(solution, mpi_tmp_path):
-    """The 3D picture of the deformed body: a 1600 x 1200 PNG whose drawn part is coloured by
-    von Mises stress (many colours, not a blank or single-colour image)."""
+    """The 3D picture of the deformed body and its contact surface: a 2800 x 1200 PNG, the left
+    1600 columns the body coloured by von Mises stress, the right ones the contact surface by
+    contact pressure (each many colours, not a blank or single-colour image)."""
     import matplotlib.image
 
     problem, u, result = solution
     write_contact_results(mpi_tmp_path / "picture", problem, u, result, plot=True, solution_npz=False)
     if problem.comm.rank == 0:
         image = matplotlib.image.imread(mpi_tmp_path / "picture" / "bodies.png")
-        assert image.shape[:2] == (1200, 1600)
+        assert image.shape[:2] == (1200, 2800)
         background = image[0, -1, :3]
-        drawn = image[..., :3][np.any(np.abs(image[..., :3] - background) > 0.05, axis=-1)]
-        assert len(drawn) > 0.1 * 1600 * 1200  # the body fills a good part of the picture
-        assert len(np.unique(np.round(drawn * 32), axis=0)) > 20  # a colour map, not one colour
+        for panel, size in ((image[:, :1400, :3], 1400 * 1200), (image[:, 1400:, :3], 1400 * 1200)):
+            drawn = panel[np.any(np.abs(panel - background) > 0.05, axis=-1)]
+            assert len(drawn) > 0.05 * size  # the body (the surface) fills a good part of its panel
+            assert len(np.unique(np.round(drawn * 32), axis=0)) > 20  # a colour map, not one colour
 
 
 @pytest.mark.one_rank(reason="figure and patch geometry on small numpy arrays, drawn without a mesh")
