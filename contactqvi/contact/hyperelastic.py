@@ -22,9 +22,11 @@ Newton step, gamma and the line search for a nonlinear f: docs/finite_strain.md.
 
 Contact is measured as in the linear problem, in nodal frames with the gap g + n . u
 linearised about the configuration of the last search: the reference one (exact for a
-plane obstacle, whatever the strain), or the current one for an obstacle pair searched
-each step (:class:`~contactqvi.contact.interface.ObstaclePair`). Body pairs at finite
-strain are not yet part of the problem (the problem builder refuses them).
+plane obstacle, whatever the strain), or the current one for a pair searched each step
+(:class:`~contactqvi.contact.interface.ObstaclePair`,
+:class:`~contactqvi.contact.interface.BodyPair`: the mortar coupling of the deformed
+surfaces). With body pairs the problem's variables are u = T w (T = (I + N) R), and f and
+its Jacobian are T^T r_K and T^T K_T T (docs/finite_strain.md, Sect. 5).
 """
 
 from __future__ import annotations

@@ -196,6 +196,12 @@ class ContactProblem(PETScOwner):
         return [obj for obj in objects if obj is not None]
 
     @property
+    def to_global(self) -> PETSc.Mat | None:
+        """The map of the change of variables to global components: T with body pairs, R with
+        nodal frames only, None without a change (the identity)."""
+        return self.transform if self.transform is not None else self.rotation
+
+    @property
     def searched_each_step(self) -> bool:
         """Whether a pair is searched again before every load step (:meth:`search`)."""
         return self.elastic is not None
@@ -283,7 +289,7 @@ class ContactProblem(PETScOwner):
         system = self.hyperelastic
         self.physical_displacement(u, system.displacement)
         r = system.assemble_residual(self.load_factor)
-        transform = self.transform if self.transform is not None else self.rotation
+        transform = self.to_global
         if transform is None:
             out.array[:] = r.array_r[: out.getLocalSize()]
         else:
@@ -296,7 +302,7 @@ class ContactProblem(PETScOwner):
         system = self.hyperelastic
         self.physical_displacement(u, system.displacement)
         system.load_factor.value = self.load_factor
-        transform = self.transform if self.transform is not None else self.rotation
+        transform = self.to_global
         if transform is None:
             system.assemble_tangent(self.A)
             return
@@ -366,7 +372,7 @@ class ContactProblem(PETScOwner):
         the stopping test in those unscaled identity rows but a force of K_ii times it in the
         reactions (two-body Hertz: 7 N of 81 kN, a force balance of 6e-5 instead of 1e-9).
         """
-        transform = self.transform if self.transform is not None else self.rotation
+        transform = self.to_global
         local = u.copy()
         local.axpy(-1.0, self.shift)
         prescribed = self.dirichlet_dofs_loc[self.dirichlet_dofs_loc < local.getLocalSize()]
