@@ -341,7 +341,8 @@ class ContactProblem(PETScOwner):
         """Shift and load of a load step: tractions, body force and prescribed displacements
         times ``load_factor``, the obstacles and moved groups translated by ``translation``
         (total, m), the moved groups also rotated by ``rotation`` (total, about its centre; a
-        problem built with ``rotations``, without obstacle pairs); slip measured from the step before: from its displacement ``previous``
+        problem built with ``rotations``, without obstacle pairs: rigid obstacles only
+        translate); slip measured from the step before: from its displacement ``previous``
         (u~ in the solver's variables; None: from rest) and from the obstacles' position
         ``previous_translation`` (the tangential obstacle motion per node; a master body
         moves with the solution, its slip is in w itself). Both come from the load path's
@@ -373,7 +374,7 @@ class ContactProblem(PETScOwner):
         for t, b in zip(self.rigid_motion(), self.translated):  # moved groups follow the rigid motion
             self.load.axpy(t, b)
         if self.hyperelastic is None:
-            self.A.multAdd(self.shift, self.load, self.load)  # l = lambda l~ + sum_c t_c l~_c + A d
+            self.A.multAdd(self.shift, self.load, self.load)  # l = lambda l~ + sum_k s_k l~_k + A d
         else:  # f is evaluated at u - d itself (no shift of the load): d only on the identity rows, as A d there
             self.load.axpy(1.0, self.shift)
 
