@@ -60,8 +60,9 @@ PATHS = {
 TWISTED = (Step(translation=(0.0, 0.0, -1e-3)),
            *(Step(translation=(0.0, 0.0, -1e-3), rotation=Rotation((0.0, 0.0, 1.0), float(k), (0.5, 0.5, 1.0)))
              for k in range(1, STEPS)))
-if MPI.COMM_WORLD.size > 1:  # another law changes only the nodal arithmetic, which the serial run checks
-    del PATHS["sphere_pressure_coulomb"]
+if MPI.COMM_WORLD.size > 1:  # another law changes only the nodal arithmetic, which the serial run checks;
+    del PATHS["sphere_pressure_coulomb"]  # the rotation is JSON in the checkpoint (checked once on 2 ranks: 2 -> 1
+    del PATHS["blocks_twisted"]  # and 2 -> 2 agree to 1e-9 and 1e-12), its geometry that of blocks_until_settled
 if MPI.COMM_WORLD.size == 3:  # 1 -> 3 ranks (make test's 3-rank run): the searched pairs, whose geometry is parallel
     del PATHS["sphere_coulomb"]
 
