@@ -4,7 +4,10 @@ Seed 000, Sect. 1, treats the static problem as one step of the quasi-static one
 Step k scales tractions and body force by its load factor and moves the obstacle
 rigidly to its translation c_k; friction acts on the slip increment since step
 k - 1 relative to the obstacle's tangential motion c_k - c_{k-1}
-(:meth:`~contactqvi.contact.problem.ContactProblem.set_step`). Each step is solved
+(:meth:`~contactqvi.contact.problem.ContactProblem.set_step`); it may also rotate the
+groups moved with the obstacles about a centre fixed for the path, u = (Q - I)(X - c) + t
+there (:class:`~contactqvi.load_steps.Rotation`; rigid obstacles only translate, so a path
+with obstacle pairs cannot rotate). Each step is solved
 by the SCD semismooth* Newton method from the previous step's solution, with the
 nodes that touched the obstacle moved along with it (no slip increment); the
 first step starts from the given guess, or a load path continues after the steps
@@ -61,12 +64,12 @@ from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult, SCDNewtonSolver, newton_step_solver
 from contactqvi.lifetime import PETScOwner
 from contactqvi.contact.surface import contact_facet_areas
-from contactqvi.load_steps import LoadStep, check_steps, interpolated
+from contactqvi.load_steps import LoadStep, Rotation, check_steps, interpolated
 from contactqvi.parameters import Parameter, Parameters
 from contactqvi.result import Status, Timings
 
-__all__ = ["PATH_PARAMETERS", "SOLVER_PARAMETERS", "LoadStep", "PathState", "check_steps", "contact_resultants",
-           "solve_load_path"]
+__all__ = ["PATH_PARAMETERS", "SOLVER_PARAMETERS", "LoadStep", "PathState", "Rotation", "check_steps",
+           "contact_resultants", "solve_load_path"]
 
 logger = logging.getLogger(__name__)
 
