@@ -187,7 +187,8 @@ def test_clipping_a_polygon_that_round_off_made_degenerate():
     clip = np.array([[(-1.0, 0.0), (3.0, 0.0), (1.0, 5.0)]])  # counter-clockwise, above y = 0
     clipped, count = clip_polygons(polygon, np.array([5]), clip)
     vertices = clipped[0, : count[0]]
-    area = 0.5 * abs(np.sum(vertices[:, 0] * np.roll(vertices[:, 1], -1) - np.roll(vertices[:, 0], -1) * vertices[:, 1]))
+    following = np.roll(vertices, -1, axis=0)
+    area = 0.5 * abs(np.sum(vertices[:, 0] * following[:, 1] - following[:, 0] * vertices[:, 1]))
     assert count[0] > 6 and abs(area - 1.0) <= 1e-8, (count, area)
 
 
@@ -282,3 +283,46 @@ def test_a_press_fitted_pin_twisted_until_it_slips(mpi_tmp_path):
     pressure = gross["normal"] / (2.0 * np.pi * B * LENGTH)
     closed = FRICTION * pressure * 2.0 * np.pi * B**2 * LENGTH
     assert gross["torque"] == pytest.approx(closed, rel=0.02), (gross["torque"], closed, pressure)
+
+
+def _blocks_case(*rotations: dict) -> dict:
+    """cases/sliding_blocks.toml as read, its steps given these rotations (dicts of a case file)."""
+    import tomllib
+
+    data = tomllib.loads((ROOT / "cases" / "sliding_blocks.toml").read_text())
+    data["steps"] = [{"translation": [0.0, 0.0, -1e-3], "rotation": rotation} for rotation in rotations]
+    return data
+
+
+@pytest.mark.one_rank(reason="case-file parsing, no mesh")
+@pytest.mark.parametrize("rotations, message", [
+    ([{"axis": [0.0, 0.0, 0.0], "angle": 1.0}], r"^steps\[0\]\.rotation\.axis: must have nonzero length"),
+    ([{"angle": float("nan")}], r"^steps\[0\]\.rotation\.angle: must be a finite number \(degrees\), got nan"),
+    ([{"angle": 1.0, "centre": [0.0, 0.0, float("inf")]}], r"^steps\[0\]\.rotation\.centre: must be 3 finite"),
+    ([{"angle": 1.0, "centre": [0.5, 0.5, 1.0]}, {"angle": 2.0}], r"^steps\[1\]\.rotation\.centre: must be the "
+     r"centre of the steps before, \[0\.5, 0\.5, 1\.0\]"),
+    ([{"angel": 1.0}], r"^steps\[0\]\.rotation\.angel: unknown key; did you mean 'angle'\?"),
+])
+def test_a_bad_rotation_is_named(rotations, message):
+    with pytest.raises(ParameterError, match=message):
+        parse_case(_blocks_case(*rotations), ROOT / "cases")
+
+
+@pytest.mark.one_rank(reason="case-file parsing, no mesh")
+def test_a_rotation_is_read_and_refused_with_a_rigid_obstacle():
+    """A rotation is read with its axis normalised and written back by to_dict; a case with a rigid
+    obstacle cannot rotate (obstacles only translate), nor one without moved groups."""
+    case = parse_case(_blocks_case({"axis": [0.0, 0.0, 2.0], "angle": 30.0, "centre": [0.5, 0.5, 1.0]}),
+                      ROOT / "cases")
+    assert case.steps[0].rotation == Rotation((0.0, 0.0, 1.0), 30.0, (0.5, 0.5, 1.0))
+    written = case.to_dict()["steps"][0]["rotation"]
+    assert written == {"axis": [0.0, 0.0, 1.0], "angle": 30.0, "centre": [0.5, 0.5, 1.0]}
+    data = _blocks_case({"angle": 1.0})
+    data["contacts"][0] = {"slave": "upper.interface", "law": "frictionless", "obstacle": {"type": "plane", "point": [0.0, 0.0, 0.5],
+                                                                    "normal": [0.0, 0.0, 1.0]}}
+    with pytest.raises(ParameterError, match=r"^steps\[0\]\.rotation: .*a path with rigid obstacles cannot rotate"):
+        parse_case(data, ROOT / "cases")
+    data = _blocks_case({"angle": 1.0})
+    data["bodies"][1]["boundary"] = {"displacement": {"top": {"z": 0.0}}}
+    with pytest.raises(ParameterError, match=r"^steps\[0\]\.rotation: rotates the groups boundary.moved"):
+        parse_case(data, ROOT / "cases")

@@ -710,8 +710,8 @@ def _solver_variables(
     return A, transformed, rotation, coupling, transform, offsets
 
 
-def _unit_translations(V: fem.FunctionSpace, a: fem.Form, moved_bc: fem.DirichletBC | None, dirichlet_dofs_loc: np.ndarray,
-                       rotations: bool = False) -> list[PETSc.Vec]:
+def _unit_translations(V: fem.FunctionSpace, a: fem.Form, moved_bc: fem.DirichletBC | None,
+                       dirichlet_dofs_loc: np.ndarray, rotations: bool = False) -> list[PETSc.Vec]:
     """The lifted loads of a unit translation e_c (c = x, y, z) of the moved groups, all
     other prescribed values zero: -A_K e_c at free dofs, e_c at the moved ones; with
     ``rotations`` then those of the nine fields e_a X_b (a, b = x, y, z, row-major) on the
