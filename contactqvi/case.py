@@ -33,6 +33,9 @@ SI units throughout (m, Pa, N/m^3). Example::
     [[steps]]                           # load path; none = one step, load 1, no translation
     load = 0.5                          # factor on tractions, body force, prescribed displacements
     translation = [0.0, 0.0, 0.0]       # translation (m) of the obstacle and of boundary.moved groups
+    # rotation = {axis = [0, 0, 1], angle = 30.0, centre = [0, 0, 0]}  # of boundary.moved groups only:
+    #                                   # u = (Q - I)(X - centre) + translation; degrees, total; one
+    #                                   # centre for the whole path; not with rigid obstacles
     [[steps]]
     load = 1.0
 
@@ -123,7 +126,7 @@ import typing
 
 from contactqvi import obstacles
 from contactqvi.laws import LAWS, ContactLaw, create_law, parameter_names
-from contactqvi.load_steps import SEARCHES
+from contactqvi.load_steps import SEARCHES, Rotation, check_rotation, check_steps
 from contactqvi.materials import MATERIALS
 from contactqvi.load_steps import LoadStep as Step
 from contactqvi.parameters import (
@@ -147,6 +150,7 @@ __all__ = [
     "MeshSource",
     "ObstacleShape",
     "PaperBody",
+    "Rotation",
     "Step",
     "check_groups",
     "check_solver",
@@ -387,6 +391,7 @@ class ContactCase:
             object.__setattr__(self, name, value)
         if not self.bodies:
             _check_consistency(self)
+        _check_rotations(self)
 
     @property
     def groups(self) -> list[str]:
@@ -430,7 +435,7 @@ def parse_case(data: collections.abc.Mapping, base_dir: str | pathlib.Path = "."
         mesh["file"] = pathlib.Path(os.path.normpath(pathlib.Path(base_dir) / mesh["file"]))
     common = {
         "mesh": MeshSource(**mesh),
-        "steps": tuple(Step(**_table(step, f"steps[{i}]", Step)) for i, step in enumerate(_array(top, "steps"))),
+        "steps": tuple(_parse_step(step, f"steps[{i}]") for i, step in enumerate(_array(top, "steps"))),
         "solver": _table(top.get("solver", {}), "solver"),
         "petsc": _table(top.get("petsc", {}), "petsc"),
     }
@@ -455,6 +460,13 @@ def _array(top: dict[str, typing.Any], name: str) -> list[typing.Any]:
     value = top.get(name, [])
     require(_is_list(value), name, f"must be an array of tables [[{name}]], got {value!r}")
     return list(value)
+
+
+def _parse_step(value: typing.Any, path: str) -> Step:
+    step = _table(value, path, Step)
+    if "rotation" in step:
+        step["rotation"] = Rotation(**_table(step["rotation"], f"{path}.rotation", Rotation))
+    return Step(**step)
 
 
 def _parse_boundary(boundary: dict[str, typing.Any], path: str) -> Boundary:
@@ -736,8 +748,18 @@ def _check_steps(steps: typing.Sequence[Step]) -> tuple[Step, ...]:
         _instance(step, Step, f"steps[{i}]")
         load = require_number(f"steps[{i}].load", step.load)
         require(load >= 0.0, f"steps[{i}].load", f"must be >= 0, got {load!r}")
-        checked.append(Step(load, _vector(step.translation, f"steps[{i}].translation")))
+        rotation = None if step.rotation is None else check_rotation(step.rotation, f"steps[{i}].rotation")
+        checked.append(Step(load, _vector(step.translation, f"steps[{i}].translation"), rotation))
     return tuple(checked) or (Step(),)
+
+
+def _check_rotations(case: ContactCase) -> None:
+    """Rotations of a path: one centre, moved groups to rotate, no rigid obstacle (which only translates)."""
+    check_steps(case.steps, obstacles=case.obstacle is not None or any(p.obstacle is not None for p in case.contacts))
+    moved = case.boundary.moved if case.boundary is not None else [m for b in case.bodies for m in b.boundary.moved]
+    for i, step in enumerate(case.steps):
+        require(step.rotation is None or bool(moved), f"steps[{i}].rotation", "rotates the groups boundary.moved, "
+                "and the case has none")
 
 
 #: Initial guesses of the first step (``solver.start``): the body at rest (u~ = 0), or

@@ -1,15 +1,26 @@
-"""Load steps of a quasi-static path: problem data shared by case files and the load-path solver."""
+"""Load steps of a quasi-static path: problem data shared by case files and the load-path solver.
+
+A step moves the groups ``boundary.moved`` rigidly: by a translation t and, optionally, a
+rotation Q about a centre c, both total from the initial position,
+
+    u = (Q - I)(X - c) + t   at the moved nodes X,
+
+which is linear in t and in the nine entries of Q - I (docs/finite_strain.md, "Prescribed
+rotations"). The centre is a point fixed in space for the whole path: every step that
+rotates names the same one (:func:`check_steps`). Rigid obstacles only translate.
+"""
 
 from __future__ import annotations
 
 import dataclasses
+import math
 import typing
 
 import numpy as np
 
 from contactqvi.parameters import require, require_positive
 
-__all__ = ["SEARCHES", "LoadStep", "check_steps"]
+__all__ = ["SEARCHES", "LoadStep", "Rotation", "check_rotation", "check_steps", "interpolated"]
 
 #: When a pair of meshed bodies is searched along the load path: before every load step
 #: after the first, in the configuration the step before ended in; as that, and again
@@ -20,6 +31,29 @@ SEARCHES = ("every_step", "until_settled", "once")
 
 
 @dataclasses.dataclass(frozen=True)
+class Rotation:
+    """A rigid rotation of the moved groups, total from the initial position.
+
+    Attributes:
+        axis: direction of the axis (normalised by :func:`check_rotation`).
+        angle: angle in degrees, right-handed about ``axis``.
+        centre: a point on the axis (m), the same for every step of a path.
+    """
+
+    axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    angle: float = 0.0
+    centre: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    def matrix(self) -> np.ndarray:
+        """Q of the rotation (Rodrigues' formula)."""
+        a = np.asarray(self.axis, dtype=float)
+        a = a / np.linalg.norm(a)
+        K = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+        theta = math.radians(self.angle)
+        return np.eye(3) + math.sin(theta) * K + (1.0 - math.cos(theta)) * K @ K
+
+
+@dataclasses.dataclass(frozen=True)
 class LoadStep:
     """One step of a load path.
 
@@ -27,16 +61,72 @@ class LoadStep:
         load: factor on tractions, body force and prescribed displacements.
         translation: total rigid translation (m) of the obstacles, and of the groups
             moved with them, from their initial position.
+        rotation: total rigid rotation of the moved groups from their initial position
+            (about its centre, then translated); None: none.
     """
 
     load: float = 1.0
     translation: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rotation: Rotation | None = None
 
 
-def check_steps(steps: typing.Sequence[LoadStep]) -> None:
-    """Raise :class:`~contactqvi.parameters.ParameterError` for a negative load or a bad translation."""
+def _finite_vector(value: typing.Any, name: str) -> tuple[float, float, float]:
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        array = np.empty(0)
+    require(array.shape == (3,) and bool(np.all(np.isfinite(array))), name,
+            f"must be 3 finite numbers [x, y, z], got {value!r}")
+    return tuple(float(v) for v in array)
+
+
+def check_rotation(rotation: typing.Any, path: str) -> Rotation:
+    """``rotation`` checked, its axis a unit vector; errors named ``PATH.axis``, ``PATH.angle``, ``PATH.centre``."""
+    require(isinstance(rotation, Rotation), path, f"must be a table {{axis, angle, centre}}, got {rotation!r}")
+    axis = _finite_vector(rotation.axis, f"{path}.axis")
+    length = math.sqrt(sum(a * a for a in axis))
+    require(length > 0.0, f"{path}.axis", f"must have nonzero length, got {list(axis)!r}")
+    angle = rotation.angle
+    ok = isinstance(angle, (int, float)) and not isinstance(angle, bool) and math.isfinite(angle)
+    require(ok, f"{path}.angle", f"must be a finite number (degrees), got {angle!r}")
+    unit = axis if math.isclose(length, 1.0, rel_tol=1e-15) else tuple(a / length for a in axis)
+    return Rotation(unit, float(angle), _finite_vector(rotation.centre, f"{path}.centre"))
+
+
+def check_steps(steps: typing.Sequence[LoadStep], obstacles: bool = False) -> None:
+    """Raise :class:`~contactqvi.parameters.ParameterError` for a negative load, a bad
+    translation or rotation, a centre of rotation that changes between steps, or a rotation
+    on a path with rigid obstacles (``obstacles``: the problem has obstacle pairs; rigid
+    obstacles are translated, never rotated)."""
+    centre = None
     for i, step in enumerate(steps):
         require_positive(f"steps[{i}].load", step.load, allow_zero=True)
-        array = np.asarray(step.translation, dtype=float)
-        require(array.shape == (3,) and bool(np.all(np.isfinite(array))), f"steps[{i}].translation",
-                f"must be 3 finite numbers (m), got {step.translation!r}")
+        _finite_vector(step.translation, f"steps[{i}].translation")
+        if step.rotation is None:
+            continue
+        rotation = check_rotation(step.rotation, f"steps[{i}].rotation")
+        require(not obstacles, f"steps[{i}].rotation", "rotations move the groups boundary.moved only; a path with "
+                "rigid obstacles cannot rotate (the obstacles would have to rotate with the moved groups)")
+        centre = rotation.centre if centre is None else centre
+        require(rotation.centre == centre, f"steps[{i}].rotation.centre", f"must be the centre of the steps "
+                f"before, {list(centre)!r} (a point fixed for the whole path), got {list(rotation.centre)!r}")
+
+
+def interpolated(start: Rotation | None, end: Rotation | None, fraction: float) -> Rotation | None:
+    """The rotation ``fraction`` of the way from ``start`` to ``end`` (None: none), its rotation
+    vector (angle times axis) interpolated linearly: about the common axis when both share it."""
+    if start is None and end is None:
+        return None
+    known = end if end is not None else start
+    if start is None or end is None or start.axis == end.axis:  # about one axis: the angle alone
+        angles = [0.0 if r is None else r.angle for r in (start, end)]
+        return Rotation(known.axis, angles[0] + fraction * (angles[1] - angles[0]), known.centre)
+    vectors = [np.zeros(3) if r is None else r.angle * np.asarray(r.axis) for r in (start, end)]
+    vector = vectors[0] + fraction * (vectors[1] - vectors[0])
+    angle = float(np.linalg.norm(vector))
+    if angle == 0.0:
+        return Rotation(known.axis, 0.0, known.centre)
+    axis = vector / angle
+    if np.dot(axis, known.axis) < 0.0:  # keep the axis's sense, the angle negative
+        axis, angle = -axis, -angle
+    return Rotation(tuple(float(a) for a in axis), angle, known.centre)

@@ -17,6 +17,7 @@ up to the last converged step stays readable if a later step fails.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import difflib
 import logging
 import pathlib
@@ -84,7 +85,7 @@ def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
         law=c.law, clamped=b.clamped, contact=c.surface, search=c.search or "once",
         obstacle=case.obstacle.create(), body_force=b.body_force,
         displacements={name: d.components() for name, d in b.displacement.items()}, moved=b.moved,
-        material=_material(case.material.model), pressures=dict(b.pressure),
+        material=_material(case.material.model), pressures=dict(b.pressure), rotations=_rotations(case),
     )
 
 
@@ -116,7 +117,13 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
     pairs = [_pair(pair) for pair in case.contacts]
     return assemble_contact_problem(msh, tags, young, poisson, tractions, pairs, clamped, body_force or None,
                                     displacements=displacements, cell_tags=cell_tags, moved=moved,
-                                    material=_material(case.bodies[0].material.model), pressures=pressures)
+                                    material=_material(case.bodies[0].material.model), pressures=pressures,
+                                    rotations=_rotations(case))
+
+
+def _rotations(case: ContactCase) -> bool:
+    """Whether a step of ``case`` rotates the moved groups (the problem then builds the rotations' loads)."""
+    return any(step.rotation is not None for step in case.steps)
 
 
 def _material(model: str | None) -> Material | None:
@@ -221,6 +228,8 @@ class _StepRecorder:
         ``state`` as a checkpoint (if it converged); an :class:`OutputError` if the output
         cannot be written."""
         entry = {"step": index + 1, "load": step.load, "translation": list(step.translation), **result.summary()}
+        if step.rotation is not None:
+            entry["rotation"] = dataclasses.asdict(step.rotation)
         if index == 0 or self.problem.searched_each_step:  # the search this step's problem comes from
             entry.update(p=self.problem.n_contact, search_seconds=dict(self.problem.setup_seconds))
         writer, summary = self.writer, self.summary

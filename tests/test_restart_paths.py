@@ -9,7 +9,9 @@ is measured), with Coulomb friction and with pressure-dependent friction; and a
 block slid along another by a moved face (prescribed displacements that move),
 its pair searched before every step and until each step's configuration settles.
 The Newton steps are solved exactly (``pc = "lu"``) so that nothing but the
-path's state can differ.
+path's state can differ. A fifth path twists that block about the vertical through its
+top's centre instead (a rotation of the moved face, 1 to 5 degrees): the state also
+holds the moved face's rotation.
 
 * On the same number of ranks the restarted run is the uninterrupted one: the
   same Newton and Krylov counts, step forces and final solution to 1e-12.
@@ -34,7 +36,7 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 
-from contactqvi.case import ContactCase, load_case
+from contactqvi.case import ContactCase, Rotation, Step, load_case
 from contactqvi.laws import create_law
 from contactqvi.runner import EXIT_CODES, run_case
 
@@ -52,9 +54,15 @@ PATHS = {
                                                           "friction_limit": 0.15, "pressure_scale": 1e9}),
     "blocks_every_step": ("sliding_blocks.toml", {"search": "every_step"}),
     "blocks_until_settled": ("sliding_blocks.toml", {}),
+    "blocks_twisted": ("sliding_blocks.toml", {}),
 }
-if MPI.COMM_WORLD.size > 1:  # another law changes only the nodal arithmetic, which the serial run checks
-    del PATHS["sphere_pressure_coulomb"]
+#: The twisted path's steps: pressed 1 mm, then turned about the vertical through the top's centre.
+TWISTED = (Step(translation=(0.0, 0.0, -1e-3)),
+           *(Step(translation=(0.0, 0.0, -1e-3), rotation=Rotation((0.0, 0.0, 1.0), float(k), (0.5, 0.5, 1.0)))
+             for k in range(1, STEPS)))
+if MPI.COMM_WORLD.size > 1:  # another law changes only the nodal arithmetic, which the serial run checks;
+    del PATHS["sphere_pressure_coulomb"]  # the rotation is JSON in the checkpoint (checked once on 2 ranks: 2 -> 1
+    del PATHS["blocks_twisted"]  # and 2 -> 2 agree to 1e-9 and 1e-12), its geometry that of blocks_until_settled
 if MPI.COMM_WORLD.size == 3:  # 1 -> 3 ranks (make test's 3-rank run): the searched pairs, whose geometry is parallel
     del PATHS["sphere_coulomb"]
 
@@ -79,7 +87,8 @@ def _case(name: str, work: pathlib.Path) -> ContactCase:
     else:
         case = dataclasses.replace(case, mesh=dataclasses.replace(case.mesh, file=work / "sphere.geo"),
                                    contact=_with(case.contact, law))
-    return dataclasses.replace(case, steps=case.steps[:STEPS], solver={**case.solver, "pc": "lu"})
+    steps = TWISTED if name == "blocks_twisted" else case.steps[:STEPS]
+    return dataclasses.replace(case, steps=steps, solver={**case.solver, "pc": "lu"})
 
 
 def _with(entry, replaced: dict):

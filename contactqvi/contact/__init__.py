@@ -3,7 +3,7 @@ by the SCD semismooth* Newton method (seed 000), for any contact law of
 :mod:`contactqvi.laws`, mortar coupling of non-matching surfaces, and quasi-static load paths."""
 
 from contactqvi.contact.interface import BodyPair, Interface, ObstaclePair
-from contactqvi.contact.load_path import LoadStep, contact_resultants, solve_load_path
+from contactqvi.contact.load_path import LoadStep, Rotation, contact_resultants, solve_load_path
 from contactqvi.contact.mortar import MortarCoupling, mortar_coupling
 from contactqvi.contact.newton_step_solver import NEWTON_STEP_SOLVERS, NewtonStepSolver
 from contactqvi.contact.path_state import PathState
@@ -32,6 +32,7 @@ __all__ = [
     "Normal",
     "ObstaclePair",
     "PathState",
+    "Rotation",
     "SCDNewtonResult",
     "SCDNewtonSolver",
     "State",

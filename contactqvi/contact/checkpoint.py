@@ -13,8 +13,9 @@ After every converged load step the runner writes, into ``OUTPUT/checkpoint/``
   ``contact_state`` (the :class:`~contactqvi.contact.nodal.State` of each contact
   node, -1 elsewhere);
 * ``checkpoint.json``, written last and atomically: the step, its file, the step's load
-  factor and translation (the obstacles' position the next step's slip is measured
-  from), the first step's stopping target and the summary so far.
+  factor, translation (the obstacles' position the next step's slip is measured
+  from) and rotation of the moved groups (``{axis, angle, centre}`` or null), the first
+  step's stopping target and the summary so far.
 
 A checkpoint exists only once ``checkpoint.json`` names it: a step file being written
 when the run died is never read, and the one before is removed only after the marker
@@ -45,6 +46,7 @@ from dolfinx import fem
 
 from contactqvi.contact.path_state import PathState
 from contactqvi.contact.problem import ContactProblem
+from contactqvi.load_steps import Rotation
 from contactqvi.parameters import ParameterError
 from contactqvi.tables import atomic_path, prepare_output_dir, to_builtin, write_summary
 
@@ -65,6 +67,7 @@ class Checkpoint:
         solved: number of converged solves (steps and parts of cut steps).
         path: its step file (``step_XXXX.bp``).
         load, translation: load factor and translation (m) of that step.
+        rotation: the moved groups' rotation at that step, or None.
         target: the first step's stopping target ||y^|| (N), the accuracy of every later step.
         summary: ``summary.json`` as it was after that step.
     """
@@ -76,6 +79,7 @@ class Checkpoint:
     translation: tuple[float, float, float]
     target: float
     summary: dict[str, typing.Any]
+    rotation: Rotation | None = None
 
     def resume(self, problem: ContactProblem) -> PathState:
         """The load path's state after :attr:`step`, read into ``problem``'s space (collective;
@@ -90,7 +94,7 @@ class Checkpoint:
         n_owned = state.variables.getLocalSize()
         state.variables.array[:] = variables.x.array[:n_owned]
         state.done, state.solved = self.step, self.solved
-        state.load, state.translation = self.load, np.array(self.translation)
+        state.load, state.translation, state.rotation = self.load, np.array(self.translation), self.rotation
         state.target = self.target
         missing = problem.comm.allreduce(int(np.count_nonzero(state.node_states[problem.contact_blk] < 0)),
                                          op=MPI.SUM)
@@ -127,8 +131,11 @@ def read_checkpoint(comm: MPI.Comm, output: str | os.PathLike, case: dict[str, t
     if "solved" not in data:
         raise ParameterError("--restart", f"the checkpoint in {marker.parent} was written by an older contactqvi "
                              "without the obstacles' position; use a new --output directory")
+    rotation = data.get("rotation")  # absent: written before rotations, or none
+    rotation = None if rotation is None else Rotation(tuple(rotation["axis"]), float(rotation["angle"]),
+                                                      tuple(rotation["centre"]))
     return Checkpoint(int(data["step"]), int(data["solved"]), marker.parent / data["file"], float(data["load"]),
-                      tuple(float(t) for t in data["translation"]), float(data["target"]), summary)
+                      tuple(float(t) for t in data["translation"]), float(data["target"]), summary, rotation)
 
 
 class CheckpointWriter:
@@ -169,6 +176,7 @@ class CheckpointWriter:
         write_summary(self.comm, self.directory / _MARKER,
                       {"step": state.done, "solved": state.solved, "file": name, "load": state.load,
                        "translation": [float(t) for t in state.translation], "target": state.target,
+                       "rotation": None if state.rotation is None else dataclasses.asdict(state.rotation),
                        "summary": summary})
         self.step = state.done
         if self.comm.rank == 0:  # the marker has moved on: older step files are garbage

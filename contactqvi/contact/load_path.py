@@ -4,7 +4,10 @@ Seed 000, Sect. 1, treats the static problem as one step of the quasi-static one
 Step k scales tractions and body force by its load factor and moves the obstacle
 rigidly to its translation c_k; friction acts on the slip increment since step
 k - 1 relative to the obstacle's tangential motion c_k - c_{k-1}
-(:meth:`~contactqvi.contact.problem.ContactProblem.set_step`). Each step is solved
+(:meth:`~contactqvi.contact.problem.ContactProblem.set_step`); it may also rotate the
+groups moved with the obstacles about a centre fixed for the path, u = (Q - I)(X - c) + t
+there (:class:`~contactqvi.load_steps.Rotation`; rigid obstacles only translate, so a path
+with obstacle pairs cannot rotate). Each step is solved
 by the SCD semismooth* Newton method from the previous step's solution, with the
 nodes that touched the obstacle moved along with it (no slip increment); the
 first step starts from the given guess, or a load path continues after the steps
@@ -61,12 +64,12 @@ from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult, SCDNewtonSolver, newton_step_solver
 from contactqvi.lifetime import PETScOwner
 from contactqvi.contact.surface import contact_facet_areas
-from contactqvi.load_steps import LoadStep, check_steps
+from contactqvi.load_steps import LoadStep, Rotation, check_steps, interpolated
 from contactqvi.parameters import Parameter, Parameters
 from contactqvi.result import Status, Timings
 
-__all__ = ["PATH_PARAMETERS", "SOLVER_PARAMETERS", "LoadStep", "PathState", "check_steps", "contact_resultants",
-           "solve_load_path"]
+__all__ = ["PATH_PARAMETERS", "SOLVER_PARAMETERS", "LoadStep", "PathState", "Rotation", "check_steps",
+           "contact_resultants", "solve_load_path"]
 
 logger = logging.getLogger(__name__)
 
@@ -129,7 +132,7 @@ def solve_load_path(
 
     Returns the results of the steps solved (after ``state.done``); the last one failed if not converged.
     """
-    check_steps(steps)
+    check_steps(steps, obstacles=any(i.obstacle is not None for i in problem.interfaces))
     parameters, path = _split(parameters)
     results: list[SCDNewtonResult] = []
     own, state = state is None, PathState.at_rest(problem) if state is None else state
@@ -209,13 +212,13 @@ class _StepSolver(PETScOwner):
 
 def _toward(state: PathState, step: LoadStep, cuts: int) -> LoadStep:
     """``step`` itself, or after ``cuts`` halvings the part 2^-cuts of the way to it from
-    ``state`` (load factor and translation interpolated)."""
+    ``state`` (load factor, translation and rotation interpolated)."""
     if cuts == 0:
         return step
     fraction = 0.5**cuts
     load = state.load + fraction * (step.load - state.load)
     translation = state.translation + fraction * (np.asarray(step.translation) - state.translation)
-    return LoadStep(load, tuple(float(t) for t in translation))
+    return LoadStep(load, tuple(float(t) for t in translation), interpolated(state.rotation, step.rotation, fraction))
 
 
 def _cut(attempts: list[tuple[LoadStep, SCDNewtonResult]], status: Status) -> SCDNewtonResult:
@@ -270,12 +273,12 @@ def _start(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSta
     logger.info("step %d: load factor %g, obstacle translation %s m", state.done + 1, step.load,
                 np.array2string(np.asarray(step.translation), precision=4))
     if state.solved == 0:
-        problem.set_step(step.load, step.translation)
+        problem.set_step(step.load, step.translation, rotation=step.rotation)
         if from_rest:
             problem.shift.copy(u)  # u~ = 0
         return
     if problem.searched_each_step:
-        problem.set_step(state.load, state.translation)  # the step before: its prescribed and moved parts
+        problem.set_step(state.load, state.translation, rotation=state.rotation)  # the step before's prescribed parts
         _search_in(problem, state.displacement, step_solver)
         problem.solver_variables(state.displacement, state.variables)
     _continue(problem, step, u, state)
@@ -350,9 +353,9 @@ def _search_reached(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state
     multigrid levels (``solver`` is destroyed)."""
     parameters, prefix, step_solver = solver.parameters, solver.prefix, _released(solver)
     _search_in(problem, reached, step_solver)
-    problem.set_step(state.load, state.translation)  # the step before: its prescribed and moved parts
+    problem.set_step(state.load, state.translation, rotation=state.rotation)  # the step before's prescribed parts
     problem.solver_variables(state.displacement, state.variables)
-    problem.set_step(step.load, step.translation, state.variables, state.translation)
+    problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation)
     problem.solver_variables(reached, u)
     u.axpy(1.0, problem.shift)
     return SCDNewtonSolver(problem, parameters, prefix=prefix, step_solver=step_solver)
@@ -377,7 +380,7 @@ def _merged(solves: list[SCDNewtonResult], status: Status,
 def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState) -> None:
     """Set ``step`` after ``state``'s step, the slip measured from it; ``u`` gets the predictor:
     u~ of that step, its touching nodes moved along with their master surface (no slip increment)."""
-    problem.set_step(step.load, step.translation, state.variables, state.translation)
+    problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation)
     u.waxpy(1.0, problem.shift, state.variables)
     touching = np.isin(state.contact_states(problem), TOUCHING)
     u.array.reshape(-1, 3)[problem.contact_blk[touching], :2] = 0.0

@@ -168,12 +168,16 @@ def clip_polygons(polygon: np.ndarray, count: np.ndarray, clip: np.ndarray) -> t
             of L vertices.
 
     Returns:
-        ``(polygon, count)``: the intersections, (P, K, 2) and (P,); count < 3 means empty.
+        ``(polygon, count)``: the intersections, (P, K', 2) and (P,); count < 3 means empty.
+        K' > K only where round-off made a polygon degenerate (nearly coincident vertices on
+        either side of a clipping edge: a half-plane then cuts it more than twice; seen on
+        rotated surfaces, where coordinates carry 1e-17 noise).
     """
-    P, K = polygon.shape[:2]
+    P = polygon.shape[0]
     rows = np.arange(P)
     L = clip.shape[1]
     for e in range(L):
+        K = polygon.shape[1]
         a, b = clip[:, e], clip[:, (e + 1) % L]
         edge = b - a
 
@@ -191,9 +195,9 @@ def clip_polygons(polygon: np.ndarray, count: np.ndarray, clip: np.ndarray) -> t
         emit_cross = valid & (in_cur != in_nxt)
         emit_next = valid & in_nxt
         slots = np.cumsum(np.stack([emit_cross, emit_next], axis=2).reshape(P, 2 * K), axis=1) - 1
-        out = np.zeros_like(polygon)
         values = np.stack([crossing, nxt], axis=2).reshape(P, 2 * K, 2)
         emitted = np.stack([emit_cross, emit_next], axis=2).reshape(P, 2 * K)
+        out = np.zeros((P, max(K, int(emitted.sum(axis=1).max(initial=0))), 2))
         p_idx, k_idx = np.nonzero(emitted)
         out[p_idx, slots[p_idx, k_idx]] = values[p_idx, k_idx]
         polygon, count = out, emitted.sum(axis=1)
@@ -323,7 +327,7 @@ def segment_integrals(slave: np.ndarray, normal: np.ndarray, master: np.ndarray,
     dual = dual_coefficients(slave[pairs]) if ns == 4 else None
     D, M = np.zeros((P, ns)), np.zeros((P, ns, nm))
     for group, rule in _rules(slave[pairs], master[pairs], degree):
-        for k in range(1, ns + nm - 1):  # fan (v0, v_k, v_k+1)
+        for k in range(1, polygon.shape[1] - 1):  # fan (v0, v_k, v_k+1)
             has = group & (count >= k + 2)
             if not has.any():
                 continue

@@ -13,10 +13,11 @@ field               read by
 ``solved``          the first solve starts from the given guess (or rest), any later one from
                     the predictor
 ``load``,           :meth:`~contactqvi.contact.problem.ContactProblem.set_step` of the next step:
-``translation``     the obstacles' tangential motion since the step before (its slip reference
-                    on a rigid obstacle), and the search of a pair searched each step: the
-                    prescribed and moved parts of ``displacement`` at the step before; a cut
-                    step (``max_cuts``) starts its parts from them
+``translation``,    the obstacles' tangential motion since the step before (its slip reference
+``rotation``        on a rigid obstacle), and the search of a pair searched each step: the
+                    prescribed and moved parts of ``displacement`` at the step before (the
+                    moved groups' rigid motion (Q - I)(X - c) + t); a cut step
+                    (``max_cuts``) starts its parts from them
 ``variables``       the next step's slip reference and predictor (``_continue``); a problem
                     searched each step recomputes it from ``displacement`` after its search
 ``displacement``    the configuration x + u~ in which pairs searched each step are searched
@@ -47,6 +48,7 @@ from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult
 from contactqvi.lifetime import PETScOwner
+from contactqvi.load_steps import Rotation
 
 __all__ = ["PathState"]
 
@@ -61,6 +63,8 @@ class PathState(PETScOwner):
         load: load factor of the last converged solve (0 at rest): step ``done``, or a part
             of the step after it when that step was cut.
         translation: total translation of the obstacles and moved groups there (m).
+        rotation: total rotation of the moved groups there
+            (:class:`~contactqvi.load_steps.Rotation`), None: none.
         variables: u~ = u - d of step ``done`` in the problem's current solver variables.
         displacement: u~ of step ``done`` in global components (m; ghosts updated).
         node_states: :class:`~contactqvi.contact.nodal.State` of each local node (ghosts
@@ -76,6 +80,7 @@ class PathState(PETScOwner):
     displacement: fem.Function
     node_states: np.ndarray
     target: float
+    rotation: Rotation | None = None
 
     @classmethod
     def at_rest(cls, problem: ContactProblem) -> PathState:
@@ -95,6 +100,7 @@ class PathState(PETScOwner):
         self.done += int(complete)
         self.solved += 1
         self.load, self.translation = problem.load_factor, problem.translation.copy()
+        self.rotation = problem.step_rotation
         self.variables.waxpy(-1.0, problem.shift, u)
         problem.physical_displacement(u, self.displacement)
         self.node_states[:] = -1

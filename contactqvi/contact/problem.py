@@ -61,6 +61,7 @@ from contactqvi.laws import ContactLaw, Frictionless, NodalLaw, StackedLaw
 from contactqvi.lifetime import PETScOwner
 from contactqvi.materials import Material
 from contactqvi.linalg import assemble_system, default_options, nonzero_rows
+from contactqvi.load_steps import Rotation
 from contactqvi.meshes import boundary_facets
 from contactqvi.obstacles import Obstacle, Plane
 from contactqvi.parameters import require
@@ -126,14 +127,17 @@ class ContactProblem(PETScOwner):
         offset: c = N g, the slave displacement due to prescribed master dofs at load
             factor 1, or None.
         translated: loads l~_c of a unit translation e_c (c = x, y, z) of the moved
-            groups (empty without them); a step adds sum_c t_c l~_c.
+            groups (empty without them), and for a problem built for rotations the nine
+            loads l~_ab of the fields e_a X_b on them (a, b = x, y, z; row-major): a step
+            adds sum_c s_c l~_c + sum_ab (Q - I)_ab l~_ab, s = t - (Q - I) c
+            (:meth:`rigid_motion`).
         translated_offset: their offsets c_c (None without body pairs).
         rollers: (m,) mask of contact nodes whose t1 component is prescribed (zero).
         dirichlet_dofs_loc: local unrolled indices of Dirichlet dofs (incl. ghosts).
         node_body: body index of each local node (ghosts included), or None for one body.
         n_contact: global number p of contact nodes.
         n_free: global number n of free dofs.
-        load_factor, translation: the current step (:meth:`set_step`).
+        load_factor, translation, step_rotation: the current step (:meth:`set_step`).
         setup_seconds: wall seconds (largest rank) of the last contact search with the
             nodal frames and mortar integration (``contact_search``) and of A = T^T A_K T
             with the loads (``change_of_variables``).
@@ -170,6 +174,7 @@ class ContactProblem(PETScOwner):
     n_free: int
     load_factor: float = 1.0
     translation: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
+    step_rotation: Rotation | None = None
     setup_seconds: dict[str, float] = dataclasses.field(default_factory=dict)
     elastic: ElasticSystem | None = None
     hyperelastic: HyperelasticSystem | None = None
@@ -252,15 +257,24 @@ class ContactProblem(PETScOwner):
         self.setup_seconds = {"contact_search": search_seconds, "change_of_variables": variables_seconds}
         return difference
 
+    def rigid_motion(self) -> np.ndarray:
+        """The coefficients of the loads :attr:`translated` at the current step: the moved
+        groups' displacement u = (Q - I)(X - c) + t is sum_c s_c e_c + sum_ab (Q - I)_ab e_a X_b
+        with s = t - (Q - I) c; without a rotation t itself."""
+        if self.step_rotation is None:
+            return self.translation
+        turn = self.step_rotation.matrix() - np.eye(3)
+        return np.concatenate([self.translation - turn @ np.asarray(self.step_rotation.centre), turn.ravel()])
+
     def solver_variables(self, displacement: fem.Function, out: PETSc.Vec) -> PETSc.Vec:
-        """The solver's variables u~ = T^-1 (u - lambda c - sum_c t_c c_c) of a physical
-        displacement u (global components) at the current step's load factor and
-        translation, with T^-1 = R^T (I - N): the inverse of :meth:`physical_displacement`
-        (without the shift); written into ``out``."""
+        """The solver's variables u~ = T^-1 (u - lambda c - sum_k s_k c_k) of a physical
+        displacement u (global components) at the current step's load factor and rigid
+        motion (:meth:`rigid_motion`), with T^-1 = R^T (I - N): the inverse of
+        :meth:`physical_displacement` (without the shift); written into ``out``."""
         local = displacement.x.petsc_vec.copy()
         if self.offset is not None:
             local.axpy(-self.load_factor, self.offset)
-        for t, c in zip(self.translation, self.translated_offset):
+        for t, c in zip(self.rigid_motion(), self.translated_offset):
             if c is not None:
                 local.axpy(-t, c)
         if self.coupling is not None:
@@ -328,10 +342,13 @@ class ContactProblem(PETScOwner):
     def set_step(
         self, load_factor: float = 1.0, translation: typing.Sequence[float] = (0.0, 0.0, 0.0),
         previous: PETSc.Vec | None = None, previous_translation: typing.Sequence[float] = (0.0, 0.0, 0.0),
+        rotation: Rotation | None = None,
     ) -> None:
         """Shift and load of a load step: tractions, body force and prescribed displacements
         times ``load_factor``, the obstacles and moved groups translated by ``translation``
-        (total, m); slip measured from the step before: from its displacement ``previous``
+        (total, m), the moved groups also rotated by ``rotation`` (total, about its centre; a
+        problem built with ``rotations``, without obstacle pairs: rigid obstacles only
+        translate); slip measured from the step before: from its displacement ``previous``
         (u~ in the solver's variables; None: from rest) and from the obstacles' position
         ``previous_translation`` (the tangential obstacle motion per node; a master body
         moves with the solution, its slip is in w itself). Both come from the load path's
@@ -339,6 +356,11 @@ class ContactProblem(PETScOwner):
         read from the problem itself.
         """
         translation = np.asarray(translation, dtype=float)
+        if rotation is not None:
+            require(len(self.translated) == 12, "steps.rotation", "the problem was built without rotations of "
+                    "moved groups (build it with rotations=True and boundary.moved groups)")
+            require(all(i.obstacle is None for i in self.interfaces), "steps.rotation", "rotations move the groups "
+                    "boundary.moved only; a problem with rigid obstacles cannot rotate")
         motion = translation - np.asarray(previous_translation, dtype=float)
         on_obstacle = self._per_node(lambda i, nodes: np.full(len(nodes), i.obstacle is not None), 1) > 0
         moved = on_obstacle[:, None] * (self.frames[:, :2, :] @ motion)
@@ -354,16 +376,16 @@ class ContactProblem(PETScOwner):
         self.shift.array.reshape(-1, 3)[self.contact_blk] = nodal
         self.applied.copy(self.load)
         self.load.scale(load_factor)
-        for t, b in zip(translation, self.translated):  # moved groups follow the translation
+        self.load_factor, self.translation, self.step_rotation = float(load_factor), translation, rotation
+        for t, b in zip(self.rigid_motion(), self.translated):  # moved groups follow the rigid motion
             self.load.axpy(t, b)
         if self.hyperelastic is None:
-            self.A.multAdd(self.shift, self.load, self.load)  # l = lambda l~ + sum_c t_c l~_c + A d
+            self.A.multAdd(self.shift, self.load, self.load)  # l = lambda l~ + sum_k s_k l~_k + A d
         else:  # f is evaluated at u - d itself (no shift of the load): d only on the identity rows, as A d there
             self.load.axpy(1.0, self.shift)
-        self.load_factor, self.translation = float(load_factor), translation
 
     def physical_displacement(self, u: PETSc.Vec, out: fem.Function) -> fem.Function:
-        """u~ = T (u - d) + lambda c + sum_c t_c c_c in global components, written into
+        """u~ = T (u - d) + lambda c + sum_k s_k c_k (:meth:`rigid_motion`) in global components, written into
         ``out`` (ghosts updated).
 
         At the prescribed dofs off the contact nodes u takes its exact value, the load there (A
@@ -385,7 +407,7 @@ class ContactProblem(PETScOwner):
         local.destroy()
         if self.offset is not None:
             out.x.petsc_vec.axpy(self.load_factor, self.offset)
-        for t, c in zip(self.translation, self.translated_offset):
+        for t, c in zip(self.rigid_motion(), self.translated_offset):
             if c is not None:
                 out.x.petsc_vec.axpy(t, c)
         out.x.scatter_forward()
@@ -486,6 +508,7 @@ def build_contact_problem(
     material: Material | None = None,
     search: str = "once",
     pressures: dict[str, float] | None = None,
+    rotations: bool = False,
 ) -> ContactProblem:
     """Assemble the GE (6.3) for a body against a rigid obstacle, at load factor 1.
 
@@ -510,6 +533,8 @@ def build_contact_problem(
         search: when the contact is searched (:class:`~contactqvi.contact.interface.ObstaclePair`).
         pressures: pressure (Pa, > 0 into the body) per boundary name, scaled by the load
             factor; on the deformed surface for a hyperelastic ``material``.
+        rotations: build the loads of rotations of the ``moved`` groups (nine more lifted loads),
+            for steps with a ``rotation`` (:class:`~contactqvi.load_steps.LoadStep`).
 
     Raises:
         ParameterError: bad values, unknown boundary names, or a contact node inside
@@ -521,7 +546,7 @@ def build_contact_problem(
     pair = ObstaclePair(contact, obstacle, law, search)
     return assemble_contact_problem(msh, facet_tags, young, poisson, tractions, [pair], clamped, body_force,
                                     displacements, moved=moved, material=material,
-                                    pressures=pressures)
+                                    pressures=pressures, rotations=rotations)
 
 
 def assemble_contact_problem(
@@ -536,7 +561,7 @@ def assemble_contact_problem(
     displacements: dict[str, dict[int, float]] | None = None,
     cell_tags: dmesh.MeshTags | None = None,
     moved: typing.Sequence[str] = (),
-    material: Material | None = None, pressures: dict[str, float] | None = None,
+    material: Material | None = None, pressures: dict[str, float] | None = None, rotations: bool = False,
 ) -> ContactProblem:
     """Assemble the GE (6.3) of one or several bodies with contact pairs, at load factor 1.
 
@@ -545,7 +570,7 @@ def assemble_contact_problem(
     ``cell_tags`` one named cell group per body (each gets its own rigid-body modes);
     ``body_force`` one vector (N/m^3) for all bodies or one per body, ``{body: f}``
     (:func:`~contactqvi.elasticity.body_forces`; each body's weight enters its balance);
-    ``moved``, ``material``, ``pressures`` as in :func:`build_contact_problem`.
+    ``moved``, ``material``, ``pressures``, ``rotations`` as in :func:`build_contact_problem`.
 
     Raises ``ParameterError`` as :func:`~contactqvi.contact.interface.build_interfaces`,
     and for nonzero prescribed components on contact nodes or a body nothing holds.
@@ -557,7 +582,7 @@ def assemble_contact_problem(
     bcs, moved_bc = _dirichlet_conditions(V, facet_tags, clamped, displacements or {}, moved)
     dirichlet_dofs_loc = np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs] + [np.empty(0, np.int32)]))
     A, applied = assemble_system(a, L, bcs)
-    loads = [applied, *_unit_translations(a, A, moved_bc, dirichlet_dofs_loc)]
+    loads = [applied, *_unit_translations(V, a, moved_bc, dirichlet_dofs_loc, rotations)]
     index_map = V.dofmap.index_map
     constrained = np.isin(np.arange(3 * (index_map.size_local + index_map.num_ghosts)), dirichlet_dofs_loc).reshape(-1, 3)
     owned_dirichlet = dirichlet_dofs_loc[dirichlet_dofs_loc < 3 * index_map.size_local]
@@ -691,27 +716,42 @@ def _solver_variables(
     return A, transformed, rotation, coupling, transform, offsets
 
 
-def _unit_translations(a: fem.Form, A: PETSc.Mat, moved_bc: fem.DirichletBC | None,
-                       dirichlet_dofs_loc: np.ndarray) -> list[PETSc.Vec]:
+def _unit_translations(V: fem.FunctionSpace, a: fem.Form, moved_bc: fem.DirichletBC | None,
+                       dirichlet_dofs_loc: np.ndarray, rotations: bool = False) -> list[PETSc.Vec]:
     """The lifted loads of a unit translation e_c (c = x, y, z) of the moved groups, all
-    other prescribed values zero: -A_K e_c at free dofs, e_c at the moved ones."""
+    other prescribed values zero: -A_K e_c at free dofs, e_c at the moved ones; with
+    ``rotations`` then those of the nine fields e_a X_b (a, b = x, y, z, row-major) on the
+    moved groups, of which a rotation's (Q - I) X is made (:meth:`ContactProblem.rigid_motion`)."""
     if moved_bc is None:
         return []
     value = moved_bc.g
     loads = []
-    n_owned = A.getLocalSize()[0]
-    V = a.function_spaces[0]
     for c in range(3):
         value.value[:] = np.eye(3)[c]
-        b = dolfinx.la.create_petsc_vector(V.dofmap.index_map, V.dofmap.index_map_bs)  # ghosted, for the lifting
-        b.set(0.0)
-        dolfinx.fem.petsc.apply_lifting(b, [a], bcs=[[moved_bc]])
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        b.array[dirichlet_dofs_loc[dirichlet_dofs_loc < n_owned]] = 0.0
-        dolfinx.fem.petsc.set_bc(b, [moved_bc])
-        loads.append(b)
+        loads.append(_lifted(a, moved_bc, dirichlet_dofs_loc))
     value.value[:] = 0.0
+    if rotations:
+        field = fem.Function(V)
+        rotated_bc = fem.dirichletbc(field, np.unique(moved_bc.dof_indices()[0] // 3).astype(np.int32))
+        x = V.tabulate_dof_coordinates()
+        for c in range(9):
+            field.x.array[:] = 0.0
+            field.x.array.reshape(-1, 3)[:, c // 3] = x[:, c % 3]
+            loads.append(_lifted(a, rotated_bc, dirichlet_dofs_loc))
     return loads
+
+
+def _lifted(a: fem.Form, bc: fem.DirichletBC, dirichlet_dofs_loc: np.ndarray) -> PETSc.Vec:
+    """The lifted load of ``bc``'s values alone: -A_K g at free dofs, g at ``bc``'s dofs, zero at
+    the other prescribed dofs ``dirichlet_dofs_loc``."""
+    V = a.function_spaces[0]
+    b = dolfinx.la.create_petsc_vector(V.dofmap.index_map, V.dofmap.index_map_bs)  # ghosted, for the lifting
+    b.set(0.0)
+    dolfinx.fem.petsc.apply_lifting(b, [a], bcs=[[bc]])
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    b.array[dirichlet_dofs_loc[dirichlet_dofs_loc < b.getLocalSize()]] = 0.0
+    dolfinx.fem.petsc.set_bc(b, [bc])
+    return b
 
 
 def _check_prescribed_on_contact(loads: list[PETSc.Vec], contact_blk: np.ndarray, constrained: np.ndarray,
