@@ -196,9 +196,11 @@ def build_interfaces(
 
 
 def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: typing.Sequence[Interface],
-                 constrained: np.ndarray, displacement: fem.Function, finite_strain: bool = False) -> list[Interface]:
+                 constrained: np.ndarray, displacement: fem.Function, translation: np.ndarray,
+                 finite_strain: bool = False) -> list[Interface]:
     """The interfaces with the pairs searched each step found again in the configuration
-    x + ``displacement`` (the others as they are; collective).
+    x + ``displacement``, the obstacles translated by ``translation`` (m; the others as they
+    are; collective).
 
     Its slave nodes, mortar rows, normals and areas are those of that configuration (an
     obstacle's nodal areas: the deformed ones with ``finite_strain``, the reference ones of
@@ -210,7 +212,7 @@ def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: t
     def again(interface: Interface) -> Interface:
         if isinstance(interface.pair, ObstaclePair):
             return _obstacle_interface(V, facet_tags, interface.pair, constrained, x,
-                                       displacement if finite_strain else None)
+                                       displacement if finite_strain else None, translation)
         return _body_interface(V, facet_tags, interface.pair, constrained, x)
 
     return [again(i) if i.searched_each_step else i for i in interfaces]
@@ -218,11 +220,13 @@ def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: t
 
 def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: ObstaclePair,
                         constrained: np.ndarray, displacement: np.ndarray | None = None,
-                        deformed: fem.Function | None = None) -> Interface:
-    """An obstacle pair's interface in the reference configuration (checked: no node inside
-    the obstacle) or in x + ``displacement`` (local nodes, 3): the obstacle at rest, its
-    normals there; :meth:`Interface.gap` adds the translation of each step. The nodal areas
-    are those of the surface deformed by ``deformed`` if given, else of the reference one."""
+                        deformed: fem.Function | None = None,
+                        translation: typing.Sequence[float] = (0.0, 0.0, 0.0)) -> Interface:
+    """An obstacle pair's interface in the reference configuration, the obstacle at rest
+    (checked: no node inside it), or in x + ``displacement`` (local nodes, 3), the obstacle
+    translated by ``translation``: its normals there; :meth:`Interface.gap` measures the gap
+    to the obstacle of each step. The nodal areas are those of the surface deformed by
+    ``deformed`` if given, else of the reference one."""
     require(pair.search in SEARCHES, f"{pair.name}: search", f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
     n_owned = V.dofmap.index_map.size_local
     excluded_blk = np.flatnonzero(constrained.all(axis=1))
@@ -230,7 +234,10 @@ def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: 
     blk = np.setdiff1d(blk[blk < n_owned], excluded_blk).astype(np.int32)
     searched_at = None if displacement is None else displacement[blk]
     x = V.tabulate_dof_coordinates()[blk]
-    gap, normal = pair.obstacle.distance(x if searched_at is None else x + searched_at)
+    if searched_at is None:
+        gap, normal = pair.obstacle.distance(x)
+    else:
+        gap, normal = pair.obstacle.translated(np.asarray(translation, dtype=float)).distance(x + searched_at)
     comm = V.mesh.comm
     undefined = comm.allreduce(int(np.count_nonzero(~np.isfinite(normal).all(axis=1))), op=MPI.SUM)
     require(undefined == 0, "obstacle", f"{undefined} contact nodes lie where the obstacle has no normal "

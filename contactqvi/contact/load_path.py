@@ -61,7 +61,8 @@ from contactqvi.contact.newton_step_solver import NewtonStepSolver
 from contactqvi.contact.nodal import State
 from contactqvi.contact.path_state import PathState
 from contactqvi.contact.problem import ContactProblem
-from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult, SCDNewtonSolver, newton_step_solver
+from contactqvi.contact.scd_newton import (PARAMETERS, SCDNewtonResult, SCDNewtonSolver, checked_parameters,
+                                            newton_step_solver)
 from contactqvi.lifetime import PETScOwner
 from contactqvi.contact.surface import contact_facet_areas
 from contactqvi.load_steps import LoadStep, Rotation, check_steps, interpolated
@@ -253,7 +254,7 @@ def _path_levels(problem: ContactProblem, parameters: dict | None, prefix: str) 
     (two-body Hertz, docs/bodies.md). A restart sets up on the same A, so it continues
     with the levels of the uninterrupted run (up to the round-off of the updates).
     """
-    step_solver = newton_step_solver(problem, PARAMETERS.check(parameters), prefix)
+    step_solver = newton_step_solver(problem, checked_parameters(problem, parameters), prefix)
     near_nullspace = problem.near_nullspace()
     problem.A.setNearNullSpace(near_nullspace)
     kept = step_solver.set_up_levels(problem.A)

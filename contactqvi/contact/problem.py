@@ -235,7 +235,8 @@ class ContactProblem(PETScOwner):
         """
         require(self.elastic is not None, "search", "no contact pair of this problem is searched each step")
         interfaces, search_seconds = _timed(self.comm, search_again, self.V, self.body.facet_tags, self.interfaces,
-                                            self.elastic.constrained, displacement, self.hyperelastic is not None)
+                                            self.elastic.constrained, displacement, self.translation,
+                                            self.hyperelastic is not None)
         for obj in (self.applied, *self._variables_objects()):
             obj.destroy()
         fields, variables_seconds = _timed(self.comm, _contact_fields, self.elastic, interfaces, True)
