@@ -26,6 +26,8 @@ import tomllib
 
 from mpi4py import MPI
 
+import numpy as np
+
 HERE = pathlib.Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE / "peers"))
@@ -42,19 +44,35 @@ GETFEM_OPTIONS = ["--release", "2.5", "--max-iter", "40", "--max-res", "1e-8"]
 LAWS = {"coulomb": "Coulomb, friction 0.5", "frictionless": "frictionless"}
 
 
-def export_mesh(work: pathlib.Path, mesh: str) -> dict[str, pathlib.Path]:
-    """The case and its frictionless copy on ``mesh``, exported to ``work``."""
+def export_mesh(work: pathlib.Path, mesh: str) -> dict[str, dict[str, pathlib.Path]]:
+    """The case on ``mesh`` exported to ``work``, per law (its own and frictionless) and frame:
+    ``"moved"`` as shipped (the roller moved by the steps' translations), ``"roller"`` in the
+    roller's frame (the roller at rest, the clamped groups moved by minus the translations, as
+    GetFEM's driver solves it; the same problem up to a rigid translation)."""
     geo, _ = MESHES[mesh]
     if geo == "fine":  # the shipped script at half its element size, meshed here
         source = work / "rubber_pad_fine.geo"
         source.write_text(f'DefineConstant[ h = 0.625e-3 ];\nInclude "{ROOT / "meshes" / "rubber_pad.geo"}";\n')
     else:
         source = None if geo is None else ROOT / geo
-    contact = tomllib.loads(CASE.read_text())["contact"]
-    frictionless = {k: v for k, v in contact.items() if k != "friction"} | {"law": "frictionless"}
-    return {"coulomb": export.export_case(work, CASE, f"rubber_{mesh}", mesh=source),
-            "frictionless": export.export_case(work, CASE, f"rubber_{mesh}_frictionless", mesh=source,
-                                               contact=frictionless)}
+    data = tomllib.loads(CASE.read_text())
+    contact = data["contact"]
+    laws = {"coulomb": contact,
+            "frictionless": {k: v for k, v in contact.items() if k != "friction"} | {"law": "frictionless"}}
+    # The roller's frame: the translations t_k = s_k t_n of the steps along one direction.
+    last = np.asarray(data["steps"][-1]["translation"], float)
+    translations = np.array([s["translation"] for s in data["steps"]], float)
+    loads = translations @ last / (last @ last)
+    if not np.allclose(np.outer(loads, last), translations, rtol=0, atol=1e-15):
+        raise ValueError("the roller's frame takes translations along one direction")
+    boundary = dict(data["boundary"], clamped=[])
+    boundary["displacement"] = {name: dict(zip("xyz", (-last).tolist())) for name in data["boundary"]["clamped"]} \
+        | data["boundary"].get("displacement", {})
+    frame = {"boundary": boundary, "steps": [{"load": float(s)} for s in loads]}
+    return {law: {"moved": export.export_case(work, CASE, f"rubber_{mesh}_{law}", mesh=source, contact=table),
+                  "roller": export.export_case(work, CASE, f"rubber_{mesh}_{law}_roller_frame", mesh=source,
+                                               contact=table, **frame)}
+            for law, table in laws.items()}
 
 
 def run(command: list[str], log: pathlib.Path) -> tuple[int, float]:
@@ -87,32 +105,53 @@ def getfem(case: pathlib.Path, out: pathlib.Path, options: list[str]) -> dict:
             "nodes": result["dofs"] // 3, "law_check": result["law_check"], "settings": result["settings"]}
 
 
+def _steps_line(name: str, run: dict) -> str:
+    newton = run["newton"]
+    solve = f" (solve {run['solve_time']:.1f} s)" if "solve_time" in run else ""
+    return (f"* {name}: {run['status']}, wall {run['wall_time']:.1f} s{solve}, Newton {sum(newton)} "
+            f"({' '.join(map(str, newton))})")
+
+
 def markdown(data: dict) -> str:
     lines = ["# The rubber pad against GetFEM 5.4 (issue 36)", "",
              "cases/rubber_pad.toml (neo-Hookean pad, E = 6 MPa, nu = 0.45, rigid roller R = 15 mm pressed "
-             "4 mm in 8 steps; half model), the same P1 tetrahedra in both codes. Roller force on the pad F_z "
-             "(N; ours: pair force top/obstacle, nodal contact searched in the current configuration until "
-             "settled; GetFEM: large-sliding integral contact brick, raytracing, Compressible_Neo_Hookean_Bonet). "
-             "diff = GetFEM / ours - 1. Wall: each process from start to exit, one core. "
-             "Written by benchmarks/rubber_peers.py; docs/rubber_getfem.md.", ""]
+             "4 mm in 8 steps; half model), the same P1 tetrahedra in both codes. F: the roller's force on the "
+             "pad (N). Ours: the pair force top/obstacle (nodal contact, searched in the current configuration "
+             "until settled), for the case as shipped (roller moved) and in the roller's frame (roller at rest, "
+             "bottom moved up: the same problem up to a rigid translation, and the frame GetFEM is solved in). "
+             "GetFEM: large-sliding integral contact brick (raytracing), Compressible_Neo_Hookean_Bonet, "
+             f"options {' '.join(data['getfem_options'])}. diff = GetFEM / ours - 1. Wall: each process from "
+             "start to exit, one core, one process at a time. Written by benchmarks/rubber_peers.py; "
+             "docs/rubber_getfem.md.", ""]
     for mesh, entry in data["meshes"].items():
         for law, runs in entry["laws"].items():
-            a, b = runs["ours"], runs["getfem"]
+            moved, roller, other = runs["ours_moved"], runs["ours_roller"], runs["getfem"]
             lines += [f"## {mesh} mesh ({entry['nodes']} nodes, h = {MESHES[mesh][1]} mm under the roller), "
                       f"{LAWS[law]}", "",
-                      f"ours: {a['status']}, wall {a['wall_time']:.1f} s, Newton {sum(a['newton'])} "
-                      f"({' '.join(map(str, a['newton']))}); GetFEM: {b['status']}, wall {b['wall_time']:.1f} s "
-                      f"(solve {b['solve_time']:.1f} s), Newton {sum(b['newton'])} ({' '.join(map(str, b['newton']))})",
-                      "", "| step | depth (mm) | F_z ours (N) | F_z GetFEM (N) | diff | F_x ours (N) | F_x GetFEM (N) |",
-                      "|---|---|---|---|---|---|---|"]
+                      _steps_line("ours, roller moved", moved), _steps_line("ours, roller's frame", roller),
+                      _steps_line("GetFEM", other), "",
+                      "| step | depth (mm) | F_z ours moved | F_z ours roller frame | F_z GetFEM | diff (roller frame) "
+                      "| diff (moved) | F_x ours moved | F_x ours roller frame | F_x GetFEM |",
+                      "|---|---|---|---|---|---|---|---|---|---|"]
             for k, row in enumerate(runs["per_step"]):
-                g = "—" if row["getfem"] is None else f"{-row['getfem'][2]:.2f}"
-                gx = "—" if row["getfem"] is None else f"{row['getfem'][0]:.2f}"
-                d = "—" if row["diff"] is None else f"{100 * row['diff']:+.2f} %"
-                lines.append(f"| {k + 1} | {row['depth_mm']:.1f} | {-row['ours'][2]:.2f} | {g} | {d} | "
-                             f"{row['ours'][0]:.2f} | {gx} |")
+                def f(v, c):
+                    return "—" if v is None else f"{(-1 if c == 2 else 1) * v[c]:.2f}"
+
+                def d(v):
+                    return "—" if v is None else f"{100 * v:+.2f} %"
+                lines.append(f"| {k + 1} | {row['depth_mm']:.1f} | {f(row['ours_moved'], 2)} | "
+                             f"{f(row['ours_roller'], 2)} | {f(row['getfem'], 2)} | {d(row['diff_roller'])} | "
+                             f"{d(row['diff_moved'])} | {f(row['ours_moved'], 0)} | {f(row['ours_roller'], 0)} | "
+                             f"{f(row['getfem'], 0)} |")
             lines.append("")
     return "\n".join(lines)
+
+
+def _finished(run: dict, k: int) -> list[float] | None:
+    """The force of step ``k`` if the run converged there."""
+    forces = run["force"]
+    return forces[k] if k < len(forces) - 1 or (k == len(forces) - 1 and run["status"].startswith("converged")) \
+        else None
 
 
 def main() -> int:
@@ -122,32 +161,38 @@ def main() -> int:
     parser.add_argument("--laws", nargs="+", default=list(LAWS), choices=list(LAWS))
     parser.add_argument("--work", default=str(ROOT / "build" / "rubber_getfem"))
     parser.add_argument("--table", default=str(HERE / "results" / "rubber_getfem"))
+    parser.add_argument("--update", action="store_true", help="add to the table's JSON instead of replacing it")
     parser.add_argument("--getfem-options", nargs=argparse.REMAINDER, default=GETFEM_OPTIONS,
                         help="options of peers/getfem_rubber.py (last on the command line)")
     args = parser.parse_args()
     work = pathlib.Path(args.work).resolve()
     work.mkdir(parents=True, exist_ok=True)
-    data = {"case": str(CASE.relative_to(ROOT)), "getfem_options": args.getfem_options,
-            "machine": {"cpus": os.cpu_count(), "load": os.getloadavg(), "python": platform.python_version()},
-            "meshes": {}}
+    table = pathlib.Path(args.table)
+    data = json.loads(table.with_suffix(".json").read_text()) if args.update else {"meshes": {}}
+    data |= {"case": str(CASE.relative_to(ROOT)), "getfem_options": args.getfem_options}
+    data.setdefault("machine", {})
     for mesh in args.meshes:
         cases = export_mesh(work, mesh)
-        entry = data["meshes"][mesh] = {"laws": {}}
+        entry = data["meshes"].setdefault(mesh, {"laws": {}})
         for law in args.laws:
-            a = ours(cases[law], work / f"ours_{mesh}_{law}")
-            b = getfem(cases[law], work / f"getfem_{mesh}_{law}", args.getfem_options)
-            entry["nodes"], entry["law_check"] = b["nodes"], b["law_check"]
-            depths = [-s["translation"][2] * 1e3 for s in tomllib.loads(cases[law].read_text())["steps"]]
+            runs = {"ours_moved": ours(cases[law]["moved"], work / f"ours_{mesh}_{law}"),
+                    "ours_roller": ours(cases[law]["roller"], work / f"ours_{mesh}_{law}_roller_frame"),
+                    "getfem": getfem(cases[law]["moved"], work / f"getfem_{mesh}_{law}", args.getfem_options)}
+            entry["nodes"], entry["law_check"] = runs["getfem"]["nodes"], runs["getfem"]["law_check"]
+            depths = [-s["translation"][2] * 1e3 for s in tomllib.loads(cases[law]["moved"].read_text())["steps"]]
             per_step = []
-            for k, force in enumerate(a["force"]):
-                other = b["force"][k] if k < len(b["force"]) and (k < len(b["force"]) - 1 or
-                                                                  b["status"] == "converged") else None
-                per_step.append({"depth_mm": depths[k], "ours": force, "getfem": other,
-                                 "diff": None if other is None else other[2] / force[2] - 1})
-            entry["laws"][law] = {"ours": a, "getfem": b, "per_step": per_step}
-            print(f"{mesh} {law}: " + " ".join("—" if r["diff"] is None else f"{100 * r['diff']:+.2f}%"
+            for k, depth in enumerate(depths):
+                row = {"depth_mm": depth} | {name: _finished(run, k) for name, run in runs.items()}
+                for frame in ("moved", "roller"):
+                    a, b = row[f"ours_{frame}"], row["getfem"]
+                    row[f"diff_{frame}"] = None if a is None or b is None else b[2] / a[2] - 1
+                per_step.append(row)
+            entry["laws"][law] = runs | {"per_step": per_step}
+            data["machine"][f"{mesh}/{law}"] = {"cpus": os.cpu_count(), "load": os.getloadavg(),
+                                                "python": platform.python_version()}
+            print(f"{mesh} {law}: " + " ".join("—" if r["diff_roller"] is None else f"{100 * r['diff_roller']:+.2f}%"
                                                for r in per_step), flush=True)
-    write_table(MPI.COMM_WORLD, args.table, data, markdown(data))
+    write_table(MPI.COMM_WORLD, table, data, markdown(data))
     return 0
 
 
