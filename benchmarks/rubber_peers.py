@@ -32,6 +32,7 @@ HERE = pathlib.Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE / "peers"))
 sys.path.insert(0, str(ROOT))
+import common  # noqa: E402
 import export  # noqa: E402
 
 from contactqvi.tables import write_table  # noqa: E402
@@ -105,11 +106,75 @@ def getfem(case: pathlib.Path, out: pathlib.Path, options: list[str]) -> dict:
             "nodes": result["dofs"] // 3, "law_check": result["law_check"], "settings": result["settings"]}
 
 
+def force_directions(case: pathlib.Path, out: pathlib.Path, translation: np.ndarray) -> dict:
+    """How far the contact surface's nodal forces of the last step in ``out/solution.npz`` are
+    from the normal of the roller moved by ``translation`` (frictionless: they should not be).
+
+    The nodal forces are the internal forces of the neo-Hookean body at the solution (P1
+    tetrahedra, F constant per cell: f_a = V P grad N_a), less the prescribed components,
+    at the contact surface's nodes; the normal is the roller's at each deformed node.
+    Returns the sum of the forces' tangential parts (N), their share sum |f_t| / sum |f_n|,
+    and the largest angle between a node's force and its normal (degrees; nodes carrying more
+    than 1 % of the largest normal force).
+    """
+    data = common.load_case(case)
+    mesh = common.read_msh(data.mesh)
+    solution = np.load(out / "solution.npz")
+    u = np.empty_like(solution["u"])
+    u[common.sort_nodes(mesh.points)] = solution["u"]  # the file's node order
+    mu = data.young / (2 * (1 + data.poisson))
+    lmbda = data.young * data.poisson / ((1 + data.poisson) * (1 - 2 * data.poisson))
+    x = mesh.points[mesh.cells]  # (cells, 4, 3)
+    edges = x[:, 1:] - x[:, :1]  # rows: x_i - x_0
+    grad_ref = np.linalg.inv(edges)  # columns: gradients of N_1..N_3
+    grads = np.concatenate([-grad_ref.sum(axis=2, keepdims=True), grad_ref], axis=2)  # (cells, 3, 4)
+    F = np.eye(3) + np.einsum("cak,cja->ckj", u[mesh.cells], grads)  # I + sum_a u_a grad N_a^T
+    J = np.linalg.det(F)
+    F_inv_T = np.linalg.inv(F).transpose(0, 2, 1)
+    P = mu * (F - F_inv_T) + (lmbda * np.log(J))[:, None, None] * F_inv_T
+    volume = np.abs(np.linalg.det(edges)) / 6
+    cell_forces = volume[:, None, None] * np.einsum("cij,cja->cai", P, grads)  # (cells, 4, 3)
+    nodal = np.zeros_like(u)
+    np.add.at(nodal, mesh.cells, cell_forces)
+    top = mesh.group_nodes(data.contact)
+    force = nodal[top]
+    for name, components in data.displacement.items():
+        on_top = np.isin(top, mesh.roller_nodes(data, name))
+        force[np.ix_(on_top, list(components))] = 0.0
+    axis_point = np.asarray(data.obstacle["point"], float) + translation
+    radial = mesh.points[top] + u[top] - axis_point
+    radial[:, 1] = 0.0  # the axis is along y
+    normal = radial / np.linalg.norm(radial, axis=1)[:, None]
+    normal_part = np.einsum("ij,ij->i", force, normal)
+    tangential = force - normal_part[:, None] * normal
+    loaded = np.abs(normal_part) > 0.01 * np.abs(normal_part).max()
+    angle = np.degrees(np.arctan2(np.linalg.norm(tangential, axis=1), np.abs(normal_part)))
+    return {"tangential_sum": tangential.sum(axis=0).tolist(),
+            "tangential_share": float(np.linalg.norm(tangential, axis=1).sum() / np.abs(normal_part).sum()),
+            "max_angle_deg": float(angle[loaded].max())}
+
+
 def _steps_line(name: str, run: dict) -> str:
     newton = run["newton"]
     solve = f" (solve {run['solve_time']:.1f} s)" if "solve_time" in run else ""
     return (f"* {name}: {run['status']}, wall {run['wall_time']:.1f} s{solve}, Newton {sum(newton)} "
             f"({' '.join(map(str, newton))})")
+
+
+def _directions(run: dict) -> str:
+    if "force_directions" not in run:
+        return "—"
+    d = run["force_directions"]
+    return f"{100 * d['tangential_share']:.3g} %, {d['max_angle_deg']:.2g}°"
+
+
+def _force(force: list[float] | None, component: int) -> str:
+    """A force component for the table (F_z as the roller's downward push, positive)."""
+    return "—" if force is None else f"{(-1 if component == 2 else 1) * force[component]:.2f}"
+
+
+def _percent(ratio: float | None) -> str:
+    return "—" if ratio is None else f"{100 * ratio:+.2f} %"
 
 
 def markdown(data: dict) -> str:
@@ -129,20 +194,21 @@ def markdown(data: dict) -> str:
             lines += [f"## {mesh} mesh ({entry['nodes']} nodes, h = {MESHES[mesh][1]} mm under the roller), "
                       f"{LAWS[law]}", "",
                       _steps_line("ours, roller moved", moved), _steps_line("ours, roller's frame", roller),
-                      _steps_line("GetFEM", other), "",
-                      "| step | depth (mm) | F_z ours moved | F_z ours roller frame | F_z GetFEM | diff (roller frame) "
-                      "| diff (moved) | F_x ours moved | F_x ours roller frame | F_x GetFEM |",
+                      _steps_line("GetFEM", other), ""]
+            if law == "frictionless":
+                lines += ["Nodal contact forces of the last step against the moved roller's normal at each "
+                          "deformed node (sum |f_t| / sum |f_n|; largest angle, nodes with > 1 % of the largest "
+                          "normal force): " + "; ".join(f"{name} {_directions(run)}" for name, run in (
+                              ("ours moved", moved), ("ours roller frame", roller), ("GetFEM", other))), ""]
+            lines += ["| step | depth (mm) | F_z ours moved | F_z ours roller frame | F_z GetFEM "
+                      "| diff (roller frame) | diff (moved) | F_x ours moved | F_x ours roller frame | F_x GetFEM |",
                       "|---|---|---|---|---|---|---|---|---|---|"]
             for k, row in enumerate(runs["per_step"]):
-                def f(v, c):
-                    return "—" if v is None else f"{(-1 if c == 2 else 1) * v[c]:.2f}"
-
-                def d(v):
-                    return "—" if v is None else f"{100 * v:+.2f} %"
-                lines.append(f"| {k + 1} | {row['depth_mm']:.1f} | {f(row['ours_moved'], 2)} | "
-                             f"{f(row['ours_roller'], 2)} | {f(row['getfem'], 2)} | {d(row['diff_roller'])} | "
-                             f"{d(row['diff_moved'])} | {f(row['ours_moved'], 0)} | {f(row['ours_roller'], 0)} | "
-                             f"{f(row['getfem'], 0)} |")
+                lines.append(f"| {k + 1} | {row['depth_mm']:.1f} | {_force(row['ours_moved'], 2)} | "
+                             f"{_force(row['ours_roller'], 2)} | {_force(row['getfem'], 2)} | "
+                             f"{_percent(row['diff_roller'])} | {_percent(row['diff_moved'])} | "
+                             f"{_force(row['ours_moved'], 0)} | {_force(row['ours_roller'], 0)} | "
+                             f"{_force(row['getfem'], 0)} |")
             lines.append("")
     return "\n".join(lines)
 
@@ -162,12 +228,17 @@ def main() -> int:
     parser.add_argument("--work", default=str(ROOT / "build" / "rubber_getfem"))
     parser.add_argument("--table", default=str(HERE / "results" / "rubber_getfem"))
     parser.add_argument("--update", action="store_true", help="add to the table's JSON instead of replacing it")
+    parser.add_argument("--rewrite", action="store_true", help="only write the markdown again from the table's JSON")
     parser.add_argument("--getfem-options", nargs=argparse.REMAINDER, default=GETFEM_OPTIONS,
                         help="options of peers/getfem_rubber.py (last on the command line)")
     args = parser.parse_args()
     work = pathlib.Path(args.work).resolve()
     work.mkdir(parents=True, exist_ok=True)
     table = pathlib.Path(args.table)
+    if args.rewrite:
+        data = json.loads(table.with_suffix(".json").read_text())
+        write_table(MPI.COMM_WORLD, table, data, markdown(data), echo=False)
+        return 0
     data = json.loads(table.with_suffix(".json").read_text()) if args.update else {"meshes": {}}
     data |= {"case": str(CASE.relative_to(ROOT)), "getfem_options": args.getfem_options}
     data.setdefault("machine", {})
@@ -179,6 +250,14 @@ def main() -> int:
                     "ours_roller": ours(cases[law]["roller"], work / f"ours_{mesh}_{law}_roller_frame"),
                     "getfem": getfem(cases[law]["moved"], work / f"getfem_{mesh}_{law}", args.getfem_options)}
             entry["nodes"], entry["law_check"] = runs["getfem"]["nodes"], runs["getfem"]["law_check"]
+            final = np.asarray(tomllib.loads(cases[law]["moved"].read_text())["steps"][-1]["translation"], float)
+            for name, case, translation in (("ours_moved", cases[law]["moved"], final),
+                                            ("ours_roller", cases[law]["roller"], np.zeros(3)),
+                                            ("getfem", cases[law]["moved"], final)):
+                if runs[name]["status"].startswith("converged"):
+                    out = work / {"ours_moved": f"ours_{mesh}_{law}", "ours_roller": f"ours_{mesh}_{law}_roller_frame",
+                                  "getfem": f"getfem_{mesh}_{law}"}[name]
+                    runs[name]["force_directions"] = force_directions(case, out, translation)
             depths = [-s["translation"][2] * 1e3 for s in tomllib.loads(cases[law]["moved"].read_text())["steps"]]
             per_step = []
             for k, depth in enumerate(depths):

@@ -1,7 +1,7 @@
 """GetFEM 5.4 on the rubber pad: finite-strain neo-Hookean body, large-sliding contact with a rigid roller.
 
     /usr/bin/python3 benchmarks/peers/getfem_rubber.py CASE.toml --output DIR \\
-        [--r 6.0] [--release 5.0] [--max-res 1e-8] [--lsearch default]
+        [--r 6.0] [--release 2.5] [--frictionless] [--substeps 1] [--max-res 1e-8]
 
 (``.venv/bin/python`` works too.) Reads a case file in the format of ``cases/rubber_pad.toml``
 (one body, ``material.model = "neo_hookean"``, a rigid ``cylinder`` obstacle moved by the
@@ -34,7 +34,7 @@ The model, and how it relates to ours (``docs/rubber_getfem.md``):
 
 Forces: the contact force is the nodal internal force (the Bonet PK1 assembled with
 ``asm_generic``) summed over the contact surface's nodes, less the components prescribed
-there (:func:`common.nodal_resultants`); ``contact_force_multipliers`` integrates the
+there (:func:`common.nodal_resultants`); ``contact_force_multipliers_per_step`` integrates the
 brick's multiplier over the reference contact surface, as a check.
 """
 
@@ -94,8 +94,10 @@ def main() -> int:
     mesh = common.read_msh(case.mesh)
     if mesh.cell_type != "tetrahedron":
         raise NotImplementedError("this driver takes tetrahedra")
+    if case.traction or case.body_force is not None:
+        raise NotImplementedError("this driver takes no tractions or body force")
     for name, components in case.displacement.items():
-        for load, translation in case.steps:
+        for _, translation in case.steps:
             if any(abs(translation[c]) > 0 for c in components):
                 raise ValueError(f"roller {name!r} prescribes a component of the obstacle's translation: "
                                  "the roller's frame would move it")
@@ -158,7 +160,6 @@ def main() -> int:
 
     md.add_filtered_fem_variable("lambda_c", mf_lambda, regions[case.contact])
     r = args.r if args.r is not None else young
-    release = args.release
     md.add_initialized_data("r", [r])
     md.add_initialized_data("friction", [friction])
     md.add_initialized_data("alpha", [1.0])
@@ -166,7 +167,7 @@ def main() -> int:
     if friction > 0:
         md.add_fem_data("w", mf_u)
         w_name = "w"
-    brick = md.add_integral_large_sliding_contact_brick_raytracing("r", release, "friction", "alpha", 0)
+    brick = md.add_integral_large_sliding_contact_brick_raytracing("r", args.release, "friction", "alpha", 0)
     md.add_slave_contact_boundary_to_large_sliding_contact_brick(brick, mim_c, regions[case.contact], "u",
                                                                  "lambda_c", w_name)
     obstacle = cylinder_expression(case)
@@ -229,7 +230,8 @@ def main() -> int:
         "contact_force_multipliers_per_step": multiplier_forces,
         "reactions": history[-1]["reactions"], "steps": history, "law_check": law_check,
         "settings": {"lsolver": args.lsolver, "lsearch": args.lsearch, "max_res": args.max_res,
-                     "max_iter": args.max_iter, "substeps": args.substeps, "r": r, "release_distance": release, "friction": friction,
+                     "max_iter": args.max_iter, "substeps": args.substeps, "r": r, "release_distance": args.release,
+                     "friction": friction,
                      "units": "mm, MPa, N", "obstacle": obstacle, "law": LAW, "lambda": lame_lambda,
                      "mu": lame_mu, "integration": ["IM_TETRAHEDRON(2)", args.contact_integration]},
         "threads": args.threads,
