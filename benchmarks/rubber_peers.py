@@ -3,13 +3,16 @@
 For each mesh (``--meshes``: ``coarse`` = meshes/rubber_pad_coarse.geo, ``shipped`` = the case's
 meshes/rubber_pad.geo, ``fine`` = the same script at h = 0.625 mm, meshed in ``--work``) the case
 is exported once to a ``.msh`` that both codes read (:func:`peers.export.export_case`), with its
-law (Coulomb, friction 0.5) and as a frictionless copy. Our solver (``python -m contactqvi run``,
-one rank) and ``peers/getfem_rubber.py`` (serial) run on each, one process at a time; the
-table compares per load step the roller's force on the pad (half model; ours the pair force
-``top/obstacle``, GetFEM's the nodal internal forces at the contact surface) and the wall
-times of the two processes. Writes ``--table``.json/.md (:func:`contactqvi.tables.write_table`).
+law (Coulomb, friction 0.5) and as a frictionless copy, each also in the roller's frame (roller at
+rest, bottom moved up: the frame GetFEM's driver solves in). Our solver (``python -m contactqvi
+run``, one rank) on both frames and ``peers/getfem_rubber.py`` (serial) run one process at a
+time; the table compares per load step the roller's force on the pad (half model; ours the pair
+force ``top/obstacle``, GetFEM's the nodal internal forces at the contact surface), the wall
+times of the processes, and how far the last step's nodal contact forces are from the roller's
+normal (:func:`force_directions`). Writes ``--table``.json/.md (:func:`contactqvi.tables.write_table`).
 
     .venv/bin/python benchmarks/rubber_peers.py --meshes coarse shipped
+    .venv/bin/python benchmarks/rubber_peers.py --meshes fine --laws frictionless --update
 """
 
 from __future__ import annotations
@@ -93,7 +96,7 @@ def ours(case: pathlib.Path, out: pathlib.Path) -> dict:
     steps = summary["steps"]
     return {"status": summary["status"] if code == 0 else f"exit {code}", "wall_time": wall,
             "force": [s["pair_forces"]["top/obstacle"] for s in steps],
-            "newton": [s["iterations"] for s in steps], "nodes": None}
+            "newton": [s["iterations"] for s in steps]}
 
 
 def getfem(case: pathlib.Path, out: pathlib.Path, options: list[str]) -> dict:
@@ -246,18 +249,19 @@ def main() -> int:
         cases = export_mesh(work, mesh)
         entry = data["meshes"].setdefault(mesh, {"laws": {}})
         for law in args.laws:
-            runs = {"ours_moved": ours(cases[law]["moved"], work / f"ours_{mesh}_{law}"),
-                    "ours_roller": ours(cases[law]["roller"], work / f"ours_{mesh}_{law}_roller_frame"),
-                    "getfem": getfem(cases[law]["moved"], work / f"getfem_{mesh}_{law}", args.getfem_options)}
+            cases_of = {"ours_moved": cases[law]["moved"], "ours_roller": cases[law]["roller"],
+                        "getfem": cases[law]["moved"]}
+            outs = {"ours_moved": work / f"ours_{mesh}_{law}", "ours_roller": work / f"ours_{mesh}_{law}_roller_frame",
+                    "getfem": work / f"getfem_{mesh}_{law}"}
+            runs = {"ours_moved": ours(cases_of["ours_moved"], outs["ours_moved"]),
+                    "ours_roller": ours(cases_of["ours_roller"], outs["ours_roller"]),
+                    "getfem": getfem(cases_of["getfem"], outs["getfem"], args.getfem_options)}
             entry["nodes"], entry["law_check"] = runs["getfem"]["nodes"], runs["getfem"]["law_check"]
             final = np.asarray(tomllib.loads(cases[law]["moved"].read_text())["steps"][-1]["translation"], float)
-            for name, case, translation in (("ours_moved", cases[law]["moved"], final),
-                                            ("ours_roller", cases[law]["roller"], np.zeros(3)),
-                                            ("getfem", cases[law]["moved"], final)):
-                if runs[name]["status"].startswith("converged"):
-                    out = work / {"ours_moved": f"ours_{mesh}_{law}", "ours_roller": f"ours_{mesh}_{law}_roller_frame",
-                                  "getfem": f"getfem_{mesh}_{law}"}[name]
-                    runs[name]["force_directions"] = force_directions(case, out, translation)
+            for name, run in runs.items():  # the roller at its last position: at rest in the roller's frame
+                if run["status"].startswith("converged"):
+                    translation = np.zeros(3) if name == "ours_roller" else final
+                    run["force_directions"] = force_directions(cases_of[name], outs[name], translation)
             depths = [-s["translation"][2] * 1e3 for s in tomllib.loads(cases[law]["moved"].read_text())["steps"]]
             per_step = []
             for k, depth in enumerate(depths):
