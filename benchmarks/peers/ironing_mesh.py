@@ -184,10 +184,9 @@ def write_mdpa(path: pathlib.Path, x: np.ndarray, tets: dict[str, np.ndarray], g
     lines = ["Begin ModelPartData", "End ModelPartData", "", "Begin Properties 0", "End Properties", "Begin Nodes"]
     lines += [f"{i + 1} {a!r} {b!r} {c!r}" for i, (a, b, c) in enumerate(x.tolist())] + ["End Nodes", ""]
     first, ranges = 1, {}
-    for body, part in PARTS.items():
-        prop = 1 if body == "die" else 2
+    for body, part in PARTS.items():  # properties 0, as the reference: materials are assigned per sub-model part
         lines.append("Begin Elements TotalLagrangianElement3D4N")
-        lines += [f"{first + k} {prop} " + " ".join(map(str, row)) for k, row in enumerate((tets[body] + 1).tolist())]
+        lines += [f"{first + k} 0 " + " ".join(map(str, row)) for k, row in enumerate((tets[body] + 1).tolist())]
         lines += ["End Elements", ""]
         ranges[part] = (first, first + len(tets[body]))
         first += len(tets[body])
@@ -198,9 +197,7 @@ def write_mdpa(path: pathlib.Path, x: np.ndarray, tets: dict[str, np.ndarray], g
         lines += ["End SubModelPartNodes", "Begin SubModelPartElements"]
         lines += [str(i) for i in range(*ranges[part])] + ["End SubModelPartElements", "End SubModelPart"]
     for group, name in NODE_SETS.items():
-        nodes = np.unique(groups[group]) if group != "symmetry" else np.flatnonzero(np.isclose(x[:, 2], 0.0))
-        if group in ("top", "bottom"):
-            nodes = np.unique(groups[group])
+        nodes = np.unique(groups[group])
         lines += [f"Begin SubModelPart {name}", "Begin SubModelPartNodes"] + [str(i + 1) for i in nodes]
         lines += ["End SubModelPartNodes", "End SubModelPart"]
     path.write_text("\n".join(lines) + "\n")
