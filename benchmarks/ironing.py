@@ -213,9 +213,22 @@ def main() -> int:
                      f"{run['t'][-1] if run['t'] else 0:.3f}, Newton {sum(run['newton'])}"
                      + (f", wall {run['wall_time']:.0f} s" if run.get("wall_time") else "")
                      + (f", {run['error']}" if run.get("error") else ""))
+    history = []
+    for name, run in runs.items():
+        peer = peers.get(name)
+        for k, t in enumerate(run["t"]):
+            match = [i for i, tk in enumerate(peer["t"]) if abs(tk - t) < 1e-6] if peer else []
+            kr = (f"{peer['F_y'][match[0]] / 1e8:.3f}", f"{peer['F_x'][match[0]] / 1e8:.3f}",
+                  str(peer["newton"][match[0]])) if match else ("–", "–", "–")
+            history.append([name, k + 1, f"{t:.2f}", f"{run['F_y'][k] / 1e8:.3f}", f"{run['F_x'][k] / 1e8:.3f}",
+                            run["newton"][k], run["searches"][k], run["substeps"][k] or 1,
+                            f"{run['solver_seconds'][k]:.0f}", *kr])
+    history_headers = ["case", "step", "t", "F_y", "F_x", "Newton", "searches after the first solve", "parts",
+                       "solver s", "Kratos F_y", "Kratos F_x", "Kratos Newton"]
     args.table.parent.mkdir(parents=True, exist_ok=True)
     markdown = ("# Shallow ironing 3D: forces beside the reference and Kratos\n\n"
-                + tables.markdown_table(headers, rows) + "\n" + "".join(f"\n- {note}" for note in notes) + "\n")
+                + tables.markdown_table(headers, rows) + "\n" + "".join(f"\n- {note}" for note in notes) + "\n"
+                + "\n## Per step (forces in 1e8 N)\n\n" + tables.markdown_table(history_headers, history) + "\n")
     tables.write_table(MPI.COMM_SELF, args.table, {"ours": runs, "kratos": peers, "checks": checks,
                                                    "reference": REFERENCE}, markdown)
     return 0
