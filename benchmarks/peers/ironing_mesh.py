@@ -1,9 +1,9 @@
 """Kratos' shallow-ironing mesh as a gmsh mesh of tetrahedra for contactqvi, and back as an mdpa.
 
     .venv/bin/python benchmarks/peers/ironing_mesh.py [--layers 0 0.2 0.4 0.6 0.8 1.0] \\
-        [--msh meshes/shallow_ironing.msh] [--mdpa reference/shallow_ironing3D_tet.mdpa]
+        [--msh meshes/shallow_ironing.msh] [--mdpa build/kratos-ironing/shallow_ironing3D_tet.mdpa]
 
-Reads ``reference/shallow_ironing3D.mdpa`` (KratosMultiphysics/Examples,
+Reads ``build/kratos-ironing/shallow_ironing3D.mdpa`` (KratosMultiphysics/Examples,
 ``contact_structural_mechanics/validation/shallow_ironing_3D``, commit 9eacc7b): trilinear
 hexahedra of two parts, the die ``Parts_Auto1`` (420 hexahedra, x in [0.2, 1.4], y in
 [4.0000667, 5.2], a round tip r = 0.75) and the block ``Parts_Auto2`` (120 x 20 x 5 hexahedra,
@@ -141,7 +141,7 @@ def boundary_triangles(tets: np.ndarray) -> np.ndarray:
 
 def build(layers: list[float] | None = None) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
     """Nodes, tetrahedra per body and boundary triangles per group (each body's part of it)."""
-    x, hexes, sets = read_mdpa(ROOT / "reference" / "shallow_ironing3D.mdpa")
+    x, hexes, sets = read_mdpa(ROOT / "build" / "kratos-ironing" / "shallow_ironing3D.mdpa")
     hexes = {body: hexes[part] for body, part in PARTS.items()}
     if layers is not None:
         x, hexes, sets = keep_layers(x, hexes, sets, layers)

@@ -1,11 +1,11 @@
 """Kratos Multiphysics 10.4 on the shallow-ironing benchmark, with Kratos' own input files.
 
     build/kratos-venv/bin/python benchmarks/peers/kratos_ironing.py --output DIR \\
-        [--friction 0.3] [--mdpa reference/shallow_ironing3D.mdpa] [--vertical-steps 16] \\
+        [--friction 0.3] [--mdpa build/kratos-ironing/shallow_ironing3D.mdpa] [--vertical-steps 16] \\
         [--sliding-steps 500] [--end-time 2.0] [--threads 1] [--max-iteration 20] \\
         [--linear-solver amgcl --linear-tol 1e-8]
 
-Runs ``reference/source/ProjectParameters_literature.json`` (KratosMultiphysics/Examples,
+Runs ``build/kratos-ironing/source/ProjectParameters_literature.json`` (KratosMultiphysics/Examples,
 ``contact_structural_mechanics/validation/shallow_ironing_3D``, commit 9eacc7b: neo-Hookean
 ``TotalLagrangianElement3D8N`` bodies, ``HyperElastic3DLaw``, dual mortar ALM contact with the
 die ``Parts_Auto1`` as slave, ``contact_residual_criterion`` 1e-4, at most 20 Newton iterations)
@@ -43,7 +43,7 @@ import time
 import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-SOURCE = ROOT / "reference" / "source"
+SOURCE = ROOT / "build" / "kratos-ironing" / "source"
 
 
 def parameters(args: argparse.Namespace, work: pathlib.Path) -> dict:
@@ -79,7 +79,7 @@ def main() -> int:
                                      formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--output", required=True)
     parser.add_argument("--friction", type=float, default=0.0)
-    parser.add_argument("--mdpa", default=str(ROOT / "reference" / "shallow_ironing3D.mdpa"))
+    parser.add_argument("--mdpa", default=str(ROOT / "build" / "kratos-ironing" / "shallow_ironing3D.mdpa"))
     parser.add_argument("--vertical-steps", type=int, default=16, help="steps of the press, t in [0.2, 1]")
     parser.add_argument("--sliding-steps", type=int, default=500, help="steps of the slide, t in [1, end]")
     parser.add_argument("--end-time", type=float, default=2.0)
