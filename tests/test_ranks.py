@@ -119,7 +119,8 @@ def test_hertz_case_on_any_number_of_ranks(mpi_tmp_path):
     _on_rank_0(comm, lambda: run_case(case, mpi_tmp_path / "one", MPI.COMM_SELF, plot=False))
     if comm.rank == 0:
         one, many = _compare(mpi_tmp_path / "one", mpi_tmp_path / "many", ["body.bp", "contact_surface.bp",
-                                                                            "solution.npz", "checkpoint"])
+                                                                            "solution.npz", "checkpoint",
+                                                                            "forces.csv"])
         assert len(one["steps"]) == len(many["steps"]) == 4
         for a, b in zip(one["steps"], many["steps"]):
             assert abs(a["iterations"] - b["iterations"]) <= 1
