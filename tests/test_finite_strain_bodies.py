@@ -117,10 +117,10 @@ def test_two_body_hertz_at_a_small_load_is_the_linear_solution(mpi_tmp_path):
     the linear solution's force P to 1e-3 (strains of 1e-3 at most; measured 3.0e-5), its
     largest pressure likewise, both solves converged and in balance: the linear one to 1e-8
     (measured 4e-10 on 1 rank, 3e-9 on 2: the forces are 60 N, the stopping floor is relative
-    to the load of the shifted variables), the neo-Hookean one to 2e-5 (measured 5.6e-6): its
-    residual cannot be resolved below eps
-    times stress terms of size mu |F| (``ContactProblem.force_scale``), and the solver stops at
-    its ``floor``, 45 eps of that."""
+    to the load of the shifted variables), the neo-Hookean one to 1e-4 (measured 5.6e-6 on 1
+    rank, 2.8e-5 on 2): its residual cannot be resolved below eps times stress terms of size
+    mu |F| (``ContactProblem.force_scale``), and the solver stops at its ``floor``, 45 eps of
+    that, here about 1.5e-3 N against a contact force of 60 N."""
     import tomllib
 
     from contactqvi.runner import run_case
@@ -137,7 +137,7 @@ def test_two_body_hertz_at_a_small_load_is_the_linear_solution(mpi_tmp_path):
         summary, code = run_case(case, mpi_tmp_path / str(model), plot=False)
         assert code == 0, summary["status"]
         results[model] = summary["steps"][-1]
-        assert max(results[model]["body_equilibrium_errors"].values()) <= (1e-8 if model is None else 2e-5)
+        assert max(results[model]["body_equilibrium_errors"].values()) <= (1e-8 if model is None else 1e-4)
     linear, neo = results[None], results["neo_hookean"]
     assert abs(neo["contact_force"][2] / linear["contact_force"][2] - 1.0) <= 1e-3
     assert abs(neo["max_contact_pressure"] / linear["max_contact_pressure"] - 1.0) <= 1e-3
