@@ -6,7 +6,8 @@
 
 Cases ``cases/shallow_ironing.toml`` (frictionless) and ``cases/shallow_ironing_frictional.toml``
 (Coulomb, mu = 0.3): Kratos' validation case ``shallow_ironing_3D`` (KratosMultiphysics/Examples,
-commit 9eacc7b, ``build/kratos-ironing/`` (scripts/fetch-kratos-ironing.sh)) after Poulios & Renard (2015). Our runs go to
+commit 9eacc7b, fetched into ``build/kratos-ironing/`` by scripts/fetch-kratos-ironing.sh) after
+Poulios & Renard (2015). Our runs go to
 ``results/ironing/<case>`` (``--results``); each step's time t of Kratos' path is read from the
 die's translation: t = 0.2 + |u_y| while it is pressed, t = 1 + u_x / 10 while it slides.
 
@@ -193,7 +194,8 @@ def main() -> int:
              "the die along x (R_x of die.top, the force that drags it); Kratos: REACTION_x, -REACTION_y of "
              "Displacement_Auto2 (the die's top; Kratos' REACTION is the support's force on the die, as our R).",
              f"plateau: mean over the steps with t in [{PLATEAU[0]}, {PLATEAU[1]}]; ref: Poulios & Renard (2015) "
-             "read from Kratos' figures (build/kratos-ironing/solution_*.png, scripts/fetch-kratos-ironing.sh), accuracy +-0.03 (plateau), +-0.05 (t = 2), "
+             "read from Kratos' figures (build/kratos-ironing/solution_*.png, scripts/fetch-kratos-ironing.sh), "
+             "accuracy +-0.03 (plateau), +-0.05 (t = 2), "
              "+-0.1 (t = 1, steep).",
              "F_x at the frictionless plateau is ~0: compare it absolutely (ref 0.00 +- 0.03)."]
     for name, c in checks.items():

@@ -348,7 +348,8 @@ def _unrolled(polygons: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, list[
     middle = np.arctan2(np.sin(angle).mean(), np.cos(angle).mean())
     arc = radius * np.angle(np.exp(1j * (angle - middle)))
     along = points @ axis
-    labels = [f"arc length on radius {radius:.4g} m [m]", f"along the axis ({', '.join(f'{v + 0.0:.2f}' for v in axis)}) [m]"]
+    direction = ", ".join(f"{v + 0.0:.2f}" for v in axis)
+    labels = [f"arc length on radius {radius:.4g} m [m]", f"along the axis ({direction}) [m]"]
     coordinates = [arc, along]
     if np.ptp(along) > np.ptp(arc):  # the longer extent across the picture
         coordinates, labels = coordinates[::-1], labels[::-1]
