@@ -50,6 +50,7 @@ import argparse
 import pathlib
 import sys
 import time
+import typing
 
 import numpy as np
 
@@ -122,6 +123,20 @@ def newton(md: gf.Model, options: list, max_iter: int) -> tuple[int, bool]:
     return its, bool(np.ravel(iterations)[1]) if np.size(iterations) > 1 else its < max_iter
 
 
+def outer_face_regions(m: gf.Mesh, pid: np.ndarray) -> typing.Callable[[int, np.ndarray], None]:
+    """``region(rnum, nodes)``: make GetFEM region ``rnum`` of the outer faces of ``m`` whose
+    vertices are all in ``nodes`` (our node indices; our node i is GetFEM point ``pid[i]``)."""
+    outer = m.outer_faces()
+    outer_keys = set(zip(outer[0].tolist(), outer[1].tolist()))
+
+    def region(rnum: int, nodes: np.ndarray) -> None:
+        faces = np.asarray(m.faces_from_pid(pid[nodes]))
+        keep = [i for i, key in enumerate(zip(faces[0].tolist(), faces[1].tolist())) if key in outer_keys]
+        m.set_region(rnum, faces[:, keep])
+
+    return region
+
+
 def main() -> int:
     parser = command_line(__doc__.split("\n")[0])
     parser.add_argument("--r", type=float, default=None,
@@ -138,14 +153,7 @@ def main() -> int:
     pts = m.pts().T
     pid = np.arange(len(pts)) if np.array_equal(pts, mesh.points) else np.asarray(
         m.pid_from_coords(mesh.points.T, 1e-12 * np.abs(mesh.points).max()), dtype=np.int64)
-    outer = m.outer_faces()
-    outer_keys = set(zip(outer[0].tolist(), outer[1].tolist()))
-
-    def region(rnum: int, nodes: np.ndarray) -> None:
-        """Region ``rnum``: the outer faces whose vertices are all in ``nodes`` (our indices)."""
-        faces = np.asarray(m.faces_from_pid(pid[nodes]))
-        keep = [i for i, key in enumerate(zip(faces[0].tolist(), faces[1].tolist())) if key in outer_keys]
-        m.set_region(rnum, faces[:, keep])
+    region = outer_face_regions(m, pid)
 
     fixed = mesh.clamped_nodes(case)
     regions = {}

@@ -109,14 +109,7 @@ def main() -> int:
     pid = np.asarray(m.pid_from_coords(points.T, 1e-9 * np.abs(points).max()), dtype=np.int64)
     if (pid < 0).any() or len(np.unique(pid)) != len(pid):
         raise RuntimeError("GetFEM merged or lost nodes of the mesh")
-    outer = m.outer_faces()
-    outer_keys = set(zip(outer[0].tolist(), outer[1].tolist()))
-
-    def region(rnum: int, nodes: np.ndarray) -> None:
-        """Region ``rnum``: the outer faces whose vertices are all in ``nodes`` (our indices)."""
-        faces = np.asarray(m.faces_from_pid(pid[nodes]))
-        keep = [i for i, key in enumerate(zip(faces[0].tolist(), faces[1].tolist())) if key in outer_keys]
-        m.set_region(rnum, faces[:, keep])
+    region = getfem_contact.outer_face_regions(m, pid)
 
     regions = {}
     for number, name in enumerate(dict.fromkeys([*case.clamped, case.contact]), start=101):
