@@ -13,6 +13,12 @@ test out of the ranks' runs:
   parsing, parameter tables, static checks of the source). ``tests/test_architecture.py``
   checks that such a test reaches none of the names of code that runs differently in
   parallel (``PARALLEL_NAMES`` there); the reason is required.
+* ``parallel_twin(twin, reason=...)``, on one parameter set of a parametrised test: this
+  set reaches parallel code, but the same code as the set ``twin`` of the same test (its
+  id in brackets, ``"d1-L1"``), which runs on several ranks; the two differ only in what
+  each rank computes alone (data of the nodal law, a material constant, another closed
+  form), said by the reason. A twin that does not run on several ranks (renamed, itself
+  marked) is a usage error, so that no test leaves the parallel run unnoticed.
 """
 
 from __future__ import annotations
@@ -27,12 +33,13 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 import pytest
+from shipped_runs import ShippedRuns
 
 # Tests create many prefixed solvers, some of whose defaults a direct solver ignores.
 PETSc.Options()["options_left"] = "no"
 
 #: Markers that take a test out of the runs on several ranks.
-ONE_RANK_MARKERS = ("serial", "one_rank")
+ONE_RANK_MARKERS = ("serial", "one_rank", "parallel_twin")
 
 
 @pytest.fixture(autouse=True)
@@ -58,6 +65,14 @@ def mpi_tmp_path() -> pathlib.Path:
     path = tempfile.mkdtemp(prefix="contactqvi-") if comm.rank == 0 else None
     yield pathlib.Path(comm.bcast(path, root=0))
     comm.Barrier()
+
+
+@pytest.fixture(scope="session")
+def shipped_runs(tmp_path_factory) -> ShippedRuns:
+    """The shipped cases' runs, each made when a test first asks for it (tests/shipped_runs.py)."""
+    comm = MPI.COMM_WORLD
+    base = comm.bcast(str(tmp_path_factory.mktemp("shipped")) if comm.rank == 0 else None, root=0)
+    return ShippedRuns(pathlib.Path(base), comm)
 
 
 @pytest.fixture
@@ -87,15 +102,31 @@ def pytest_collection_modifyitems(config, items):
     the tests of a module that share a module-scoped fixture go to one worker, so that
     the fixture (all shipped cases, say) is computed once; the other tests go one by one."""
     for item in items:
-        mark = item.get_closest_marker("one_rank")
-        if mark is not None and not (mark.kwargs.get("reason") or (mark.args and mark.args[0])):
-            raise pytest.UsageError(f"{item.nodeid}: one_rank needs a reason, one_rank(reason=...)")
+        for name in ("one_rank", "parallel_twin"):
+            mark = item.get_closest_marker(name)
+            if mark is not None and not mark.kwargs.get("reason"):
+                raise pytest.UsageError(f"{item.nodeid}: {name} needs a reason, {name}(..., reason=...)")
         if config.pluginmanager.hasplugin("xdist") and _shares_a_module_fixture(item):
             item.add_marker(pytest.mark.xdist_group(item.path.name))
+    selected = [item for item in items if not any(item.get_closest_marker(m) for m in ONE_RANK_MARKERS)]
+    _check_twins(config, items, selected)
     if MPI.COMM_WORLD.size == 1:
         return
-    selected = [item for item in items if not any(item.get_closest_marker(m) for m in ONE_RANK_MARKERS)]
     deselected = [item for item in items if any(item.get_closest_marker(m) for m in ONE_RANK_MARKERS)]
     if deselected:
         config.hook.pytest_deselected(items=deselected)
         items[:] = selected
+
+
+def _check_twins(config: pytest.Config, items: list[pytest.Item], selected: list[pytest.Item]) -> None:
+    """Each ``parallel_twin`` names a parameter set of its own test that runs on several ranks
+    (``-k`` selects later; a run of chosen test ids may leave the twin out)."""
+    collected, running = {item.nodeid for item in items}, {item.nodeid for item in selected}
+    chosen = any("::" in str(arg) for arg in config.args)
+    for item in items:
+        mark = item.get_closest_marker("parallel_twin")
+        if mark is None:
+            continue
+        twin = f"{item.nodeid.split('[')[0]}[{mark.args[0]}]"
+        if twin not in running and (twin in collected or not chosen):
+            raise pytest.UsageError(f"{item.nodeid}: its parallel_twin {twin} does not run on several ranks")

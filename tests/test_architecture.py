@@ -251,7 +251,8 @@ PARALLEL_NAMES = {
     "write_solution_npz": "solution.npz gathered on rank 0",
 }
 #: Modules of tests/ that tests import helpers from.
-TEST_HELPERS = ("conftest", "law_checks", "friction_checks", "mortar_checks", "output_files", "petsc_audit")
+TEST_HELPERS = ("conftest", "law_checks", "friction_checks", "mortar_checks", "output_files", "petsc_audit",
+                "shipped_runs")
 
 
 def _test_namespace(tree: ast.Module, helpers: dict[str, ast.Module]) -> dict[str, ast.AST]:
@@ -370,3 +371,31 @@ def test_one_rank_tests_reach_no_parallel_code(path):
     paths = parallel_paths(path.read_text(), HELPER_SOURCES)
     wrong = {name: paths[name] for name in sorted(_one_rank_tests(ast.parse(path.read_text()))) if paths[name]}
     assert not wrong, f"{path.name}: tests marked one_rank reach parallel code: {wrong}"
+
+
+@dataclasses.dataclass
+class _Item:
+    """What conftest's check of ``parallel_twin`` reads of a collected test."""
+
+    nodeid: str
+    marks: tuple = ()
+
+    def get_closest_marker(self, name: str):
+        return next((mark for mark in self.marks if mark.name == name), None)
+
+
+def test_a_parallel_twin_must_run_on_several_ranks():
+    """A parameter set marked ``parallel_twin`` leaves the ranks' run only while its twin runs there:
+    a twin that is itself marked, or that is not collected (renamed), stops the run."""
+    from conftest import _check_twins
+
+    config = type("Config", (), {"args": ["tests"]})()
+    twin = pytest.mark.parallel_twin("a", reason="x").mark
+    one_rank = pytest.mark.one_rank(reason="x").mark
+    first, second = _Item("t.py::test_f[a]"), _Item("t.py::test_f[b]", (twin,))
+    _check_twins(config, [first, second], [first])
+    with pytest.raises(pytest.UsageError, match=r"test_f\[b\]: its parallel_twin t.py::test_f\[a\] does not run"):
+        _check_twins(config, [_Item(first.nodeid, (one_rank,)), second], [])
+    with pytest.raises(pytest.UsageError, match="parallel_twin"):
+        _check_twins(config, [second], [])
+    _check_twins(type("Config", (), {"args": ["t.py::test_f[b]"]})(), [second], [])  # the test chosen alone

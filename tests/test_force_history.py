@@ -4,32 +4,30 @@ the summary's numbers, one row per converged step, against what drives the path.
 from __future__ import annotations
 
 import csv
-import pathlib
 
 from mpi4py import MPI
 
 import numpy as np
 import pytest
 
-from contactqvi.case import load_case
+from contactqvi.contact.figures import plot_forces
 from contactqvi.contact.force_history import force_columns
-from contactqvi.runner import run_case
-
-ROOT = pathlib.Path(__file__).resolve().parent.parent
+from shipped_runs import group
 
 
-def test_forces_of_the_sliding_blocks_path(mpi_tmp_path):
+@group("sliding_blocks")
+def test_forces_of_the_sliding_blocks_path(shipped_runs):
     """cases/sliding_blocks.toml: forces.csv holds, per step, exactly the summary's load,
     translation, pair forces and reactions (floats written exactly), and forces.png is drawn
     against the slide (x translation)."""
-    case = load_case(ROOT / "cases" / "sliding_blocks.toml")
-    summary, code = run_case(case, mpi_tmp_path / "slide", plot=True)
-    assert code == 0, summary["status"]
-    assert summary["forces_plot"] is True
+    run = shipped_runs["sliding_blocks"]
+    summary, out = run["summary"], run["output"]
+    assert run["code"] == 0, summary["status"]
+    assert plot_forces(out / "forces.png", summary["steps"], MPI.COMM_WORLD) is True
     if MPI.COMM_WORLD.rank != 0:
         return
-    assert (mpi_tmp_path / "slide" / "forces.png").stat().st_size > 10_000
-    with open(mpi_tmp_path / "slide" / "forces.csv", newline="") as f:
+    assert (out / "forces.png").stat().st_size > 10_000
+    with open(out / "forces.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     assert len(rows) == len(summary["steps"])
     for row, step in zip(rows, summary["steps"]):

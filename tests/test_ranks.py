@@ -108,10 +108,12 @@ def test_demo_on_any_number_of_ranks(lev, mpi_tmp_path, load_demo):
 
 
 def test_hertz_case_on_any_number_of_ranks(mpi_tmp_path):
-    """cases/hertz.toml on meshes/hertz_coarse.geo (a sphere, gmsh, shared-facet ghosts), four load steps."""
+    """cases/hertz.toml on meshes/hertz_coarse.geo (a sphere, gmsh, shared-facet ghosts), its first two
+    load steps."""
     comm = MPI.COMM_WORLD
     raw = load_case(CASES / "hertz.toml").to_dict()
     raw["mesh"] = {"file": str(CASES.parent / "meshes" / "hertz_coarse.geo")}
+    raw["steps"] = raw["steps"][:2]
     raw.setdefault("solver", {})["pc"] = "lu"
     case = parse_case(raw, CASES)
     summary, code = run_case(case, mpi_tmp_path / "many", comm, plot=False)
@@ -121,7 +123,7 @@ def test_hertz_case_on_any_number_of_ranks(mpi_tmp_path):
         one, many = _compare(mpi_tmp_path / "one", mpi_tmp_path / "many", ["body.bp", "contact_surface.bp",
                                                                             "solution.npz", "checkpoint",
                                                                             "forces.csv"])
-        assert len(one["steps"]) == len(many["steps"]) == 4
+        assert len(one["steps"]) == len(many["steps"]) == 2
         for a, b in zip(one["steps"], many["steps"]):
             assert abs(a["iterations"] - b["iterations"]) <= 1
             assert b["contact_force"][2] == pytest.approx(a["contact_force"][2], rel=RTOL)

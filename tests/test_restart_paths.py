@@ -1,22 +1,25 @@
 """A restarted load path is the uninterrupted one (issue 35), after every step.
 
-Each path runs six steps uninterrupted, then once per step k = 1..5 stopped after
-step k (``stop_after``: the run ends as if interrupted there, its checkpoint kept)
-and continued with ``restart``. The paths cover what a step reads from the step
-before (:class:`~contactqvi.contact.path_state.PathState`): a rigid sphere pressed
-into a block and dragged along it (the obstacle's position, from which the slip
-is measured), with Coulomb friction and with pressure-dependent friction; and a
-block slid along another by a moved face (prescribed displacements that move),
-its pair searched before every step and until each step's configuration settles.
-The Newton steps are solved exactly (``pc = "lu"``) so that nothing but the
-path's state can differ. A fifth path twists that block about the vertical through its
-top's centre instead (a rotation of the moved face, 1 to 5 degrees): the state also
-holds the moved face's rotation.
+Each path runs six steps uninterrupted, and again as a chain of runs each stopped after
+one more step (``stop_after``: the run ends as if interrupted there, its checkpoint kept)
+and continued with ``restart``: every step k + 1 of the chain starts from the checkpoint
+of step k. State that a step reads from any earlier step and that the checkpoint lacks
+is then missing in the chain at the first step that reads it. The paths cover what a
+step reads from the steps before (:class:`~contactqvi.contact.path_state.PathState`): a
+rigid sphere pressed into a block and dragged along it (the obstacle's position, from
+which the slip is measured), with Coulomb friction and with pressure-dependent friction;
+and a block slid along another by a moved face (prescribed displacements that move),
+its pair searched before every step and until each step's configuration settles. The
+Newton steps are solved exactly (``pc = "lu"``) so that nothing but the path's state can
+differ. A fifth path twists that block about the vertical through its top's centre
+instead (a rotation of the moved face, 1 to 5 degrees): the state also holds the moved
+face's rotation.
 
-* On the same number of ranks the restarted run is the uninterrupted one: the
-  same Newton and Krylov counts, step forces and final solution to 1e-12.
-* Written on 2 ranks and continued on 1 (the 2-rank run), or written on 1 and
-  continued on 3 (the 3-rank run): step forces and final solution to 1e-9.
+* On the same number of ranks the chain is the uninterrupted run: the same Newton and
+  Krylov counts in every step, every step's forces and the final solution to 1e-12.
+* Written on 2 ranks and continued on 1 (the 2-rank run), or written on 1 and continued
+  on 3 (the 3-rank run): from the checkpoint of every step k, step k + 1 on the other
+  number of ranks gives the writer's forces and solution of step k + 1 to 1e-9.
 
 Before the path state held the obstacles' position, a restart moved the sphere
 by its whole travel in its first step: the dragged sphere's tangential force
@@ -30,6 +33,7 @@ import json
 import pathlib
 import shutil
 import tempfile
+import typing
 
 from mpi4py import MPI
 
@@ -102,8 +106,8 @@ def _with(entry, replaced: dict):
 
 def _solve(case: ContactCase, out: pathlib.Path, comm: MPI.Comm, **options) -> dict:
     summary, code = run_case(case, out, comm, plot=False, **options)
-    expected = EXIT_CODES["interrupted" if options.get("stop_after") else "converged"]
-    assert code == expected, summary["status"]
+    stopped = options.get("stop_after", STEPS) < STEPS
+    assert code == EXIT_CODES["interrupted" if stopped else "converged"], summary["status"]
     return summary
 
 
@@ -115,59 +119,63 @@ def _forces(summary: dict) -> np.ndarray:
     return np.array([[f for force in s["pair_forces"].values() for f in force] for s in summary["steps"]])
 
 
-def _differences(a: tuple[dict, pathlib.Path], b: tuple[dict, pathlib.Path]) -> tuple[float, float]:
-    """Largest relative differences of the step forces and of the final solutions of two runs."""
-    (sa, out_a), (sb, out_b) = a, b
-    fa, fb = _forces(sa), _forces(sb)
-    ua, ub = (np.load(out / "solution.npz")["u"] for out in (out_a, out_b))
-    return float(np.abs(fa - fb).max() / np.abs(fa).max()), float(np.abs(ua - ub).max() / np.abs(ua).max())
+def _difference(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.abs(a - b).max() / np.abs(a).max())
 
 
-def _restarts(case: ContactCase, base: pathlib.Path, writer: MPI.Comm | None, reader: MPI.Comm | None):
-    """For k = 1..STEPS-1: the output directory of a run stopped after step k on ``writer``
-    and the summary of its continuation on ``reader`` (None on ranks outside ``reader``).
-    The run stopped after step k is the one stopped after step k - 1, continued (a copy
-    of it is continued to the end)."""
-    world, chain = MPI.COMM_WORLD, base / "chain"
-    for k in range(1, STEPS):
-        if writer is not None:
-            assert len(_solve(case, chain, writer, stop_after=k, restart=k > 1)["steps"]) == k
-        out = base / f"after_{k}"
-        if world.rank == 0:
-            shutil.copytree(chain, out)
-        world.Barrier()
-        yield k, out, None if reader is None else _solve(case, out, reader, restart=True)
-        world.Barrier()
+def _solution(out: pathlib.Path) -> np.ndarray:
+    return np.load(out / "solution.npz")["u"]
+
+
+def _chain(case: ContactCase, out: pathlib.Path, comm: MPI.Comm) -> typing.Iterator[tuple[int, dict]]:
+    """Steps k = 1..STEPS run one at a time in ``out``, each stopped after step k and the
+    next continued from its checkpoint: k and the summary after step k."""
+    for k in range(1, STEPS + 1):
+        summary = _solve(case, out, comm, stop_after=k, restart=k > 1)
+        assert len(summary["steps"]) == k
+        yield k, summary
 
 
 @pytest.mark.parametrize("name", PATHS)
-def test_a_path_restarted_after_any_step_is_the_uninterrupted_path(name, work):
+def test_a_path_restarted_after_every_step_is_the_uninterrupted_path(name, work):
     comm = MPI.COMM_WORLD
     case, base = _case(name, work), work / f"{name}_{comm.size}"
     whole = _solve(case, base / "whole", comm)
     assert len(whole["steps"]) == STEPS
-    for k, out, restarted in _restarts(case, base, comm, comm):
-        assert restarted["restarts"][-1] == {"after_step": k, "mpi_size": comm.size}
-        assert _steps(restarted) == _steps(whole), k
-        if comm.rank == 0:
-            forces, solution = _differences((whole, base / "whole"), (restarted, out))
-            assert forces <= 1e-12 and solution <= 1e-12, (k, forces, solution)
+    *_, (_, chained) = _chain(case, base / "chain", comm)
+    assert chained["restarts"] == [{"after_step": k, "mpi_size": comm.size} for k in range(1, STEPS)]
+    assert _steps(chained) == _steps(whole)
+    if comm.rank == 0:
+        forces = np.abs(_forces(whole) - _forces(chained)).max(axis=1) / np.abs(_forces(whole)).max()
+        assert forces.max() <= 1e-12, forces  # every step's
+        solution = _difference(_solution(base / "whole"), _solution(base / "chain"))
+        assert solution <= 1e-12, solution
 
 
 @pytest.mark.skipif(MPI.COMM_WORLD.size not in (2, 3), reason="written on 2 ranks, continued on 1; or 1 -> 3")
 @pytest.mark.parametrize("name", PATHS)
 def test_a_path_restarted_on_another_number_of_ranks(name, work):
-    """2 -> 1 in the 2-rank run (rank 0 continues alone), 1 -> 3 in the 3-rank run."""
+    """2 -> 1 in the 2-rank run (rank 0 continues alone), 1 -> 3 in the 3-rank run: the
+    writer's chain keeps its output after every step k, and step k + 1 continued from it
+    on the reader's ranks is compared with the chain's step k + 1."""
     world = MPI.COMM_WORLD
     alone = world.Split(world.rank, 0)  # each rank on its own
     first = alone if world.rank == 0 else None
     writer, reader = (world, first) if world.size == 2 else (first, world)
-    case, base = _case(name, work), work / f"{name}_{world.size}_ranks"
-    whole = _solve(case, base / "whole", writer) if writer is not None else None  # rank 0 compares
-    for k, out, restarted in _restarts(case, base, writer, reader):
-        if world.rank == 0:
-            forces, solution = _differences((whole, base / "whole"), (restarted, out))
+    base = work / f"{name}_{world.size}_ranks"
+    case, written = _case(name, work), base / "chain"
+    chain = _chain(case, written, writer) if writer is not None else ((k, None) for k in range(1, STEPS + 1))
+    for k, summary in chain:
+        if k > 1 and reader is not None:
+            continued = _solve(case, base / f"after_{k - 1}", reader, stop_after=k, restart=True)
+            assert continued["restarts"][-1] == {"after_step": k - 1, "mpi_size": reader.size}
+        if world.rank == 0 and k > 1:
+            forces = _difference(_forces(summary)[-1], _forces(continued)[-1])
+            solution = _difference(_solution(written), _solution(base / f"after_{k - 1}"))
             assert forces <= 1e-9 and solution <= 1e-9, (k, forces, solution)
+        if world.rank == 0 and k < STEPS:
+            shutil.copytree(written, base / f"after_{k}")
+        world.Barrier()
     alone.Free()
 
 

@@ -3,14 +3,13 @@ where that is cheap to check, and with its Newton counts per load step as a regr
 
 Each case file of ``cases/`` runs through :func:`contactqvi.case.load_case` and
 :func:`contactqvi.runner.run_case` as shipped, or as its coarse variant where it names a
-larger mesh (:data:`COARSE`). No case may carry expert solver settings: they must all
+larger mesh (:data:`shipped_runs.COARSE`), each run once for the session. No case may carry expert solver settings: they must all
 converge with the defaults (issue 23). Two edge cases of the stopping test close the module: a first
 load step in which nothing touches, and a contact surface far from the obstacle.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import pathlib
 
 from mpi4py import MPI
@@ -18,7 +17,7 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 
-from contactqvi.case import ContactCase, PaperBody, load_case
+from contactqvi.case import load_case
 from contactqvi.contact import LoadStep, build_contact_problem, solve_load_path
 from contactqvi.contact.nodal import State
 from contactqvi.laws import Coulomb
@@ -26,41 +25,9 @@ from contactqvi.meshes import create_contact_body
 from contactqvi.obstacles import Plane
 from contactqvi.problems import coulomb as data
 from contactqvi.problems import hertz, press_fit
-from contactqvi.runner import run_case
+from shipped_runs import group, of_case, shipped_case
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-
-@dataclasses.dataclass(frozen=True)
-class Variant:
-    """What ``make test`` runs instead of a large case: another mesh file or paper level,
-    and optionally only the first steps of a long load path."""
-
-    mesh: str | PaperBody | None = None
-    steps: int | None = None
-
-    def of(self, case: ContactCase) -> ContactCase:
-        if isinstance(self.mesh, PaperBody):
-            case = dataclasses.replace(case, mesh=dataclasses.replace(case.mesh, box=self.mesh))
-        elif self.mesh is not None:
-            case = dataclasses.replace(case, mesh=dataclasses.replace(case.mesh, file=ROOT / "meshes" / self.mesh))
-        return case if self.steps is None else dataclasses.replace(case, steps=case.steps[: self.steps])
-
-
-#: The variant of each case whose file names a larger mesh (the coarsest mesh it lists).
-#: Two bodies on the coarse Mindlin meshes take 45 s for three steps under load: the
-#: indentation and two tangential steps of the path run.
-COARSE = {
-    "hertz": Variant("hertz_coarse.geo"),
-    "hertz_bodies": Variant("hertz_bodies_coarse.geo"),
-    "cattaneo_mindlin": Variant("mindlin_coarse.geo"),
-    "cattaneo_mindlin_nu045": Variant("mindlin_coarse.geo"),
-    "cattaneo_mindlin_bodies": Variant("mindlin_bodies_coarse.geo", steps=3),
-    "paper_d3_L2": Variant(PaperBody(lev=3, geometry="d3")),
-    "rubber_pad": Variant("rubber_pad_coarse.geo"),
-    # the ironing paths take 36 min each (docs/ironing.md): their first press step here
-    "shallow_ironing": Variant(steps=1),
-    "shallow_ironing_frictional": Variant(steps=1),
-}
 
 #: Regression guard, not a paper number: Newton steps per load step of each case (its
 #: variant) with the default solver, measured on 1 and 2 ranks (GAMG depends on the
@@ -79,13 +46,15 @@ COARSE = {
 #: the multigrid levels of several bodies set up once per load path (on A) and kept across
 #: the searches changed hertz_bodies [5, 6, 7, 7] / [6, 5, 5, 5] -> [5, 7, 7, 7] / [6, 6, 6, 6],
 #: vice [8, 7] -> [8, 8] on 1 rank and cattaneo_mindlin_bodies [9, 7, 6] -> [9, 6, 6] on 2.
+#: The cases of shipped_runs.TWINS run on one rank only (their 2-rank counts were
+#: cattaneo_mindlin_bodies [9, 6, 6], cattaneo_mindlin_nu045 [10, 6, 7, 6, 7, 7, 6, 6, 7, 6, 6,
+#: 6, 5, 6, 6] and shallow_ironing_frictional [16]).
 NEWTON_STEPS = {
     "arch_block": {1: [10, 8, 8, 9], 2: [10, 8, 7, 7]},
     "cattaneo_mindlin": {1: [8, 5, 4, 5, 4, 4, 5, 5, 4, 4, 4, 4, 4, 4, 4],
                          2: [8, 5, 5, 5, 5, 4, 5, 4, 4, 5, 4, 4, 4, 4, 4]},
-    "cattaneo_mindlin_bodies": {1: [8, 7, 6], 2: [9, 6, 6]},
-    "cattaneo_mindlin_nu045": {1: [9, 6, 7, 6, 6, 7, 6, 5, 5, 6, 5, 6, 6, 6, 6],
-                               2: [10, 6, 7, 6, 7, 7, 6, 6, 7, 6, 6, 6, 5, 6, 6]},
+    "cattaneo_mindlin_bodies": {1: [8, 7, 6]},
+    "cattaneo_mindlin_nu045": {1: [9, 6, 7, 6, 6, 7, 6, 5, 5, 6, 5, 6, 6, 6, 6]},
     "hertz": {1: [6, 6, 6, 6], 2: [6, 6, 6, 7]},
     "hertz_bodies": {1: [5, 7, 7, 7], 2: [6, 6, 6, 6]},
     "hex_patch": {1: [5], 2: [5]},
@@ -94,7 +63,7 @@ NEWTON_STEPS = {
     "patch_test": {1: [5], 2: [5]},
     "rubber_pad": {1: [11, 15, 15, 14, 15, 15, 20, 22], 2: [11, 15, 13, 14, 14, 15, 20, 20]},
     "shallow_ironing": {1: [14], 2: [14]},
-    "shallow_ironing_frictional": {1: [16], 2: [16]},
+    "shallow_ironing_frictional": {1: [16]},
     "shrink_fit": {1: [5], 2: [4]},
     "sliding_blocks": {1: [11, 14, 13, 14, 14, 14, 13, 5], 2: [11, 14, 13, 13, 14, 12, 13, 5]},
     "vice": {1: [8, 8], 2: [8, 7]},
@@ -113,36 +82,9 @@ MAX_NEWTON = {"hertz": 15}
 IMBALANCE = 1e-7
 
 
-@pytest.fixture(scope="module")
-def summaries(tmp_path_factory) -> dict[str, dict]:
-    """Summaries of every shipped case (or its variant), each run once for the whole module;
-    a case that raises is recorded, so that only its own tests fail."""
-    comm = MPI.COMM_WORLD
-    base = pathlib.Path(comm.bcast(str(tmp_path_factory.mktemp("shipped")) if comm.rank == 0 else None, root=0))
-    runs = {}
-    for path in sorted((ROOT / "cases").glob("*.toml")):
-        case = COARSE.get(path.stem, Variant()).of(load_case(path))
-        try:
-            summary, code = run_case(case, base / path.stem, comm, plot=False)
-            runs[path.stem] = {"summary": summary, "code": code}
-        except Exception as exc:  # reported by that case's tests; the others still run
-            runs[path.stem] = {"error": f"{type(exc).__name__}: {exc}"}
-        comm.Barrier()
-    return runs
-
-
-def _steps(summaries: dict[str, dict], name: str) -> list[dict]:
-    """The step summaries of a case run without error (exit code 0)."""
-    run = summaries[name]
-    if "error" in run:
-        pytest.fail(f"{name} raised {run['error']}")
-    assert run["code"] == 0, [step["status"] for step in run["summary"]["steps"]]
-    return run["summary"]["steps"]
-
-
 @pytest.mark.one_rank(reason="case-file contents, no run")
 def test_every_shipped_case_is_guarded():
-    """A new case file needs its counts in NEWTON_STEPS (and its coarse variant in COARSE)."""
+    """A new case file needs its counts in NEWTON_STEPS (and its variant in shipped_runs.COARSE)."""
     assert {path.stem for path in (ROOT / "cases").glob("*.toml")} == set(NEWTON_STEPS)
 
 
@@ -156,40 +98,42 @@ def test_shipped_case_needs_no_expert_settings(name):
     assert set(case.solver) <= {"start", "geometry_tol"} and case.petsc == {}
 
 
-@pytest.mark.parametrize("name", sorted(NEWTON_STEPS))
-def test_shipped_case_converges_in_equilibrium(summaries, name):
+@pytest.mark.parametrize("name", of_case(*sorted(NEWTON_STEPS)))
+def test_shipped_case_converges_in_equilibrium(shipped_runs, name):
     """Every load step of the variant converges within its Newton budget, and the forces
     balance: reactions, applied load and the obstacles' contact forces, and each body's with the
     contact forces between bodies (:data:`IMBALANCE`)."""
-    steps = _steps(summaries, name)
-    assert len(steps) == len(COARSE.get(name, Variant()).of(load_case(ROOT / "cases" / f"{name}.toml")).steps)
+    steps = shipped_runs.steps(name)
+    assert len(steps) == len(shipped_case(name).steps)
     assert all(step["converged"] for step in steps)
     assert max(step["iterations"] for step in steps) <= MAX_NEWTON.get(name, 25)
     assert max(step["equilibrium_error"] for step in steps) < IMBALANCE
     assert all(error < IMBALANCE for step in steps for error in step.get("body_equilibrium_errors", {}).values())
 
 
-@pytest.mark.parametrize("name", sorted(NEWTON_STEPS))
-def test_shipped_case_newton_counts_regression_guard(summaries, name):
+@pytest.mark.parametrize("name", of_case(*sorted(NEWTON_STEPS)))
+def test_shipped_case_newton_counts_regression_guard(shipped_runs, name):
     """Newton steps per load step as recorded in :data:`NEWTON_STEPS` (ours, not the paper's)."""
     expected = NEWTON_STEPS[name].get(MPI.COMM_WORLD.size)
     if expected is None:
         pytest.skip(f"no counts recorded for {MPI.COMM_WORLD.size} ranks")
-    assert [step["iterations"] for step in _steps(summaries, name)] == expected
+    assert [step["iterations"] for step in shipped_runs.steps(name)] == expected
 
 
-def test_paper_case_within_the_paper_count(summaries):
+@group("paper_d3_L2")
+def test_paper_case_within_the_paper_count(shipped_runs):
     """Seed 000, Table 2, d3/L2 at lev 3: the paper needs 13 Newton steps from u0 = 0."""
-    (step,) = _steps(summaries, "paper_d3_L2")
+    (step,) = shipped_runs.steps("paper_d3_L2")
     assert step["iterations"] <= data.PAPER_TABLE2[3]["d3/L2"][0]
 
 
-def test_hertz_case_meets_the_closed_form(summaries):
+@group("hertz")
+def test_hertz_case_meets_the_closed_form(shipped_runs):
     """Rigid sphere pressed 1 mm into the quarter block (h = a/8): force, contact radius and peak
     pressure against Hertz at the last step, and P ~ delta^(3/2) along the path (within 4 %)."""
     case = load_case(ROOT / "cases" / "hertz.toml")
     E, nu, R = case.material.young, case.material.poisson, case.obstacle.radius
-    steps = _steps(summaries, "hertz")
+    steps = shipped_runs.steps("hertz")
     depths = np.array([-step.translation[2] for step in case.steps])
     forces = np.array([4 * abs(step["contact_force"][2]) for step in steps])
     delta, a = depths[-1], hertz.contact_radius(R, depths[-1])
@@ -199,7 +143,8 @@ def test_hertz_case_meets_the_closed_form(summaries):
     assert np.allclose(forces / forces[-1], (depths / delta) ** 1.5, rtol=0.04)
 
 
-def test_shrink_fit_case_meets_lame(summaries):
+@group("shrink_fit")
+def test_shrink_fit_case_meets_lame(shipped_runs):
     """The steel pin 0.1 mm oversize in the aluminium ring: the pin's force on the quarter ring
     is p b t along x and along y, p Lamé's pressure, within 1 % (measured +0.02 %)."""
     case = load_case(ROOT / "cases" / "shrink_fit.toml")
@@ -207,13 +152,13 @@ def test_shrink_fit_case_meets_lame(summaries):
     materials = [(body.material.young, body.material.poisson) for body in (pin, ring)]
     b, c, t = 0.02, 0.04, 0.002  # meshes/shrink_fit.geo
     p = press_fit.contact_pressure(pair.interference, b, c, *materials)
-    (step,) = _steps(summaries, "shrink_fit")
+    (step,) = shipped_runs.steps("shrink_fit")
     force = step["pair_forces"][f"{pair.slave}/{pair.master}"]
     assert force[:2] == pytest.approx([p * b * t, p * b * t], rel=0.01)
 
 
-@pytest.mark.parametrize("name", ["cattaneo_mindlin", "cattaneo_mindlin_nu045"])
-def test_mindlin_case_follows_the_coulomb_bound(summaries, name):
+@pytest.mark.parametrize("name", of_case("cattaneo_mindlin", "cattaneo_mindlin_nu045"))
+def test_mindlin_case_follows_the_coulomb_bound(shipped_runs, name):
     """Moved tangentially at constant depth, the tangential force grows at every step and stays
     within the Coulomb bound mu P; the sticking area shrinks; at nu = 0.45 (Dundurs beta =
     0.09, nearly the uncoupled problem of the closed forms) Q follows Mindlin's law within
@@ -221,7 +166,7 @@ def test_mindlin_case_follows_the_coulomb_bound(summaries, name):
     benchmarks/results/cattaneo_mindlin.md)."""
     case = load_case(ROOT / "cases" / f"{name}.toml")
     mu, E, nu = case.contact.law.friction, case.material.young, case.material.poisson
-    steps = _steps(summaries, name)
+    steps = shipped_runs.steps(name)
     P = 2 * abs(steps[0]["contact_force"][2])
     a = np.sqrt(2 * steps[0]["contact_area"] / np.pi)
     s = np.array([step.translation[0] for step in case.steps[1:]])
@@ -235,13 +180,14 @@ def test_mindlin_case_follows_the_coulomb_bound(summaries, name):
         assert np.abs(Q - mindlin).max() <= 0.05 * mu * P
 
 
-def test_sliding_case_slides_at_the_coulomb_bound(summaries):
+@group("sliding_blocks")
+def test_sliding_case_slides_at_the_coulomb_bound(shipped_runs):
     """The slider of ``sliding_blocks``, searched until settled: in every sliding step the
     friction force is F times the normal force, against the slide (within 0.1 %: the nodes at
     its trailing edge stick), each step searched at least twice; held, the force stays."""
     case = load_case(ROOT / "cases" / "sliding_blocks.toml")
     friction = case.contacts[0].law.friction
-    steps = _steps(summaries, "sliding_blocks")
+    steps = shipped_runs.steps("sliding_blocks")
     forces = np.array([step["pair_forces"]["upper.interface/lower.interface"] for step in steps])
     sliding = [k for k in range(1, len(steps)) if case.steps[k].translation != case.steps[k - 1].translation]
     assert sliding == list(range(1, 7))
