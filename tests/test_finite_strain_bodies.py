@@ -113,14 +113,14 @@ def test_bodies_of_a_case_file_take_one_model():
 
 
 def test_two_body_hertz_at_a_small_load_is_the_linear_solution(mpi_tmp_path):
-    """cases/hertz_bodies.toml on its coarse mesh at 1e-3 of its indentation (1 um): both bodies neo-Hookean give
-    the linear solution's force P to 1e-3 (strains of 1e-3 at most; measured 3.0e-5), its
-    largest pressure likewise, both solves converged and in balance: the linear one to 1e-8
-    (measured 4e-10 on 1 rank, 3e-9 on 2: the forces are 60 N, the stopping floor is relative
-    to the load of the shifted variables), the neo-Hookean one to 1e-4 (measured 5.6e-6 on 1
-    rank, 2.8e-5 on 2): its residual cannot be resolved below eps times stress terms of size
-    mu |F| (``ContactProblem.force_scale``), and the solver stops at its ``floor``, 45 eps of
-    that, here about 1.5e-3 N against a contact force of 60 N."""
+    """cases/hertz_bodies.toml on its coarse mesh at 1e-3 of its indentation (1 um): both bodies
+    neo-Hookean give the linear solution's force P to 1e-3 (strains of 1e-3 at most; measured
+    2.2e-5 on 1 and 2 ranks), its largest pressure likewise, both solves converged and in
+    balance: the linear one to 1e-8 (measured 3.5e-10 on 1 rank, 1.5e-9 on 2: the forces are
+    140 N, the stopping floor is relative to the load of the shifted variables), the
+    neo-Hookean one to 1e-4 (measured 6.3e-6 on 1 rank, 8.2e-6 on 2): its residual cannot be
+    resolved below eps times stress terms of size mu |F| (``ContactProblem.force_scale``), and
+    the solver stops at its ``floor``, 45 eps of that."""
     import tomllib
 
     from contactqvi.runner import run_case
