@@ -252,8 +252,7 @@ class ContactProblem(PETScOwner):
         difference = _nonzeros(self.A, -1.0) if change else None
         self.A.zeroEntries()
         self.A.axpy(1.0, searched, _SUBSET)
-        if searched is not self.elastic.stiffness:  # without contact nodes T = I and A_K itself came back
-            searched.destroy()
+        searched.destroy()
         for name, value in fields.items():
             setattr(self, name, value)
         if self.hyperelastic is not None:  # the rows of the prescribed dofs in the new frames
@@ -619,8 +618,6 @@ def assemble_contact_problem(
     elastic = ElasticSystem(A, loads, constrained, owned_dirichlet)
     searched = any(i.searched_each_step for i in interfaces)
     fields, variables_seconds = _timed(msh.comm, _contact_fields, elastic, interfaces, searched)
-    if searched and fields["A"] is A:  # frames (e1, e2, e3), T = I: A_K itself, which the searches keep
-        fields["A"] = A.duplicate(copy=True)
     node_body = None if cell_tags is None else _node_body(V, cell_tags)
     if node_body is not None:
         _check_held(V, facet_tags, cell_tags, node_body, constrained, interfaces)
@@ -650,8 +647,6 @@ def _make_hyperelastic(problem: ContactProblem, material: Material | None, young
     Nothing for a linear material (None)."""
     if material is None:
         return
-    if problem.elastic is not None and problem.A is problem.elastic.stiffness:  # A_K, kept for the searches
-        problem.A = problem.A.duplicate(copy=True)
     problem.hyperelastic = create_hyperelastic_system(problem.V, material, young, poisson, load, bcs,
                                                       problem.dirichlet_dofs_loc, problem.rotation,
                                                       problem.body.pressures, facet_tags)
@@ -724,8 +719,8 @@ def _solver_variables(
     keep: bool,
 ) -> tuple[PETSc.Mat, list[PETSc.Vec], PETSc.Mat | None, PETSc.Mat | None, PETSc.Mat | None, list[PETSc.Vec | None]]:
     """A = T^T A_K T and l~ = T^T (l~_K - A_K c) for each load, with R, N, T and the offsets c
-    of the change of variables. Without a change (T = I) A_K and the loads themselves;
-    otherwise new objects, and A_K and the loads are freed unless ``keep``."""
+    of the change of variables. Without a change (T = I) the loads themselves and A_K (a copy
+    if ``keep``); otherwise new objects, and A_K and the loads are freed unless ``keep``."""
     A_K, loads = elastic.stiffness, elastic.loads
     mortar = any(i.coupling is not None for i in interfaces)
     rotation = _nodal_rotation(A_K, contact_blk, frames, always=mortar)
@@ -735,8 +730,8 @@ def _solver_variables(
         coupling = _mortar_rows(A_K, interfaces, elastic.constrained)
         offsets = [_prescribed_offset(coupling, b, elastic.owned_dirichlet) for b in loads]
         transform = _change_of_variables(coupling, rotation, elastic.owned_dirichlet)
-    if rotation is None:
-        return A_K, loads, rotation, coupling, transform, offsets
+    if rotation is None:  # T = I: A_K itself, a copy of it when A_K is kept (the searches change A, not A_K)
+        return A_K.duplicate(copy=True) if keep else A_K, loads, rotation, coupling, transform, offsets
     T = transform if transform is not None else rotation
     transformed = [_in_solver_variables(A_K, T, b, c) for b, c in zip(loads, offsets)]
     with default_options("", {"mat_product_clear": True}):  # A keeps no copies of A_K T and T (same values)
