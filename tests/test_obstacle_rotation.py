@@ -197,6 +197,28 @@ def test_a_rotated_obstacle_has_the_rotated_gap_and_normal(obstacle):
     assert np.abs(gap_moved - gap).max() <= 1e-14 and np.abs(normal_moved - normal @ Q.T).max() <= 1e-14
 
 
+@pytest.mark.one_rank(reason="rigid motion arithmetic, no mesh")
+def test_the_obstacle_surface_increment_is_the_chord_of_each_points_arc():
+    """Between rotations by 10 and 25 degrees about an oblique axis through c (and translations
+    t_0, t_1): p - d is where p's material point was, i.e. phi_0(phi_1^-1(p)); without the
+    translations d is a chord of length 2 r sin(15 / 2 degrees), r the distance from the axis, and
+    perpendicular to the axis; without rotations d = t_1 - t_0 exactly. To 1e-14."""
+    axis = np.array([1.0, -2.0, 2.0]) / 3.0
+    centre = (0.5, -0.2, 1.0)
+    r0, r1 = Rotation(tuple(axis), 10.0, centre), Rotation(tuple(axis), 25.0, centre)
+    t0, t1 = np.array([0.1, 0.0, -0.2]), np.array([0.3, 0.4, 0.0])
+    p = np.random.default_rng(5).uniform(-2.0, 2.0, (50, 3))
+    d = rigid_increment(p, t1, r1, t0, r0)
+    X = (p - centre - t1) @ r1.matrix() + centre  # the material points' initial positions
+    assert np.abs(p - d - ((X - centre) @ r0.matrix().T + centre + t0)).max() <= 1e-14
+    chord = rigid_increment(p, (0, 0, 0), r1, (0, 0, 0), r0)
+    offset = p - centre
+    radius = np.linalg.norm(offset - (offset @ axis)[:, None] * axis, axis=1)
+    assert np.abs(np.linalg.norm(chord, axis=1) - 2.0 * radius * np.sin(np.radians(7.5))).max() <= 1e-14
+    assert np.abs(chord @ axis).max() <= 1e-14
+    assert np.array_equal(rigid_increment(p, t1, None, t0, None), np.broadcast_to(t1 - t0, p.shape))
+
+
 def _obstacle_case(search: str | None = None, **step: dict) -> dict:
     """cases/hertz.toml as read (a sphere against a block), one step with ``step``'s keys."""
     import tomllib
