@@ -22,6 +22,7 @@ node's closest point (:func:`~contactqvi.load_steps.rigid_increment`).
 from __future__ import annotations
 
 import pathlib
+import tomllib
 
 from mpi4py import MPI
 
@@ -34,7 +35,7 @@ from contactqvi.contact.load_path import contact_resultants
 from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import build_contact_problem
 from contactqvi.laws import Coulomb, Frictionless
-from contactqvi.load_steps import rigid_increment
+from contactqvi.load_steps import placed, rigid_increment
 from contactqvi.materials import NeoHookean
 from contactqvi.meshes import create_contact_body
 from contactqvi.obstacles import Cylinder, Plane, Sphere
@@ -185,8 +186,6 @@ def test_friction_opposes_the_slip_on_a_plane_turning_about_its_normal():
                                       Cylinder((0.0, 1.0, 0.0), (1.0, 0.0, 0.0), 0.5)])
 def test_a_rotated_obstacle_has_the_rotated_gap_and_normal(obstacle):
     """g_rotated(Q (x - c) + c + t) = g(x) and n_rotated = Q n (the placed obstacle of a step), to 1e-14."""
-    from contactqvi.load_steps import placed
-
     rotation = Rotation((1.0, 2.0, 3.0) / np.linalg.norm((1.0, 2.0, 3.0)), 37.0, (0.3, -0.2, 0.5))
     t = np.array([0.1, -0.3, 0.2])
     x = np.random.default_rng(3).uniform(-2.0, 2.0, (20, 3))
@@ -221,8 +220,6 @@ def test_the_obstacle_surface_increment_is_the_chord_of_each_points_arc():
 
 def _obstacle_case(search: str | None = None, **step: dict) -> dict:
     """cases/hertz.toml as read (a sphere against a block), one step with ``step``'s keys."""
-    import tomllib
-
     data = tomllib.loads((ROOT / "cases" / "hertz.toml").read_text())
     data["steps"] = [{"translation": [0.0, 0.0, -1e-4], **step}]
     if search is not None:
@@ -257,8 +254,6 @@ def test_an_obstacle_rotation_is_read_and_its_centre_kept():
     with pytest.raises(ParameterError, match=r"^steps\[1\]\.rotation\.centre: must be the centre of the steps "
                        r"before, \[0\.0, 0\.0, 1\.0\]"):
         parse_case(data, ROOT / "cases")
-    import tomllib
-
     data = tomllib.loads((ROOT / "cases" / "sliding_blocks.toml").read_text())
     data["contacts"].append({"slave": "lower.bottom", "law": "frictionless",
                              "obstacle": {"type": "plane", "point": [0.0, 0.0, -0.1], "normal": [0.0, 0.0, 1.0]}})
