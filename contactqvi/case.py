@@ -33,9 +33,10 @@ SI units throughout (m, Pa, N/m^3). Example::
     [[steps]]                           # load path; none = one step, load 1, no translation
     load = 0.5                          # factor on tractions, body force, prescribed displacements
     translation = [0.0, 0.0, 0.0]       # translation (m) of the obstacle and of boundary.moved groups
-    # rotation = {axis = [0, 0, 1], angle = 30.0, centre = [0, 0, 0]}  # of boundary.moved groups only:
-    #                                   # u = (Q - I)(X - centre) + translation; degrees, total; one
-    #                                   # centre for the whole path; not with rigid obstacles
+    # rotation = {axis = [0, 0, 1], angle = 30.0, centre = [0, 0, 0]}  # of the obstacle and the
+    #                                   # boundary.moved groups: x = Q (X - centre) + centre + translation;
+    #                                   # degrees, total; one centre for the whole path; a rotated
+    #                                   # obstacle needs [contact] search = "every_step" or "until_settled"
     [[steps]]
     load = 1.0
 
@@ -126,7 +127,7 @@ import typing
 
 from contactqvi import obstacles
 from contactqvi.laws import LAWS, ContactLaw, create_law, parameter_names
-from contactqvi.load_steps import SEARCHES, Rotation, check_rotation, check_steps
+from contactqvi.load_steps import SEARCHES, Rotation, check_rotation, check_steps, rotates
 from contactqvi.materials import MATERIALS
 from contactqvi.load_steps import LoadStep as Step
 from contactqvi.parameters import (
@@ -754,12 +755,20 @@ def _check_steps(steps: typing.Sequence[Step]) -> tuple[Step, ...]:
 
 
 def _check_rotations(case: ContactCase) -> None:
-    """Rotations of a path: one centre, moved groups to rotate, no rigid obstacle (which only translates)."""
-    check_steps(case.steps, obstacles=case.obstacle is not None or any(p.obstacle is not None for p in case.contacts))
+    """Rotations of a path: one centre, something to rotate (moved groups or a rigid obstacle),
+    and every rigid obstacle's pair searched each step (a rotation turns its normals)."""
+    check_steps(case.steps)
+    first = rotates(case.steps)
+    if first is None:
+        return
     moved = case.boundary.moved if case.boundary is not None else [m for b in case.bodies for m in b.boundary.moved]
-    for i, step in enumerate(case.steps):
-        require(step.rotation is None or bool(moved), f"steps[{i}].rotation", "rotates the groups boundary.moved, "
-                "and the case has none")
+    searches = {"contact.search": case.contact.search} if case.obstacle is not None else {
+        f"contacts[{i}].search": p.search for i, p in enumerate(case.contacts) if p.obstacle is not None}
+    require(bool(moved) or bool(searches), f"steps[{first}].rotation", "rotates the groups boundary.moved and the "
+            "rigid obstacles, and the case has neither")
+    for key, search in searches.items():
+        require(search in ("every_step", "until_settled"), key, f"steps[{first}] rotates the obstacle, whose normals "
+                f"then turn: search it each step ('every_step' or 'until_settled'), got {search or 'once'!r}")
 
 
 #: Initial guesses of the first step (``solver.start``): the body at rest (u~ = 0), or

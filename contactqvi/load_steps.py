@@ -1,13 +1,15 @@
 """Load steps of a quasi-static path: problem data shared by case files and the load-path solver.
 
-A step moves the groups ``boundary.moved`` rigidly: by a translation t and, optionally, a
-rotation Q about a centre c, both total from the initial position,
+A step moves the groups ``boundary.moved`` and the rigid obstacles together rigidly: by a
+translation t and, optionally, a rotation Q about a centre c, both total from the initial
+position, first the rotation about c, then the translation,
 
-    u = (Q - I)(X - c) + t   at the moved nodes X,
+    x = phi(X) = Q (X - c) + c + t,   u = (Q - I)(X - c) + t   at the moved nodes X,
 
 which is linear in t and in the nine entries of Q - I (docs/finite_strain.md, "Prescribed
-rotations"). The centre is a point fixed in space for the whole path: every step that
-rotates names the same one (:func:`check_steps`). Rigid obstacles only translate.
+rotations"); an obstacle's points and directions go along (:func:`placed`). The centre is a
+point fixed in space for the whole path: every step that rotates names the same one
+(:func:`check_steps`).
 """
 
 from __future__ import annotations
@@ -18,9 +20,11 @@ import typing
 
 import numpy as np
 
+from contactqvi.obstacles import Obstacle
 from contactqvi.parameters import require, require_positive
 
-__all__ = ["SEARCHES", "LoadStep", "Rotation", "check_rotation", "check_steps", "interpolated"]
+__all__ = ["SEARCHES", "LoadStep", "Rotation", "check_rotation", "check_steps", "interpolated", "placed",
+           "rigid_increment", "rotates"]
 
 #: When a pair of meshed bodies is searched along the load path: before every load step
 #: after the first, in the configuration the step before ended in; as that, and again
@@ -32,7 +36,7 @@ SEARCHES = ("every_step", "until_settled", "once")
 
 @dataclasses.dataclass(frozen=True)
 class Rotation:
-    """A rigid rotation of the moved groups, total from the initial position.
+    """A rigid rotation of the moved groups and the rigid obstacles, total from the initial position.
 
     Attributes:
         axis: direction of the axis (normalised by :func:`check_rotation`).
@@ -61,8 +65,9 @@ class LoadStep:
         load: factor on tractions, body force and prescribed displacements.
         translation: total rigid translation (m) of the obstacles, and of the groups
             moved with them, from their initial position.
-        rotation: total rigid rotation of the moved groups from their initial position
-            (about its centre, then translated); None: none.
+        rotation: total rigid rotation of the obstacles and the moved groups from their
+            initial position (about its centre, then translated: x = Q (X - c) + c + t);
+            None: none.
     """
 
     load: float = 1.0
@@ -93,11 +98,9 @@ def check_rotation(rotation: typing.Any, path: str) -> Rotation:
     return Rotation(unit, float(angle), _finite_vector(rotation.centre, f"{path}.centre"))
 
 
-def check_steps(steps: typing.Sequence[LoadStep], obstacles: bool = False) -> None:
+def check_steps(steps: typing.Sequence[LoadStep]) -> None:
     """Raise :class:`~contactqvi.parameters.ParameterError` for a negative load, a bad
-    translation or rotation, a centre of rotation that changes between steps, or a rotation
-    on a path with rigid obstacles (``obstacles``: the problem has obstacle pairs; rigid
-    obstacles are translated, never rotated)."""
+    translation or rotation, or a centre of rotation that changes between steps."""
     centre = None
     for i, step in enumerate(steps):
         require_positive(f"steps[{i}].load", step.load, allow_zero=True)
@@ -105,11 +108,43 @@ def check_steps(steps: typing.Sequence[LoadStep], obstacles: bool = False) -> No
         if step.rotation is None:
             continue
         rotation = check_rotation(step.rotation, f"steps[{i}].rotation")
-        require(not obstacles, f"steps[{i}].rotation", "rotations move the groups boundary.moved only; a path with "
-                "rigid obstacles cannot rotate (the obstacles would have to rotate with the moved groups)")
         centre = rotation.centre if centre is None else centre
         require(rotation.centre == centre, f"steps[{i}].rotation.centre", f"must be the centre of the steps "
                 f"before, {list(centre)!r} (a point fixed for the whole path), got {list(rotation.centre)!r}")
+
+
+def rotates(steps: typing.Sequence[LoadStep]) -> int | None:
+    """Index of the first step of ``steps`` with a rotation, None if none has one."""
+    return next((i for i, step in enumerate(steps) if step.rotation is not None), None)
+
+
+def placed(obstacle: Obstacle, translation: typing.Sequence[float], rotation: Rotation | None) -> Obstacle:
+    """``obstacle`` (in its initial position) at a step: rotated by ``rotation`` about its
+    centre, then translated by ``translation`` (m), x -> Q (x - c) + c + t."""
+    turned = obstacle if rotation is None else obstacle.rotated(rotation.matrix(), rotation.centre)
+    return turned.translated(np.asarray(translation, dtype=float))
+
+
+def rigid_increment(points: np.ndarray, translation: typing.Sequence[float], rotation: Rotation | None,
+                    previous_translation: typing.Sequence[float], previous_rotation: Rotation | None) -> np.ndarray:
+    """Displacement (m, 3) since the step before of the material points of a rigidly moved
+    body (an obstacle) that lie at ``points`` (m, 3) at this step:
+
+        p - phi_0(phi_1^-1(p)),   phi_k(X) = Q_k (X - c) + c + t_k,   phi_1^-1(p) = Q_1^T (p - c - t_1) + c,
+
+    phi_1 this step's rigid motion (``translation``, ``rotation``), phi_0 the step before's
+    (total, from the initial position; None: no rotation). Without rotations t_1 - t_0 at
+    every point, whatever ``points``; about one axis with a fixed centre, the chord of each
+    point's circle, turned by the angle increment, plus t_1 - t_0."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    shift = np.asarray(translation, dtype=float) - np.asarray(previous_translation, dtype=float)
+    if rotation is None and previous_rotation is None:
+        return np.broadcast_to(shift, points.shape).copy()
+    centre = np.asarray((rotation if rotation is not None else previous_rotation).centre)
+    Q1, Q0 = (np.eye(3) if r is None else r.matrix() for r in (rotation, previous_rotation))
+    initial = (points - centre - np.asarray(translation, dtype=float)) @ Q1  # rows of Q_1^T (p - c - t_1)
+    before = initial @ Q0.T + centre + np.asarray(previous_translation, dtype=float)
+    return points - before
 
 
 def interpolated(start: Rotation | None, end: Rotation | None, fraction: float) -> Rotation | None:

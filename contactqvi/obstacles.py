@@ -8,7 +8,9 @@ nodal law acts: the normal component is the gap direction, the two tangential
 ones span the tangent plane. Small deformations as in the seed: gaps and frames
 are taken at the nodes' reference positions, frames fixed in the reference
 configuration; a rigid translation c of the obstacle changes the gap to
-g(x - c) (exact for the translated shape).
+g(x - c) (exact for the translated shape), a rigid rotation Q about a centre c,
+x -> Q (x - c) + c, rotates its points and directions (:meth:`Obstacle.rotated`), so that
+g and n of the rotated shape are exact too (docs/finite_strain.md, "Rotated obstacles").
 
 The plane x3 = 0 with normal e3 gives g = x3 and the frames (e1, e2, e3), the
 foundation of seed 000, Sect. 7.
@@ -43,6 +45,12 @@ def _point(name: str, vector: Vector) -> np.ndarray:
     return array
 
 
+def _rotated_point(matrix: np.ndarray, centre: Vector, point: np.ndarray) -> np.ndarray:
+    """Q (x - c) + c of a point x."""
+    centre = _point("rotation.centre", centre)
+    return np.asarray(matrix, dtype=float) @ (point - centre) + centre
+
+
 def tangent_frames(normals: np.ndarray) -> np.ndarray:
     """Right-handed orthonormal frames (rows t1, t2, n) for unit normals ``normals`` (m, 3).
 
@@ -72,6 +80,11 @@ class Obstacle(abc.ABC):
     def translated(self, c: Vector) -> Obstacle:
         """The obstacle moved rigidly by ``c``."""
 
+    @abc.abstractmethod
+    def rotated(self, matrix: np.ndarray, centre: Vector) -> Obstacle:
+        """The obstacle rotated rigidly by ``matrix`` (Q, orthogonal) about ``centre`` (c):
+        its points x go to Q (x - c) + c, its directions d to Q d."""
+
     def frames(self, x: np.ndarray) -> np.ndarray:
         """Nodal frames (m, 3, 3), rows t1, t2, n, at points ``x``."""
         return tangent_frames(self.distance(x)[1])
@@ -95,6 +108,9 @@ class Plane(Obstacle):
     def translated(self, c: Vector) -> Plane:
         return Plane(self.point + _point("translation", c), self.normal)
 
+    def rotated(self, matrix: np.ndarray, centre: Vector) -> Plane:
+        return Plane(_rotated_point(matrix, centre, self.point), matrix @ self.normal)
+
 
 @dataclasses.dataclass(frozen=True)
 class Sphere(Obstacle):
@@ -116,6 +132,9 @@ class Sphere(Obstacle):
 
     def translated(self, c: Vector) -> Sphere:
         return Sphere(self.center + _point("translation", c), self.radius)
+
+    def rotated(self, matrix: np.ndarray, centre: Vector) -> Sphere:
+        return Sphere(_rotated_point(matrix, centre, self.center), self.radius)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -141,3 +160,6 @@ class Cylinder(Obstacle):
 
     def translated(self, c: Vector) -> Cylinder:
         return Cylinder(self.point + _point("translation", c), self.axis, self.radius)
+
+    def rotated(self, matrix: np.ndarray, centre: Vector) -> Cylinder:
+        return Cylinder(_rotated_point(matrix, centre, self.point), matrix @ self.axis, self.radius)

@@ -309,9 +309,10 @@ def test_a_bad_rotation_is_named(rotations, message):
 
 
 @pytest.mark.one_rank(reason="case-file parsing, no mesh")
-def test_a_rotation_is_read_and_refused_with_a_rigid_obstacle():
+def test_a_rotation_is_read_and_refused_with_a_rigid_obstacle_searched_once():
     """A rotation is read with its axis normalised and written back by to_dict; a case with a rigid
-    obstacle cannot rotate (obstacles only translate), nor one without moved groups."""
+    obstacle searched once cannot rotate (the rotation turns its normals:
+    tests/test_obstacle_rotation.py), nor one with neither moved groups nor an obstacle."""
     case = parse_case(_blocks_case({"axis": [0.0, 0.0, 2.0], "angle": 30.0, "centre": [0.5, 0.5, 1.0]}),
                       ROOT / "cases")
     assert case.steps[0].rotation == Rotation((0.0, 0.0, 1.0), 30.0, (0.5, 0.5, 1.0))
@@ -320,7 +321,7 @@ def test_a_rotation_is_read_and_refused_with_a_rigid_obstacle():
     data = _blocks_case({"angle": 1.0})
     data["contacts"][0] = {"slave": "upper.interface", "law": "frictionless", "obstacle": {"type": "plane", "point": [0.0, 0.0, 0.5],
                                                                     "normal": [0.0, 0.0, 1.0]}}
-    with pytest.raises(ParameterError, match=r"^steps\[0\]\.rotation: .*a path with rigid obstacles cannot rotate"):
+    with pytest.raises(ParameterError, match=r"^contacts\[0\]\.search: steps\[0\] rotates the obstacle"):
         parse_case(data, ROOT / "cases")
     data = _blocks_case({"angle": 1.0})
     data["bodies"][1]["boundary"] = {"displacement": {"top": {"z": 0.0}}}

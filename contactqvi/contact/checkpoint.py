@@ -14,7 +14,7 @@ After every converged load step the runner writes, into ``OUTPUT/checkpoint/``
   node, -1 elsewhere);
 * ``checkpoint.json``, written last and atomically: the step, its file, the step's load
   factor, translation (the obstacles' position the next step's slip is measured
-  from) and rotation of the moved groups (``{axis, angle, centre}`` or null), the first
+  from) and rotation of the obstacles and moved groups (``{axis, angle, centre}`` or null), the first
   step's stopping target and the summary so far.
 
 A checkpoint exists only once ``checkpoint.json`` names it: a step file being written
@@ -67,7 +67,7 @@ class Checkpoint:
         solved: number of converged solves (steps and parts of cut steps).
         path: its step file (``step_XXXX.bp``).
         load, translation: load factor and translation (m) of that step.
-        rotation: the moved groups' rotation at that step, or None.
+        rotation: the obstacles' and moved groups' rotation at that step, or None.
         target: the first step's stopping target ||y^|| (N), the accuracy of every later step.
         summary: ``summary.json`` as it was after that step.
     """

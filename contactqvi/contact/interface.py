@@ -33,7 +33,7 @@ from dolfinx import mesh as dmesh
 
 from contactqvi.contact.mortar import MortarCoupling, mortar_coupling
 from contactqvi.laws import ContactLaw, Frictionless
-from contactqvi.load_steps import SEARCHES
+from contactqvi.load_steps import SEARCHES, Rotation, placed, rigid_increment
 from contactqvi.meshes import boundary_facets
 from contactqvi.obstacles import Obstacle, tangent_frames
 from contactqvi.parameters import require
@@ -49,7 +49,8 @@ class ObstaclePair:
 
     Attributes:
         surface: facet group of the slave surface.
-        obstacle: the obstacle in its initial position (moved by the load steps' translations).
+        obstacle: the obstacle in its initial position (moved by the load steps' translations
+            and rotations, :func:`~contactqvi.load_steps.placed`).
         law: the contact law (:mod:`contactqvi.laws`), e.g. ``Coulomb(friction=0.3)``.
         search: ``"once"``: gaps and normals of the reference configuration, the gap
             linearised as g + n . u (exact for a plane; small displacements on a curved
@@ -151,17 +152,37 @@ class Interface:
         """The facet group of the slave nodes."""
         return self.pair.surface if isinstance(self.pair, ObstaclePair) else self.pair.slave
 
-    def gap(self, x: np.ndarray, translation: np.ndarray) -> np.ndarray:
-        """Gap of each slave node (m) at reference positions ``x`` with the obstacle translated
-        by ``translation``; a body pair's weighted gap does not depend on it. An obstacle pair
-        searched in a deformed configuration u_s gives g(x + u_s) - n . u_s, so that g + n . u
-        is the gap linearised about that configuration."""
+    def gap(self, x: np.ndarray, translation: np.ndarray, rotation: Rotation | None = None) -> np.ndarray:
+        """Gap of each slave node (m) at reference positions ``x`` with the obstacle at a step's
+        position, ``rotation`` about its centre then ``translation``
+        (:func:`~contactqvi.load_steps.placed`); a body pair's weighted gap does not depend
+        on it. An obstacle pair searched in a deformed configuration u_s gives
+        g(x + u_s) - n . u_s, so that g + n . u is the gap linearised about that configuration."""
         if self.obstacle is None:
             return self.initial_gap
+        obstacle = placed(self.obstacle, translation, rotation)
         if self.searched_at is None:
-            return self.obstacle.translated(translation).distance(x)[0]
-        gap = self.obstacle.translated(translation).distance(x + self.searched_at)[0]
+            return obstacle.distance(x)[0]
+        gap = obstacle.distance(x + self.searched_at)[0]
         return gap - np.einsum("ij,ij->i", self.frames[:, 2], self.searched_at)
+
+    def obstacle_increment(self, x: np.ndarray, translation: np.ndarray, rotation: Rotation | None,
+                           previous_translation: np.ndarray, previous_rotation: Rotation | None) -> np.ndarray:
+        """Displacement (m, 3; m) of the obstacle's surface at each slave node since the step before,
+        the slip reference of friction: the displacement between the two step ends of the
+        obstacle's material point at the node's closest point p = y - g(y) n(y) on the obstacle
+        at this step, y = x + u_s the node where the gap is linearised (``x`` reference
+        positions, u_s :attr:`searched_at`, zero if not searched), by
+        :func:`~contactqvi.load_steps.rigid_increment`: the rigid velocity field of rotation and
+        translation integrated over the step, t_1 - t_0 at every node without rotations.
+        Zero for a body pair (its master moves with the solution: the slip is in w itself)."""
+        if self.obstacle is None:
+            return np.zeros((len(x), 3))
+        y = x if self.searched_at is None else x + self.searched_at
+        if rotation is not None or previous_rotation is not None:
+            gap, normal = placed(self.obstacle, translation, rotation).distance(y)
+            y = y - gap[:, None] * normal
+        return rigid_increment(y, translation, rotation, previous_translation, previous_rotation)
 
 
 def build_interfaces(
@@ -197,10 +218,11 @@ def build_interfaces(
 
 def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: typing.Sequence[Interface],
                  constrained: np.ndarray, displacement: fem.Function, translation: np.ndarray,
-                 finite_strain: bool = False) -> list[Interface]:
+                 finite_strain: bool = False, rotation: Rotation | None = None) -> list[Interface]:
     """The interfaces with the pairs searched each step found again in the configuration
-    x + ``displacement``, the obstacles translated by ``translation`` (m; the others as they
-    are; collective).
+    x + ``displacement``, the obstacles rotated by ``rotation`` (None: not) and translated by
+    ``translation`` (m; :func:`~contactqvi.load_steps.placed`; the others as they are;
+    collective).
 
     Its slave nodes, mortar rows, normals and areas are those of that configuration (an
     obstacle's nodal areas: the deformed ones with ``finite_strain``, the reference ones of
@@ -212,7 +234,7 @@ def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: t
     def again(interface: Interface) -> Interface:
         if isinstance(interface.pair, ObstaclePair):
             return _obstacle_interface(V, facet_tags, interface.pair, constrained, x,
-                                       displacement if finite_strain else None, translation)
+                                       displacement if finite_strain else None, translation, rotation)
         return _body_interface(V, facet_tags, interface.pair, constrained, x)
 
     return [again(i) if i.searched_each_step else i for i in interfaces]
@@ -221,10 +243,11 @@ def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: t
 def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: ObstaclePair,
                         constrained: np.ndarray, displacement: np.ndarray | None = None,
                         deformed: fem.Function | None = None,
-                        translation: typing.Sequence[float] = (0.0, 0.0, 0.0)) -> Interface:
+                        translation: typing.Sequence[float] = (0.0, 0.0, 0.0),
+                        rotation: Rotation | None = None) -> Interface:
     """An obstacle pair's interface in the reference configuration, the obstacle at rest
     (checked: no node inside it), or in x + ``displacement`` (local nodes, 3), the obstacle
-    translated by ``translation``: its normals there; :meth:`Interface.gap` measures the gap
+    rotated by ``rotation`` and translated by ``translation``: its normals there; :meth:`Interface.gap` measures the gap
     to the obstacle of each step. The nodal areas are those of the surface deformed by
     ``deformed`` if given, else of the reference one."""
     require(pair.search in SEARCHES, f"{pair.name}: search", f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
@@ -237,7 +260,7 @@ def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: 
     if searched_at is None:
         gap, normal = pair.obstacle.distance(x)
     else:
-        gap, normal = pair.obstacle.translated(np.asarray(translation, dtype=float)).distance(x + searched_at)
+        gap, normal = placed(pair.obstacle, translation, rotation).distance(x + searched_at)
     comm = V.mesh.comm
     undefined = comm.allreduce(int(np.count_nonzero(~np.isfinite(normal).all(axis=1))), op=MPI.SUM)
     require(undefined == 0, "obstacle", f"{undefined} contact nodes lie where the obstacle has no normal "

@@ -1,13 +1,13 @@
 """Quasi-static load paths: a sequence of static contact problems of the seed-000 type.
 
 Seed 000, Sect. 1, treats the static problem as one step of the quasi-static one.
-Step k scales tractions and body force by its load factor and moves the obstacle
-rigidly to its translation c_k; friction acts on the slip increment since step
-k - 1 relative to the obstacle's tangential motion c_k - c_{k-1}
-(:meth:`~contactqvi.contact.problem.ContactProblem.set_step`); it may also rotate the
-groups moved with the obstacles about a centre fixed for the path, u = (Q - I)(X - c) + t
-there (:class:`~contactqvi.load_steps.Rotation`; rigid obstacles only translate, so a path
-with obstacle pairs cannot rotate). Each step is solved
+Step k scales tractions and body force by its load factor and moves the obstacles and
+the moved groups rigidly to x = Q_k (X - c) + c + t_k (its translation t_k and, optionally,
+its rotation Q_k about a centre c fixed for the path, :class:`~contactqvi.load_steps.Rotation`;
+a rotated obstacle's pair is searched each step); friction acts on the slip increment since
+step k - 1 relative to the obstacle's surface, whose material point at a node's closest
+point moved by t_k - t_{k-1} plus the rotation's chord
+(:meth:`~contactqvi.contact.problem.ContactProblem.set_step`). Each step is solved
 by the SCD semismooth* Newton method from the previous step's solution, with the
 nodes that touched the obstacle moved along with it (no slip increment); the
 first step starts from the given guess, or a load path continues after the steps
@@ -133,7 +133,7 @@ def solve_load_path(
 
     Returns the results of the steps solved (after ``state.done``); the last one failed if not converged.
     """
-    check_steps(steps, obstacles=any(i.obstacle is not None for i in problem.interfaces))
+    check_steps(steps)
     parameters, path = _split(parameters)
     results: list[SCDNewtonResult] = []
     own, state = state is None, PathState.at_rest(problem) if state is None else state
@@ -356,7 +356,7 @@ def _search_reached(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state
     _search_in(problem, reached, step_solver)
     problem.set_step(state.load, state.translation, rotation=state.rotation)  # the step before's prescribed parts
     problem.solver_variables(state.displacement, state.variables)
-    problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation)
+    problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation, state.rotation)
     problem.solver_variables(reached, u)
     u.axpy(1.0, problem.shift)
     return SCDNewtonSolver(problem, parameters, prefix=prefix, step_solver=step_solver)
@@ -381,7 +381,7 @@ def _merged(solves: list[SCDNewtonResult], status: Status,
 def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState) -> None:
     """Set ``step`` after ``state``'s step, the slip measured from it; ``u`` gets the predictor:
     u~ of that step, its touching nodes moved along with their master surface (no slip increment)."""
-    problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation)
+    problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation, state.rotation)
     u.waxpy(1.0, problem.shift, state.variables)
     touching = np.isin(state.contact_states(problem), TOUCHING)
     u.array.reshape(-1, 3)[problem.contact_blk[touching], :2] = 0.0

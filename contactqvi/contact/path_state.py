@@ -13,8 +13,10 @@ field               read by
 ``solved``          the first solve starts from the given guess (or rest), any later one from
                     the predictor
 ``load``,           :meth:`~contactqvi.contact.problem.ContactProblem.set_step` of the next step:
-``translation``,    the obstacles' tangential motion since the step before (its slip reference
-``rotation``        on a rigid obstacle), and the search of a pair searched each step: the
+``translation``,    the obstacles' surface motion since the step before (its slip reference
+``rotation``        on a rigid obstacle: the displacement of the obstacle's material points,
+                    :func:`~contactqvi.load_steps.rigid_increment`), and the search of a pair
+                    searched each step (the obstacles' position there): the
                     prescribed and moved parts of ``displacement`` at the step before (the
                     moved groups' rigid motion (Q - I)(X - c) + t); a cut step
                     (``max_cuts``) starts its parts from them
@@ -63,7 +65,7 @@ class PathState(PETScOwner):
         load: load factor of the last converged solve (0 at rest): step ``done``, or a part
             of the step after it when that step was cut.
         translation: total translation of the obstacles and moved groups there (m).
-        rotation: total rotation of the moved groups there
+        rotation: total rotation of the obstacles and moved groups there
             (:class:`~contactqvi.load_steps.Rotation`), None: none.
         variables: u~ = u - d of step ``done`` in the problem's current solver variables.
         displacement: u~ of step ``done`` in global components (m; ghosts updated).

@@ -27,10 +27,13 @@ nodal structure unchanged whatever the master side is.
 
 The shift d (zero off the contact nodes) makes the non-penetration condition
 u3 >= 0 and, for load steps, measures slip from the previous step:
-    d_n = g_k,   d_t = -(u~_t of the previous step + tangential obstacle translation since it),
+    d_n = g_k,   d_t = -(u~_t of the previous step + tangential obstacle motion since it),
 where g_k is the gap to the obstacle at step k (:meth:`ContactProblem.set_step`), so
-u_t is the slip increment relative to the obstacle (the time-discrete quasi-static
-Coulomb problem; a single step from rest is the static problem of the seed).
+u_t is the slip increment relative to the obstacle (the obstacle motion: the displacement
+since the step before of the obstacle's material point at the node's closest point, the
+translation's increment plus the rotation's chord, :meth:`ContactProblem.set_step`; the
+time-discrete quasi-static Coulomb problem; a single step from rest is the static problem
+of the seed).
 
 Shift of the load, derived (the seed prints l := l~ - A d, which is a sign slip):
 u~ = u - d minimises 1/2 u~^T A u~ - l~^T u~ subject to the contact conditions, and
@@ -236,9 +239,10 @@ class ContactProblem(PETScOwner):
         require(self.elastic is not None, "search", "no contact pair of this problem is searched each step")
         interfaces, search_seconds = _timed(self.comm, search_again, self.V, self.body.facet_tags, self.interfaces,
                                             self.elastic.constrained, displacement, self.translation,
-                                            self.hyperelastic is not None)
+                                            self.hyperelastic is not None, self.step_rotation)
         for obj in (self.applied, *self._variables_objects()):
-            obj.destroy()
+            if all(obj is not b for b in self.elastic.loads):  # without frames (T = I) the loads are l~_K themselves
+                obj.destroy()
         fields, variables_seconds = _timed(self.comm, _contact_fields, self.elastic, interfaces, True)
         searched = fields.pop("A")
         # PETSc 3.22's MatAXPY with a different pattern drops A's near-nullspace without
@@ -248,8 +252,7 @@ class ContactProblem(PETScOwner):
         difference = _nonzeros(self.A, -1.0) if change else None
         self.A.zeroEntries()
         self.A.axpy(1.0, searched, _SUBSET)
-        if searched is not self.elastic.stiffness:  # without contact nodes T = I and A_K itself came back
-            searched.destroy()
+        searched.destroy()
         for name, value in fields.items():
             setattr(self, name, value)
         if self.hyperelastic is not None:  # the rows of the prescribed dofs in the new frames
@@ -327,10 +330,12 @@ class ContactProblem(PETScOwner):
         self.A.axpy(1.0, transformed, _SUBSET)
         transformed.destroy()
 
-    def gap(self, translation: typing.Sequence[float] = (0.0, 0.0, 0.0)) -> np.ndarray:
-        """Gap of each owned contact node (m), obstacles translated by ``translation``."""
+    def gap(self, translation: typing.Sequence[float] = (0.0, 0.0, 0.0),
+            rotation: Rotation | None = None) -> np.ndarray:
+        """Gap of each owned contact node (m), obstacles rotated by ``rotation`` about its centre
+        and translated by ``translation`` (:func:`~contactqvi.load_steps.placed`)."""
         x = self.V.tabulate_dof_coordinates()[self.contact_blk]
-        return self._per_node(lambda i, nodes: i.gap(x[nodes], np.asarray(translation, dtype=float)), 1)
+        return self._per_node(lambda i, nodes: i.gap(x[nodes], np.asarray(translation, dtype=float), rotation), 1)
 
     def _per_node(self, value: typing.Callable[[Interface, np.ndarray], np.ndarray], width: int) -> np.ndarray:
         """An interface-wise quantity spread over the contact nodes ((m,) or (m, width))."""
@@ -343,36 +348,31 @@ class ContactProblem(PETScOwner):
     def set_step(
         self, load_factor: float = 1.0, translation: typing.Sequence[float] = (0.0, 0.0, 0.0),
         previous: PETSc.Vec | None = None, previous_translation: typing.Sequence[float] = (0.0, 0.0, 0.0),
-        rotation: Rotation | None = None,
+        rotation: Rotation | None = None, previous_rotation: Rotation | None = None,
     ) -> None:
         """Shift and load of a load step: tractions, body force and prescribed displacements
-        times ``load_factor``, the obstacles and moved groups translated by ``translation``
-        (total, m), the moved groups also rotated by ``rotation`` (total, about its centre; a
-        problem built with ``rotations``, without obstacle pairs: rigid obstacles only
-        translate); slip measured from the step before: from its displacement ``previous``
-        (u~ in the solver's variables; None: from rest) and from the obstacles' position
-        ``previous_translation`` (the tangential obstacle motion per node; a master body
-        moves with the solution, its slip is in w itself). Both come from the load path's
-        :class:`~contactqvi.contact.path_state.PathState`; nothing of the step before is
+        times ``load_factor``, the obstacles and moved groups rotated by ``rotation`` (total,
+        about its centre; None: not) and translated by ``translation`` (total, m),
+        x = Q (X - c) + c + t (the moved groups need a problem built with ``rotations``, rotated
+        obstacles a search each step: their normals turn); slip measured from the step before:
+        from its displacement ``previous`` (u~ in the solver's variables; None: from rest) and
+        from the obstacles' position ``previous_translation``, ``previous_rotation``: the
+        tangential part of the displacement since then of the obstacle's material point at each
+        node's closest point (:meth:`~contactqvi.contact.interface.Interface.obstacle_increment`;
+        a master body moves with the solution, its slip is in w itself). Both come from the load
+        path's :class:`~contactqvi.contact.path_state.PathState`; nothing of the step before is
         read from the problem itself.
         """
         translation = np.asarray(translation, dtype=float)
-        if rotation is not None:
-            require(len(self.translated) == 12, "steps.rotation", "the problem was built without rotations of "
-                    "moved groups (build it with rotations=True and boundary.moved groups)")
-            require(all(i.obstacle is None for i in self.interfaces), "steps.rotation", "rotations move the groups "
-                    "boundary.moved only; a problem with rigid obstacles cannot rotate")
-        motion = translation - np.asarray(previous_translation, dtype=float)
-        on_obstacle = self._per_node(lambda i, nodes: np.full(len(nodes), i.obstacle is not None), 1) > 0
-        moved = on_obstacle[:, None] * (self.frames[:, :2, :] @ motion)
-        along = self.comm.allreduce(float(np.abs(moved[self.rollers, 0]).max(initial=0.0)), op=MPI.MAX)
-        require(along <= 1e-12 * max(float(np.linalg.norm(motion)), 1e-300),
-                "steps.translation", "the obstacle must not move along a component prescribed on contact nodes")
+        if rotation is not None or previous_rotation is not None:
+            self._check_rotatable()
+        moved = self._obstacle_motion(translation, rotation, np.asarray(previous_translation, dtype=float),
+                                      previous_rotation)
         nodal = np.zeros((len(self.contact_blk), 3))
         if previous is not None:
             nodal[:, :2] = previous.array.reshape(-1, 3)[self.contact_blk, :2]
         nodal[:, :2] = -(nodal[:, :2] + moved)
-        nodal[:, 2] = self.gap(translation)
+        nodal[:, 2] = self.gap(translation, rotation)
         self.shift.set(0.0)
         self.shift.array.reshape(-1, 3)[self.contact_blk] = nodal
         self.applied.copy(self.load)
@@ -384,6 +384,33 @@ class ContactProblem(PETScOwner):
             self.A.multAdd(self.shift, self.load, self.load)  # l = lambda l~ + sum_k s_k l~_k + A d
         else:  # f is evaluated at u - d itself (no shift of the load): d only on the identity rows, as A d there
             self.load.axpy(1.0, self.shift)
+
+    def _check_rotatable(self) -> None:
+        """Raise unless a step may rotate: moved groups built with their rotation loads (or none),
+        something to rotate, and every obstacle pair searched each step (its frames turn)."""
+        require(len(self.translated) in (0, 12), "steps.rotation", "the problem was built without rotations of "
+                "moved groups (build it with rotations=True and boundary.moved groups)")
+        obstacles = [i for i in self.interfaces if i.obstacle is not None]
+        require(len(self.translated) == 12 or bool(obstacles), "steps.rotation", "rotates the groups boundary.moved "
+                "and the rigid obstacles; this problem has neither")
+        for interface in obstacles:
+            require(interface.searched_each_step, f"{interface.pair.name}: search", "a rotated obstacle's normals "
+                    "turn: its pair must be searched each step ('every_step' or 'until_settled'), got 'once'")
+
+    def _obstacle_motion(self, translation: np.ndarray, rotation: Rotation | None, previous_translation: np.ndarray,
+                         previous_rotation: Rotation | None) -> np.ndarray:
+        """(m, 2) tangential components (t1, t2) of each contact node's obstacle surface displacement
+        since the step before (:meth:`~contactqvi.contact.interface.Interface.obstacle_increment`;
+        zero on body pairs), checked to vanish along components prescribed on contact nodes."""
+        x = self.V.tabulate_dof_coordinates()[self.contact_blk]
+        increment = self._per_node(lambda i, nodes: i.obstacle_increment(
+            x[nodes], translation, rotation, previous_translation, previous_rotation), 3)
+        moved = np.einsum("nij,nj->ni", self.frames[:, :2, :], increment)
+        along = self.comm.allreduce(float(np.abs(moved[self.rollers, 0]).max(initial=0.0)), op=MPI.MAX)
+        size = self.comm.allreduce(float(np.abs(increment).max(initial=0.0)), op=MPI.MAX)
+        require(along <= 1e-12 * max(size, 1e-300), "steps.translation",
+                "the obstacle must not move along a component prescribed on contact nodes")
+        return moved
 
     def physical_displacement(self, u: PETSc.Vec, out: fem.Function) -> fem.Function:
         """u~ = T (u - d) + lambda c + sum_k s_k c_k (:meth:`rigid_motion`) in global components, written into
@@ -620,8 +647,6 @@ def _make_hyperelastic(problem: ContactProblem, material: Material | None, young
     Nothing for a linear material (None)."""
     if material is None:
         return
-    if problem.elastic is not None and problem.A is problem.elastic.stiffness:  # A_K, kept for the searches
-        problem.A = problem.A.duplicate(copy=True)
     problem.hyperelastic = create_hyperelastic_system(problem.V, material, young, poisson, load, bcs,
                                                       problem.dirichlet_dofs_loc, problem.rotation,
                                                       problem.body.pressures, facet_tags)
@@ -694,8 +719,8 @@ def _solver_variables(
     keep: bool,
 ) -> tuple[PETSc.Mat, list[PETSc.Vec], PETSc.Mat | None, PETSc.Mat | None, PETSc.Mat | None, list[PETSc.Vec | None]]:
     """A = T^T A_K T and l~ = T^T (l~_K - A_K c) for each load, with R, N, T and the offsets c
-    of the change of variables. Without a change (T = I) A_K and the loads themselves;
-    otherwise new objects, and A_K and the loads are freed unless ``keep``."""
+    of the change of variables. Without a change (T = I) the loads themselves and A_K (a copy
+    if ``keep``); otherwise new objects, and A_K and the loads are freed unless ``keep``."""
     A_K, loads = elastic.stiffness, elastic.loads
     mortar = any(i.coupling is not None for i in interfaces)
     rotation = _nodal_rotation(A_K, contact_blk, frames, always=mortar)
@@ -705,8 +730,8 @@ def _solver_variables(
         coupling = _mortar_rows(A_K, interfaces, elastic.constrained)
         offsets = [_prescribed_offset(coupling, b, elastic.owned_dirichlet) for b in loads]
         transform = _change_of_variables(coupling, rotation, elastic.owned_dirichlet)
-    if rotation is None:
-        return A_K, loads, rotation, coupling, transform, offsets
+    if rotation is None:  # T = I: A_K itself, a copy of it when A_K is kept (the searches change A, not A_K)
+        return A_K.duplicate(copy=True) if keep else A_K, loads, rotation, coupling, transform, offsets
     T = transform if transform is not None else rotation
     transformed = [_in_solver_variables(A_K, T, b, c) for b, c in zip(loads, offsets)]
     with default_options("", {"mat_product_clear": True}):  # A keeps no copies of A_K T and T (same values)

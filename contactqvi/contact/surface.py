@@ -30,6 +30,7 @@ from dolfinx import mesh as dmesh
 from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult
+from contactqvi.load_steps import placed
 from contactqvi.paraview import Dataset, MeshPiece
 
 __all__ = [
@@ -397,7 +398,7 @@ class ContactSurface:
         u_tilde = displacement.x.array.reshape(-1, 3)[self._parent_blk]
         contact = nodal[:, _COLUMNS["contact"]] > 0
         if problem.obstacle is not None:  # the surface's other nodes: gap and normal to the obstacle
-            initial_gap, normal = problem.obstacle.translated(problem.translation).distance(self._x)
+            initial_gap, normal = placed(problem.obstacle, problem.translation, problem.step_rotation).distance(self._x)
         else:  # a body pair: no gap where there is no contact law
             initial_gap, normal = np.full(len(self._x), np.nan), np.zeros_like(self._x)
         normal[contact] = nodal[contact, _COLUMNS["normal"]]  # the nodes' (reference) frames
