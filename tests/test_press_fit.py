@@ -22,6 +22,7 @@ arcs in equal segments, so the faceted surfaces are similar polygons), one mater
 
 from __future__ import annotations
 
+import json
 import pathlib
 import re
 import typing
@@ -387,3 +388,107 @@ def test_a_taper_is_checked_node_by_node(tapered):
 def test_a_bad_interference_table_is_named(table, key, message):
     with pytest.raises(ParameterError, match=rf"^contacts\[0\]\.interference\.{key}: {message}"):
         parse_case(_case(MESH, STEEL, STEEL, table))
+
+
+#: A fit taken up over four steps: the fraction of the interference resolved at each.
+FITS = (0.25, 0.5, 0.75, 1.0)
+
+
+def _path_pressures(case: dict, steps: list[LoadStep], parameters: dict | None = None) -> list[np.ndarray]:
+    """The nodal normal forces lambda_i / D_ii (Pa) of each step of the load path ``steps``
+    (owned slave nodes); every step converged. Collective."""
+    with build_problem(parse_case(case), MPI.COMM_WORLD) as problem:
+        u = problem.A.createVecRight()
+        try:
+            results = solve_load_path(problem, steps, u, parameters, from_rest=True)
+        finally:
+            u.destroy()
+        assert [r.converged for r in results] == [True] * len(steps)
+        return [r.normal_force / problem.contact_area for r in results]
+
+
+def _largest(comm: MPI.Comm, values: np.ndarray) -> float:
+    return comm.allreduce(float(np.abs(values).max(initial=0.0)), op=MPI.MAX)
+
+
+def test_a_fit_over_several_steps_ends_as_the_one_step_fit(mpi_tmp_path):
+    """The steel pin 0.1 mm oversize in the aluminium ring (coarse slice, frictionless, searched
+    once): resolved over four steps (``fit`` = 0.25, 0.5, 0.75, 1), the last step's nodal pressures
+    are the one-step fit's to 1e-8 (the same linear problem, solved from another start; both solved
+    to rtol 1e-11), and each step's mean pressure is its fraction of Lamé's to 1 % (the gap
+    g + (1 - fit) delta: the overlap as meshed is delta to 0.2 %, the rest as in
+    test_press_fit_meets_lame)."""
+    comm = MPI.COMM_WORLD
+    case = _case(_geo(mpi_tmp_path, 1e-4, "coarse"), STEEL, ALUMINIUM, 1e-4)
+    case["contacts"][0]["search"] = "once"
+    exact = {"rtol": 1e-11, "pc": "lu"}
+    gradual = _path_pressures(case, [LoadStep(1.0, fit=f) for f in FITS], exact)
+    (once,) = _path_pressures(case, [LoadStep(1.0)], exact)
+    assert _largest(comm, gradual[-1] - once) <= 1e-8 * _largest(comm, once)
+    p = press_fit.contact_pressure(1e-4, B, C, STEEL, ALUMINIUM)
+    means = np.array([_mean(comm, pressure) for pressure in gradual])
+    assert np.abs(means / (np.array(FITS) * p) - 1.0).max() < 0.01, means / (np.array(FITS) * p) - 1.0
+
+
+def test_a_frictional_fit_over_several_steps_meets_lame(mpi_tmp_path):
+    """As above with Coulomb friction 0.3 and the default search (every step): it converges, and the
+    pair force of the last step is Lamé's pressure to 1 %, as the one-step fit's."""
+    case = _case(_geo(mpi_tmp_path, 1e-4, "coarse"), STEEL, ALUMINIUM, 1e-4)
+    case["contacts"][0].update(law="coulomb", friction=0.3)
+    case["steps"] = [{"load": 1.0, "fit": f} for f in FITS]
+    summary, code = run_case(parse_case(case), mpi_tmp_path / "gradual", plot=False)
+    assert code == 0
+    force = summary["steps"][-1]["pair_forces"][PAIR]
+    p = press_fit.contact_pressure(1e-4, B, C, STEEL, ALUMINIUM)
+    assert np.abs(np.array(force[:2]) / (B * T) / p - 1.0).max() < 0.01, force
+
+
+def _push_out(directory: pathlib.Path, steps: list[dict]) -> dict:
+    """The push-out of test_push_out_slides_at_the_coulomb_force with the load path ``steps``."""
+    rollers = {"symmetry_x": {"x": 0.0}, "symmetry_y": {"y": 0.0}}
+    case = _case(_geo(directory, 1e-4, "coarse", t=LENGTH, nlay=4), STEEL, ALUMINIUM, 1e-4)
+    pin, hub = case["bodies"]
+    pin["boundary"]["displacement"] = {**rollers, "flat": {"z": PUSH}}
+    hub["boundary"]["displacement"] = {**rollers, "ring_outer": {"z": 0.0}}
+    case["contacts"][0].update(law="coulomb", friction=FRICTION)
+    case["steps"] = steps
+    return case
+
+
+def test_a_gradual_fit_restarted_after_any_step_is_the_uninterrupted_path(mpi_tmp_path):
+    """The push-out with the fit taken up in two steps (``fit`` = 0.5, 1 at load 0), then pushed:
+    checkpoint.json holds the fit reached (0.5 after step 1), and a run stopped after step 1 and
+    restarted ends with the uninterrupted run's step forces and solution to 1e-12 (exact Newton
+    steps, ``pc = "lu"``; measured: bitwise; after step 2 too, checked once: 136 s on 2 ranks)."""
+    comm = MPI.COMM_WORLD
+    case = _push_out(mpi_tmp_path, [{"load": 0.0, "fit": 0.5}, {"load": 0.0}, {"load": 1.0}])
+    case["solver"] = {"pc": "lu"}
+    whole, code = run_case(parse_case(case), mpi_tmp_path / "whole", plot=False)
+    assert code == 0
+
+    def forces(summary: dict) -> np.ndarray:
+        return np.array([s["pair_forces"][PAIR] for s in summary["steps"]])
+
+    out = mpi_tmp_path / "after_1"
+    run_case(parse_case(case), out, plot=False, stop_after=1)
+    marker = comm.bcast(json.loads((out / "checkpoint" / "checkpoint.json").read_text()) if comm.rank == 0 else None)
+    assert marker["step"] == 1 and marker["fit"] == 0.5
+    restarted, code = run_case(parse_case(case), out, plot=False, restart=True)
+    assert code == 0 and restarted["restarts"][-1]["after_step"] == 1
+    assert np.abs(forces(restarted) - forces(whole)).max() <= 1e-12 * np.abs(forces(whole)).max()
+    if comm.rank == 0:
+        u, expected = (np.load(path / "solution.npz")["u"] for path in (out, mpi_tmp_path / "whole"))
+        assert np.abs(u - expected).max() <= 1e-12 * np.abs(expected).max()
+
+
+@pytest.mark.one_rank(reason="case-file parsing, no mesh")
+@pytest.mark.parametrize("fit, interference, message", [
+    (1.5, 1e-4, r"must be a number in \[0, 1\] \(the fraction of the interference resolved\), got 1.5"),
+    ("half", 1e-4, r"must be a number in \[0, 1\] \(the fraction of the interference resolved\), got 'half'"),
+    (0.5, None, r"resolves the declared interferences of \[\[contacts\]\], and no pair declares one"),
+])
+def test_a_bad_fit_is_named(fit, interference, message):
+    case = _case(MESH, STEEL, STEEL, interference)
+    case["steps"] = [{"load": 1.0}, {"load": 1.0, "fit": fit}]
+    with pytest.raises(ParameterError, match=rf"^steps\[1\]\.fit: {message}$"):
+        parse_case(case)
