@@ -37,6 +37,7 @@ from dolfinx import fem
 from contactqvi.case import parse_case
 from contactqvi.contact import LoadStep, solve_load_path
 from contactqvi.contact.load_path import contact_resultants
+from contactqvi.contact.nodal import State
 from contactqvi.parameters import ParameterError
 from contactqvi.problems import press_fit
 from contactqvi.runner import build_problem, run_case
@@ -492,3 +493,65 @@ def test_a_bad_fit_is_named(fit, interference, message):
     case["steps"] = [{"load": 1.0}, {"load": 1.0, "fit": fit}]
     with pytest.raises(ParameterError, match=rf"^steps\[1\]\.fit: {message}$"):
         parse_case(case)
+
+
+#: The push-out pushed in increments: its load factors after the fit step (0.025 = 1.25 um).
+PUSH_LOADS = (0.025, 0.05, 0.1, 0.2, 0.25, 0.3, 0.4, 0.5, 0.55, 0.6, 1.0)
+#: Layers of the push-out mesh along the pin's axis (2.5 mm).
+PUSH_LAYERS = 8
+STICKING = (State.STICKING, State.WEAK_STICKING)
+
+
+def _push_out_states(directory: pathlib.Path) -> tuple[list[np.ndarray], np.ndarray, list[float]]:
+    """The push-out of test_push_out_slides_at_the_coulomb_force in PUSH_LAYERS layers, pushed by
+    PUSH_LOADS after the fit. Per step: whether each owned node sticks (a node on no contact surface
+    does not); each owned node's z; and the largest |friction force| / normal force of a slave
+    node (over the ranks). Collective."""
+    case = _push_out(directory, [])
+    case["mesh"]["file"] = str(_geo(directory, 1e-4, "coarse", t=LENGTH, nlay=PUSH_LAYERS))
+    steps = [LoadStep(0.0)] + [LoadStep(load) for load in PUSH_LOADS]
+    sticking, ratios = [], []
+    with build_problem(parse_case(case), MPI.COMM_WORLD) as problem:
+
+        def record(index: int, step: LoadStep, u: typing.Any, result: typing.Any, state: typing.Any) -> None:
+            assert result.converged
+            sticking.append(np.isin(state.node_states, STICKING))
+            pressed = result.normal_force > 0.0
+            ratio = np.linalg.norm(result.friction_force[pressed], axis=1) / result.normal_force[pressed]
+            ratios.append(problem.comm.allreduce(float(ratio.max(initial=0.0)), op=MPI.MAX))
+
+        u = problem.A.createVecRight()
+        try:
+            solve_load_path(problem, steps, u, from_rest=True, on_step=record)
+        finally:
+            u.destroy()
+        n_owned = problem.V.dofmap.index_map.size_local
+        z = problem.V.tabulate_dof_coordinates()[:n_owned, 2]
+    return [stick[:n_owned] for stick in sticking], z, ratios
+
+
+def test_a_push_out_sticks_in_a_zone_that_shrinks_from_the_ends(mpi_tmp_path):
+    """The steel pin 0.1 mm oversize in the aluminium hub (L = b = 20 mm, 8 layers, mu = 0.1), the
+    fit, then pushed along +z in steps up to 50 um. From the first push step on (a new increment:
+    the nodes the fit left sliding by the Poisson effect stick again), every node that sticks
+    stuck at the step before (the stick zone shrinks), the layers with a sticking node are
+    contiguous (it shrinks from its ends, never splits), the layer at the pin's end z = L (the hub's
+    edge) slides from the first push step on and the end z = 0 loses its last sticking node while
+    the layers inside still stick (the ends slip first), and at 50 um no node sticks (gross slip).
+    Friction force / normal force <= mu at every slave node and step (to 1e-10; measured 2e-13 over).
+    The measured evolution: docs/press_fit.md, Push-out."""
+    comm = MPI.COMM_WORLD
+    sticking, z, ratios = _push_out_states(mpi_tmp_path)
+    layer = np.rint(z / LENGTH * PUSH_LAYERS).astype(np.int64)
+    counts = [comm.allreduce(np.bincount(layer[stick], minlength=PUSH_LAYERS + 1), op=MPI.SUM) for stick in sticking]
+    pushed = range(1, len(sticking))
+    for k in pushed:
+        grown = comm.allreduce(int(np.count_nonzero(sticking[k] & ~sticking[k - 1])), op=MPI.SUM)
+        assert k == 1 or grown == 0, (k, grown)
+        zone = np.flatnonzero(counts[k])
+        assert len(zone) == 0 or np.all(counts[k][zone[0]:zone[-1] + 1] > 0), (k, counts[k])
+        assert counts[k][PUSH_LAYERS] == 0, (k, counts[k])
+    free_base = next(k for k in pushed if counts[k][0] == 0)
+    assert counts[free_base][1:PUSH_LAYERS].sum() > 0, counts[free_base]
+    assert counts[1].sum() > counts[0].sum() and counts[-1].sum() == 0, counts
+    assert max(ratios) <= FRICTION * (1.0 + 1e-10), max(ratios) / FRICTION - 1.0
