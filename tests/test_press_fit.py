@@ -460,7 +460,7 @@ def test_a_gradual_fit_restarted_after_any_step_is_the_uninterrupted_path(mpi_tm
     """The push-out with the fit taken up in two steps (``fit`` = 0.5, 1 at load 0), then pushed:
     checkpoint.json holds the fit reached (0.5 after step 1), and a run stopped after step 1 and
     restarted ends with the uninterrupted run's step forces and solution to 1e-12 (exact Newton
-    steps, ``pc = "lu"``; measured: bitwise; after step 2 too, checked once: 136 s on 2 ranks)."""
+    steps, ``pc = "lu"``; a restart after step 2 too, checked once on 1 and 2 ranks)."""
     comm = MPI.COMM_WORLD
     case = _push_out(mpi_tmp_path, [{"load": 0.0, "fit": 0.5}, {"load": 0.0}, {"load": 1.0}])
     case["solver"] = {"pc": "lu"}
