@@ -18,6 +18,11 @@ of the nodes more than 10° from them on the ring's inner and outer surface and 
 surface; for interferences of 0.01 % and 0.5 % of b, on a coarse and a finer mesh (both
 arcs in equal segments, so the faceted surfaces are similar polygons), one material
 (steel) and two (a steel pin in an aluminium ring).
+
+Also (docs/press_fit.md): a tapered pin, ``interference = {value, at, slope}``, against
+Lamé's plane-stress pressure of the local interference; a fit taken up over several steps
+(``[[steps]] fit``) against the one-step fit, and restarted; the push-out's stick zone, step
+by step.
 """
 
 from __future__ import annotations
