@@ -33,6 +33,7 @@ SI units throughout (m, Pa, N/m^3). Example::
     [[steps]]                           # load path; none = one step, load 1, no translation
     load = 0.5                          # factor on tractions, body force, prescribed displacements
     translation = [0.0, 0.0, 0.0]       # translation (m) of the obstacle and of boundary.moved groups
+    # fit = 0.5                         # fraction of the [[contacts]] interferences resolved (default 1)
     # rotation = {axis = [0, 0, 1], angle = 30.0, centre = [0, 0, 0]}  # of the obstacle and the
     #                                   # boundary.moved groups: x = Q (X - centre) + centre + translation;
     #                                   # degrees, total; one centre for the whole path; a rotated
@@ -76,7 +77,9 @@ slave surface with a master surface (``"body.group"``) or with a rigid obstacle
     # search_distance = 0.01            # m; default: each slave facet's longest edge
     # search = "every_step"             # "until_settled": also after each step, solved again
     #                                   # until it settles; "once": the reference configuration
-    # interference = 1e-4               # m: the surfaces overlap by this as meshed (a press fit)
+    # interference = 1e-4               # m: the surfaces overlap by this as meshed (a press fit), or
+    #                                   # linear in x (a taper): {value = 1e-4, at = [0, 0, 0],
+    #                                   # slope = [0, 0, 2e-3]}, delta(x) = value + slope . (x - at)
 
 Contact laws (:data:`contactqvi.laws.LAWS`; ``law`` may be left out for ``coulomb``),
 with the keys each takes beside ``law`` (checked by the law's class, errors named by
@@ -126,8 +129,9 @@ import tomllib
 import typing
 
 from contactqvi import obstacles
+from contactqvi.interference import Interference, check_interference
 from contactqvi.laws import LAWS, ContactLaw, create_law, parameter_names
-from contactqvi.load_steps import SEARCHES, Rotation, check_rotation, check_steps, rotates
+from contactqvi.load_steps import SEARCHES, Rotation, check_fit, check_rotation, check_steps, rotates
 from contactqvi.materials import MATERIALS
 from contactqvi.load_steps import LoadStep as Step
 from contactqvi.parameters import (
@@ -147,6 +151,7 @@ __all__ = [
     "ContactCase",
     "ContactPair",
     "Displacement",
+    "Interference",
     "Material",
     "MeshSource",
     "ObstacleShape",
@@ -331,7 +336,9 @@ class ContactPair:
             configuration settles) or ``"once"`` (in the reference configuration only);
             None: ``"every_step"`` for a ``master``, ``"once"`` for an obstacle.
         interference: the overlap of the slave and master surfaces as meshed (m, >= 0;
-            a press or shrink fit), resolved in the first load step; body pairs only
+            a press or shrink fit), or an :class:`~contactqvi.interference.Interference`
+            linear in position (a taper); resolved in the first load step, or over the
+            steps' ``fit`` fractions; body pairs only
             (:class:`~contactqvi.contact.interface.BodyPair`, docs/press_fit.md). None: 0.
     """
 
@@ -341,7 +348,7 @@ class ContactPair:
     law: ContactLaw | None = None
     search_distance: float | None = None
     search: str | None = None
-    interference: float | None = None
+    interference: float | Interference | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -393,6 +400,7 @@ class ContactCase:
         if not self.bodies:
             _check_consistency(self)
         _check_rotations(self)
+        _check_fits(self)
 
     @property
     def groups(self) -> list[str]:
@@ -495,6 +503,8 @@ def _parse_pair(value: typing.Any, path: str) -> ContactPair:
     pair = _with_law(_table(value, path, ContactPair, extra=parameter_names()), path)
     if "obstacle" in pair:
         pair["obstacle"] = ObstacleShape(**_table(pair["obstacle"], f"{path}.obstacle", ObstacleShape))
+    if isinstance(pair.get("interference"), collections.abc.Mapping):
+        pair["interference"] = Interference(**_table(pair["interference"], f"{path}.interference", Interference))
     return ContactPair(**pair)
 
 
@@ -708,12 +718,12 @@ def _check_contacts(contacts: typing.Sequence[ContactPair], bodies: tuple[Body, 
     return tuple(checked)
 
 
-def _check_interference(pair: ContactPair, path: str) -> float | None:
-    """A pair's ``interference``: a number >= 0 (m), between meshed bodies only."""
+def _check_interference(pair: ContactPair, path: str) -> float | Interference | None:
+    """A pair's ``interference``: a number >= 0 (m) or an :class:`Interference` (a taper; its
+    sign on the surface is checked with the mesh), between meshed bodies only."""
     if pair.interference is None:
         return None
-    interference = require_number(f"{path}.interference", pair.interference)
-    require_positive(f"{path}.interference", interference, allow_zero=True)
+    interference = check_interference(pair.interference, f"{path}.interference")
     require(pair.obstacle is None, f"{path}.interference", "an overlap is declared between meshed bodies only (a "
             "'master' surface); a rigid obstacle's position is exact: move it or the body")
     return interference
@@ -750,7 +760,8 @@ def _check_steps(steps: typing.Sequence[Step]) -> tuple[Step, ...]:
         load = require_number(f"steps[{i}].load", step.load)
         require(load >= 0.0, f"steps[{i}].load", f"must be >= 0, got {load!r}")
         rotation = None if step.rotation is None else check_rotation(step.rotation, f"steps[{i}].rotation")
-        checked.append(Step(load, _vector(step.translation, f"steps[{i}].translation"), rotation))
+        checked.append(Step(load, _vector(step.translation, f"steps[{i}].translation"), rotation,
+                            check_fit(step.fit, f"steps[{i}].fit")))
     return tuple(checked) or (Step(),)
 
 
@@ -769,6 +780,14 @@ def _check_rotations(case: ContactCase) -> None:
     for key, search in searches.items():
         require(search in ("every_step", "until_settled"), key, f"steps[{first}] rotates the obstacle, whose normals "
                 f"then turn: search it each step ('every_step' or 'until_settled'), got {search or 'once'!r}")
+
+
+def _check_fits(case: ContactCase) -> None:
+    """A step's ``fit`` takes up declared interferences: some pair must declare one."""
+    declared = any(pair.interference is not None for pair in case.contacts)
+    for i, step in enumerate(case.steps):
+        require(step.fit is None or declared, f"steps[{i}].fit", "resolves the declared interferences of "
+                "[[contacts]], and no pair declares one")
 
 
 #: Initial guesses of the first step (``solver.start``): the body at rest (u~ = 0), or

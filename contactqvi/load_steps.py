@@ -23,8 +23,8 @@ import numpy as np
 from contactqvi.obstacles import Obstacle
 from contactqvi.parameters import require, require_positive
 
-__all__ = ["SEARCHES", "LoadStep", "Rotation", "check_rotation", "check_steps", "interpolated", "placed",
-           "rigid_increment", "rotates"]
+__all__ = ["SEARCHES", "LoadStep", "Rotation", "check_fit", "check_rotation", "check_steps", "finite_vector",
+           "interpolated", "placed", "rigid_increment", "rotates"]
 
 #: When a pair of meshed bodies is searched along the load path: before every load step
 #: after the first, in the configuration the step before ended in; as that, and again
@@ -68,14 +68,24 @@ class LoadStep:
         rotation: total rigid rotation of the obstacles and the moved groups from their
             initial position (about its centre, then translated: x = Q (X - c) + c + t);
             None: none.
+        fit: the fraction in [0, 1] of the contact pairs' declared interferences resolved at
+            this step: the gap is g + (1 - fit) δ(x) (docs/press_fit.md, "A fit over several
+            steps"); None: 1, the whole fit (not scaled by ``load``).
     """
 
     load: float = 1.0
     translation: tuple[float, float, float] = (0.0, 0.0, 0.0)
     rotation: Rotation | None = None
+    fit: float | None = None
+
+    @property
+    def fit_fraction(self) -> float:
+        """``fit``, 1 when not given."""
+        return 1.0 if self.fit is None else self.fit
 
 
-def _finite_vector(value: typing.Any, name: str) -> tuple[float, float, float]:
+def finite_vector(value: typing.Any, name: str) -> tuple[float, float, float]:
+    """``value`` as 3 floats; :class:`~contactqvi.parameters.ParameterError` ``name`` unless 3 finite numbers."""
     try:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
@@ -88,23 +98,24 @@ def _finite_vector(value: typing.Any, name: str) -> tuple[float, float, float]:
 def check_rotation(rotation: typing.Any, path: str) -> Rotation:
     """``rotation`` checked, its axis a unit vector; errors named ``PATH.axis``, ``PATH.angle``, ``PATH.centre``."""
     require(isinstance(rotation, Rotation), path, f"must be a table {{axis, angle, centre}}, got {rotation!r}")
-    axis = _finite_vector(rotation.axis, f"{path}.axis")
+    axis = finite_vector(rotation.axis, f"{path}.axis")
     length = math.sqrt(sum(a * a for a in axis))
     require(length > 0.0, f"{path}.axis", f"must have nonzero length, got {list(axis)!r}")
     angle = rotation.angle
     ok = isinstance(angle, (int, float)) and not isinstance(angle, bool) and math.isfinite(angle)
     require(ok, f"{path}.angle", f"must be a finite number (degrees), got {angle!r}")
     unit = axis if math.isclose(length, 1.0, rel_tol=1e-15) else tuple(a / length for a in axis)
-    return Rotation(unit, float(angle), _finite_vector(rotation.centre, f"{path}.centre"))
+    return Rotation(unit, float(angle), finite_vector(rotation.centre, f"{path}.centre"))
 
 
 def check_steps(steps: typing.Sequence[LoadStep]) -> None:
-    """Raise :class:`~contactqvi.parameters.ParameterError` for a negative load, a bad
-    translation or rotation, or a centre of rotation that changes between steps."""
+    """Raise :class:`~contactqvi.parameters.ParameterError` for a negative load, a fit outside
+    [0, 1], a bad translation or rotation, or a centre of rotation that changes between steps."""
     centre = None
     for i, step in enumerate(steps):
         require_positive(f"steps[{i}].load", step.load, allow_zero=True)
-        _finite_vector(step.translation, f"steps[{i}].translation")
+        finite_vector(step.translation, f"steps[{i}].translation")
+        check_fit(step.fit, f"steps[{i}].fit")
         if step.rotation is None:
             continue
         rotation = check_rotation(step.rotation, f"steps[{i}].rotation")
@@ -145,6 +156,15 @@ def rigid_increment(points: np.ndarray, translation: typing.Sequence[float], rot
     initial = (points - centre - np.asarray(translation, dtype=float)) @ Q1  # rows of Q_1^T (p - c - t_1)
     before = initial @ Q0.T + centre + np.asarray(previous_translation, dtype=float)
     return points - before
+
+
+def check_fit(fit: typing.Any, name: str) -> float | None:
+    """A step's ``fit``: None or a number in [0, 1] (:class:`LoadStep`)."""
+    if fit is not None:
+        ok = isinstance(fit, (int, float)) and not isinstance(fit, bool) and 0.0 <= fit <= 1.0
+        require(ok, name, f"must be a number in [0, 1] (the fraction of the interference resolved), got {fit!r}")
+        return float(fit)
+    return None
 
 
 def interpolated(start: Rotation | None, end: Rotation | None, fraction: float) -> Rotation | None:

@@ -227,7 +227,8 @@ class _StepRecorder:
         """Write step ``index``'s results (if it converged), the summary, and the path's
         ``state`` as a checkpoint (if it converged); an :class:`OutputError` if the output
         cannot be written."""
-        entry = {"step": index + 1, "load": step.load, "translation": list(step.translation), **result.summary()}
+        entry = {"step": index + 1, "load": step.load, "translation": list(step.translation),
+                 **({} if step.fit is None else {"fit": step.fit}), **result.summary()}
         if step.rotation is not None:
             entry["rotation"] = dataclasses.asdict(step.rotation)
         if index == 0 or self.problem.searched_each_step:  # the search this step's problem comes from

@@ -1,7 +1,7 @@
 """The rules of docs/architecture.md that can be read off the source: checked by static analysis (``ast``).
 
 * Data flows one way: the problem-data layer (``contactqvi/problems/``, ``case.py``,
-  ``load_steps.py``, ``obstacles.py``, the contact laws ``contactqvi/laws/``) imports no solver
+  ``load_steps.py``, ``obstacles.py``, ``interference.py``, the contact laws ``contactqvi/laws/``) imports no solver
   package (``contact``, ``friction``, ``vi``, ``qvi``).
 * No import cycle in the package (imports at module level, in functions and under
   ``TYPE_CHECKING`` alike; ``from package import module`` counts as an import of the module).
@@ -27,7 +27,7 @@ pytestmark = pytest.mark.one_rank(reason="the source files read and checked stat
 PACKAGE = pathlib.Path(__file__).resolve().parent.parent / "contactqvi"
 SOLVER_PACKAGES = ("contactqvi.contact", "contactqvi.friction", "contactqvi.vi", "contactqvi.qvi")
 DATA_LAYER = ("contactqvi.problems", "contactqvi.case", "contactqvi.load_steps", "contactqvi.obstacles",
-              "contactqvi.laws")
+              "contactqvi.laws", "contactqvi.interference")
 MAX_FUNCTION_LINES = 60
 #: Calls that create a PETSc object: petsc4py's camel-case constructors and copies, and the factories.
 CREATING_METHODS = ("duplicate", "getDiagonal", "convert", "createVecs")

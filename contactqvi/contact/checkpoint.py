@@ -14,8 +14,9 @@ After every converged load step the runner writes, into ``OUTPUT/checkpoint/``
   node, -1 elsewhere);
 * ``checkpoint.json``, written last and atomically: the step, its file, the step's load
   factor, translation (the obstacles' position the next step's slip is measured
-  from) and rotation of the obstacles and moved groups (``{axis, angle, centre}`` or null), the first
-  step's stopping target and the summary so far.
+  from), rotation of the obstacles and moved groups (``{axis, angle, centre}`` or null)
+  and fraction of the declared interferences resolved (``fit``), the first step's stopping
+  target and the summary so far.
 
 A checkpoint exists only once ``checkpoint.json`` names it: a step file being written
 when the run died is never read, and the one before is removed only after the marker
@@ -68,6 +69,7 @@ class Checkpoint:
         path: its step file (``step_XXXX.bp``).
         load, translation: load factor and translation (m) of that step.
         rotation: the obstacles' and moved groups' rotation at that step, or None.
+        fit: the fraction of the declared interferences resolved at that step.
         target: the first step's stopping target ||y^|| (N), the accuracy of every later step.
         summary: ``summary.json`` as it was after that step.
     """
@@ -80,6 +82,7 @@ class Checkpoint:
     target: float
     summary: dict[str, typing.Any]
     rotation: Rotation | None = None
+    fit: float = 1.0
 
     def resume(self, problem: ContactProblem) -> PathState:
         """The load path's state after :attr:`step`, read into ``problem``'s space (collective;
@@ -95,6 +98,7 @@ class Checkpoint:
         state.variables.array[:] = variables.x.array[:n_owned]
         state.done, state.solved = self.step, self.solved
         state.load, state.translation, state.rotation = self.load, np.array(self.translation), self.rotation
+        state.fit = self.fit
         state.target = self.target
         missing = problem.comm.allreduce(int(np.count_nonzero(state.node_states[problem.contact_blk] < 0)),
                                          op=MPI.SUM)
@@ -135,7 +139,8 @@ def read_checkpoint(comm: MPI.Comm, output: str | os.PathLike, case: dict[str, t
     rotation = None if rotation is None else Rotation(tuple(rotation["axis"]), float(rotation["angle"]),
                                                       tuple(rotation["centre"]))
     return Checkpoint(int(data["step"]), int(data["solved"]), marker.parent / data["file"], float(data["load"]),
-                      tuple(float(t) for t in data["translation"]), float(data["target"]), summary, rotation)
+                      tuple(float(t) for t in data["translation"]), float(data["target"]), summary, rotation,
+                      float(data.get("fit", 1.0)))  # absent: written before fits over several steps
 
 
 class CheckpointWriter:
@@ -177,6 +182,7 @@ class CheckpointWriter:
                       {"step": state.done, "solved": state.solved, "file": name, "load": state.load,
                        "translation": [float(t) for t in state.translation], "target": state.target,
                        "rotation": None if state.rotation is None else dataclasses.asdict(state.rotation),
+                       "fit": state.fit,
                        "summary": summary})
         self.step = state.done
         if self.comm.rank == 0:  # the marker has moved on: older step files are garbage

@@ -32,6 +32,7 @@ from dolfinx import fem, la
 from dolfinx import mesh as dmesh
 
 from contactqvi.contact.mortar import MortarCoupling, mortar_coupling
+from contactqvi.interference import Interference, as_interference
 from contactqvi.laws import ContactLaw, Frictionless
 from contactqvi.load_steps import SEARCHES, Rotation, placed, rigid_increment
 from contactqvi.meshes import boundary_facets
@@ -87,10 +88,12 @@ class BodyPair:
             step: :func:`~contactqvi.contact.load_path.solve_load_path`); ``"once"``: only
             in the reference configuration (small sliding over the whole load path).
         interference: the declared overlap of the two surfaces as meshed (m, >= 0; a press or
-            shrink fit): slave nodes may start up to this deep inside the master body (and
-            :data:`FACETING` of their size deeper), and some node must. The contact conditions
-            are those of the measured gaps from the first load step on, which resolves the
-            whole overlap (docs/press_fit.md).
+            shrink fit), a number or an :class:`~contactqvi.interference.Interference` linear in
+            position (a taper), read at each slave node's reference position: slave nodes may
+            start up to this deep inside the master body (and :data:`FACETING` of their size
+            deeper), and some node must. The contact conditions are those of the measured gaps
+            once the fit is resolved: in the first load step, or over the steps' ``fit``
+            fractions (:meth:`Interface.gap`; docs/press_fit.md).
     """
 
     slave: str
@@ -98,7 +101,7 @@ class BodyPair:
     law: ContactLaw = Frictionless()
     search_distance: float | None = None
     search: str = "every_step"
-    interference: float = 0.0
+    interference: float | Interference = 0.0
 
     @property
     def name(self) -> str:
@@ -152,14 +155,20 @@ class Interface:
         """The facet group of the slave nodes."""
         return self.pair.surface if isinstance(self.pair, ObstaclePair) else self.pair.slave
 
-    def gap(self, x: np.ndarray, translation: np.ndarray, rotation: Rotation | None = None) -> np.ndarray:
+    def gap(self, x: np.ndarray, translation: np.ndarray, rotation: Rotation | None = None,
+            fit: float = 1.0) -> np.ndarray:
         """Gap of each slave node (m) at reference positions ``x`` with the obstacle at a step's
         position, ``rotation`` about its centre then ``translation``
-        (:func:`~contactqvi.load_steps.placed`); a body pair's weighted gap does not depend
-        on it. An obstacle pair searched in a deformed configuration u_s gives
-        g(x + u_s) - n . u_s, so that g + n . u is the gap linearised about that configuration."""
+        (:func:`~contactqvi.load_steps.placed`). An obstacle pair searched in a deformed
+        configuration u_s gives g(x + u_s) - n . u_s, so that g + n . u is the gap linearised
+        about that configuration. A body pair's weighted gap does not depend on the obstacles'
+        position; with a declared interference δ(x) resolved by the fraction ``fit`` of it, it
+        is g_i + (1 - fit) δ(x_i): the overlap not yet taken up is admitted
+        (docs/press_fit.md, "A fit over several steps")."""
         if self.obstacle is None:
-            return self.initial_gap
+            if fit == 1.0:
+                return self.initial_gap
+            return self.initial_gap + (1.0 - fit) * as_interference(self.pair.interference).at_points(x)
         obstacle = placed(self.obstacle, translation, rotation)
         if self.searched_at is None:
             return obstacle.distance(x)[0]
@@ -287,7 +296,6 @@ def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: Body
     distance = pair.search_distance
     require(distance is None or distance > 0.0, f"{pair.name}: search_distance", f"must be > 0, got {distance!r}")
     require(pair.search in SEARCHES, f"{pair.name}: search", f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
-    require(pair.interference >= 0.0, f"{pair.name}: interference", f"must be >= 0, got {pair.interference!r}")
     coupling = mortar_coupling(V, slave, master, distance, np.flatnonzero(constrained.all(axis=1)), displacement)
     comm = V.mesh.comm
     if displacement is None:
@@ -300,7 +308,7 @@ def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: Body
     normal /= np.linalg.norm(normal, axis=1)[:, None]
     gap = np.einsum("ij,ij->i", normal, coupling.separation)
     if displacement is None:
-        _check_interference(comm, V, gap, pair, coupling.weight)
+        _check_interference(comm, V, gap, pair, coupling.weight, V.tabulate_dof_coordinates()[coupling.slave_blk])
     return Interface(pair, coupling.slave_blk, tangent_frames(normal), coupling.weight, coupling, gap)
 
 
@@ -311,33 +319,59 @@ MESHED_INTERFERENCE = 0.01
 
 
 def _check_interference(comm: MPI.Comm, V: fem.FunctionSpace, gap: np.ndarray, pair: BodyPair,
-                        weight: np.ndarray) -> None:
-    """Raise if the slave nodes of a body pair overlap the master body by more than its declared
-    interference plus the faceting allowance :data:`FACETING` sqrt(D_ii) of each node (m), or if a
-    declared interference is not in the mesh: no node overlaps by at least it less its allowance.
-    Warn if the mean overlap as meshed, -sum_i D_ii g_i / sum_i D_ii, differs from the declared
-    one by more than :data:`MESHED_INTERFERENCE` of it."""
-    declared, faceting = pair.interference, FACETING * np.sqrt(weight)
+                        weight: np.ndarray, x: np.ndarray) -> None:
+    """Raise if the declared interference δ(x_i) of a body pair is negative at a slave node (x its
+    slave nodes' reference positions), if a slave node overlaps the master body by more than
+    δ(x_i) plus the faceting allowance :data:`FACETING` sqrt(D_ii) (m), or if a declared
+    interference is not in the mesh: no node overlaps by at least its δ(x_i) less its allowance.
+    Warn if the mean overlap as meshed, -sum_i D_ii g_i / sum_i D_ii, differs from the mean declared
+    one, sum_i D_ii δ(x_i) / sum_i D_ii, by more than :data:`MESHED_INTERFERENCE` of it."""
+    interference = as_interference(pair.interference)
+    declared, faceting = interference.at_points(x), FACETING * np.sqrt(weight)
+    _check_sign(comm, declared, pair)
     largest = comm.allreduce(float(faceting.max(initial=0.0)), op=MPI.MAX)
     faceting_text = f"the faceting allowance {FACETING:g} x sqrt(D_ii) (up to {largest:.3e} m here)"
-    allowance = f"the declared interference {declared:.3e} m plus {faceting_text}" if declared > 0.0 else faceting_text
-    hint = "" if declared > 0.0 else "; for a press or shrink fit, declare the overlap as [[contacts]] interference (m)"
-    _check_overlap(comm, V, gap, pair.name, f"nodes of {pair.slave!r} lie inside the body of {pair.master!r} "
-                   f"by more than {allowance}", declared + faceting, hint)
-    if declared == 0.0:
+    text = _declared_text(comm, interference, declared)
+    fit = comm.allreduce(float(declared.max(initial=0.0)), op=MPI.MAX) > 0.0
+    allowance = f"the declared interference {text} plus {faceting_text}" if fit else faceting_text
+    hint = "" if fit else "; for a press or shrink fit, declare the overlap as [[contacts]] interference (m)"
+    _check_overlap(comm, V, gap, pair.name, f"nodes of {pair.slave!r} lie inside the body of "
+                   f"{pair.master!r} by more than {allowance}", declared + faceting, hint)
+    if not fit:
         return
-    reached = comm.allreduce(float(np.max(faceting - gap, initial=-np.inf)), op=MPI.MAX)
+    reached = comm.allreduce(float(np.max(faceting - gap - declared, initial=-np.inf)), op=MPI.MAX)
     overlap = comm.allreduce(float(np.max(-gap, initial=0.0)), op=MPI.MAX)
-    require(reached >= declared, f"{pair.name}: interference", f"declared {declared:.3e} m, but the surfaces "
+    require(reached >= 0.0, f"{pair.name}: interference", f"declared {text}, but the surfaces "
             f"overlap by at most {overlap:.3e} m as meshed, less than it by more than {faceting_text}: "
             "mesh the bodies overlapping by the interference, e.g. a pin of radius b + interference in a "
             "hole of radius b")
-    mean = -comm.allreduce(float(weight @ gap), op=MPI.SUM) / comm.allreduce(float(weight.sum()), op=MPI.SUM)
-    if abs(mean / declared - 1.0) > MESHED_INTERFERENCE:
+    area = comm.allreduce(float(weight.sum()), op=MPI.SUM)
+    mean = -comm.allreduce(float(weight @ gap), op=MPI.SUM) / area
+    expected = interference.value if interference.uniform else comm.allreduce(float(weight @ declared),
+                                                                              op=MPI.SUM) / area
+    if abs(mean / expected - 1.0) > MESHED_INTERFERENCE:
         logger.warning("%s: the surfaces overlap by %.4e m on average as meshed, %+.1f %% of the declared "
-                       "interference %.4e m; the fit solved is the meshed one (chords lie inside a curved "
+                       "interference %.4e m%s; the fit solved is the meshed one (chords lie inside a curved "
                        "surface by h^2 / (8 R)): mesh both surfaces in equal segments (docs/press_fit.md)",
-                       pair.name, mean, 100.0 * (mean / declared - 1.0), declared)
+                       pair.name, mean, 100.0 * (mean / expected - 1.0), expected,
+                       "" if interference.uniform else " (its mean over the surface)")
+
+
+def _check_sign(comm: MPI.Comm, declared: np.ndarray, pair: BodyPair) -> None:
+    """Raise unless the declared interference δ(x_i) (m) is >= 0 at every slave node x_i."""
+    count = comm.allreduce(int(np.count_nonzero(declared < 0.0)), op=MPI.SUM)
+    lowest = comm.allreduce(float(declared.min(initial=np.inf)), op=MPI.MIN)
+    require(count == 0, f"{pair.name}: interference", f"delta(x) = value + slope . (x - at) is negative at {count} "
+            f"nodes of {pair.slave!r}, down to {lowest:.3e} m; it must be >= 0 on the contact surface")
+
+
+def _declared_text(comm: MPI.Comm, interference: Interference, declared: np.ndarray) -> str:
+    """The declared interference in a message: ``1.000e-04 m``, or its range over the slave nodes."""
+    if interference.uniform:
+        return f"{interference.value:.3e} m"
+    low = comm.allreduce(float(declared.min(initial=np.inf)), op=MPI.MIN)
+    high = comm.allreduce(float(declared.max(initial=-np.inf)), op=MPI.MAX)
+    return f"delta(x) from {low:.3e} to {high:.3e} m"
 
 
 def _check_overlap(comm: MPI.Comm, V: fem.FunctionSpace, gap: np.ndarray, name: str, what: str,

@@ -213,13 +213,15 @@ class _StepSolver(PETScOwner):
 
 def _toward(state: PathState, step: LoadStep, cuts: int) -> LoadStep:
     """``step`` itself, or after ``cuts`` halvings the part 2^-cuts of the way to it from
-    ``state`` (load factor, translation and rotation interpolated)."""
+    ``state`` (load factor, translation, rotation and fit interpolated)."""
     if cuts == 0:
         return step
     fraction = 0.5**cuts
     load = state.load + fraction * (step.load - state.load)
     translation = state.translation + fraction * (np.asarray(step.translation) - state.translation)
-    return LoadStep(load, tuple(float(t) for t in translation), interpolated(state.rotation, step.rotation, fraction))
+    fit = state.fit + fraction * (step.fit_fraction - state.fit)
+    return LoadStep(load, tuple(float(t) for t in translation), interpolated(state.rotation, step.rotation, fraction),
+                    fit)
 
 
 def _cut(attempts: list[tuple[LoadStep, SCDNewtonResult]], status: Status) -> SCDNewtonResult:
@@ -274,15 +276,20 @@ def _start(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSta
     logger.info("step %d: load factor %g, obstacle translation %s m", state.done + 1, step.load,
                 np.array2string(np.asarray(step.translation), precision=4))
     if state.solved == 0:
-        problem.set_step(step.load, step.translation, rotation=step.rotation)
+        problem.set_step(step.load, step.translation, rotation=step.rotation, fit=step.fit_fraction)
         if from_rest:
             problem.shift.copy(u)  # u~ = 0
         return
     if problem.searched_each_step:
-        problem.set_step(state.load, state.translation, rotation=state.rotation)  # the step before's prescribed parts
+        _set_previous(problem, state)
         _search_in(problem, state.displacement, step_solver)
         problem.solver_variables(state.displacement, state.variables)
     _continue(problem, step, u, state)
+
+
+def _set_previous(problem: ContactProblem, state: PathState) -> None:
+    """Set the step of ``state`` again: its prescribed parts and fit (before a search in its configuration)."""
+    problem.set_step(state.load, state.translation, rotation=state.rotation, fit=state.fit)
 
 
 def _search_in(problem: ContactProblem, configuration: fem.Function, step_solver: NewtonStepSolver | None) -> None:
@@ -354,9 +361,10 @@ def _search_reached(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state
     multigrid levels (``solver`` is destroyed)."""
     parameters, prefix, step_solver = solver.parameters, solver.prefix, _released(solver)
     _search_in(problem, reached, step_solver)
-    problem.set_step(state.load, state.translation, rotation=state.rotation)  # the step before's prescribed parts
+    _set_previous(problem, state)
     problem.solver_variables(state.displacement, state.variables)
-    problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation, state.rotation)
+    problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation, state.rotation,
+                     step.fit_fraction)
     problem.solver_variables(reached, u)
     u.axpy(1.0, problem.shift)
     return SCDNewtonSolver(problem, parameters, prefix=prefix, step_solver=step_solver)
@@ -381,7 +389,8 @@ def _merged(solves: list[SCDNewtonResult], status: Status,
 def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState) -> None:
     """Set ``step`` after ``state``'s step, the slip measured from it; ``u`` gets the predictor:
     u~ of that step, its touching nodes moved along with their master surface (no slip increment)."""
-    problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation, state.rotation)
+    problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation, state.rotation,
+                     step.fit_fraction)
     u.waxpy(1.0, problem.shift, state.variables)
     touching = np.isin(state.contact_states(problem), TOUCHING)
     u.array.reshape(-1, 3)[problem.contact_blk[touching], :2] = 0.0

@@ -14,12 +14,12 @@ field               read by
                     the predictor
 ``load``,           :meth:`~contactqvi.contact.problem.ContactProblem.set_step` of the next step:
 ``translation``,    the obstacles' surface motion since the step before (its slip reference
-``rotation``        on a rigid obstacle: the displacement of the obstacle's material points,
-                    :func:`~contactqvi.load_steps.rigid_increment`), and the search of a pair
+``rotation``,       on a rigid obstacle: the displacement of the obstacle's material points,
+``fit``             :func:`~contactqvi.load_steps.rigid_increment`), and the search of a pair
                     searched each step (the obstacles' position there): the
                     prescribed and moved parts of ``displacement`` at the step before (the
-                    moved groups' rigid motion (Q - I)(X - c) + t); a cut step
-                    (``max_cuts``) starts its parts from them
+                    moved groups' rigid motion (Q - I)(X - c) + t) and the interference it
+                    had resolved; a cut step (``max_cuts``) starts its parts from them
 ``variables``       the next step's slip reference and predictor (``_continue``); a problem
                     searched each step recomputes it from ``displacement`` after its search
 ``displacement``    the configuration x + u~ in which pairs searched each step are searched
@@ -72,6 +72,7 @@ class PathState(PETScOwner):
         node_states: :class:`~contactqvi.contact.nodal.State` of each local node (ghosts
             included) at step ``done``; -1 where it was no contact node.
         target: the first step's stopping target ||y^|| (N); 0 before it.
+        fit: the fraction of the declared interferences resolved there (0 at rest).
     """
 
     done: int
@@ -83,6 +84,7 @@ class PathState(PETScOwner):
     node_states: np.ndarray
     target: float
     rotation: Rotation | None = None
+    fit: float = 0.0
 
     @classmethod
     def at_rest(cls, problem: ContactProblem) -> PathState:
@@ -102,7 +104,7 @@ class PathState(PETScOwner):
         self.done += int(complete)
         self.solved += 1
         self.load, self.translation = problem.load_factor, problem.translation.copy()
-        self.rotation = problem.step_rotation
+        self.rotation, self.fit = problem.step_rotation, problem.fit
         self.variables.waxpy(-1.0, problem.shift, u)
         problem.physical_displacement(u, self.displacement)
         self.node_states[:] = -1

@@ -140,7 +140,7 @@ class ContactProblem(PETScOwner):
         node_body: body index of each local node (ghosts included), or None for one body.
         n_contact: global number p of contact nodes.
         n_free: global number n of free dofs.
-        load_factor, translation, step_rotation: the current step (:meth:`set_step`).
+        load_factor, translation, step_rotation, fit: the current step (:meth:`set_step`).
         setup_seconds: wall seconds (largest rank) of the last contact search with the
             nodal frames and mortar integration (``contact_search``) and of A = T^T A_K T
             with the loads (``change_of_variables``).
@@ -178,6 +178,7 @@ class ContactProblem(PETScOwner):
     load_factor: float = 1.0
     translation: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
     step_rotation: Rotation | None = None
+    fit: float = 1.0
     setup_seconds: dict[str, float] = dataclasses.field(default_factory=dict)
     elastic: ElasticSystem | None = None
     hyperelastic: HyperelasticSystem | None = None
@@ -330,12 +331,14 @@ class ContactProblem(PETScOwner):
         self.A.axpy(1.0, transformed, _SUBSET)
         transformed.destroy()
 
-    def gap(self, translation: typing.Sequence[float] = (0.0, 0.0, 0.0),
-            rotation: Rotation | None = None) -> np.ndarray:
+    def gap(self, translation: typing.Sequence[float] = (0.0, 0.0, 0.0), rotation: Rotation | None = None,
+            fit: float = 1.0) -> np.ndarray:
         """Gap of each owned contact node (m), obstacles rotated by ``rotation`` about its centre
-        and translated by ``translation`` (:func:`~contactqvi.load_steps.placed`)."""
+        and translated by ``translation`` (:func:`~contactqvi.load_steps.placed`), the fraction
+        ``fit`` of the declared interferences resolved (:meth:`Interface.gap`)."""
         x = self.V.tabulate_dof_coordinates()[self.contact_blk]
-        return self._per_node(lambda i, nodes: i.gap(x[nodes], np.asarray(translation, dtype=float), rotation), 1)
+        return self._per_node(lambda i, nodes: i.gap(x[nodes], np.asarray(translation, dtype=float), rotation, fit),
+                              1)
 
     def _per_node(self, value: typing.Callable[[Interface, np.ndarray], np.ndarray], width: int) -> np.ndarray:
         """An interface-wise quantity spread over the contact nodes ((m,) or (m, width))."""
@@ -348,19 +351,21 @@ class ContactProblem(PETScOwner):
     def set_step(
         self, load_factor: float = 1.0, translation: typing.Sequence[float] = (0.0, 0.0, 0.0),
         previous: PETSc.Vec | None = None, previous_translation: typing.Sequence[float] = (0.0, 0.0, 0.0),
-        rotation: Rotation | None = None, previous_rotation: Rotation | None = None,
+        rotation: Rotation | None = None, previous_rotation: Rotation | None = None, fit: float = 1.0,
     ) -> None:
         """Shift and load of a load step: tractions, body force and prescribed displacements
         times ``load_factor``, the obstacles and moved groups rotated by ``rotation`` (total,
         about its centre; None: not) and translated by ``translation`` (total, m),
         x = Q (X - c) + c + t (the moved groups need a problem built with ``rotations``, rotated
-        obstacles a search each step: their normals turn); slip measured from the step before:
-        from its displacement ``previous`` (u~ in the solver's variables; None: from rest) and
-        from the obstacles' position ``previous_translation``, ``previous_rotation``: the
-        tangential part of the displacement since then of the obstacle's material point at each
-        node's closest point (:meth:`~contactqvi.contact.interface.Interface.obstacle_increment`;
-        a master body moves with the solution, its slip is in w itself). Both come from the load
-        path's :class:`~contactqvi.contact.path_state.PathState`; nothing of the step before is
+        obstacles a search each step: their normals turn), the fraction ``fit`` of the body
+        pairs' declared interferences resolved (the gap g + (1 - fit) δ(x), :meth:`gap`); slip
+        measured from the step before: from its displacement ``previous`` (u~ in the solver's
+        variables; None: from rest) and from the obstacles' position ``previous_translation``,
+        ``previous_rotation``: the tangential part of the displacement since then of the
+        obstacle's material point at each node's closest point
+        (:meth:`~contactqvi.contact.interface.Interface.obstacle_increment`; a master body moves
+        with the solution, its slip is in w itself). Both come from the load path's
+        :class:`~contactqvi.contact.path_state.PathState`; nothing of the step before is
         read from the problem itself.
         """
         translation = np.asarray(translation, dtype=float)
@@ -372,12 +377,13 @@ class ContactProblem(PETScOwner):
         if previous is not None:
             nodal[:, :2] = previous.array.reshape(-1, 3)[self.contact_blk, :2]
         nodal[:, :2] = -(nodal[:, :2] + moved)
-        nodal[:, 2] = self.gap(translation, rotation)
+        nodal[:, 2] = self.gap(translation, rotation, fit)
         self.shift.set(0.0)
         self.shift.array.reshape(-1, 3)[self.contact_blk] = nodal
         self.applied.copy(self.load)
         self.load.scale(load_factor)
         self.load_factor, self.translation, self.step_rotation = float(load_factor), translation, rotation
+        self.fit = float(fit)
         for t, b in zip(self.rigid_motion(), self.translated):  # moved groups follow the rigid motion
             self.load.axpy(t, b)
         if self.hyperelastic is None:
