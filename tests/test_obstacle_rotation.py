@@ -7,7 +7,7 @@ node's closest point (:func:`~contactqvi.load_steps.rigid_increment`).
 
 * Objectivity at finite strain: a neo-Hookean block held at its face x = 0 (a moved group),
   pressed onto a plane by a follower pressure on its top, Coulomb friction; then the plane and
-  the held face are turned together by 90 degrees about x in ten steps. The final contact force
+  the held face are turned together by 90 degrees about x in five steps. The final contact force
   is Q times the pressed one's, the same nodes touch, and every step of the turn has the same
   contact states node by node.
 * The obstacle's surface motion in the friction law, in closed form: a linear block clamped at
@@ -44,7 +44,7 @@ from contactqvi.parameters import ParameterError
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 YOUNG, POISSON = 10e6, 0.3  # Pa
 PRESSURE = 0.5e6  # Pa on the block's top: about 5 % strain
-TURNS = 10  # steps of 9 degrees
+TURNS = 5  # steps of 18 degrees
 AXIS_X = (1.0, 0.0, 0.0)
 TURN_CENTRE = (1.0, 0.5, 0.0)  # m, the middle of the block's bottom
 
@@ -70,7 +70,7 @@ def test_a_block_turned_with_its_plane_is_objective():
     force is Q f of the pressed block, the same nodes touch, and the contact states of the turn's
     first and last steps agree node by node (a rigid turn slips nowhere: every node sticks).
 
-    Measured: 1.2e-11 (force, relative; 1 and 2 ranks); asserted 1e-6."""
+    Measured: 6.6e-12 (force, relative; 1 and 2 ranks); asserted 1e-6."""
     rows = []
     steps = [LoadStep(0.5), LoadStep(1.0)] + [
         LoadStep(1.0, rotation=Rotation(AXIS_X, 90.0 * (k + 1) / TURNS, TURN_CENTRE)) for k in range(TURNS)]
