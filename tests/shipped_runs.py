@@ -99,6 +99,8 @@ TWINS = {
                                 "2 ranks also in tests/test_restart.py, killed and restarted"),
     "shallow_ironing_frictional": ("shallow_ironing", "shallow_ironing's mesh and press step; Coulomb's nodal law, "
                                    "at finite strain on 2 ranks in rubber_pad"),
+    "twisted_fit": ("shrink_fit", "shrink_fit's pair and interference on a full model; tests/test_rotation.py "
+                    "twists the same case on 2 ranks"),
 }
 
 

@@ -30,6 +30,7 @@ from __future__ import annotations
 import json
 import pathlib
 import re
+import tomllib
 import typing
 
 from mpi4py import MPI
@@ -46,6 +47,7 @@ from contactqvi.contact.nodal import State
 from contactqvi.parameters import ParameterError
 from contactqvi.problems import press_fit
 from contactqvi.runner import build_problem, run_case
+from shipped_runs import group
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 MESH = ROOT / "meshes" / "shrink_fit.geo"
@@ -190,33 +192,29 @@ def test_a_fit_changed_by_the_faceting_is_reported(mpi_tmp_path, caplog):
     assert measured["force x"] > 2.0 * lame(delta, STEEL)["force x"]
 
 
-#: Push-out: the slice lengthened to a pin and a hub of length L = b in 4 layers, Coulomb
-#: friction, the pin's end faces moved along z by PUSH in the second step (the first: the fit).
-LENGTH, FRICTION, PUSH = B, 0.1, 5e-5
+#: Push-out (cases/push_out.toml): the slice lengthened to a pin and a hub of length L = b,
+#: Coulomb friction.
+LENGTH, FRICTION = B, 0.1
 
 
-def test_push_out_slides_at_the_coulomb_force(mpi_tmp_path):
-    """A steel pin 0.1 mm oversize in an aluminium hub of length L = b, the hub held along z
-    on its outer surface, its faces free; the pin's two end faces pushed 50 um along z after
-    the fit. Every contact node slides, and the axial force is the Coulomb force of the
-    contact pressure, mu p (pi / 2) b L on the quarter (mu p 2 pi b L whole), with p measured
-    as the pair force F_x / (b L) (to 0.5 %; -3e-4 measured). That p lies between Lamé's
-    plane-stress and plane-strain pressures (156.95 and 166.87 MPa; 162.9 measured): the
-    pin's ends keep its length, the hub's faces are free, so neither limit holds."""
-    rollers = {"symmetry_x": {"x": 0.0}, "symmetry_y": {"y": 0.0}}
-    case = _case(_geo(mpi_tmp_path, 1e-4, "coarse", t=LENGTH, nlay=4), STEEL, ALUMINIUM, 1e-4)
-    pin, hub = case["bodies"]
-    pin["boundary"]["displacement"] = {**rollers, "flat": {"z": PUSH}}
-    hub["boundary"]["displacement"] = {**rollers, "ring_outer": {"z": 0.0}}
-    case["contacts"][0].update(law="coulomb", friction=FRICTION)
-    case["steps"] = [{"load": 0.0}, {"load": 1.0}]
-    summary, code = run_case(parse_case(case), mpi_tmp_path / "push_out", plot=False)
-    assert code == 0
-    pushed = summary["steps"][-1]
+@group("push_out")
+def test_push_out_slides_at_the_coulomb_force(shipped_runs):
+    """cases/push_out.toml: a steel pin 0.1 mm oversize in an aluminium hub of length L = b, the
+    hub held along z on its outer surface, its faces free; the pin's two end faces pushed up to
+    50 um along z after the fit. The axial force grows with the push and stays within the
+    Coulomb force mu p (pi / 2) b L on the quarter (mu p 2 pi b L whole), p measured as the pair
+    force F_x / (b L) of each step; at 50 um every contact node slides and the axial force is
+    that Coulomb force (to 0.5 %; -3e-4 measured). That p lies between Lamé's plane-stress and
+    plane-strain pressures (156.95 and 166.87 MPa; 162.9 measured): the pin's ends keep its
+    length, the hub's faces are free, so neither limit holds."""
+    steps = shipped_runs.steps("push_out")
+    forces = np.array([step["pair_forces"][PAIR] for step in steps])
+    coulomb = FRICTION * forces[:, 0] / (B * LENGTH) * np.pi / 2 * B * LENGTH
+    assert np.all(np.diff(forces[:4, 2]) > 0) and np.all(forces[:, 2] <= coulomb * (1 + 5e-3)), (forces, coulomb)
+    pushed = steps[-1]
     assert {name: n for name, n in pushed["state_counts"].items() if n} == {"sliding": pushed["state_counts"]["sliding"]}
-    force = pushed["pair_forces"][PAIR]
-    pressure = force[0] / (B * LENGTH)
-    assert force[2] == pytest.approx(FRICTION * pressure * np.pi / 2 * B * LENGTH, rel=5e-3)
+    assert forces[-1, 2] == pytest.approx(coulomb[-1], rel=5e-3)
+    pressure = forces[-1, 0] / (B * LENGTH)
     bounds = [press_fit.contact_pressure(1e-4, B, C, STEEL, ALUMINIUM, plane) for plane in ("stress", "strain")]
     assert bounds[0] < pressure < bounds[1]
 
@@ -462,14 +460,9 @@ def test_a_frictional_fit_over_several_steps_meets_lame(mpi_tmp_path):
 
 
 def _push_out(directory: pathlib.Path, steps: list[dict], layers: int = 4) -> dict:
-    """The push-out of test_push_out_slides_at_the_coulomb_force with the load path ``steps``, in
-    ``layers`` layers along the pin's axis."""
-    rollers = {"symmetry_x": {"x": 0.0}, "symmetry_y": {"y": 0.0}}
-    case = _case(_geo(directory, 1e-4, "coarse", t=LENGTH, nlay=layers), STEEL, ALUMINIUM, 1e-4)
-    pin, hub = case["bodies"]
-    pin["boundary"]["displacement"] = {**rollers, "flat": {"z": PUSH}}
-    hub["boundary"]["displacement"] = {**rollers, "ring_outer": {"z": 0.0}}
-    case["contacts"][0].update(law="coulomb", friction=FRICTION)
+    """cases/push_out.toml with the load path ``steps``, in ``layers`` layers along the pin's axis."""
+    case = tomllib.loads((ROOT / "cases" / "push_out.toml").read_text())
+    case["mesh"]["file"] = str(_geo(directory, 1e-4, "coarse", t=LENGTH, nlay=layers))
     case["steps"] = steps
     return case
 

@@ -36,7 +36,7 @@ from contactqvi.laws import Coulomb, Frictionless
 from contactqvi.materials import NeoHookean
 from contactqvi.meshes import read_gmsh, split_by_body
 from contactqvi.contact.nodal import State
-from contactqvi.case import parse_case
+from contactqvi.case import load_case, parse_case
 from contactqvi.parameters import ParameterError
 from contactqvi.runner import build_problem
 from contactqvi.postprocess import StressFields
@@ -192,53 +192,18 @@ def test_clipping_a_polygon_that_round_off_made_degenerate():
     assert count[0] > 6 and abs(area - 1.0) <= 1e-8, (count, area)
 
 
-#: The press fit of meshes/shrink_fit.geo as a full model (a quarter's symmetry rollers cannot
-#: twist): pin radius b + delta, hole b, outer radius c, length t, the arcs in n_arc segments.
-FULL_FIT = """b = 0.02; delta = 1e-4; c = 0.04; t = 0.01; h = 5e-3; n_arc = 32; nlay = 1;
-SetFactory("OpenCASCADE");
-rp = b + delta;
-Disk(1) = {0, 0, 0, rp};
-Disk(4) = {0, 0, 0, c};
-Disk(5) = {0, 0, 0, b};
-BooleanDifference(6) = { Surface{4}; Delete; }{ Surface{5}; Delete; };
-MeshSize{ PointsOf{ Surface{1}; } } = h;
-MeshSize{ PointsOf{ Surface{6}; } } = h;
-eps = 1e-6;
-arcs[] = Curve In BoundingBox{-rp - eps, -rp - eps, -eps, rp + eps, rp + eps, eps};
-Transfinite Curve{arcs[]} = n_arc + 1;
-pin[] = Extrude {0, 0, t} { Surface{1}; Layers{nlay}; };
-ring[] = Extrude {0, 0, t} { Surface{6}; Layers{nlay}; };
-Physical Volume("pin") = {pin[1]};
-Physical Volume("ring") = {ring[1]};
-Physical Surface("flat") = Surface In BoundingBox{-c - eps, -c - eps, -eps, c + eps, c + eps, eps};
-Physical Surface("flat") += Surface In BoundingBox{-c - eps, -c - eps, t - eps, c + eps, c + eps, t + eps};
-Physical Surface("pin_outer") = {pin[2]};
-ring_inner[] = {}; ring_outer[] = {};
-faces[] = Boundary{ Volume{ring[1]}; };
-For i In {0 : #faces[] - 1}
-  f = Abs(faces[i]); bb[] = BoundingBox Surface{f};
-  If (bb[5] - bb[2] > eps)
-    If (bb[3] < b + 10 * eps)
-      ring_inner[] += {f};
-    Else
-      ring_outer[] += {f};
-    EndIf
-  EndIf
-EndFor
-Physical Surface("ring_inner") = ring_inner[];
-Physical Surface("ring_outer") = ring_outer[];
-"""
-B, LENGTH, FRICTION = 0.02, 0.01, 0.1  # m, m, as in FULL_FIT
+B, LENGTH, FRICTION = 0.02, 0.01, 0.1  # m, m, as in cases/twisted_fit.toml
 
 
-def test_a_press_fitted_pin_twisted_until_it_slips(mpi_tmp_path):
-    """The torque path of a press fit (issue 37): a steel pin 0.1 mm oversize in an aluminium hub
-    (full model, L = b / 2, Coulomb mu = 0.1, the hub clamped on its outer surface), the pin's
-    end faces a moved group: held in the fit step, then turned about the pin's axis by 0.02 and
-    0.1 degrees. At 0.02 degrees part of the surface still sticks; at 0.1 every node slides (gross
-    slip), and the torque on the hub is mu p 2 pi b^2 L with p = sum of the nodal normal forces /
-    (2 pi b L), the run's own mean pressure, to 2 % (measured 0.996; p = 547 MPa, three times the
-    push-out's: the pin's held ends cannot shrink). Friction / normal <= mu at every node.
+def test_a_press_fitted_pin_twisted_until_it_slips():
+    """The torque path of a press fit (issue 37), cases/twisted_fit.toml: a steel pin 0.1 mm
+    oversize in an aluminium hub (full model, L = b / 2, Coulomb mu = 0.1, the hub clamped on its
+    outer surface), the pin's end faces a moved group: held in the fit step, then turned about the
+    pin's axis by 0.02 and 0.1 degrees. At 0.02 degrees part of the surface still sticks; at 0.1
+    every node slides (gross slip), and the torque on the hub is mu p 2 pi b^2 L with p = sum of
+    the nodal normal forces / (2 pi b L), the run's own mean pressure, to 2 % (measured 0.996;
+    p = 547 MPa, three times the push-out's: the pin's held ends cannot shrink). Friction /
+    normal <= mu at every node.
 
     Measured beyond gross slip, the torque creeps up (1.013 at 0.2 degrees, 1.023 at 0.4): the
     friction part is mu sum N_i |x_i| (the hub's hole opened to 20.1 mm, +0.5 %), and the normal
@@ -246,18 +211,7 @@ def test_a_press_fitted_pin_twisted_until_it_slips(mpi_tmp_path):
     (32 segments: tilted up to 1.9 degrees from radial by the facets' triangulation) weighting
     normal forces that change as the pin's facets pass under the hub's nodes."""
     comm = MPI.COMM_WORLD
-    if comm.rank == 0:
-        (mpi_tmp_path / "fit.geo").write_text(FULL_FIT)
-    comm.Barrier()
-    steel, aluminium = {"young": 210e9, "poisson": 0.3}, {"young": 70e9, "poisson": 0.33}
-    case = parse_case({
-        "mesh": {"file": str(mpi_tmp_path / "fit.geo")},
-        "bodies": [{"name": "pin", "material": steel, "boundary": {"moved": ["flat"]}},
-                   {"name": "ring", "material": aluminium, "boundary": {"clamped": ["ring_outer"]}}],
-        "contacts": [{"slave": "ring.ring_inner", "master": "pin.pin_outer", "law": "coulomb", "friction": FRICTION,
-                      "interference": 1e-4, "search": "until_settled"}],
-        "steps": [{"load": 0.0}] + [{"rotation": {"axis": [0.0, 0.0, 1.0], "angle": angle}} for angle in (0.02, 0.1)],
-    })
+    case = load_case(ROOT / "cases" / "twisted_fit.toml")
     rows = []
     with build_problem(case, comm) as problem:
 
