@@ -213,7 +213,10 @@ def ratio_markdown(rows: list[dict]) -> str:
                 " (in residual, line_search)" if name == "residual_assembly" else "")
             phases.append([r["label"], name + inside, r["calls"].get(name, ""), f"{p['seconds']:.2f}",
                            f"{p['seconds'] / r['solve_s']:.1%}", f"{p['seconds'] / newton:.3f}", events])
-    return tables.markdown_table(header, table) + "\n" + tables.markdown_table([
+    worst = max(s["seconds"] / l["seconds"] for r in rows for s, l in zip(r["steps"], linear["steps"]))
+    verdict = (f"\nLargest ratio of a load step to the small-strain step: {worst:.2f} (requirement ≤ {MAX_RATIO:g}: "
+               f"{'met' if worst <= MAX_RATIO else 'not met'}).\n\n")
+    return tables.markdown_table(header, table) + verdict + tables.markdown_table([
         "run", "phase", "calls", "seconds", "share of the solve", "per Newton step (s)",
         "dominant PETSc events (count, s)"], phases)
 
@@ -223,8 +226,11 @@ def ranks_markdown(rows: list[dict]) -> str:
               r.get("max_newton_difference"), r.get("relative_difference"),
               None if "relative_difference" not in r else ("yes" if r["relative_difference"] <= MAX_RANK_DIFFERENCE
                                                            else "no"), r["commit"], r["seconds"]] for r in rows]
+    worst = max((r.get("relative_difference", 0.0) for r in rows), default=0.0)
     return tables.markdown_table(["case", "ranks", "status", "Newton per step", "Krylov", "dNewton",
-                                  f"rel. diff (≤ {MAX_RANK_DIFFERENCE:g})", "within", "commit", "wall s"], table)
+                                  f"rel. diff (≤ {MAX_RANK_DIFFERENCE:g})", "within", "commit", "wall s"], table) + (
+        f"\nLargest rel. diff: {worst:.2g} (requirement ≤ {MAX_RANK_DIFFERENCE:g}: "
+        f"{'met' if worst <= MAX_RANK_DIFFERENCE else 'not met'}).\n")
 
 
 def large_markdown(r: dict) -> str:
@@ -238,16 +244,29 @@ def large_markdown(r: dict) -> str:
                                   "commit"], table)
 
 
+def history_markdown(history: list[dict]) -> str:
+    """Earlier measurements of the ratio part (``history`` of the JSON file: one dict per code
+    version with its counts and phases, kept when the part is measured again)."""
+    table = [[h["version"], h["run"], h["newton"], h["krylov"], h["solve_s"], h["ratio"], h["pc_set_ups"],
+              h["pc_set_up_s"], h["tangent_s"]] for h in history]
+    return tables.markdown_table(["version", "run", "Newton per step", "Krylov per step", "solve (s)",
+                                  "mean step / small strain", "PC set-ups", "PC set-up (s)", "tangent assembly (s)"],
+                                 table)
+
+
 def markdown(data: dict) -> str:
-    """All parts present in ``data``, each with its text (:data:`TEXTS`)."""
+    """All parts present in ``data``, each with its text (:data:`TEXTS`) and its notes (``notes``)."""
+    notes = data.get("notes", {})
     text = [TEXTS["head"].format(**data["machine"])]
     if "ratio" in data:
-        text += [TEXTS["ratio"].format(commit=data["ratio"]["commit"]), ratio_markdown(data["ratio"]["rows"]),
-                 data.get("ratio_notes", "")]
+        text += [TEXTS["ratio"].format(commit=data["ratio"]["commit"]), ratio_markdown(data["ratio"]["rows"])]
+        if data.get("history"):
+            text += [TEXTS["history"], history_markdown(data["history"])]
+        text.append(notes.get("ratio", ""))
     if "ranks" in data:
-        text += [TEXTS["ranks"], ranks_markdown(data["ranks"]), data.get("ranks_notes", "")]
+        text += [TEXTS["ranks"], ranks_markdown(data["ranks"]), notes.get("ranks", "")]
     if "large" in data:
-        text += [TEXTS["large"], large_markdown(data["large"]), data.get("large_notes", "")]
+        text += [TEXTS["large"], large_markdown(data["large"]), notes.get("large", "")]
     return "\n".join(text)
 
 
@@ -273,6 +292,8 @@ TEXTS = {
              "tangent assembly `problem.tangent` (K_T by DOLFINx and T^T K_T T; part of `newton_matrix`) and the "
              "residual assembly `problem.residual` (r_K and T^T r_K; part of `residual` and `line_search`). "
              "Share: of the load path's solve time; per Newton step: the phase's seconds over all Newton steps.\n",
+    "history": "Before and after the solver change of this benchmark (same script, same machine, shared: "
+               "the before run's machine load differed; compare counts and the shares):\n",
     "ranks": "## The same solution on 1, 2 and 3 ranks (finite strain)\n\n"
              "`python -m contactqvi run` of cases/hertz_bodies.toml on meshes/hertz_bodies_coarse.geo with both "
              "bodies neo-Hookean (four steps of 0.25 mm, `every_step`), on 1, 2 and 3 ranks (3 oversubscribed on "
@@ -290,7 +311,8 @@ TEXTS = {
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
                                      formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    parser.add_argument("--parts", nargs="+", choices=("ratio", "ranks", "large"), default=["ratio"])
+    parser.add_argument("--parts", nargs="*", choices=("ratio", "ranks", "large"), default=["ratio"],
+                        help="parts to measure (none: write the tables of the JSON file again)")
     parser.add_argument("--mesh", default="fine", help="Hertz bodies mesh of the ratio part")
     parser.add_argument("--settled", action="store_true", help="ratio part: also neo-Hookean until_settled")
     parser.add_argument("--ranks", type=int, nargs="+", default=[1, 2, 3], help="ranks part: numbers of ranks, 1 first")
