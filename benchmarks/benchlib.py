@@ -21,9 +21,13 @@ from contactqvi.contact.scd_newton import PARAMETERS
 from contactqvi.laws import Coulomb
 from contactqvi.linalg import create_ksp, preset
 from contactqvi.problems import coulomb as data
+from contactqvi.result import Timings
 
 #: The six cases of Tables 2 and 3 of seed 000.
 CASES = [f"{g}/{l}" for g in ("d1", "d2", "d3") for l in ("L1", "L2")]
+#: PETSc events reported inside the phases (:func:`phases`).
+EVENTS = ("PCSetUp", "KSPSolve", "MatPtAPNumeric", "MatMatMultNum", "MatAXPY", "MatCopy", "MatZeroRowsCol",
+          "MatMult", "VecNorm")
 
 
 def make_parser(doc: str) -> argparse.ArgumentParser:
@@ -73,6 +77,34 @@ def merge_rows(path: pathlib.Path, rows: list[dict], key: tuple[str, ...]) -> li
 def emit(comm: MPI.Comm, out: pathlib.Path, name: str, rows: list[dict], markdown: str) -> None:
     """Write ``name.json`` (machine + rows) and ``name.md`` atomically on rank 0 and print the table."""
     tables.write_table(comm, out / name, {"machine": machine(comm), "rows": rows}, markdown)
+
+
+def event_totals() -> dict[tuple[str, str], tuple[int, float]]:
+    """(count, seconds) of every :data:`EVENTS` in every phase's stage so far (this rank)."""
+    totals = {}
+    for name, stage in Timings._stages.items():
+        for event in EVENTS:
+            info = PETSc.Log.Event(event).getPerfInfo(stage.id)
+            totals[name, event] = (info["count"], info["time"])
+    return totals
+
+
+def phases(comm: MPI.Comm, timings: dict[str, float], before: dict[tuple[str, str], tuple[int, float]]) -> dict:
+    """Wall time (largest rank) and the :data:`EVENTS` (count and seconds, largest rank) of every
+    phase of ``timings`` (:class:`~contactqvi.result.Timings`, each phase a PETSc log stage)
+    since ``before`` (:func:`event_totals`); PETSc's logging must be on (``PETSc.Log.begin()``)."""
+    after = event_totals()
+    out = {}
+    for name, seconds in timings.items():
+        events = {}
+        for event in EVENTS if name in Timings._stages else ():
+            count0, time0 = before.get((name, event), (0, 0.0))
+            count = comm.allreduce(after[name, event][0] - count0, op=MPI.MAX)
+            if count:
+                events[event] = {"count": count,
+                                 "seconds": comm.allreduce(after[name, event][1] - time0, op=MPI.MAX)}
+        out[name] = {"seconds": comm.allreduce(seconds, op=MPI.MAX), "events": events}
+    return out
 
 
 def run_coulomb_case(

@@ -30,38 +30,6 @@ from contactqvi.contact import SCDNewtonSolver, build_contact_problem
 from contactqvi.laws import Coulomb
 from contactqvi.meshes import create_contact_body
 from contactqvi.problems import coulomb as data
-from contactqvi.result import Timings
-
-#: PETSc events reported inside the phases.
-EVENTS = ("PCSetUp", "KSPSolve", "MatPtAPNumeric", "MatMatMultNum", "MatAXPY", "MatCopy", "MatZeroRowsCol",
-          "MatMult", "VecNorm")
-
-
-def _event_totals() -> dict[tuple[str, str], tuple[int, float]]:
-    """(count, seconds) of every reported event in every phase's stage so far (this rank)."""
-    totals = {}
-    for name, stage in Timings._stages.items():
-        for event in EVENTS:
-            info = PETSc.Log.Event(event).getPerfInfo(stage.id)
-            totals[name, event] = (info["count"], info["time"])
-    return totals
-
-
-def _phases(comm: MPI.Comm, timings: dict[str, float], before: dict[tuple[str, str], tuple[int, float]]) -> dict:
-    """Wall time (largest rank) and dominant PETSc events of every phase since ``before``."""
-    after = _event_totals()
-    phases = {}
-    for name, seconds in timings.items():
-        events = {}
-        for event in EVENTS if name in Timings._stages else ():
-            count0, time0 = before.get((name, event), (0, 0.0))
-            count = comm.allreduce(after[name, event][0] - count0, op=MPI.MAX)
-            if count:
-                events[event] = {"count": count,
-                                 "seconds": comm.allreduce(after[name, event][1] - time0, op=MPI.MAX)}
-        phases[name] = {"seconds": comm.allreduce(seconds, op=MPI.MAX), "events": events}
-    return phases
-
 
 def profile(comm: MPI.Comm, lev: int, case: str, pc: str, version: str, repeat: int) -> dict:
     """One case: the fastest of ``repeat`` Coulomb solves (each from u0 = 0 with a new solver) with its
@@ -73,13 +41,13 @@ def profile(comm: MPI.Comm, lev: int, case: str, pc: str, version: str, repeat: 
     runs = []
     for _ in range(repeat):
         u.set(0.0)
-        before = _event_totals()
+        before = benchlib.event_totals()
         comm.Barrier()
         t0 = time.perf_counter()
         with SCDNewtonSolver(problem, {"pc": pc}, prefix="profile_") as solver:
             result = solver.solve(u)
         seconds = comm.allreduce(time.perf_counter() - t0, op=MPI.MAX)
-        runs.append((seconds, result, _phases(comm, result.timings, before)))
+        runs.append((seconds, result, benchlib.phases(comm, result.timings, before)))
         PETSc.garbage_cleanup(comm)
     seconds, result, phases = min(runs, key=lambda run: run[0])
     elastic = min((benchlib.elastic_solve(problem, "profile_elastic_") for _ in range(repeat)),

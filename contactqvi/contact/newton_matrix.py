@@ -118,13 +118,17 @@ class NewtonMatrix(PETScOwner):
             _insert_rows(self.J, self._rows_of_A)
             self._holds_J = False
 
-    def refresh(self) -> None:
+    def refresh(self, lagged: bool = False) -> None:
         """A's storage was overwritten by a new stiffness of the same pattern (the Jacobian of a
-        nonlinear f at a new iterate): keep its values on the rows J changes, as at construction."""
+        nonlinear f at a new iterate): keep its values on the rows J changes, as at construction.
+
+        ``lagged``: a preconditioner keeps levels made for the last J, so the next :attr:`change`
+        is taken from that J (its rows kept in ``rows``) instead of from the new stiffness."""
         self._holds_J = False
         fresh = _rows_of(self.J, self._coupled)
         fresh.copy(self._rows_of_A, _SAME)
-        fresh.copy(self.rows, _SAME)
+        if not lagged:
+            fresh.copy(self.rows, _SAME)
         fresh.destroy()
 
     def undone(self) -> PETSc.Mat:

@@ -259,6 +259,7 @@ class ContactProblem(PETScOwner):
         if self.hyperelastic is not None:  # the rows of the prescribed dofs in the new frames
             h = self.hyperelastic
             h.prescribed = prescribed_rows(h.external, h.dirichlet_owned, self.rotation)
+            h.forget_transform()
         self.setup_seconds = {"contact_search": search_seconds, "change_of_variables": variables_seconds}
         return difference
 
@@ -325,11 +326,8 @@ class ContactProblem(PETScOwner):
         if transform is None:
             system.assemble_tangent(self.A)
             return
-        with default_options("", {"mat_product_clear": True}):
-            transformed = system.assemble_tangent(system.global_stiffness()).PtAP(transform)
         self.A.zeroEntries()
-        self.A.axpy(1.0, transformed, _SUBSET)
-        transformed.destroy()
+        self.A.axpy(1.0, system.transformed_tangent(transform), _SUBSET)
 
     def gap(self, translation: typing.Sequence[float] = (0.0, 0.0, 0.0), rotation: Rotation | None = None,
             fit: float = 1.0) -> np.ndarray:

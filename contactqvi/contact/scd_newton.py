@@ -400,15 +400,24 @@ class SCDNewtonSolver(PETScOwner):
         self._newton.mult_stiffness(u, r)
         r.axpy(-1.0, self.problem.load)
 
-    def linearise(self, u: PETSc.Vec) -> None:
+    def linearise(self, u: PETSc.Vec, k: int) -> None:
         """grad f at u of (5.4) into A's storage when f is nonlinear (a hyperelastic body):
-        the tangent at the iterate, whose rows the Newton matrix then changes; the
-        preconditioner keeps nothing of the last one. A linear f has grad f = A: nothing to do."""
+        the tangent at the iterate of Newton step ``k``, whose rows the Newton matrix then
+        changes. A linear f has grad f = A: nothing to do.
+
+        The preconditioner is set up on the first J of each solve (k = 0) and lagged within
+        it (PETSc's ``-snes_lag_preconditioner -2``): a multigrid keeps its interpolations and
+        coarse operators, updated only by the change of J's rows at the contact (the fine
+        level and its smoother take each J whole), and the Krylov method solves each J to
+        ``tol``. Within a load step the tangent changes by the step's increment. A new set-up
+        at every Newton step took 38 % of the two-body Hertz fine mesh's neo-Hookean path
+        (benchmarks/results/finite_strain_performance.md)."""
         if self.problem.hyperelastic is None:
             return
         self.problem.tangent(u)
-        self._newton.refresh()
-        self.step_solver.operator_replaced()
+        self._newton.refresh(lagged=k > 0)
+        if k == 0:
+            self.step_solver.operator_replaced()
 
     def residual(self, u: PETSc.Vec) -> GraphPoint:
         """The graph point of (6.17) at u alone: ||y^|| is the accuracy measure."""
@@ -629,7 +638,7 @@ class SCDNewtonSolver(PETScOwner):
                 _log_iteration(entry)
                 break
             with result.timings.phase("newton_matrix"):
-                self.linearise(u)
+                self.linearise(u, k)
                 J = self.newton_system(*self.generalized_derivative(point, normal, tangential), u)
             kinds = np.concatenate([normal, tangential])
             settled = alpha == 1.0 and comm.allreduce(np.array_equal(kinds, kinds_previous), op=MPI.LAND)
