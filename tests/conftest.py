@@ -13,12 +13,13 @@ test out of the ranks' runs:
   parsing, parameter tables, static checks of the source). ``tests/test_architecture.py``
   checks that such a test reaches none of the names of code that runs differently in
   parallel (``PARALLEL_NAMES`` there); the reason is required.
-* ``parallel_twin(twin, reason=...)``, on one parameter set of a parametrised test: this
-  set reaches parallel code, but the same code as the set ``twin`` of the same test (its
-  id in brackets, ``"d1-L1"``), which runs on several ranks; the two differ only in what
-  each rank computes alone (data of the nodal law, a material constant, another closed
-  form), said by the reason. A twin that does not run on several ranks (renamed, itself
-  marked) is a usage error, so that no test leaves the parallel run unnoticed.
+* ``parallel_twin(twin, reason=...)``: the test reaches parallel code, but the same code as
+  its twin, which runs on several ranks: the parameter set ``twin`` of the same test (its id
+  in brackets, ``"d1-L1"``) or the test ``twin`` of the same module (``"test_..."``); the two
+  differ only in what each rank computes alone (data of the nodal law, a material constant,
+  a finer mesh of the same bodies, another closed form), said by the reason. A twin that
+  does not run on several ranks (renamed, itself marked) is a usage error, so that no test
+  leaves the parallel run unnoticed.
 """
 
 from __future__ import annotations
@@ -119,14 +120,16 @@ def pytest_collection_modifyitems(config, items):
 
 
 def _check_twins(config: pytest.Config, items: list[pytest.Item], selected: list[pytest.Item]) -> None:
-    """Each ``parallel_twin`` names a parameter set of its own test that runs on several ranks
-    (``-k`` selects later; a run of chosen test ids may leave the twin out)."""
+    """Each ``parallel_twin`` names a parameter set of its own test, or a test of its module, that
+    runs on several ranks (``-k`` selects later; a run of chosen test ids may leave the twin out)."""
     collected, running = {item.nodeid for item in items}, {item.nodeid for item in selected}
     chosen = any("::" in str(arg) for arg in config.args)
     for item in items:
         mark = item.get_closest_marker("parallel_twin")
         if mark is None:
             continue
-        twin = f"{item.nodeid.split('[')[0]}[{mark.args[0]}]"
+        name = mark.args[0]
+        twin = f"{item.nodeid.split('::')[0]}::{name}" if name.startswith("test_") else \
+            f"{item.nodeid.split('[')[0]}[{name}]"
         if twin not in running and (twin in collected or not chosen):
             raise pytest.UsageError(f"{item.nodeid}: its parallel_twin {twin} does not run on several ranks")

@@ -399,3 +399,8 @@ def test_a_parallel_twin_must_run_on_several_ranks():
     with pytest.raises(pytest.UsageError, match="parallel_twin"):
         _check_twins(config, [second], [])
     _check_twins(type("Config", (), {"args": ["t.py::test_f[b]"]})(), [second], [])  # the test chosen alone
+    other = _Item("t.py::test_g", (pytest.mark.parallel_twin("test_f[a]", reason="x").mark,))
+    _check_twins(config, [first, other], [first])  # a test of the module
+    with pytest.raises(pytest.UsageError, match=r"test_g: its parallel_twin t.py::test_f\[b\] does not run"):
+        _check_twins(config, [first, second, _Item("t.py::test_g", (pytest.mark.parallel_twin(
+            "test_f[b]", reason="x").mark,))], [first])

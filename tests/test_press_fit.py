@@ -540,6 +540,8 @@ def _push_out_states(directory: pathlib.Path) -> tuple[list[np.ndarray], np.ndar
     return [stick[:n_owned] for stick in sticking], z, ratios
 
 
+@pytest.mark.parallel_twin("test_push_out_slides_at_the_coulomb_force", reason="the push-out's bodies, pair and "
+                           "law in 8 layers; nodal states compared (each rank's own)")
 def test_a_push_out_sticks_in_a_zone_that_shrinks_from_the_ends(mpi_tmp_path):
     """The steel pin 0.1 mm oversize in the aluminium hub (L = b = 20 mm, 8 layers, mu = 0.1), the
     fit, then pushed along +z in steps up to 50 um. From the first push step on (a new increment:

@@ -2,10 +2,11 @@
 continued with ``--restart`` ends as the uninterrupted run does.
 
 Two bodies (Cattaneo-Mindlin, coarse meshes, the indentation and the first two
-tangential steps), killed in the second tangential step, so the checkpoint carries
-mortar relative displacements, nodal frames and the previous step's slip. On the same number of ranks the restart must
-give the same Newton and Krylov counts and the same solution to 1e-12; restarted on
-2 ranks (N-to-M) the solution to 1e-9.
+tangential steps: the variant of the shipped case that tests/shipped_runs.py runs, the
+uninterrupted run), killed once in the second tangential step, so the checkpoint carries
+mortar relative displacements, nodal frames and the previous step's slip. Continued on the
+same number of ranks the restart must give the same Newton and Krylov counts and the same
+solution to 1e-12; continued on 2 ranks (N-to-M) the solution to 1e-9.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import numpy as np
 import pytest
 
 from contactqvi.contact.checkpoint import DIRECTORY
+from shipped_runs import group
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 STEPS = 3
@@ -75,8 +77,9 @@ def _difference(a: pathlib.Path, b: pathlib.Path) -> float:
 
 
 @pytest.fixture(scope="module")
-def uninterrupted(tmp_path_factory) -> tuple[pathlib.Path, pathlib.Path]:
-    """The case file and the output of its uninterrupted run."""
+def killed(tmp_path_factory) -> tuple[pathlib.Path, pathlib.Path]:
+    """The case file (the shipped case's coarse variant, tests/shipped_runs.py) and the output
+    of its run killed during step STEPS: its checkpoint is step STEPS - 1's."""
     work = tmp_path_factory.mktemp("restart")
     text = (ROOT / "cases" / "cattaneo_mindlin_bodies.toml").read_text()
     text = text.replace('file = "../meshes/mindlin_bodies_medium.geo"',
@@ -84,15 +87,22 @@ def uninterrupted(tmp_path_factory) -> tuple[pathlib.Path, pathlib.Path]:
     head, *steps = text.split("[[steps]]")
     case = work / "case.toml"
     case.write_text("[[steps]]".join([head, *steps[:STEPS]]))
-    _run(_command(case, work / "whole"))
-    return case, work / "whole"
+    _kill_during_step(case, work / "killed", step=STEPS)
+    return case, work / "killed"
 
 
-def test_killed_run_restarted_on_the_same_ranks_ends_as_the_uninterrupted_one(uninterrupted, tmp_path):
-    case, whole = uninterrupted
-    out = tmp_path / "out"
-    _kill_during_step(case, out, step=STEPS)
-    _run(_command(case, out, "--restart"))
+def _continued(killed: tuple[pathlib.Path, pathlib.Path], directory: pathlib.Path, ranks: int) -> pathlib.Path:
+    """A copy of the killed run's output in ``directory``, continued with ``--restart`` on ``ranks``."""
+    case, out = killed
+    shutil.copytree(out, directory / "out")
+    _run(_command(case, directory / "out", "--restart", ranks=ranks))
+    return directory / "out"
+
+
+@group("cattaneo_mindlin_bodies")
+def test_killed_run_restarted_on_the_same_ranks_ends_as_the_uninterrupted_one(killed, shipped_runs, tmp_path):
+    whole = shipped_runs["cattaneo_mindlin_bodies"]["output"]
+    out = _continued(killed, tmp_path, 1)
     assert _counts(out) == _counts(whole)
     assert _difference(whole, out) <= 1e-12
     summary = json.loads((out / "summary.json").read_text())
@@ -100,13 +110,11 @@ def test_killed_run_restarted_on_the_same_ranks_ends_as_the_uninterrupted_one(un
     _assert_time_steps(out)
 
 
-def test_killed_run_restarted_on_two_ranks(uninterrupted, tmp_path):
-    case, whole = uninterrupted
-    out = tmp_path / "out"
-    _kill_during_step(case, out, step=STEPS)
-    _run(_command(case, out, "--restart", ranks=2))
+@group("cattaneo_mindlin_bodies")
+def test_killed_run_restarted_on_two_ranks(killed, shipped_runs, tmp_path):
+    out = _continued(killed, tmp_path, 2)
     assert len(_counts(out)) == STEPS
-    assert _difference(whole, out) <= 1e-9
+    assert _difference(shipped_runs["cattaneo_mindlin_bodies"]["output"], out) <= 1e-9
     _assert_time_steps(out)
 
 
