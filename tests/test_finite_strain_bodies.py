@@ -80,7 +80,11 @@ def _compressed_blocks(friction: float, search: str, steps: int) -> list[dict]:
     return rows
 
 
-@pytest.mark.parametrize("friction, search, steps", [(0.0, "once", 20), (0.3, "until_settled", 10)])
+@pytest.mark.parametrize("friction, search, steps", [
+    pytest.param(0.0, "once", 20, marks=pytest.mark.parallel_twin(
+        "0.3-until_settled-10", reason="the first search and the hyperelastic assembly, which the twin runs "
+        "too; the frictionless nodal law")),
+    (0.3, "until_settled", 10)])
 def test_finite_strain_contact_patch_test(friction, search, steps):
     """Every step: the homogeneous displacement to 1e-8 and a uniform contact pressure equal
     to the closed form to 1e-8, every slave node in contact (sticking with friction)."""
