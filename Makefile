@@ -40,13 +40,14 @@ WORKERS ?= 2
 test-serial: $(PY)
 	$(PY) -m pytest -q --color=no -p no:cacheprovider -n $(WORKERS) --dist loadgroup tests
 
-# Every test on NP ranks except those marked serial (cannot run under mpirun) or one_rank
-# (serial arithmetic on every rank): README, "Tests and benchmarks".
+# Every test on NP ranks except those marked serial (cannot run under mpirun), one_rank (serial
+# arithmetic on every rank), parallel_twin (a twin runs its parallel code) or ranks(...) without
+# NP: README, "Tests and benchmarks".
 test-mpi: $(PY)
 	$(MPIRUN) $(PY) -m mpi4py -m pytest -q --color=no -p no:cacheprovider tests
 
 # 1 rank against 3 and 4 (ranks without contact facets, parallel output, a restart written on 1 rank
-# continued on 3): a small, fast subset.
+# continued on 3): a small, fast subset; the marker ranks(...) of a test says on which it runs.
 RANK_TESTS ?= tests/test_ranks.py tests/test_output_parallel.py \
 	tests/test_restart_paths.py::test_a_path_restarted_on_another_number_of_ranks
 test-ranks: $(PY)

@@ -20,6 +20,11 @@ test out of the ranks' runs:
   a finer mesh of the same bodies, another closed form), said by the reason. A twin that
   does not run on several ranks (renamed, itself marked) is a usage error, so that no test
   leaves the parallel run unnoticed.
+
+A fourth, ``ranks(*sizes)``, says on which numbers of ranks above one a test runs: a test
+that compares N ranks with one runs where ranks without contact facets occur (``ranks(3,
+4)``, ``RANK_TESTS`` of the Makefile), a restart written on N ranks where N -> M is asked
+for; on other numbers of ranks it is deselected. On one rank it changes nothing.
 """
 
 from __future__ import annotations
@@ -113,10 +118,18 @@ def pytest_collection_modifyitems(config, items):
     _check_twins(config, items, selected)
     if MPI.COMM_WORLD.size == 1:
         return
-    deselected = [item for item in items if any(item.get_closest_marker(m) for m in ONE_RANK_MARKERS)]
+    selected = [item for item in selected if _on_these_ranks(item)]
+    kept = {id(item) for item in selected}
+    deselected = [item for item in items if id(item) not in kept]
     if deselected:
         config.hook.pytest_deselected(items=deselected)
         items[:] = selected
+
+
+def _on_these_ranks(item: pytest.Item) -> bool:
+    """Whether the test runs on this number of ranks (``ranks`` marker: the sizes above one)."""
+    mark = item.get_closest_marker("ranks")
+    return mark is None or MPI.COMM_WORLD.size in mark.args
 
 
 def _check_twins(config: pytest.Config, items: list[pytest.Item], selected: list[pytest.Item]) -> None:

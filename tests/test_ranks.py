@@ -1,6 +1,6 @@
 """The same answer and the same files on any number of ranks (issue 24).
 
-Each test runs a program on ``COMM_WORLD`` (under ``make test-ranks``: 3 and 4
+Each test runs a program on ``COMM_WORLD`` (only under ``make test-ranks``: 3 and 4
 ranks, where ranks without a contact facet or a clamped facet occur) and the same
 program on one rank (``COMM_SELF`` on rank 0, the other ranks waiting), and
 compares: the solution to 1e-9 relative, Newton steps within 1, every output
@@ -33,8 +33,9 @@ from contactqvi.problems import coulomb as data
 from contactqvi.runner import run_case
 from output_files import read_vtx
 
-pytestmark = pytest.mark.skipif(MPI.COMM_WORLD.size == 1, reason="compares COMM_WORLD with one rank: on one rank "
-                                "both are the same run (make test runs this module on 2, 3 and 4 ranks)")
+pytestmark = [pytest.mark.ranks(3, 4),  # where ranks without contact facets occur (make test-ranks)
+              pytest.mark.skipif(MPI.COMM_WORLD.size == 1, reason="compares COMM_WORLD with one rank: on one rank "
+                                 "both are the same run (make test runs this module on 3 and 4 ranks)")]
 
 CASES = pathlib.Path(__file__).resolve().parent.parent / "cases"
 RTOL = 1e-9
