@@ -2,7 +2,7 @@
 
 ``make test`` runs every test serially (two pytest-xdist workers), then under
 ``mpirun -n 2`` every test not marked below, then ``RANK_TESTS`` on 3 and 4 ranks.
-Running in parallel is the default; two markers (registered in pyproject.toml) take a
+Running in parallel is the default; three markers (registered in pyproject.toml) take a
 test out of the ranks' runs:
 
 * ``serial``: the test cannot run under ``mpirun`` at all: it launches ``mpirun`` or a
