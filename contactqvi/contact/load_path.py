@@ -273,8 +273,9 @@ def _start(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSta
     given (or rest) for the first step, else the predictor of :func:`_continue`; a problem
     searched each step is searched first in the configuration of the step before, which
     updates the levels of ``step_solver`` (if any) for the new A."""
-    logger.info("step %d: load factor %g, obstacle translation %s m", state.done + 1, step.load,
-                np.array2string(np.asarray(step.translation), precision=4))
+    turned = "" if step.rotation is None else f", rotation {step.rotation.angle:g} degrees about {step.rotation.axis}"
+    logger.info("step %d: load factor %g, translation of the obstacles and moved groups %s m%s", state.done + 1,
+                step.load, np.array2string(np.asarray(step.translation), precision=4), turned)
     if state.solved == 0:
         problem.set_step(step.load, step.translation, rotation=step.rotation, fit=step.fit_fraction)
         if from_rest:
