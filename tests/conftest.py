@@ -21,10 +21,10 @@ test out of the ranks' runs:
   does not run on several ranks (renamed, itself marked) is a usage error, so that no test
   leaves the parallel run unnoticed.
 
-A fourth, ``ranks(*sizes)``, says on which numbers of ranks above one a test runs: a test
+A fourth, ``ranks(*sizes)``, says on which numbers of ranks a test runs at all: a test
 that compares N ranks with one runs where ranks without contact facets occur (``ranks(3,
 4)``, ``RANK_TESTS`` of the Makefile), a restart written on N ranks where N -> M is asked
-for; on other numbers of ranks it is deselected. On one rank it changes nothing.
+for; on other numbers of ranks, one rank among them, it is deselected (not skipped).
 """
 
 from __future__ import annotations
@@ -117,7 +117,7 @@ def pytest_collection_modifyitems(config, items):
     selected = [item for item in items if not any(item.get_closest_marker(m) for m in ONE_RANK_MARKERS)]
     _check_twins(config, items, selected)
     if MPI.COMM_WORLD.size == 1:
-        return
+        selected = items
     selected = [item for item in selected if _on_these_ranks(item)]
     kept = {id(item) for item in selected}
     deselected = [item for item in items if id(item) not in kept]
@@ -127,7 +127,7 @@ def pytest_collection_modifyitems(config, items):
 
 
 def _on_these_ranks(item: pytest.Item) -> bool:
-    """Whether the test runs on this number of ranks (``ranks`` marker: the sizes above one)."""
+    """Whether the test runs on this number of ranks (``ranks`` marker: the sizes it runs on)."""
     mark = item.get_closest_marker("ranks")
     return mark is None or MPI.COMM_WORLD.size in mark.args
 

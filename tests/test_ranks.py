@@ -33,9 +33,9 @@ from contactqvi.problems import coulomb as data
 from contactqvi.runner import run_case
 from output_files import read_vtx
 
-pytestmark = [pytest.mark.ranks(3, 4),  # where ranks without contact facets occur (make test-ranks)
-              pytest.mark.skipif(MPI.COMM_WORLD.size == 1, reason="compares COMM_WORLD with one rank: on one rank "
-                                 "both are the same run (make test runs this module on 3 and 4 ranks)")]
+#: COMM_WORLD against one rank, where ranks without contact facets occur (make test-ranks); on one
+#: rank both would be the same run.
+pytestmark = pytest.mark.ranks(3, 4)
 
 CASES = pathlib.Path(__file__).resolve().parent.parent / "cases"
 RTOL = 1e-9

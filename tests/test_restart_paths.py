@@ -183,8 +183,7 @@ def test_a_path_restarted_after_every_step_is_the_uninterrupted_path(name, work)
     _assert_chain_is_whole((whole, base / "whole"), (chained, base / "chain"), comm)
 
 
-@pytest.mark.ranks(2, 3)
-@pytest.mark.skipif(MPI.COMM_WORLD.size == 1, reason="written on 2 ranks, continued on 1; or 1 -> 3")
+@pytest.mark.ranks(2, 3)  # written on 2 ranks, continued on 1; or 1 -> 3
 @pytest.mark.parametrize("name", PATHS)
 def test_a_path_restarted_on_another_number_of_ranks(name, work):
     """2 -> 1 in the 2-rank run (rank 0 continues alone), 1 -> 3 in the 3-rank run: the
