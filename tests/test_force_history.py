@@ -52,3 +52,22 @@ def test_force_columns_leave_out_failed_steps():
     assert columns["a/b F_x [N]"].tolist() == [0.0, -0.2]
     assert columns["a.top R_z [N]"].tolist() == [-1.0, -1.0]
     assert np.all(np.isfinite(np.column_stack(list(columns.values()))))
+
+
+@pytest.mark.one_rank(reason="columns of a summary's steps (lists of numbers), no mesh")
+def test_a_torque_path_is_plotted_against_its_rotation():
+    """A path that only turns its moved groups (a torque path) has the rotation angle as abscissa;
+    a path that translates them keeps the translation, one that does neither the load factor."""
+    from contactqvi.contact.force_history import _abscissa
+
+    def step(k: int, angle: float | None, x: float = 0.0) -> dict:
+        entry = {"step": k, "load": 1.0, "converged": True, "translation": [x, 0.0, 0.0],
+                 "pair_forces": {"a/b": [0.0, 0.0, 1.0]}}
+        return entry if angle is None else {**entry, "rotation": {"axis": [0, 0, 1], "angle": angle}}
+
+    columns = force_columns([step(1, None), step(2, 0.02), step(3, 0.1)])
+    assert columns["rotation_angle"].tolist() == [0.0, 0.02, 0.1]
+    values, label = _abscissa(columns)
+    assert values.tolist() == [0.0, 0.02, 0.1] and label.startswith("rotation")
+    assert _abscissa(force_columns([step(1, 0.1, 0.0), step(2, 0.2, 0.5)]))[1].startswith("translation")
+    assert _abscissa(force_columns([step(1, None), step(2, None)]))[1] == "load factor"

@@ -6,7 +6,8 @@ summary's steps (``pair_forces``: the force of a pair's master side or obstacle 
 surface; ``reaction_forces``: the force of each support on its body; N, global components),
 so the table and the picture are the summary's numbers and nothing else. The abscissa of the
 picture is the translation component of the obstacles and moved groups that changes most
-along the path (m) when the path moves them, else the load factor.
+along the path (m) when the path moves them, else their rotation angle (degrees) when the path
+turns them (a torque path), else the load factor.
 """
 
 from __future__ import annotations
@@ -28,7 +29,8 @@ _AXES = "xyz"
 
 
 def force_columns(steps: typing.Sequence[dict[str, typing.Any]]) -> dict[str, np.ndarray]:
-    """The path's columns, by name: ``step``, ``load``, ``translation_x/y/z`` (m), and per pair
+    """The path's columns, by name: ``step``, ``load``, ``translation_x/y/z`` (m), ``rotation_angle``
+    (degrees about the steps' axis, 0 without a rotation), and per pair
     and per support its force components (``"block.top/ball.sphere F_z"``, ``"ball.load R_z"``; N).
     Only converged steps (a failed step's forces are not a solution)."""
     steps = [s for s in steps if s.get("converged")]
@@ -38,6 +40,7 @@ def force_columns(steps: typing.Sequence[dict[str, typing.Any]]) -> dict[str, np
     }
     translation = np.array([s.get("translation", (0.0, 0.0, 0.0)) for s in steps], dtype=float).reshape(-1, 3)
     columns.update({f"translation_{a}": translation[:, i] for i, a in enumerate(_AXES)})
+    columns["rotation_angle"] = np.array([(s.get("rotation") or {}).get("angle", 0.0) for s in steps], dtype=float)
     for key, symbol in (("pair_forces", "F"), ("reaction_forces", "R")):
         names = list(dict.fromkeys(name for s in steps for name in s.get(key, {})))
         for name in names:
@@ -92,9 +95,15 @@ def plot_force_history(path: str | os.PathLike, steps: typing.Sequence[dict[str,
 
 
 def _abscissa(columns: dict[str, np.ndarray]) -> tuple[np.ndarray, str]:
-    """The translation component that changes most along the path, else the load factor."""
-    ranges = [float(np.ptp(columns[f"translation_{a}"])) if len(columns["step"]) else 0.0 for a in _AXES]
+    """The translation component that changes most along the path, else the rotation angle if it
+    changes, else the load factor."""
+    def spread(name: str) -> float:
+        return float(np.ptp(columns[name])) if len(columns["step"]) else 0.0
+
+    ranges = [spread(f"translation_{a}") for a in _AXES]
     if max(ranges) > 0.0:
         a = _AXES[int(np.argmax(ranges))]
         return columns[f"translation_{a}"], f"translation of the obstacles and moved groups along {a} [m]"
+    if spread("rotation_angle") > 0.0:
+        return columns["rotation_angle"], "rotation of the obstacles and moved groups [degrees]"
     return columns["load"], "load factor"
