@@ -243,7 +243,7 @@ def test_two_body_solution_is_frame_invariant(blocks):
     assert frame_invariance_error(msh, solve, rotation(np.array([1.0, 2.0, 2.0]) / 3.0, 0.7)) < 1e-8
 
 
-@pytest.mark.skipif(MPI.COMM_WORLD.size == 1, reason="compares a parallel run with a serial one")
+@pytest.mark.ranks(2)  # compares a parallel run with a serial one
 @pytest.mark.parametrize("pc", ["lu", "gamg"])
 def test_two_body_parallel_equals_serial(pc):
     """The patch blocks with slip (F = 0.3, different moduli) on all ranks and on each rank
