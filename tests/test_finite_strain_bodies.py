@@ -82,12 +82,18 @@ def _compressed_blocks(friction: float, search: str, steps: int) -> list[dict]:
 
 @pytest.mark.parametrize("friction, search, steps", [
     pytest.param(0.0, "once", 20, marks=pytest.mark.parallel_twin(
-        "0.3-until_settled-10", reason="the first search and the hyperelastic assembly, which the twin runs "
+        "0.3-until_settled-5", reason="the first search and the hyperelastic assembly, which the twin runs "
         "too; the frictionless nodal law")),
-    (0.3, "until_settled", 10)])
+    (0.3, "until_settled", 5)])
 def test_finite_strain_contact_patch_test(friction, search, steps):
     """Every step: the homogeneous displacement to 1e-8 and a uniform contact pressure equal
-    to the closed form to 1e-8, every slave node in contact (sticking with friction)."""
+    to the closed form to 1e-8, every slave node in contact (sticking with friction).
+
+    Steps of 6 % of the height invert elements in the first Newton iterate: each is cut once
+    (the path searched until settled). Searched once, the path takes 20 steps: from 0.9 to 1
+    (10 steps, or 5 with their cuts) Newton finds another equilibrium of the frozen reference
+    coupling, its slave nodes at the interface's outer edge slid by 0.1 m (homogeneous
+    elsewhere; the 6, 7 and 20-step paths stay on the homogeneous one)."""
     rows = _compressed_blocks(friction, search, steps)
     assert len(rows) == steps
     for row in rows:
