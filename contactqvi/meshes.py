@@ -241,8 +241,8 @@ def read_gmsh(
         ParameterError: (``mesh``) on every rank when the file is missing or gmsh cannot
             read it, and before the mesh is distributed when DOLFINx cannot take the
             model (a gmsh volume in two physical volumes, facets of a group with a node
-            in no cell: they ended in an MPI abort or a heap corruption), naming the
-            groups, the counts and where.
+            in no cell, cells of several kinds: they ended in an MPI abort or a heap
+            corruption), naming the groups, the counts and where.
     """
     import gmsh
 
@@ -312,11 +312,13 @@ def _read_model(path: pathlib.Path, gdim: int) -> _GmshModel:
                     for _, tag in gmsh.model.getPhysicalGroups(dim)} for dim in (gdim - 1, gdim)}
     facets = {name: _element_rows(gdim - 1, tag) for name, tag in groups[gdim - 1].items()}
     cells = {name: _element_rows(gdim, tag) for name, tag in groups[gdim].items()}
+    kinds = {name: _element_kinds(gdim, tag) for name, tag in groups[gdim].items()}
     entities = {name: np.asarray(gmsh.model.getEntitiesForPhysicalGroup(gdim, tag), dtype=np.int64)
                 for name, tag in groups[gdim].items()}
     node_tags, node_x, _ = gmsh.model.mesh.getNodes()
     nodes = _Nodes(np.asarray(node_tags, dtype=np.int64), np.asarray(node_x, dtype=float).reshape(-1, 3))
     shared, fault = _mesh_faults(facets, cells, entities, nodes)
+    fault = _mixed_cells(kinds) or fault
     counts = {name: sum(len(rows) for rows in facets[name]) for name in facets}
     return _GmshModel(groups[gdim - 1], groups[gdim], counts, shared, fault)
 
@@ -332,6 +334,29 @@ def _element_rows(dim: int, tag: int) -> list[np.ndarray]:
         rows += [np.asarray(tags, dtype=np.int64).reshape(-1, gmsh.model.mesh.getElementProperties(kind)[3])
                  for kind, tags in zip(types, nodes)]
     return rows
+
+
+def _element_kinds(dim: int, tag: int) -> set[str]:
+    """gmsh's names of the kinds of element of physical group ``(dim, tag)`` ("Hexahedron 8")."""
+    import gmsh
+
+    return {gmsh.model.mesh.getElementProperties(kind)[0]
+            for entity in gmsh.model.getEntitiesForPhysicalGroup(dim, tag)
+            for kind in gmsh.model.mesh.getElements(dim, entity)[0]}
+
+
+def _mixed_cells(kinds: dict[str, set[str]]) -> str | None:
+    """The error text when the physical volumes hold cells of several kinds, else None.
+
+    DOLFINx 0.9 builds a mesh of one cell type (gmshio: an ``MPI_ERR_RANK`` abort otherwise),
+    and the bodies of a case share one mesh, so a hexahedral body cannot touch a tetrahedral one.
+    """
+    if len(set().union(*kinds.values())) <= 1:
+        return None
+    listed = "; ".join(f"{name!r}: {', '.join(sorted(kind))}" for name, kind in kinds.items())
+    return (f"the physical volumes hold cells of several kinds ({listed}): the bodies of a case share one mesh, "
+            "and DOLFINx 0.9 takes one kind of cell per mesh; mesh every body with the same kind (all "
+            "hexahedra: Transfinite and Recombine on every volume, or all tetrahedra)")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -6,7 +6,8 @@ bodies whose coincident nodes gmsh merged (``touching.geo``: a structured extrus
 facet group on a volume in no physical volume (``unphysical.geo``) ended in
 ``MPI_ERR_RANK: invalid rank`` and ``MPI_ABORT`` (exit 6), a volume in two physical
 volumes (``twice.geo``) in a heap corruption (SIGABRT), and bodies joined by
-BooleanFragments ran on into errors about the contact search that did not name the cause.
+BooleanFragments ran on into errors about the contact search that did not name the cause;
+a hexahedral body on a tetrahedral one (``mixed_cells.geo``) ended in ``MPI_ERR_RANK``.
 """
 
 from __future__ import annotations
@@ -116,6 +117,15 @@ def test_a_volume_in_two_physical_volumes_is_named():
     with pytest.raises(ParameterError, match="^mesh: gmsh volume 1 is in the physical volumes 'lower' and 'both': "
                        "each cell must be in one physical volume"):
         read_gmsh(DATA / "twice.geo", MPI.COMM_WORLD)
+
+
+def test_bodies_with_cells_of_two_kinds_are_named():
+    """A hexahedral body on a tetrahedral one (DOLFINx 0.9 builds a mesh of one cell type; an
+    MPI abort before): the error names each volume's kind of cell and the fix."""
+    with pytest.raises(ParameterError, match="^" + re.escape(
+            "mesh: the physical volumes hold cells of several kinds ('lower': Hexahedron 8; 'upper': "
+            "Tetrahedron 4): the bodies of a case share one mesh, and DOLFINx 0.9 takes one kind of cell per mesh")):
+        read_gmsh(DATA / "mixed_cells.geo", MPI.COMM_WORLD)
 
 
 @pytest.mark.parametrize("mesh, groups", [
