@@ -38,8 +38,10 @@ install_kratos() {
     local py="$KRATOS_VENV/bin/python"
     # Importing Kratos prints a banner (and a line at exit): ask pip's metadata for the version.
     local version="import importlib.metadata as m; print(m.version('KratosContactStructuralMechanicsApplication'))"
+    # The constitutive laws application holds HyperElastic3DLaw (the ironing case's neo-Hookean bodies).
+    local modules="import KratosMultiphysics.ContactStructuralMechanicsApplication, KratosMultiphysics.ConstitutiveLawsApplication"
     if [ -x "$py" ] && [ "$("$py" -c "$version" 2>/dev/null)" = "$KRATOS_VERSION" ] \
-        && "$py" -c 'import KratosMultiphysics.ContactStructuralMechanicsApplication' >/dev/null 2>&1; then
+        && "$py" -c "$modules" >/dev/null 2>&1; then
         echo "install-peers: Kratos $KRATOS_VERSION already installed in $KRATOS_VENV"
         return
     fi
@@ -49,8 +51,9 @@ install_kratos() {
     "$py" -m pip install --quiet --disable-pip-version-check \
         "kratosmultiphysics==$KRATOS_VERSION" \
         "kratosstructuralmechanicsapplication==$KRATOS_VERSION" \
-        "kratoscontactstructuralmechanicsapplication==$KRATOS_VERSION" 2> >(grep -v "is ignored: it is neither" >&2)
-    "$py" -c 'import KratosMultiphysics.ContactStructuralMechanicsApplication' >/dev/null
+        "kratoscontactstructuralmechanicsapplication==$KRATOS_VERSION" \
+        "kratosconstitutivelawsapplication==$KRATOS_VERSION" 2> >(grep -v "is ignored: it is neither" >&2)
+    "$py" -c "$modules" >/dev/null
     echo "install-peers: Kratos $("$py" -c "$version") in $KRATOS_VENV"
 }
 
