@@ -3,6 +3,9 @@
     .venv/bin/python benchmarks/ironing.py --run                  # runs both cases (1 rank), then the table
     .venv/bin/python benchmarks/ironing.py                        # the table from earlier runs
     .venv/bin/python benchmarks/ironing.py --kratos DIR [DIR]     # with Kratos' runs (peers/kratos_ironing.py)
+    .venv/bin/python benchmarks/ironing.py --run --mesh meshes/shallow_ironing_hex.msh \
+        --results results/ironing-hex --table benchmarks/results/ironing_hex
+                                                                  # the cases on another mesh
 
 Cases ``cases/shallow_ironing.toml`` (frictionless) and ``cases/shallow_ironing_frictional.toml``
 (Coulomb, mu = 0.3): Kratos' validation case ``shallow_ironing_3D`` (KratosMultiphysics/Examples,
@@ -63,7 +66,7 @@ def path_time(translation: np.ndarray) -> np.ndarray:
 def ours(directory: pathlib.Path) -> dict:
     """Steps, times, F_y, F_x, Newton counts and cuts of one of our runs."""
     summary = json.loads((directory / "summary.json").read_text())
-    steps = summary["steps"]
+    steps = [step for step in summary["steps"] if step["converged"]]  # a path that failed: up to its last step
     translation = np.array([s["translation"] for s in steps])
     pair = np.array([s["pair_forces"][PAIR] for s in steps])
     support = np.array([s["reaction_forces"][SUPPORT] for s in steps])
@@ -130,9 +133,19 @@ def at(run: dict, what: str) -> tuple[float, float] | None:
     return (fy[near[-1]] / 1e8, fx[near[-1]] / 1e8) if len(near) else None
 
 
-def run_case(name: str, out: pathlib.Path, ranks: int) -> None:
-    """Run one case with our solver, timing the whole process (``wall_time.json``)."""
-    command = [str(ROOT / ".venv" / "bin" / "python"), "-m", "contactqvi", "run", str(ROOT / CASES[name][0]),
+def run_case(name: str, out: pathlib.Path, ranks: int, mesh: pathlib.Path | None = None) -> None:
+    """Run one case with our solver, timing the whole process (``wall_time.json``).
+
+    ``mesh`` replaces the case's mesh file: the case is copied to ``out/case.toml`` with it.
+    """
+    case = ROOT / CASES[name][0]
+    if mesh is not None:
+        text = case.read_text()
+        line = next(s for s in text.splitlines() if s.startswith("file = "))
+        out.mkdir(parents=True, exist_ok=True)
+        case = out / "case.toml"
+        case.write_text(text.replace(line, f"file = {str(mesh.resolve())!r}"))
+    command = [str(ROOT / ".venv" / "bin" / "python"), "-m", "contactqvi", "run", str(case),
                "--output", str(out), "--no-plot"]
     if ranks > 1:
         command = ["mpirun", "-n", str(ranks)] + command
@@ -146,6 +159,9 @@ def main() -> int:
                                      formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--run", action="store_true", help="run our cases first")
     parser.add_argument("--ranks", type=int, default=1)
+    parser.add_argument("--case", choices=sorted(CASES), nargs="+", default=sorted(CASES), help="cases to run")
+    parser.add_argument("--mesh", type=pathlib.Path, default=None,
+                        help="run on this mesh instead of the cases' (e.g. meshes/shallow_ironing_hex.msh)")
     parser.add_argument("--results", type=pathlib.Path, default=ROOT / "results" / "ironing")
     parser.add_argument("--kratos", type=pathlib.Path, nargs="*", default=[],
                         help="output directories of peers/kratos_ironing.py (frictionless, frictional)")
@@ -154,8 +170,8 @@ def main() -> int:
     runs = {}
     for name in CASES:
         out = args.results / name
-        if args.run:
-            run_case(name, out, args.ranks)
+        if args.run and name in args.case:
+            run_case(name, out, args.ranks, args.mesh)
         if (out / "summary.json").exists():
             runs[name] = ours(out)
     peers = {}

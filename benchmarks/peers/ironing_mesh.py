@@ -45,6 +45,8 @@ NODE_SETS = {"bottom": "DISPLACEMENT_Displacement_Auto1", "top": "DISPLACEMENT_D
              "symmetry": "DISPLACEMENT_Displacement_Auto3", "contact": "CONTACT_Contact_Auto1"}
 SURFACE_TAGS = {"top": 1, "bottom": 2, "symmetry": 3, "contact": 4}
 VOLUME_TAGS = {"die": 11, "block": 12}
+#: gmsh 2.2 element types by dimension and node count (triangle, quadrilateral; tetrahedron, hexahedron)
+GMSH_TYPES = {2: {3: 2, 4: 3}, 3: {4: 4, 8: 5}}
 
 
 def read_mdpa(path: pathlib.Path) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
@@ -132,27 +134,33 @@ def split_hexahedra(x: np.ndarray, hexes: np.ndarray) -> np.ndarray:
     return tets
 
 
-def boundary_triangles(tets: np.ndarray) -> np.ndarray:
-    """Faces of the tetrahedra that belong to one tetrahedron only."""
-    faces = np.concatenate([tets[:, [1, 2, 3]], tets[:, [0, 3, 2]], tets[:, [0, 1, 3]], tets[:, [0, 2, 1]]])
+def boundary_faces(cells: np.ndarray) -> np.ndarray:
+    """Faces (triangles of tetrahedra, quadrilaterals of hexahedra) that belong to one cell only."""
+    local = HEX_FACES if cells.shape[1] == 8 else ((1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1))
+    faces = np.concatenate([cells[:, list(face)] for face in local])
     _, index, count = np.unique(np.sort(faces, axis=1), axis=0, return_index=True, return_counts=True)
     return faces[index[count == 1]]
 
 
-def build(layers: list[float] | None = None) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
-    """Nodes, tetrahedra per body and boundary triangles per group (each body's part of it)."""
+def build(layers: list[float] | None = None,
+          hexahedra: bool = False) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Nodes, cells per body and boundary faces per group (each body's part of it).
+
+    The cells are the tetrahedra of :func:`split_hexahedra`, or Kratos' hexahedra as they are
+    (``hexahedra``; Kratos' node order is gmsh's), the faces triangles or quadrilaterals.
+    """
     x, hexes, sets = read_mdpa(ROOT / "build" / "kratos-ironing" / "shallow_ironing3D.mdpa")
     hexes = {body: hexes[part] for body, part in PARTS.items()}
     if layers is not None:
         x, hexes, sets = keep_layers(x, hexes, sets, layers)
-    tets = {body: split_hexahedra(x, cells) for body, cells in hexes.items()}
+    tets = hexes if hexahedra else {body: split_hexahedra(x, cells) for body, cells in hexes.items()}
     groups = {}
     for name, node_set in NODE_SETS.items():
         member = np.zeros(len(x), dtype=bool)
         member[sets[node_set]] = True
         rows = []
         for body in tets:
-            tri = boundary_triangles(tets[body])
+            tri = boundary_faces(tets[body])
             tri = tri[member[tri].all(axis=1)]
             if name == "contact":  # the round tip and the block's top, not the faces z = 0, 1
                 normal = np.cross(x[tri[:, 1]] - x[tri[:, 0]], x[tri[:, 2]] - x[tri[:, 0]])
@@ -170,8 +178,9 @@ def write_msh(path: pathlib.Path, x: np.ndarray, tets: dict[str, np.ndarray], gr
     lines += [f"{i + 1} {a!r} {b!r} {c!r}" for i, (a, b, c) in enumerate(x.tolist())]
     lines += ["$EndNodes", "$Elements", str(sum(map(len, groups.values())) + sum(map(len, tets.values())))]
     number = 0
-    for kind, tags, blocks in ((2, SURFACE_TAGS, groups), (4, VOLUME_TAGS, tets)):
+    for dim, tags, blocks in ((2, SURFACE_TAGS, groups), (3, VOLUME_TAGS, tets)):
         for name, rows in blocks.items():
+            kind = GMSH_TYPES[dim][rows.shape[1]]
             for row in (rows + 1).tolist():
                 number += 1
                 lines.append(f"{number} {kind} 2 {tags[name]} {tags[name]} " + " ".join(map(str, row)))
@@ -209,13 +218,17 @@ def main() -> None:
     parser.add_argument("--layers", type=float, nargs="+", default=None, help="z planes kept (default: all six)")
     parser.add_argument("--msh", type=pathlib.Path, default=ROOT / "meshes" / "shallow_ironing.msh")
     parser.add_argument("--mdpa", type=pathlib.Path, default=None, help="also write the tetrahedra for Kratos")
+    parser.add_argument("--hexahedra", action="store_true", help="Kratos' hexahedra, not split (no --mdpa)")
     args = parser.parse_args()
-    x, tets, groups = build(args.layers)
+    if args.hexahedra and args.mdpa:
+        parser.error("--mdpa writes tetrahedra: Kratos reads its own hexahedral mdpa")
+    x, tets, groups = build(args.layers, args.hexahedra)
     write_msh(args.msh, x, tets, groups)
     if args.mdpa:
         write_mdpa(args.mdpa, x, tets, groups)
-    print(f"{args.msh}: {len(x)} nodes, " + ", ".join(f"{b} {len(t)} tetrahedra" for b, t in tets.items())
-          + "; " + ", ".join(f"{g} {len(t)} triangles" for g, t in groups.items()))
+    cells, faces = ("hexahedra", "quadrilaterals") if args.hexahedra else ("tetrahedra", "triangles")
+    print(f"{args.msh}: {len(x)} nodes, " + ", ".join(f"{b} {len(t)} {cells}" for b, t in tets.items())
+          + "; " + ", ".join(f"{g} {len(t)} {faces}" for g, t in groups.items()))
 
 
 if __name__ == "__main__":

@@ -32,7 +32,11 @@ configuration it reached and the step is solved again from there, the slip still
 measured from the step before, until a solve changes the displacement by at most
 ``geometry_tol`` times the step's increment (:data:`PATH_PARAMETERS`; Code_Aster's
 geometric loop, ``REAC_GEOM = 'AUTOMATIQUE'`` with ``RESI_GEOM``, tested on the
-displacement).
+displacement). The loop is the fixed-point iteration c <- u(c) on the configuration c
+searched in; where a solve changes the displacement no less than the one before (the
+iteration does not contract: nodes at the edge of a master surface flip between facets,
+docs/ironing.md), each later search moves only part of the way, c <- c + omega (u(c) - c),
+omega halved at every such solve, which has the same fixed point.
 
 A step that does not converge (and was not interrupted) is cut: its first half, from the
 last converged state (:class:`~contactqvi.contact.path_state.PathState`), is solved
@@ -315,10 +319,12 @@ def _settle(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSt
     of the problem is searched ``"until_settled"``.
 
     The slip stays measured from the step before (its u~ in the new variables goes to
-    ``state.variables``); each solve starts from the last solution and stops at the first
-    one's target ||y^||. Returns the solver of the last solve (``solver`` is destroyed) and the
-    step's result: the last solve's, with the iterations, timings and history of all of
-    them, ``diverged_max_it`` if the configuration did not settle.
+    ``state.variables``); each solve starts from the configuration searched in and stops at
+    the first one's target ||y^||; after a solve that changed the displacement no less than
+    the one before, the next configuration is under-relaxed (module docstring). Returns the
+    solver of the last solve (``solver`` is destroyed) and the step's result: the last
+    solve's, with the iterations, timings and history of all of them, ``diverged_max_it``
+    if the configuration did not settle.
     """
     if not problem.settles_geometry:
         return solver, result
@@ -326,6 +332,7 @@ def _settle(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSt
     index, before = state.done, state.displacement
     reached = problem.physical_displacement(u, fem.Function(problem.V))  # the configuration searched in
     work = reached.x.petsc_vec.duplicate()
+    relaxation = 1.0
     try:
         while result.converged:
             work.waxpy(-1.0, before.x.petsc_vec, reached.x.petsc_vec)
@@ -345,7 +352,12 @@ def _settle(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSt
             reached.x.petsc_vec.copy(work)
             problem.physical_displacement(u, reached)
             work.axpy(-1.0, reached.x.petsc_vec)
-            change = work.norm(PETSc.NormType.NORM_INFINITY)
+            change, last = work.norm(PETSc.NormType.NORM_INFINITY), change
+            if change >= last:  # not contracting: move only part of the way to the next configuration
+                relaxation *= 0.5
+            if relaxation < 1.0:
+                reached.x.petsc_vec.axpy(1.0 - relaxation, work)
+                reached.x.scatter_forward()
             logger.info("step %d, search %d in the configuration it reached: the displacement changed by %.3g m "
                         "(%.3g of the step's increment)", index + 1, len(solves) - 1, change,
                         change / increment if increment > 0.0 else math.inf)
