@@ -342,7 +342,7 @@ def _element_kinds(dim: int, tag: int) -> set[str]:
 
     return {gmsh.model.mesh.getElementProperties(kind)[0]
             for entity in gmsh.model.getEntitiesForPhysicalGroup(dim, tag)
-            for kind in gmsh.model.mesh.getElements(dim, entity)[0]}
+            for kind in gmsh.model.mesh.getElementTypes(dim, entity)}
 
 
 def _mixed_cells(kinds: dict[str, set[str]]) -> str | None:

@@ -24,10 +24,12 @@ import numpy as np
 import pytest
 
 from contactqvi.contact.checkpoint import DIRECTORY
-from shipped_runs import group
+from shipped_runs import COARSE, group
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-STEPS = 3
+#: The shipped case's variant that tests/shipped_runs.py runs (the uninterrupted run): its mesh and steps.
+VARIANT = COARSE["cattaneo_mindlin_bodies"]
+STEPS = VARIANT.steps.stop
 MPIENV = {"OMPI_MCA_rmaps_base_oversubscribe": "1", "PRTE_MCA_rmaps_default_mapping_policy": ":oversubscribe",
           "OMPI_MCA_btl": "self,sm", "OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1"}
 
@@ -82,8 +84,7 @@ def killed(tmp_path_factory) -> tuple[pathlib.Path, pathlib.Path]:
     of its run killed during step STEPS: its checkpoint is step STEPS - 1's."""
     work = tmp_path_factory.mktemp("restart")
     text = (ROOT / "cases" / "cattaneo_mindlin_bodies.toml").read_text()
-    text = text.replace('file = "../meshes/mindlin_bodies_medium.geo"',
-                        f'file = "{ROOT / "meshes" / "mindlin_bodies_coarse.geo"}"')
+    text = text.replace('file = "../meshes/mindlin_bodies_medium.geo"', f'file = "{ROOT / "meshes" / VARIANT.mesh}"')
     head, *steps = text.split("[[steps]]")
     case = work / "case.toml"
     case.write_text("[[steps]]".join([head, *steps[:STEPS]]))
