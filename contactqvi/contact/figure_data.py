@@ -29,6 +29,7 @@ import typing
 import numpy as np
 
 from contactqvi.contact.nodal import State
+from contactqvi.contact.surface import state_names
 from contactqvi.contact.surface_views import SurfaceView, contact_limits, number, surface_views
 from contactqvi.load_steps import Rotation, placed
 from contactqvi.obstacles import Cylinder, Obstacle, Plane, Sphere, tangent_frames
@@ -47,6 +48,7 @@ __all__ = [
     "length_text",
     "obstacle_drawing",
     "robust_scale",
+    "state_labels",
     "states_figure",
 ]
 
@@ -153,24 +155,26 @@ LOG_SCALE_RANGE = 100.0
 FENCE = 1.5
 
 
-def _robust_range(values: np.ndarray) -> tuple[float, float]:
-    """The 1st and 99th percentile of ``values``, kept within Tukey's fences (:data:`FENCE`
-    interquartile ranges beyond the quartiles): on a coarse mesh a few corner nodes at a
-    symmetry plane are more than 1 % of the nodes (a press fit's 4 of 67), and the fences keep
-    them from setting the range, while a Hertz distribution lies within them."""
+def _robust_range(values: np.ndarray, fenced: bool) -> tuple[float, float]:
+    """The 1st and 99th percentile of ``values``, ``fenced`` within Tukey's fences
+    (:data:`FENCE` interquartile ranges beyond the quartiles): on a coarse mesh a few corner
+    nodes at a symmetry plane are more than 1 % of the pressing nodes (a press fit's 4 of 67),
+    and the fences keep them from setting the range, while a Hertz distribution lies within
+    them. A stress map is not fenced: its contact zone is a few percent of the boundary's
+    cells, outside the fences of the rest."""
     first, lower, upper, last = np.percentile(values, [1.0, 25.0, 75.0, 99.0])
-    spread = FENCE * (upper - lower)
+    spread = FENCE * (upper - lower) if fenced else np.inf
     return float(max(first, lower - spread)), float(min(last, upper + spread))
 
 
 def robust_scale(name: str, values: np.ndarray, at: np.ndarray, what: str, stress_map: bool = False) -> ColourScale:
     """The colour scale of ``values`` (Pa) at positions ``at`` (m): the robust range of the
-    positive values (:func:`_robust_range`), so that a few singular values (corner nodes at a
-    symmetry plane) do not set it; the largest value and its position stated in ``note``. A ``stress_map`` starts
+    positive values (:func:`_robust_range`, fenced unless a ``stress_map``), so that a few
+    singular values (corner nodes at a symmetry plane) do not set it; the largest value and its position stated in ``note``. A ``stress_map`` starts
     at zero, or is logarithmic when the percentiles span more than :data:`LOG_SCALE_RANGE`.
     ``what`` names the values the percentiles are of."""
     positive = values[values > 0.0]
-    low, high = _robust_range(positive) if len(positive) else (0.0, 1.0)
+    low, high = _robust_range(positive, not stress_map) if len(positive) else (0.0, 1.0)
     log = bool(stress_map and low * LOG_SCALE_RANGE < high)
     if log:
         low = max(low, 1e-4 * high)
@@ -180,8 +184,8 @@ def robust_scale(name: str, values: np.ndarray, at: np.ndarray, what: str, stres
     top = int(np.argmax(values)) if len(values) else -1
     largest, largest_at = (float(values[top]), at[top]) if top >= 0 else (0.0, np.zeros(3))
     unit, factor = stress_unit(high)
-    note = (f"colours: 1st-99th percentile of {what}, within {number(FENCE)} interquartile ranges of the "
-            f"quartiles ({number(low * factor, 3)} to {number(high * factor, 3)} {unit}"
+    fence = "" if stress_map else f", within {number(FENCE)} interquartile ranges of the quartiles"
+    note = (f"colours: 1st-99th percentile of {what}{fence} ({number(low * factor, 3)} to {number(high * factor, 3)} {unit}"
             f"{', log scale' if log else ''}); largest {number(largest * factor, 3)} {unit} at {length_text(largest_at)}")
     return ColourScale(f"{name} [{unit}]", low, high, log, unit, factor, largest,
                        tuple(float(c) for c in largest_at), note)
@@ -224,7 +228,7 @@ def displacement_scale(size: float, largest: float, reference_gap: float, finite
     scale = _nice_floor(min(wanted, touching))
     if scale < MIN_MAGNIFICATION:
         return 1.0, "true scale (magnified, touching bodies would part or overlap)"
-    return scale, f"displacement magnified x{number(scale, 3)} (touching bodies stay touching)"
+    return scale, f"displacement magnified x{scale:.0f} (touching bodies stay touching)"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -486,10 +490,8 @@ def states_figure(contact: Dataset, pair_of_patch: np.ndarray, pair_names: list[
     """The description of ``contact_states.png`` from the gathered tributary patches: each
     pair's patches drawn as :func:`~contactqvi.contact.surface_views.surface_views` sees them
     (flat, per plane, or unrolled on a fitted cylinder or sphere)."""
-    from contactqvi.contact.surface import state_names
-
     shown_pairs = [k for k in range(len(pair_names)) if np.any(pair_of_patch == k)]
-    labels = _state_labels({frictional[k] for k in shown_pairs}, state_names)
+    labels = state_labels({frictional[k] for k in shown_pairs})
     listed = np.array(list(labels), dtype=int)
     colour_of = np.zeros(len(State), dtype=int)
     colour_of[listed] = np.arange(len(listed))
@@ -509,7 +511,7 @@ def states_figure(contact: Dataset, pair_of_patch: np.ndarray, pair_names: list[
     return StatesFigure(f"Contact states, {shown.text()}; {names}", shown.status(), panels, legend)
 
 
-def _state_labels(frictional: set[bool], state_names: typing.Callable[[bool], dict[State, str]]) -> dict[State, str]:
+def state_labels(frictional: set[bool]) -> dict[State, str]:
     """Legend text of the states the laws of the pairs drawn can give (``frictional``: their
     ``law.frictional``), a state named differently by the two kinds named both ways."""
     labels: dict[State, list[str]] = {}

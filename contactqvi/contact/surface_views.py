@@ -169,7 +169,7 @@ def _unrolled_cylinder(polygons: np.ndarray, pressure: np.ndarray, areas: np.nda
     along = 1e3 * points @ axis
     coordinates = np.stack([arc, along], axis=-1).reshape(*polygons.shape[:2], 2)
     title = (f"unrolled on the fitted cylinder: radius {number(1e3 * radius, 4)} mm, "
-             f"axis {_vector_text(axis)}, rms error {number(100 * error, 2)} % of the radius")
+             f"axis {_vector_text(axis)}, rms error {number(round(100 * error, 3) + 0.0, 2)} % of the radius")
     labels = (f"arc length from {start} [mm]", f"along the axis {_vector_text(axis)} [mm]")
     return SurfaceView("cylinder", title, labels, coordinates, error)
 
@@ -189,7 +189,7 @@ def _unrolled_sphere(polygons: np.ndarray, pressure: np.ndarray) -> SurfaceView 
     azimuth = np.arctan2(radial @ e2, radial @ e1)
     coordinates = 1e3 * radius * polar[:, None] * np.column_stack([np.cos(azimuth), np.sin(azimuth)])
     title = (f"mapped from the fitted sphere (distances from {start} kept): radius {number(1e3 * radius, 4)} mm, "
-             f"rms error {number(100 * error, 2)} % of the radius")
+             f"rms error {number(round(100 * error, 3) + 0.0, 2)} % of the radius")
     labels = tuple(f"geodesic distance from {start} towards t{i + 1} = {_vector_text(t)} [mm]"
                    for i, t in enumerate((e1, e2)))
     return SurfaceView("sphere", title, labels, coordinates.reshape(*polygons.shape[:2], 2), error)
@@ -221,10 +221,9 @@ def surface_views(polygons: np.ndarray, pressure: np.ndarray) -> list[tuple[Surf
     if deviation <= FLAT_TOLERANCE:
         return [(_plane_view(polygons, normal, "flat", "plane {where}"), everything)]
     areas = _area_vectors(polygons)
-    fits = [view for view in (_unrolled_cylinder(polygons, pressure, areas), _unrolled_sphere(polygons, pressure))
-            if view is not None]
-    if fits:
-        return [(min(fits, key=lambda view: view.fit_error), everything)]
+    fitted = _unrolled_cylinder(polygons, pressure, areas) or _unrolled_sphere(polygons, pressure)
+    if fitted is not None:  # a cylinder first: a short strip of one also lies on a sphere
+        return [(fitted, everything)]
     planes = _planes(polygons, areas)
     if planes is not None:
         return [(_plane_view(polygons[m], _plane_fit(polygons[m].reshape(-1, 3))[0], "plane",
