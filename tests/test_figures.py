@@ -1,11 +1,12 @@
 """What ``bodies.png`` and ``contact_states.png`` show, read from their descriptions
 (:mod:`contactqvi.contact.figure_data`), never from pixels (issue 46).
 
-The geometry and the words are checked on small numpy arrays (one rank); four cases of
+The geometry and the words are checked on small numpy arrays (one rank); the cases of
 issue 46 are solved for a step or two on coarse meshes and their figures described on
-any number of ranks: a neo-Hookean seal pressed by a plate (an L-shaped contact group),
-a press fit (a quarter bore; corner nodes at the symmetry planes), two-body Hertz and a
-hexahedral stack.
+any number of ranks: a neo-Hookean seal pressed by a plate (an L-shaped contact group,
+``tests/data/pictures``, from ``../shared/repro/turn5``), a press fit (a quarter bore;
+corner nodes at the symmetry planes), two-body Hertz, a hexahedral stack and the shipped
+rubber pad (Cauchy pressure, a cylinder).
 """
 
 from __future__ import annotations
@@ -206,7 +207,8 @@ def described(tmp_path_factory):
     cases = {"seal": (lambda: load_case(DATA / "seal_half_nu0.45.toml"), 2),
              "press_fit": (lambda: load_case(DATA / "fit_h1.0_1.5.toml"), 1),
              "hertz_bodies": (lambda: shipped_case("hertz_bodies"), 1),
-             "hex_patch": (lambda: shipped_case("hex_patch"), 1)}
+             "hex_patch": (lambda: shipped_case("hex_patch"), 1),
+             "rubber_pad": (lambda: shipped_case("rubber_pad"), 1)}
     made = {}
 
     def figures(name: str):
@@ -303,4 +305,24 @@ def test_hexahedral_stack_pictures(described):
     assert np.all(bodies.contact.values[np.isfinite(bodies.contact.values)] == pytest.approx(1e6, rel=1e-6))
     (panel,) = states.panels
     assert panel.view.kind == "flat" and panel.view.labels == ("x1 [mm]", "x2 [mm]")
+    _no_negative_zero(_all_texts(bodies, states))
+
+
+def test_rubber_pad_pictures(described):
+    """The shipped rubber pad (neo-Hookean, searched until settled) after its first step: true
+    scale, the cylinder drawn where it is within the view, the pressure named Cauchy."""
+    bodies, states = described("rubber_pad")
+    if MPI.COMM_WORLD.rank != 0:
+        return
+    assert bodies.scale == 1.0 and bodies.scale_text == "true scale (finite strain)"
+    (roller,) = bodies.obstacles
+    moved = Cylinder((0.0, 0.0, 0.015 - 0.5e-3), (0.0, 1.0, 0.0), 0.015)
+    assert np.allclose(moved.distance(roller.points)[0], 0.0, atol=1e-12)
+    drawn = bodies.bodies.points
+    margin = 0.15 * np.ptp(drawn, axis=0).max() + 1e-12
+    assert np.all(roller.points >= drawn.min(axis=0) - margin) and np.all(roller.points <= drawn.max(axis=0) + margin)
+    assert bodies.pressure.title == "Cauchy contact pressure [MPa]"
+    assert bodies.contact_title.startswith("Cauchy contact pressure")
+    (panel,) = states.panels
+    assert panel.view.kind == "flat" and states.title.endswith("top on the cylinder")
     _no_negative_zero(_all_texts(bodies, states))

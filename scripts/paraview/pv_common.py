@@ -42,6 +42,36 @@ IMAGE_SIZE = (1600, 900)
 FONT = 22
 
 
+#: The contact pressure's kinds, as contactqvi.contact.surface.PRESSURE_DEFINITIONS names them.
+PRESSURE_KINDS = ("Cauchy", "nominal")
+#: Searches in the current configuration each step (contactqvi.load_steps.SEARCHES).
+SEARCHED_EACH_STEP = ("every_step", "until_settled")
+
+
+def finite_strain(case):
+    """Whether the summary's ``case`` has a hyperelastic body (a ``model`` in a material)."""
+    materials = [case.get("material") or {}] + [body.get("material") or {} for body in case.get("bodies") or []]
+    return any(material.get("model") for material in materials)
+
+
+def pressure_name(case):
+    """The contact pressure's name, as contactqvi.contact.surface.pressure_label gives it:
+    Cauchy for a pair searched each step of a hyperelastic body, nominal otherwise (small
+    strain, or searched once); both joined when the pairs differ. A result without a case
+    (the paper's demo) is linear: nominal."""
+    pairs = list(case.get("contacts") or []) + ([case["contact"]] if case.get("contact") else [])
+    kinds = {"Cauchy" if finite_strain(case) and pair.get("search", "every_step" if "master" in pair else "once")
+             in SEARCHED_EACH_STEP else "nominal" for pair in pairs} or {"nominal"}
+    return " / ".join(kind for kind in PRESSURE_KINDS if kind in kinds) + " contact pressure"
+
+
+def bar_left(title, position):
+    """The left edge (fraction of the image) of a vertical colour bar at ``position`` moved left
+    as far as its horizontal ``title`` (FONT, bold) needs to fit in the image."""
+    width = 0.62 * FONT * len(title) + 24  # pixels: a generous average glyph width
+    return min(position, 1.0 - width / IMAGE_SIZE[0])
+
+
 class ResultError(Exception):
     """A file, field or step this script needs is not in the result directory."""
 
@@ -184,7 +214,8 @@ def colour_bar(view, lut, title, largest=None, position=(0.86, 0.2), length=0.6)
 
     bar = simple.GetScalarBar(lut, view)
     bar.Title, bar.ComponentTitle, bar.Orientation = title, "", "Vertical"
-    bar.WindowLocation, bar.Position, bar.ScalarBarLength = "Any Location", list(position), length
+    bar.WindowLocation, bar.ScalarBarLength = "Any Location", length
+    bar.Position = [bar_left(title, position[0]), position[1]]  # the title never cut off at the right
     bar.TitleColor = bar.LabelColor = [0.0, 0.0, 0.0]
     bar.TitleFontSize, bar.LabelFontSize, bar.TitleBold, bar.HorizontalTitle = FONT, FONT - 2, 1, 1
     if largest is not None:  # about three digits

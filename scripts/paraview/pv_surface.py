@@ -16,6 +16,7 @@ from pv_common import (
     ResultError,
     add_array,
     add_title,
+    bar_left,
     cell_areas,
     colour_bar,
     field,
@@ -80,8 +81,9 @@ def traction_view(result, path):
     lut.ApplyPreset("Blues", True)
     lut.InvertTransferFunction()  # white: no pressure
     lut.RescaleTransferFunction(0.0, p_max or 1.0)
-    colour_bar(view, lut, f"contact pressure ({p_unit})", p_max)
-    side = plan_view(view, grid, frame, box=(0.11, 0.80, 0.16, 0.86))
+    title = f"{result['case']['pressure']} ({p_unit})"
+    colour_bar(view, lut, title, p_max)
+    side = plan_view(view, grid, frame, box=(0.11, bar_left(title, 0.86) - 0.04, 0.16, 0.86))
     if t_max > 0 and t_assoc == "POINTS":
         from vtkmodules.vtkCommonCore import vtkPoints
         from vtkmodules.vtkCommonDataModel import vtkPolyData
@@ -100,7 +102,7 @@ def traction_view(result, path):
         arrows.ColorArrayName, arrows.DiffuseColor = ["POINTS", ""], [0.85, 0.1, 0.1]
         arrows.AmbientColor = arrows.DiffuseColor
         arrows.Translation = list(0.5 * spacing * frame[3])  # towards the camera, above the surface
-    add_title(view, f"Contact pressure and friction traction ({result['case']['label']})",
+    add_title(view, f"{result['case']['pressure'].capitalize()} and friction traction ({result['case']['label']})",
               f"contact surface seen {side}, through the body; red arrows: friction traction on the body, "
               f"length proportional to its magnitude (largest {t_max:.3g} {t_unit})")  # fmt: skip
     save(view, path)
