@@ -148,3 +148,18 @@ def test_paraview_names_the_pressure_as_contactqvi_does(pv_views, name):
     assert label == {"rubber_pad": "Cauchy", "hertz_bodies": "nominal", "seal": "nominal"}[name] + " contact pressure"
     described = pv_views.describe(ROOT / "nothing", -1)
     assert described["pressure"] == "nominal contact pressure" and described["finite_strain"] is False
+
+
+@pytest.mark.one_rank(reason="colour ranges of numpy arrays, serial arithmetic")
+def test_paraview_colours_the_pressure_as_the_pictures_do(pv_views):
+    """The traction view's colours end where bodies.png's do: corner nodes do not set them."""
+    from contactqvi.contact.figure_data import robust_scale
+
+    import pv_common
+
+    rng = np.random.default_rng(5)
+    pressure = np.concatenate([np.zeros(20), rng.uniform(62e6, 123e6, 61), [193e6, 215e6, 300e6, 314e6]])
+    top = pv_common.robust_top(pressure)
+    assert top < 193e6
+    assert top == pytest.approx(robust_scale("p", pressure[pressure > 0], np.zeros((65, 3)), "nodes").high, rel=1e-14)
+    assert pv_common.robust_top(np.zeros(4)) == 0.0

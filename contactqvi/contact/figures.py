@@ -244,14 +244,15 @@ def _bar(title: str) -> dict[str, typing.Any]:
 
 
 def _add_panel(plotter: typing.Any, surface: Surface3D, scale: typing.Any, cmap: str, texts: list[str],
-               camera: list) -> None:
-    """One panel: ``surface`` coloured on ``scale`` (a ColourScale), its texts, the camera."""
+               camera: list, lit: bool = True) -> None:
+    """One panel: ``surface`` coloured on ``scale`` (a ColourScale), its texts, the camera;
+    without ``lit`` the colours as mapped (a surface seen from either side)."""
     name = scale.title
     grid = _grid(surface, name)
     grid[name] = grid[name] * scale.factor
     plotter.add_mesh(grid, scalars=name, cmap=cmap, clim=(scale.low * scale.factor, scale.high * scale.factor),
                      log_scale=scale.log, nan_color="#bdbdbd", show_edges=True, edge_color="#404040",
-                     line_width=0.3, scalar_bar_args=_bar(name))
+                     line_width=0.3, lighting=lit, scalar_bar_args=_bar(name))
     plotter.add_text("\n".join(textwrap.fill(t, 100) for t in [*texts, scale.note]), position="upper_left",
                      font_size=11)
     plotter.camera_position = camera
@@ -264,8 +265,8 @@ def _render_bodies(path: pathlib.Path, figure: BodiesFigure) -> None:
     import pyvista
 
     camera = [tuple(figure.camera), (0.0, 0.0, 0.0), (0.0, 0.0, 1.0)]
-    texts = [figure.title, *([figure.status] if figure.status else []), figure.scale_text
-             + "; von Mises stress per cell" + "".join(f"; {o.label} in brown" for o in figure.obstacles)]
+    texts = [figure.title, figure.scale_text + "; von Mises stress per cell"
+             + "".join(f"; {o.label} in brown" for o in figure.obstacles)]
     with _display():
         plotter = pyvista.Plotter(off_screen=True, window_size=(1600 if figure.contact is None else 2800, 1200),
                                   shape=(1, 1 if figure.contact is None else 2))
@@ -274,9 +275,12 @@ def _render_bodies(path: pathlib.Path, figure: BodiesFigure) -> None:
                 faces = np.concatenate([[len(f), *f] for f in obstacle.faces])
                 plotter.add_mesh(pyvista.PolyData(obstacle.points, faces), color="#a0785a", opacity=0.45)
             _add_panel(plotter, figure.bodies, figure.stress, "viridis", texts, camera)
+            if figure.status:  # a failed path, in red under the header
+                plotter.add_text(figure.status, position=(8, 1080), font_size=14, color="#b00000")
             if figure.contact is not None:
                 plotter.subplot(0, 1)
-                _add_panel(plotter, figure.contact, figure.pressure, "plasma", [figure.contact_title], camera)
+                _add_panel(plotter, figure.contact, figure.pressure, "plasma", [figure.contact_title], camera,
+                           lit=False)
             image = plotter.screenshot(None, return_img=True)
         finally:
             plotter.close()

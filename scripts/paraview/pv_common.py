@@ -65,6 +65,21 @@ def pressure_name(case):
     return " / ".join(kind for kind in PRESSURE_KINDS if kind in kinds) + " contact pressure"
 
 
+#: Tukey's fence of the pressure's colours, as contactqvi.contact.figure_data.FENCE.
+FENCE = 1.5
+
+
+def robust_top(values):
+    """The top of a contact pressure's colours as contactqvi's bodies.png takes it: the 99th
+    percentile of the positive (pressing) ``values``, at most FENCE interquartile ranges above
+    the upper quartile, so that a few corner nodes at symmetry planes do not set it; 0 for none."""
+    pressing = np.asarray(values)[np.asarray(values) > 0.0]
+    if len(pressing) == 0:
+        return 0.0
+    lower, upper, last = np.percentile(pressing, [25.0, 75.0, 99.0])
+    return float(min(last, upper + FENCE * (upper - lower)))
+
+
 def bar_left(title, position):
     """The left edge (fraction of the image) of a vertical colour bar at ``position`` moved left
     as far as its horizontal ``title`` (FONT, bold) needs to fit in the image."""
@@ -91,7 +106,8 @@ def read_grid(path, step):
     if not os.path.exists(path):
         raise ResultError(f"{path}: not found (SOURCES in {os.path.basename(__file__)})")
     reader = simple.ADIOS2VTXReader(FileName=path)
-    times = list(getattr(reader, "TimestepValues", None) or [0.0])
+    times = getattr(reader, "TimestepValues", None) or [0.0]
+    times = [times] if isinstance(times, float) else list(times)  # one step: ParaView gives a number
     index = step - 1 if step > 0 else step
     if step == 0 or not -len(times) <= index < len(times):
         raise ResultError(f"{path}: no step {step}; it holds {len(times)} (--step 1 ... {len(times)})")
