@@ -102,6 +102,6 @@ def deformed_view(result, path):
     view.CameraPosition = [centre[0] - 1.6 * extent, centre[1] - 2.4 * extent, centre[2] + 1.5 * extent]
     view.CameraViewUp = [0.0, 0.0, 1.0]
     simple.ResetCamera(view)
-    view.CameraPosition = [c + 0.8 * (p - c) for p, c in zip(view.CameraPosition, centre)]
+    view.CameraPosition = [c + 0.95 * (p - c) for p, c in zip(view.CameraPosition, centre)]  # clear of the bar
     add_title(view, f"Deformed body ({case['label']})", "\n".join(captions))
     save(view, path)
