@@ -249,7 +249,8 @@ def test_seal_pictures(described):
     assert 0.0 < bodies.pressure.low < bodies.pressure.high <= bodies.pressure.largest
     assert [p.view.kind for p in states.panels] == ["plane", "plane"]
     assert [p.title for p in states.panels] == ["plane 1 of 2, x3 = 5 mm", "plane 2 of 2, x1 = 10 mm"]
-    assert states.title == "Contact states, step 2 of 2: load factor 1, translation (0, 0, -0.15) mm; contact on the plane"
+    assert states.title == ("Contact states, step 2 of 2: load factor 1, translation (0, 0, -0.15) mm; "
+                            "contact on the plane")
     _no_negative_zero(_all_texts(bodies, states))
 
 

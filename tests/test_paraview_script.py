@@ -122,7 +122,8 @@ def test_the_deformed_view_is_true_to_scale_at_finite_strain_and_where_bodies_to
 def test_colour_bar_titles_fit_in_the_image(pv_views):
     import pv_common
 
-    for title in ("nominal contact pressure (MPa)", "Cauchy / nominal contact pressure (MPa)", "von Mises stress (MPa)"):
+    titles = ("nominal contact pressure (MPa)", "Cauchy / nominal contact pressure (MPa)", "von Mises stress (MPa)")
+    for title in titles:
         left = pv_common.bar_left(title, 0.86)
         assert left * pv_common.IMAGE_SIZE[0] + 0.55 * pv_common.FONT * len(title) < pv_common.IMAGE_SIZE[0]
     assert pv_common.bar_left("contact state", 0.72) == 0.72

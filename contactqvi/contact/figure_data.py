@@ -38,15 +38,18 @@ from contactqvi.paraview import Dataset
 __all__ = [
     "BodiesFigure",
     "ColourScale",
+    "DrawnState",
     "ObstacleDrawing",
     "ShownStep",
     "StatesFigure",
     "StatesPanel",
     "Surface3D",
     "bodies_figure",
+    "camera_direction",
     "displacement_scale",
     "length_text",
     "obstacle_drawing",
+    "pressing_nodes",
     "robust_scale",
     "state_labels",
     "states_figure",
@@ -97,9 +100,13 @@ class ShownStep:
                    failed=None if failed is None else failed["step"],
                    failed_status="" if failed is None else str(failed.get("status", "")))
 
+    def where(self) -> str:
+        """``step 3 of 20``, or '' for a single solve."""
+        return "" if self.step is None else f"step {self.step}" + ("" if self.total is None else f" of {self.total}")
+
     def text(self) -> str:
         """``step 3 of 20: load factor 1, translation (0, 0, -0.225) mm``."""
-        where = "" if self.step is None else f"step {self.step}" + ("" if self.total is None else f" of {self.total}")
+        where = self.where()
         what = [f"load factor {number(self.load, 4)}"]
         if any(t != 0.0 for t in self.translation):
             what.append(f"translation {length_text(self.translation)}")
@@ -170,8 +177,9 @@ def _robust_range(values: np.ndarray, fenced: bool) -> tuple[float, float]:
 def robust_scale(name: str, values: np.ndarray, at: np.ndarray, what: str, stress_map: bool = False) -> ColourScale:
     """The colour scale of ``values`` (Pa) at positions ``at`` (m): the robust range of the
     positive values (:func:`_robust_range`, fenced unless a ``stress_map``), so that a few
-    singular values (corner nodes at a symmetry plane) do not set it; the largest value and its position stated in ``note``. A ``stress_map`` starts
-    at zero, or is logarithmic when the percentiles span more than :data:`LOG_SCALE_RANGE`.
+    singular values (corner nodes at a symmetry plane) do not set it; the largest value and
+    its position stated in ``note``. A ``stress_map`` starts at zero, or is logarithmic when
+    the percentiles span more than :data:`LOG_SCALE_RANGE`.
     ``what`` names the values the percentiles are of."""
     positive = values[values > 0.0]
     low, high = _robust_range(positive, not stress_map) if len(positive) else (0.0, 1.0)
@@ -185,8 +193,9 @@ def robust_scale(name: str, values: np.ndarray, at: np.ndarray, what: str, stres
     largest, largest_at = (float(values[top]), at[top]) if top >= 0 else (0.0, np.zeros(3))
     unit, factor = stress_unit(high)
     fence = "" if stress_map else f", within {number(FENCE)} interquartile ranges of the quartiles"
-    note = (f"colours: 1st-99th percentile of {what}{fence} ({number(low * factor, 3)} to {number(high * factor, 3)} {unit}"
-            f"{', log scale' if log else ''}); largest {number(largest * factor, 3)} {unit} at {length_text(largest_at)}")
+    shown = f"{number(low * factor, 3)} to {number(high * factor, 3)} {unit}" + (", log scale" if log else "")
+    note = (f"colours: 1st-99th percentile of {what}{fence} ({shown}); "
+            f"largest {number(largest * factor, 3)} {unit} at {length_text(largest_at)}")
     return ColourScale(f"{name} [{unit}]", low, high, log, unit, factor, largest,
                        tuple(float(c) for c in largest_at), note)
 
@@ -408,7 +417,7 @@ def bodies_figure(bodies: Dataset, contact: Dataset | None, drawn: DrawnState) -
     margin = VIEW_MARGIN * float((high - low).max())
     translation = scale * np.asarray(drawn.shown.translation)
     obstacles = [obstacle_drawing(placed(obstacle, translation, drawn.shown.rotation), low - margin,
-                                  high + margin, f"{label} at {drawn.shown.text().split(': ')[0] or 'this step'}")
+                                  high + margin, f"{label} at {drawn.shown.where() or 'this load'}")
                  for obstacle, label in drawn.obstacles]
     figure = BodiesFigure(
         title=f"Deformed bodies, {drawn.shown.text()}", status=drawn.shown.status(), scale=scale,
@@ -452,7 +461,8 @@ def _pressure_panel(contact: Dataset, scale: float, name: str) -> tuple[Surface3
     drawn = (contact.points + scale * contact.point_data["displacement [m]"])[used]
     values = np.where(pressure[used] > 0.0, pressure[used], np.nan)
     colours = robust_scale(name, pressure[pressing], contact.points[pressing], "the pressing nodes' values")
-    title = f"{name} on the contact surfaces (slave side; grey: none)" + (", zoomed on the contact zone" if zoomed else "")
+    title = f"{name} on the contact surfaces (slave side; grey: none)" + (
+        ", zoomed on the contact zone" if zoomed else "")
     return Surface3D(drawn, kept.reshape(-1, cells.shape[1]), contact.cell_type, values, False), colours, title
 
 

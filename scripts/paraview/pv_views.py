@@ -12,8 +12,9 @@ by the displacement coloured by the von Mises stress (or |u|), with the rigid ob
 that step if ``summary.json`` describes them, at true scale for a hyperelastic body and
 wherever bodies touch (magnified otherwise, the factor stated); ``paraview_contact_traction.png``,
 the contact surface seen along its normal from the body's side, coloured by the contact
-pressure named as contactqvi names it (Cauchy or nominal), with friction-traction arrows; ``paraview_stick_slip.png``, the contact states
-of the tributary patches (one cell per node) with their areas.
+pressure named as contactqvi names it (Cauchy or nominal), with friction-traction arrows;
+``paraview_stick_slip.png``, the contact states of the tributary patches (one cell per
+node) with their areas.
 
 Every file and field the script reads is listed in ``SOURCES`` and ``FIELDS``; a
 missing file or field stops it with a message that names it. Files are read with
