@@ -35,6 +35,7 @@ from contactqvi.case import Body, ContactCase, ContactPair, check_groups, check_
 from contactqvi.contact.checkpoint import Checkpoint, CheckpointWriter, read_checkpoint, remove_checkpoints
 from contactqvi.contact.load_path import SOLVER_PARAMETERS, LoadStep, solve_load_path
 from contactqvi.contact.path_state import PathState
+from contactqvi.contact.figure_data import ShownStep
 from contactqvi.contact.figures import plot_contact_states, plot_deformed_bodies, plot_forces
 from contactqvi.contact.force_history import write_force_table
 from contactqvi.contact.postprocess import ContactResultsWriter
@@ -270,14 +271,14 @@ def _exit_code(results: list[SCDNewtonResult], remaining: int) -> int:
 
 
 def _draw_figures(writer: ContactResultsWriter, summary: dict[str, typing.Any], comm: MPI.Comm) -> None:
-    """``contact_states.png`` and ``bodies.png`` of the last step written, ``forces.png`` of the
-    path, and whether each was drawn in the summary."""
+    """``contact_states.png`` and ``bodies.png`` of the last step written (named in them, with
+    the step a failed path stopped at), ``forces.png`` of the path, and whether each was drawn
+    in the summary."""
     last = writer.last
-    step = next(entry["step"] for entry in reversed(summary["steps"]) if entry["converged"])
-    summary["plot"] = plot_contact_states(writer.out / "contact_states.png", last.surface, step)
-    touching = any(i.coupling is not None for i in last.surface.problem.interfaces)
+    shown = ShownStep.from_summary(summary)
+    summary["plot"] = plot_contact_states(writer.out / "contact_states.png", last.surface, shown)
     summary["bodies_plot"] = plot_deformed_bodies(writer.out / "bodies.png", last.displacement, last.von_mises,
-                                                  touching, last.surface)
+                                                  last.surface, shown)
     summary["forces_plot"] = plot_forces(writer.out / "forces.png", summary["steps"], comm)
     tables.write_summary(comm, writer.out / "summary.json", summary)
 

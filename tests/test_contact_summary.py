@@ -21,7 +21,8 @@ from dolfinx import fem
 from contactqvi import meshes
 from contactqvi.case import load_case
 from contactqvi.contact import build_contact_problem
-from contactqvi.contact.figures import _pair_text, _state_labels, _step_text
+from contactqvi.contact.figure_data import ShownStep, state_labels
+from contactqvi.contact.figures import _pair_text
 from contactqvi.contact.interface import BodyPair, ObstaclePair
 from contactqvi.contact.nodal import State
 from contactqvi.contact.postprocess import contact_summary
@@ -135,10 +136,10 @@ def test_figure_words():
     plane = ObstaclePair("bottom", Plane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0)), Frictionless())
     assert _pair_text(bodies) == "upper.interface on lower.interface"
     assert _pair_text(sphere) == "contact on the sphere" and _pair_text(plane) == "bottom on the plane"
-    assert _step_text(None, 6) == "step 6"
-    frictionless = _state_labels({False})
+    assert ShownStep(6, 1.0).text() == "step 6: load factor 1"
+    frictionless = state_labels({False})
     assert frictionless[State.SLIDING] == "in contact" and State.STICKING not in frictionless
-    assert _state_labels({True}) == STATE_NAMES
-    both = _state_labels({True, False})
+    assert state_labels({True}) == STATE_NAMES
+    both = state_labels({True, False})
     assert both[State.SLIDING] == "sliding / in contact (frictionless pairs)" and both[State.STICKING] == "sticking"
     assert "seed" not in " ".join(both.values())

@@ -209,35 +209,21 @@ def test_bodies_picture(solution, mpi_tmp_path):
 
 
 @pytest.mark.one_rank(reason="figure and patch geometry on small numpy arrays, drawn without a mesh")
-def test_bodies_picture_magnifies_small_displacements_only():
-    """``bodies.png`` magnifies an elastic displacement to a tenth of the bodies' size and draws
-    one above 1 % of the size (a slide, finite strain) true to scale."""
-    from contactqvi.contact.figures import _displacement_scale
-
-    points = np.array([[0.0, 0.0, 0.0], [3.6, 1.0, 1.0]])
-    assert _displacement_scale(points, np.array([[0.0, 0.0, -1e-4], [0.0, 0.0, 0.0]])) == pytest.approx(3600.0)
-    assert _displacement_scale(points, np.array([[0.0, 0.0, -0.035], [0.0, 0.0, 0.0]])) == pytest.approx(10.29,
-                                                                                                        rel=1e-3)
-    assert _displacement_scale(points, np.array([[0.0, 0.0, -0.037], [0.0, 0.0, 0.0]])) == 1.0
-    assert _displacement_scale(points, np.array([[0.6, 0.0, -1e-3], [0.0, 0.0, 0.0]])) == 1.0
-    assert _displacement_scale(points, np.zeros((2, 3))) == 1.0
-
-
-@pytest.mark.one_rank(reason="figure and patch geometry on small numpy arrays, drawn without a mesh")
 def test_bodies_picture_looks_at_the_largest_stress_and_spans_its_decades():
     """The camera of ``bodies.png`` is on the side of the largest stress (a quarter model's
     contact lies at its symmetry planes, x = y = 0 here, which a view from the positive
     octant would hide), and stresses spanning decades get a log colour scale."""
-    from contactqvi.contact.figures import _camera_direction, _stress_colour_range
+    from contactqvi.contact.figure_data import camera_direction, robust_scale
 
     centres = np.random.default_rng(1).uniform([0.0, 0.0, -1.0], [1.0, 1.0, 0.0], size=(500, 3))
     stress = 1e4 + 1e9 * np.exp(-50.0 * np.sum(centres**2, axis=1))  # peaks at the contact, (0, 0, 0)
-    direction = _camera_direction(centres, stress)
+    direction = camera_direction(centres, stress)
     assert np.allclose(np.linalg.norm(direction), 1.0) and np.all(np.sign(direction) == [-1.0, -1.0, 1.0])
     assert np.isclose(np.degrees(np.arcsin(direction[2])), 35.0)
-    (low, high), log_scale = _stress_colour_range(stress)
-    assert log_scale and high == stress.max() and np.isclose(low, 1e-4 * high)
-    assert _stress_colour_range(np.array([2.0, 3.0, 5.0])) == ((0.0, 5.0), False)  # within two decades: linear
+    scale = robust_scale("von Mises stress", stress, centres, "cells", stress_map=True)
+    assert scale.log and scale.high <= stress.max() and scale.largest == stress.max()
+    linear = robust_scale("von Mises stress", np.array([2.0, 3.0, 5.0]), np.zeros((3, 3)), "cells", stress_map=True)
+    assert not linear.log and linear.low == 0.0  # within two decades: linear from zero
 
 
 @pytest.mark.one_rank(reason="figure and patch geometry on small numpy arrays, drawn without a mesh")
@@ -265,48 +251,3 @@ def test_tributary_patches_of_triangles():
     # indicators raised there once, and the other rank waited in the collective write
     empty = TributaryPatches(points, np.zeros((0, 3), dtype=cells.dtype)).dataset({}, state, pair)
     assert empty.cells.shape == (0, 4) and len(empty.cell_data["is_in_contact"]) == 0
-
-
-@pytest.mark.one_rank(reason="figure and patch geometry on small numpy arrays, drawn without a mesh")
-def test_contact_state_panel_zooms_on_a_small_contact_zone():
-    """A contact zone of one cell in a 10 x 10 surface: the panel shows it with half its size
-    around it (clipped to the surface); a zone over the whole surface: no zoom."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from contactqvi.contact.figures import _zoom_to_contact
-    from contactqvi.contact.nodal import State
-
-    corners = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
-    plane = np.array([corners + [i, j] for i in range(10) for j in range(10)])
-    state = np.full(len(plane), State.NO_CONTACT)
-    state[0] = State.SLIDING
-    fig, ax = plt.subplots()
-    assert _zoom_to_contact(ax, plane, state)
-    assert ax.get_xlim() == (0.0, 1.5) and ax.get_ylim() == (0.0, 1.5)
-    assert not _zoom_to_contact(ax, plane, np.full(len(plane), State.STICKING))
-    plt.close(fig)
-
-
-@pytest.mark.one_rank(reason="figure geometry on small numpy arrays, drawn without a mesh")
-def test_contact_states_picture_unrolls_a_curved_surface():
-    """A quarter of a bore (radius 20 mm, 2 mm long, facets of 22.5 degrees) is drawn unrolled:
-    31.4 mm of arc by 2 mm along the axis, not its 28.3 mm chord; a flat surface keeps its plan
-    view in global axes."""
-    from contactqvi.contact.figures import _plan_view
-
-    theta = np.linspace(0.0, np.pi / 2, 5)
-    ring = np.array([[[0.02 * np.cos(t0), 0.02 * np.sin(t0), 0.0], [0.02 * np.cos(t1), 0.02 * np.sin(t1), 0.0],
-                      [0.02 * np.cos(t1), 0.02 * np.sin(t1), 0.002], [0.02 * np.cos(t0), 0.02 * np.sin(t0), 0.002]]
-                     for t0, t1 in zip(theta[:-1], theta[1:])])
-    plane, labels = _plan_view(ring)
-    assert np.ptp(plane[..., 0]) == pytest.approx(0.02 * np.pi / 2, rel=1e-9)
-    assert np.ptp(plane[..., 1]) == pytest.approx(0.002, rel=1e-9)
-    assert labels[0].startswith("arc length on radius 0.02")
-    flat = ring.copy()
-    flat[..., 2] = 0.0
-    flat[..., :2] = [[[0, 0], [1, 0], [1, 1], [0, 1]]]
-    plane, labels = _plan_view(flat)
-    assert labels == ["x1 [m]", "x2 [m]"]

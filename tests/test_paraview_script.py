@@ -18,7 +18,9 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 
-SCRIPT = pathlib.Path(__file__).resolve().parent.parent / "scripts" / "paraview" / "pv_views.py"
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+SCRIPT = ROOT / "scripts" / "paraview" / "pv_views.py"
+DATA = ROOT / "tests" / "data" / "pictures"
 
 
 @pytest.fixture(scope="module")
@@ -101,3 +103,64 @@ def test_a_surface_is_seen_along_its_normal_from_its_body(pv_views, normal):
     assert np.allclose(centre, x.mean(axis=0))
     if normal == (0.0, 0.0, 1.0):  # seen from +x3: x1 to the right, x2 up
         assert np.allclose(f1, [1, 0, 0]) and np.allclose(f2, [0, 1, 0])
+
+
+@pytest.mark.one_rank(reason="the deformed view's scale rule, serial arithmetic")
+def test_the_deformed_view_is_true_to_scale_at_finite_strain_and_where_bodies_touch(pv_views):
+    """The rubber pad (finite strain, 4 mm on a 40 mm pad) is drawn at true scale, not
+    "magnified x0.2"; a linear body is magnified only when nothing touches, never shrunk."""
+    import pv_body
+
+    assert pv_body.drawing_scale(4e-3, 0.04, finite=True, touching=True) == (1.0, "true scale (finite strain)")
+    assert pv_body.drawing_scale(1e-6, 0.04, finite=False, touching=True)[0] == 1.0
+    scale, words = pv_body.drawing_scale(1e-6, 0.04, finite=False, touching=False)
+    assert scale == 2000.0 and words == "displacement magnified \u00d72000 (nothing touches)"
+    assert pv_body.drawing_scale(4e-3, 0.04, finite=False, touching=False) == (1.0, "true scale")
+
+
+@pytest.mark.one_rank(reason="colour bar geometry, serial arithmetic")
+def test_colour_bar_titles_fit_in_the_image(pv_views):
+    import pv_common
+
+    titles = ("nominal contact pressure (MPa)", "Cauchy / nominal contact pressure (MPa)", "von Mises stress (MPa)")
+    for title in titles:
+        left = pv_common.bar_left(title, 0.86)
+        assert left * pv_common.IMAGE_SIZE[0] + 0.55 * pv_common.FONT * len(title) < pv_common.IMAGE_SIZE[0]
+    assert pv_common.bar_left("contact state", 0.72) == 0.72
+
+
+@pytest.mark.parametrize("name", ["rubber_pad", "hertz_bodies", "seal"])
+def test_paraview_names_the_pressure_as_contactqvi_does(pv_views, name):
+    """ParaView's name of the contact pressure, read from the summary's case, is the one the
+    problem gives (contactqvi.contact.surface.pressure_label): Cauchy for the rubber pad
+    (neo-Hookean, searched until settled), nominal for linear Hertz and for the seal (neo-Hookean,
+    searched once: reference areas)."""
+    from contactqvi.case import load_case
+    from contactqvi.contact.surface import pressure_label
+    from contactqvi.runner import build_problem
+    from shipped_runs import shipped_case
+
+    import pv_common
+
+    case = load_case(DATA / "seal_half_nu0.45.toml") if name == "seal" else shipped_case(name)
+    with build_problem(case, MPI.COMM_WORLD) as problem:
+        label = pressure_label(problem)
+    assert label == pv_common.pressure_name(case.to_dict())
+    assert label == {"rubber_pad": "Cauchy", "hertz_bodies": "nominal", "seal": "nominal"}[name] + " contact pressure"
+    described = pv_views.describe(ROOT / "nothing", -1)
+    assert described["pressure"] == "nominal contact pressure" and described["finite_strain"] is False
+
+
+@pytest.mark.one_rank(reason="colour ranges of numpy arrays, serial arithmetic")
+def test_paraview_colours_the_pressure_as_the_pictures_do(pv_views):
+    """The traction view's colours end where bodies.png's do: corner nodes do not set them."""
+    from contactqvi.contact.figure_data import robust_scale
+
+    import pv_common
+
+    rng = np.random.default_rng(5)
+    pressure = np.concatenate([np.zeros(20), rng.uniform(62e6, 123e6, 61), [193e6, 215e6, 300e6, 314e6]])
+    top = pv_common.robust_top(pressure)
+    assert top < 193e6
+    assert top == pytest.approx(robust_scale("p", pressure[pressure > 0], np.zeros((65, 3)), "nodes").high, rel=1e-14)
+    assert pv_common.robust_top(np.zeros(4)) == 0.0

@@ -272,8 +272,7 @@ def write_contact_results(
         summary["plot"] = plot_contact_states(writer.out / "contact_states.png", surface)
         if summary["plot"]:
             files.append("contact_states.png")
-        touching = any(i.coupling is not None for i in problem.interfaces)
-        if plot_deformed_bodies(writer.out / "bodies.png", displacement, von_mises, touching, surface):
+        if plot_deformed_bodies(writer.out / "bodies.png", displacement, von_mises, surface):
             files.append("bodies.png")
     summary["files"] = files
     return summary

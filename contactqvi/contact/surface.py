@@ -41,9 +41,12 @@ __all__ = [
     "ContactSurface",
     "ContactSurfaceFields",
     "FRICTIONLESS_STATE_NAMES",
+    "PRESSURE_DEFINITIONS",
     "TributaryPatches",
     "contact_facet_areas",
     "labelled",
+    "pressure_kinds",
+    "pressure_label",
     "state_names",
     "vertex_blocks",
 ]
@@ -74,6 +77,31 @@ def state_names(frictional: bool) -> dict[State, str]:
     :data:`STATE_NAMES` for a law with friction (``law.frictional``), else
     :data:`FRICTIONLESS_STATE_NAMES`."""
     return STATE_NAMES if frictional else FRICTIONLESS_STATE_NAMES
+
+
+#: What the contact pressure (a node's normal force over its contact area) is, by the area it
+#: is divided by: its name in figures, ``summary.json`` and ParaView, and its definition.
+PRESSURE_DEFINITIONS = {
+    "Cauchy": "normal force per deformed area: the normal Cauchy traction on the deformed surface",
+    "nominal": "normal force per reference area: the nominal (first Piola) normal traction",
+}
+
+
+def pressure_kinds(problem: ContactProblem) -> list[str]:
+    """The kind (a key of :data:`PRESSURE_DEFINITIONS`) of each contact pair's pressure:
+    ``Cauchy`` when its nodal areas are those of the deformed surface, i.e. a hyperelastic
+    body (finite strain) and the pair searched in the current configuration each step;
+    ``nominal`` at small strain (where the two agree to the strain's order) or for a pair
+    searched once (areas of the reference configuration)."""
+    finite_strain = problem.hyperelastic is not None
+    return ["Cauchy" if finite_strain and i.searched_each_step else "nominal" for i in problem.interfaces]
+
+
+def pressure_label(problem: ContactProblem) -> str:
+    """The contact pressure's name: ``Cauchy contact pressure`` or ``nominal contact pressure``
+    (:func:`pressure_kinds`); ``Cauchy / nominal contact pressure`` when the pairs differ."""
+    kinds = pressure_kinds(problem)
+    return " / ".join(k for k in PRESSURE_DEFINITIONS if k in kinds) + " contact pressure"
 
 
 #: States counted as sticking and as sliding in areas and indicators; all others are open.
@@ -346,6 +374,11 @@ class ContactSurface:
     def n_nodes(self) -> int:
         """Global number of surface nodes."""
         return self.mesh.geometry.index_map().size_global
+
+    @property
+    def node_states(self) -> np.ndarray:
+        """:class:`State` of each owned contact node (``problem.contact_blk``) at the last :meth:`update`."""
+        return self._table.array.reshape(-1, _TABLE_BS)[self.problem.contact_blk, _COLUMNS["state"]].astype(np.int32)
 
     def _fill_table(self, u: PETSc.Vec, result: SCDNewtonResult) -> np.ndarray:
         """Per node of V (owned and ghost): state, contact flag, pressure, friction traction,

@@ -33,31 +33,52 @@ def obstacle_source(obstacle, translation, centre, extent):
                         Point2=list(corner + 1.4 * extent * e2))  # fmt: skip
 
 
+def drawing_scale(u_max, extent, finite, touching):
+    """Factor on the displacement in the deformed view, and its words. True scale for a
+    hyperelastic body (``finite`` strain) and wherever bodies touch: magnified, touching bodies
+    would be drawn apart or overlapping (contactqvi's bodies.png magnifies a linear body as
+    far as they stay touching, which needs the gaps at rest that the files do not hold);
+    else the largest displacement ``u_max`` magnified to about 8 % of the body's ``extent``
+    (1, 2 or 5 times a power of ten), never shrunk."""
+    if finite:
+        return 1.0, "true scale (finite strain)"
+    if touching:
+        return 1.0, "true scale (bodies touch: magnified they would part or overlap)"
+    raw = 0.08 * extent / u_max if u_max > 0 else 0.0
+    if raw < 2.0:
+        return 1.0, "true scale"
+    exponent = math.floor(math.log10(raw))
+    scale = next(m for m in (5, 2, 1) if m <= raw / 10**exponent) * 10**exponent
+    return float(scale), f"displacement magnified \u00d7{scale:g} (nothing touches)"
+
+
+def _colour(grid, u):
+    """(association, label, unit, values shown, caption) of the body's colour: von Mises or |u|."""
+    von_mises = field(grid, "von_mises", SOURCES["volume"])
+    if von_mises is not None:
+        association, values, _ = von_mises
+        label, _, unit, factor = FIELDS["von_mises"][2:]
+        where = "cell-wise" if association == "CELLS" else "nodal"
+        return association, label, unit, values * factor, f"colour: von Mises stress ({where})"
+    shown = np.linalg.norm(u, axis=1) * FIELDS["displacement"][5]
+    return "POINTS", "displacement magnitude", FIELDS["displacement"][4], shown, "colour: |u| (no von Mises stress)"
+
+
 def deformed_view(result, path):
-    """The body warped by the displacement, coloured by von Mises (or |u|), with the obstacle if described."""
+    """The body warped by the displacement (true scale at finite strain or where bodies
+    touch, :func:`drawing_scale`), coloured by von Mises (or |u|), with the obstacles if described."""
     from paraview import simple
 
     grid, case = result["volume"], result["case"]
     _, u, u_name = field(grid, "displacement", SOURCES["volume"])
-    von_mises = field(grid, "von_mises", SOURCES["volume"])
     u = u.reshape(len(u), -1)
     u_max = float(np.linalg.norm(u, axis=1).max())
     b = grid.GetBounds()
     extent = max(b[1] - b[0], b[3] - b[2], b[5] - b[4])
     centre = [(b[0] + b[1]) / 2, (b[2] + b[3]) / 2, (b[4] + b[5]) / 2]
-    scale = 1.0
-    if u_max > 0:  # 1, 2 or 5 times a power of ten: the largest displacement shown as about 8 % of the body
-        raw = 0.08 * extent / u_max
-        exponent = math.floor(math.log10(raw))
-        scale = next(m for m in (5, 2, 1) if m <= raw / 10**exponent) * 10**exponent
-    if von_mises is not None:
-        association, values, _ = von_mises
-        label, _, unit, factor = FIELDS["von_mises"][2:]
-        where = "cell-wise" if association == "CELLS" else "nodal"
-        shown, what = values * factor, f"colour: von Mises stress ({where})"
-    else:
-        association, label, unit = "POINTS", "displacement magnitude", FIELDS["displacement"][4]
-        shown, what = np.linalg.norm(u, axis=1) * FIELDS["displacement"][5], "colour: |u| (no von Mises stress)"
+    _, state, _ = field(result["surface"], "contact_state", SOURCES["surface"])
+    scale, drawn = drawing_scale(u_max, extent, case["finite_strain"], bool(np.any(np.rint(state) != 0)))
+    association, label, unit, shown, what = _colour(grid, u)
     add_array(grid, association, "shown", shown)
     view = new_view()
     body = producer(grid)
@@ -67,19 +88,20 @@ def deformed_view(result, path):
     display.Representation, display.EdgeColor = "Surface With Edges", [0.25, 0.25, 0.25]
     simple.ColorBy(display, (association, "shown"))
     lut = simple.GetColorTransferFunction("shown")
-    lut.ApplyPreset("Turbo" if von_mises is not None else "Viridis (matplotlib)", True)
+    lut.ApplyPreset("Turbo" if "von Mises" in label else "Viridis (matplotlib)", True)
     lut.RescaleTransferFunction(0.0, float(shown.max()) or 1.0)
     colour_bar(view, lut, f"{label} ({unit})", shown.max(), position=(0.85, 0.2))
-    captions = [f"displacement magnified \u00d7{scale:g} (largest {u_max * 1e3:.3g} mm); {what}; grey box: undeformed"]
-    if case.get("obstacle"):
-        obstacle = simple.Show(obstacle_source(case["obstacle"], case.get("translation"), centre, extent), view)
-        obstacle.DiffuseColor = obstacle.AmbientColor = [0.55, 0.45, 0.35]
-        obstacle.Opacity = 0.5
-        captions.append(f"brown: the rigid obstacle ({case['obstacle']['type']}) at this step")
+    captions = [f"{drawn} (largest displacement {u_max * 1e3:.3g} mm); {what}; grey box: undeformed"]
+    translation = scale * np.asarray(case.get("translation") or [0.0, 0.0, 0.0], dtype=float)
+    for obstacle in case.get("obstacles") or []:
+        shape = simple.Show(obstacle_source(obstacle, list(translation), centre, extent), view)
+        shape.DiffuseColor = shape.AmbientColor = [0.55, 0.45, 0.35]
+        shape.Opacity = 0.5
+        captions.append(f"brown: the rigid obstacle ({obstacle['type']}) at this step")
     view.CameraFocalPoint = centre
     view.CameraPosition = [centre[0] - 1.6 * extent, centre[1] - 2.4 * extent, centre[2] + 1.5 * extent]
     view.CameraViewUp = [0.0, 0.0, 1.0]
     simple.ResetCamera(view)
-    view.CameraPosition = [c + 0.8 * (p - c) for p, c in zip(view.CameraPosition, centre)]
+    view.CameraPosition = [c + 0.95 * (p - c) for p, c in zip(view.CameraPosition, centre)]  # clear of the bar
     add_title(view, f"Deformed body ({case['label']})", "\n".join(captions))
     save(view, path)

@@ -42,6 +42,51 @@ IMAGE_SIZE = (1600, 900)
 FONT = 22
 
 
+#: The contact pressure's kinds, as contactqvi.contact.surface.PRESSURE_DEFINITIONS names them.
+PRESSURE_KINDS = ("Cauchy", "nominal")
+#: Searches in the current configuration each step (contactqvi.load_steps.SEARCHES).
+SEARCHED_EACH_STEP = ("every_step", "until_settled")
+
+
+def finite_strain(case):
+    """Whether the summary's ``case`` has a hyperelastic body (a ``model`` in a material)."""
+    materials = [case.get("material") or {}] + [body.get("material") or {} for body in case.get("bodies") or []]
+    return any(material.get("model") for material in materials)
+
+
+def pressure_name(case):
+    """The contact pressure's name, as contactqvi.contact.surface.pressure_label gives it:
+    Cauchy for a pair searched each step of a hyperelastic body, nominal otherwise (small
+    strain, or searched once); both joined when the pairs differ. A result without a case
+    (the paper's demo) is linear: nominal."""
+    pairs = list(case.get("contacts") or []) + ([case["contact"]] if case.get("contact") else [])
+    kinds = {"Cauchy" if finite_strain(case) and pair.get("search", "every_step" if "master" in pair else "once")
+             in SEARCHED_EACH_STEP else "nominal" for pair in pairs} or {"nominal"}
+    return " / ".join(kind for kind in PRESSURE_KINDS if kind in kinds) + " contact pressure"
+
+
+#: Tukey's fence of the pressure's colours, as contactqvi.contact.figure_data.FENCE.
+FENCE = 1.5
+
+
+def robust_top(values):
+    """The top of a contact pressure's colours as contactqvi's bodies.png takes it: the 99th
+    percentile of the positive (pressing) ``values``, at most FENCE interquartile ranges above
+    the upper quartile, so that a few corner nodes at symmetry planes do not set it; 0 for none."""
+    pressing = np.asarray(values)[np.asarray(values) > 0.0]
+    if len(pressing) == 0:
+        return 0.0
+    lower, upper, last = np.percentile(pressing, [25.0, 75.0, 99.0])
+    return float(min(last, upper + FENCE * (upper - lower)))
+
+
+def bar_left(title, position):
+    """The left edge (fraction of the image) of a vertical colour bar at ``position`` moved left
+    as far as its horizontal ``title`` (FONT, bold) needs to fit in the image."""
+    width = 0.62 * FONT * len(title) + 24  # pixels: a generous average glyph width
+    return min(position, 1.0 - width / IMAGE_SIZE[0])
+
+
 class ResultError(Exception):
     """A file, field or step this script needs is not in the result directory."""
 
@@ -61,7 +106,8 @@ def read_grid(path, step):
     if not os.path.exists(path):
         raise ResultError(f"{path}: not found (SOURCES in {os.path.basename(__file__)})")
     reader = simple.ADIOS2VTXReader(FileName=path)
-    times = list(getattr(reader, "TimestepValues", None) or [0.0])
+    times = getattr(reader, "TimestepValues", None) or [0.0]
+    times = [times] if isinstance(times, float) else list(times)  # one step: ParaView gives a number
     index = step - 1 if step > 0 else step
     if step == 0 or not -len(times) <= index < len(times):
         raise ResultError(f"{path}: no step {step}; it holds {len(times)} (--step 1 ... {len(times)})")
@@ -184,7 +230,8 @@ def colour_bar(view, lut, title, largest=None, position=(0.86, 0.2), length=0.6)
 
     bar = simple.GetScalarBar(lut, view)
     bar.Title, bar.ComponentTitle, bar.Orientation = title, "", "Vertical"
-    bar.WindowLocation, bar.Position, bar.ScalarBarLength = "Any Location", list(position), length
+    bar.WindowLocation, bar.ScalarBarLength = "Any Location", length
+    bar.Position = [bar_left(title, position[0]), position[1]]  # the title never cut off at the right
     bar.TitleColor = bar.LabelColor = [0.0, 0.0, 0.0]
     bar.TitleFontSize, bar.LabelFontSize, bar.TitleBold, bar.HorizontalTitle = FONT, FONT - 2, 1, 1
     if largest is not None:  # about three digits

@@ -9,6 +9,7 @@ import numpy as np
 from pv_common import (
     ALWAYS_IN_LEGEND,
     CONTACT_STATES,
+    FENCE,
     FIELDS,
     FONT,
     IMAGE_SIZE,
@@ -16,6 +17,7 @@ from pv_common import (
     ResultError,
     add_array,
     add_title,
+    bar_left,
     cell_areas,
     colour_bar,
     field,
@@ -24,6 +26,7 @@ from pv_common import (
     patch_nodes,
     points_of,
     producer,
+    robust_top,
     save,
 )
 
@@ -70,7 +73,11 @@ def traction_view(result, path):
     add_array(grid, p_assoc, "pressure_shown", pressure * p_factor)
     traction = traction.reshape(len(traction), -1) * t_factor
     traction = np.column_stack([traction, np.zeros((len(traction), 3 - traction.shape[1]))])
-    t_max, p_max = float(np.linalg.norm(traction, axis=1).max()), float(pressure.max()) * p_factor
+    t_max = float(np.linalg.norm(traction, axis=1).max())
+    ids = patch_nodes(grid) if p_assoc == "POINTS" else np.arange(len(pressure))
+    largest = int(ids[np.argmax(pressure[ids])])
+    p_top = robust_top(pressure[ids]) * p_factor
+    where = points_of(grid)[largest] if p_assoc == "POINTS" else None
     view = new_view()
     display = simple.Show(producer(grid), view)
     display.Representation, display.EdgeColor = "Surface With Edges", [0.6, 0.6, 0.6]
@@ -79,15 +86,15 @@ def traction_view(result, path):
     lut = simple.GetColorTransferFunction("pressure_shown")
     lut.ApplyPreset("Blues", True)
     lut.InvertTransferFunction()  # white: no pressure
-    lut.RescaleTransferFunction(0.0, p_max or 1.0)
-    colour_bar(view, lut, f"contact pressure ({p_unit})", p_max)
-    side = plan_view(view, grid, frame, box=(0.11, 0.80, 0.16, 0.86))
-    if t_max > 0 and t_assoc == "POINTS":
+    lut.RescaleTransferFunction(0.0, p_top or 1.0)
+    title = f"{result['case']['pressure']} ({p_unit})"
+    colour_bar(view, lut, title, p_top)
+    side = plan_view(view, grid, frame, box=(0.11, bar_left(title, 0.86) - 0.04, 0.16, 0.86))
+    if t_max > 1e-9 * (p_top or 1.0) and t_assoc == "POINTS":  # not a frictionless pair's round-off
         from vtkmodules.vtkCommonCore import vtkPoints
         from vtkmodules.vtkCommonDataModel import vtkPolyData
         from vtkmodules.util.numpy_support import numpy_to_vtk
 
-        ids = patch_nodes(grid)
         nodes = vtkPolyData()
         nodes.SetPoints(vtkPoints())
         nodes.GetPoints().SetData(numpy_to_vtk(np.ascontiguousarray(points_of(grid)[ids]), deep=True))
@@ -100,9 +107,12 @@ def traction_view(result, path):
         arrows.ColorArrayName, arrows.DiffuseColor = ["POINTS", ""], [0.85, 0.1, 0.1]
         arrows.AmbientColor = arrows.DiffuseColor
         arrows.Translation = list(0.5 * spacing * frame[3])  # towards the camera, above the surface
-    add_title(view, f"Contact pressure and friction traction ({result['case']['label']})",
+    add_title(view, f"{result['case']['pressure'].capitalize()} and friction traction ({result['case']['label']})",
               f"contact surface seen {side}, through the body; red arrows: friction traction on the body, "
-              f"length proportional to its magnitude (largest {t_max:.3g} {t_unit})")  # fmt: skip
+              f"length proportional to its magnitude (largest {t_max:.3g} {t_unit})\n"
+              f"colours up to the 99th percentile of the pressing nodes' pressure within {FENCE:g} interquartile "
+              f"ranges ({p_top:.3g} {p_unit}); largest {pressure[largest] * p_factor:.3g} {p_unit}"
+              + ("" if where is None else " at (" + ", ".join(f"{round(1e3 * c, 4) + 0.0:g}" for c in where) + ") mm"))
     save(view, path)
 
 

@@ -8,11 +8,13 @@ installs ParaView from Debian and runs it on a fresh result::
 
 Writes three PNGs of one load step (``--step N``: the N-th written step; default the last)
 to ``--out`` (default: the result directory): ``paraview_deformed.png``, the body warped
-by the displacement (magnified) coloured by the von Mises stress (or |u|), with the rigid
-obstacle at that step if ``summary.json`` describes one; ``paraview_contact_traction.png``,
+by the displacement coloured by the von Mises stress (or |u|), with the rigid obstacles at
+that step if ``summary.json`` describes them, at true scale for a hyperelastic body and
+wherever bodies touch (magnified otherwise, the factor stated); ``paraview_contact_traction.png``,
 the contact surface seen along its normal from the body's side, coloured by the contact
-pressure, with friction-traction arrows; ``paraview_stick_slip.png``, the contact states
-of the tributary patches (one cell per node) with their areas.
+pressure named as contactqvi names it (Cauchy or nominal), with friction-traction arrows;
+``paraview_stick_slip.png``, the contact states of the tributary patches (one cell per
+node) with their areas.
 
 Every file and field the script reads is listed in ``SOURCES`` and ``FIELDS``; a
 missing file or field stops it with a message that names it. Files are read with
@@ -35,6 +37,8 @@ from pv_common import (  # noqa: E402
     SOURCES,
     ResultError,
     field_matches,
+    finite_strain,
+    pressure_name,
     read_grid,
     surface_frame,
 )
@@ -50,7 +54,8 @@ VIEWS = {
 
 
 def describe(result_dir, step):
-    """From ``summary.json``: a label, the obstacle (if the result has one) and its translation at ``step``."""
+    """From ``summary.json``: a label, the obstacles (if the result has any) and their translation
+    at ``step``, whether a body is hyperelastic and the contact pressure's name (:func:`pressure_name`)."""
     try:
         with open(os.path.join(result_dir, "summary.json")) as f:
             summary = json.load(f)
@@ -65,7 +70,11 @@ def describe(result_dir, step):
     entry = written[index] if step != 0 and -len(written) <= index < len(written) else {}
     if steps:
         label += f", step {entry.get('step', '?')} of {len(steps)}"
-    return {"label": label, "obstacle": case.get("obstacle"), "translation": entry.get("translation")}
+    obstacles = [case["obstacle"]] if case.get("obstacle") else []
+    obstacles += [pair["obstacle"] for pair in case.get("contacts") or [] if pair.get("obstacle")]
+    return {"label": label, "obstacle": case.get("obstacle"), "obstacles": obstacles,
+            "translation": entry.get("translation"), "finite_strain": finite_strain(case),
+            "pressure": pressure_name(case)}
 
 
 def main(argv=None):
