@@ -1,0 +1,92 @@
+"""The frictional rubber seal of issue 45: how far the quasi-static path goes, over nu and mu.
+
+A neo-Hookean strip (E = 5 MPa; a quarter cross-section 10 x 5 mm, a plane-strain slice 2 mm
+deep) is squeezed 30 % by a rigid plate with Coulomb friction in 20 steps
+(``benchmarks/data/seal/seal_half.toml``, the new user's case). For each Poisson's ratio
+(``--poisson``), friction coefficient (``--friction``) and mesh (``--meshes``) the case runs in
+this process with default solver settings, ``max_cuts`` raised to ``--max-cuts`` where asked
+(a step that fails is halved up to that many times in a row, so the last converged squeeze
+brackets the end of the path to 0.075 mm / 2^max_cuts); the table gives the squeeze reached
+(of the strip's height), the run's status and failure, the Newton steps per converged load
+step and the time. A failed run is a row. docs/finite_strain.md, Sect. 11, reads the table.
+
+    .venv/bin/python benchmarks/seal_squeeze.py --poisson 0.3 0.4 0.45 0.49 --friction 0.2 0.3 0.4 0.5
+    .venv/bin/python benchmarks/seal_squeeze.py --poisson 0.45 --friction 0.4 --max-cuts 14 --table seal_path_end
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import time
+import tomllib
+
+from mpi4py import MPI
+
+from contactqvi.case import parse_case
+from contactqvi.runner import run_case
+from contactqvi.tables import write_table
+
+HERE = pathlib.Path(__file__).resolve().parent
+CASE = HERE / "data" / "seal" / "seal_half.toml"
+#: Mesh name -> file in benchmarks/data/seal (element size at the contact group).
+MESHES = {"h1.0": "seal_half_h1.0.msh", "h0.5": "seal_half_h0.5.msh"}
+#: Half the strip's height (m): the quarter model's plate travel over it is the squeeze.
+HALF_HEIGHT = 5e-3
+
+
+def run(poisson: float, friction: float, mesh: str, max_cuts: int | None, work: pathlib.Path) -> dict:
+    """One run of the seal case; its row of the table."""
+    data = tomllib.loads(CASE.read_text())
+    data["mesh"]["file"] = MESHES[mesh]
+    data["material"]["poisson"] = poisson
+    data["contact"]["friction"] = friction
+    if max_cuts is not None:
+        data.setdefault("solver", {})["max_cuts"] = max_cuts
+    case = parse_case(data, CASE.parent)
+    name = f"{mesh}_nu{poisson:g}_mu{friction:g}" + ("" if max_cuts is None else f"_cuts{max_cuts}")
+    start = time.perf_counter()
+    summary, code = run_case(case, work / name, MPI.COMM_WORLD, plot=False)
+    seconds = time.perf_counter() - start
+    converged = [step for step in summary["steps"] if step["converged"]]
+    squeeze = -converged[-1]["translation"][2] / HALF_HEIGHT if converged else 0.0
+    newton = [step["iterations"] for step in converged]
+    return {"mesh": mesh, "poisson": poisson, "friction": friction, "max_cuts": max_cuts, "exit": code,
+            "status": summary["status"], "failure": summary.get("failure"), "squeeze": squeeze,
+            "newton_per_step": newton, "newton_total": sum(step["iterations"] for step in summary["steps"]),
+            "seconds": seconds}
+
+
+def markdown(rows: list[dict]) -> str:
+    """The table: one row per run."""
+    lines = ["| mesh | nu | mu | max_cuts | squeeze reached | status | Newton per converged step (mean, max) "
+             "| Newton in all | s |", "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        steps = r["newton_per_step"]
+        mean = f"{sum(steps) / len(steps):.1f}, {max(steps)}" if steps else "-"
+        cuts = "default" if r["max_cuts"] is None else r["max_cuts"]
+        lines.append(f"| {r['mesh']} | {r['poisson']:g} | {r['friction']:g} | {cuts} | {100 * r['squeeze']:.4f} % "
+                     f"| {r['status']} | {mean} | {r['newton_total']} | {r['seconds']:.0f} |")
+    return "\n".join(lines) + "\n"
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser.add_argument("--poisson", type=float, nargs="+", default=[0.3, 0.4, 0.45, 0.49])
+    parser.add_argument("--friction", type=float, nargs="+", default=[0.2, 0.3, 0.4, 0.5])
+    parser.add_argument("--meshes", nargs="+", choices=tuple(MESHES), default=["h1.0"])
+    parser.add_argument("--max-cuts", type=int, default=None, help="[solver] max_cuts (default: the solver's)")
+    parser.add_argument("--work", default="/tmp/seal_squeeze", help="where the runs write their results")
+    parser.add_argument("--table", default="seal_squeeze", help="name of the table in benchmarks/results")
+    args = parser.parse_args()
+    work = pathlib.Path(args.work)
+    rows = [run(nu, mu, mesh, args.max_cuts, work)
+            for mesh in args.meshes for nu in args.poisson for mu in args.friction]
+    write_table(MPI.COMM_WORLD, HERE / "results" / args.table, {"case": str(CASE.relative_to(HERE.parent)),
+                                                                "runs": rows}, markdown(rows))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
