@@ -63,6 +63,24 @@ def test_a_faceted_press_fit_states_its_pressure_error_in_the_summary(mpi_tmp_pa
     assert abs(estimate / real - 1.0) < 0.1, (estimate, real)
     logged = [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
     assert logged == ([r["message"] for r in on_disk["warnings"]] if MPI.COMM_WORLD.rank == 0 else [])
+    _check_pressures(summary["steps"][0], slave, abs(force[0]) / (B * T))
+
+
+def _check_pressures(step: dict, slave: str, mean: float) -> None:
+    """The same runs' pressure fields (issue 46, item 3): the nodal maximum (314 MPa with the hub
+    the slave, at a corner of the slice: a symmetry plane and a flat face; 509 MPa with the shaft)
+    is more than twice the facet maximum ``max_contact_pressure`` (132 and 215 MPa) and lies on
+    the slave surface; with the hub the robust range (5-95 %) holds the mean pressure (82 MPa)
+    and leaves the corners out (61-123 MPa)."""
+    at = step["max_nodal_contact_pressure_at"]
+    radius = B if slave == "hub" else B + DELTA
+    assert abs((at[0] ** 2 + at[1] ** 2) ** 0.5 - radius) < 1e-9
+    assert step["max_nodal_contact_pressure"] > 2.0 * step["max_contact_pressure"] > 2.0 * mean
+    assert step["contact_pressure_measure"] == "nominal"
+    if slave == "hub":
+        assert min(abs(at[0]), abs(at[1])) < 1e-9 and min(abs(at[2]), abs(at[2] - T)) < 1e-9
+        low, high = step["contact_pressure_range"]
+        assert low < mean < high < 1.6 * mean
 
 
 def test_a_warning_is_recorded_by_every_active_recorder_and_logged_on_rank_0(caplog):

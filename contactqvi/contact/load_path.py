@@ -411,7 +411,8 @@ def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: Path
     u.array.reshape(-1, 3)[problem.contact_blk[touching], :2] = 0.0
 
 
-def contact_resultants(problem: ContactProblem, result: SCDNewtonResult) -> dict[str, typing.Any]:
+def contact_resultants(problem: ContactProblem, result: SCDNewtonResult,
+                       displacement: fem.Function | None = None) -> dict[str, typing.Any]:
     """Contact forces (N, global components) and contact, sticking and sliding areas (m^2) of a solved step.
 
     ``pair_forces``: per contact pair, the force of the master side (obstacle or body) on
@@ -419,7 +420,8 @@ def contact_resultants(problem: ContactProblem, result: SCDNewtonResult) -> dict
     master sides on the slave bodies; ``obstacle_force``: the part of it from rigid
     obstacles (forces between bodies cancel in the global balance, so this is the one the
     equilibrium of all bodies together has). ``contact_area``: the area of the slave
-    facets in contact (:func:`~contactqvi.contact.surface.contact_facet_areas`);
+    facets in contact (:func:`~contactqvi.contact.surface.contact_facet_areas`, the facets'
+    normals those of the surface displaced by ``displacement`` if given: at finite strain);
     ``sticking_area`` and ``sliding_area`` split it by the states of the facets' nodes and
     add up to it.
     """
@@ -433,7 +435,7 @@ def contact_resultants(problem: ContactProblem, result: SCDNewtonResult) -> dict
         total += force
         if interface.obstacle is not None:
             obstacles += force
-    sticking, sliding = problem.comm.allreduce(contact_facet_areas(problem, result.states), op=MPI.SUM)
+    sticking, sliding = problem.comm.allreduce(contact_facet_areas(problem, result.states, displacement), op=MPI.SUM)
     return {
         "contact_force": total.tolist(),
         "obstacle_force": obstacles.tolist(),

@@ -27,9 +27,12 @@ the groups prescribing it, shared equally, :func:`~contactqvi.postprocess.reacti
 so it does not depend on the order of the groups), applied force (N) and the relative
 equilibrium error of their sum with the rigid obstacles' forces, each body's force
 balance (several bodies), contact/sticking/sliding areas (m^2, the slave facets by the
-share of their nodes in each state, :func:`~contactqvi.contact.surface.contact_facet_areas`),
-node counts per state (named for each pair's law), the largest contact pressure and von
-Mises stress (Pa), the global l2 norm of u~ (m; the number demos print to compare runs).
+share of their nodes in each state, projected on the contact plane,
+:func:`~contactqvi.contact.surface.contact_facet_areas`; at finite strain also on the deformed
+surface), node counts per state (named for each pair's law), the contact pressure's facet and
+nodal maxima, robust range and measure (:func:`~contactqvi.contact.surface.pressure_summary`),
+the largest von Mises stress (Pa), the global l2 norm of u~ (m; the number demos print to
+compare runs).
 """
 
 from __future__ import annotations
@@ -52,7 +55,8 @@ from contactqvi.contact.load_path import contact_resultants
 from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult
-from contactqvi.contact.surface import STATE_NAMES, UNITS, ContactSurface, labelled, state_names
+from contactqvi.contact.surface import (STATE_NAMES, UNITS, ContactSurface, contact_facet_areas, labelled,
+                                        pressure_summary, state_names)
 from contactqvi.paraview import MeshPiece, VTXDatasetWriter
 from contactqvi.postprocess import StressFields, applied_force, reaction_forces
 from contactqvi.records import warn
@@ -92,12 +96,12 @@ def contact_summary(
     reactions = reaction_forces(displacement, problem.body, problem.load_factor, problem.dirichlet_dofs_loc,
                                 problem.nodal_contact_forces(result.normal_force, result.friction_force))
     applied = applied_force(problem.V.mesh, problem.body, problem.load_factor, displacement)
-    resultants = contact_resultants(problem, result)
+    finite_strain = problem.hyperelastic is not None
+    resultants = contact_resultants(problem, result, displacement if finite_strain else None)
     obstacle_force = np.asarray(resultants["obstacle_force"])  # forces between bodies cancel in the sum
     total = sum(reactions.values(), np.zeros(3)) + obstacle_force + applied
     scale = max([np.linalg.norm(applied), np.linalg.norm(obstacle_force)]
                 + [np.linalg.norm(r) for r in reactions.values()])
-    pressure = result.normal_force / problem.contact_area
     summary = {
         "contact_force": resultants["contact_force"],
         "pair_forces": resultants["pair_forces"],
@@ -108,9 +112,12 @@ def contact_summary(
         "sticking_area": resultants["sticking_area"],
         "sliding_area": resultants["sliding_area"],
         "state_counts": _state_counts(problem, result.states),
-        "max_contact_pressure": comm.allreduce(float(pressure.max(initial=0.0)), op=MPI.MAX),
+        **pressure_summary(problem, result),
         "displacement_norm": displacement.x.petsc_vec.norm(),
     }
+    if finite_strain:
+        summary["deformed_contact_area"] = comm.allreduce(
+            float(contact_facet_areas(problem, result.states, displacement, deformed=True).sum()), op=MPI.SUM)
     if problem.node_body is not None:
         summary["body_equilibrium_errors"] = _body_equilibrium(problem, reactions, resultants["pair_forces"],
                                                                displacement)
