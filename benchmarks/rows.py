@@ -37,8 +37,9 @@ def failed(row: dict[str, typing.Any]) -> bool:
 
 
 def read_table(path: pathlib.Path) -> dict[str, typing.Any]:
-    """The JSON table ``path`` as an earlier run wrote it; ``{}`` if there is none or it cannot be
-    read (a truncated or hand-edited file: said on stderr, and the new run writes a new one)."""
+    """The JSON object ``path`` as an earlier run wrote it (a table of ``rows``, a run's summary or
+    result); ``{}`` if there is none or it cannot be read (a truncated or hand-edited file: said on
+    stderr, and the new run writes a new one)."""
     if not path.is_file():
         return {}
     try:

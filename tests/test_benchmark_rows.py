@@ -81,3 +81,16 @@ def test_an_unreadable_table_is_an_empty_one(tmp_path, capsys):
     assert "peers_real.json: not read" in capsys.readouterr().err
     rows.write_text(path, "{\"rows\": []}\n")
     assert rows.read_table(path) == {"rows": []} and sorted(p.name for p in tmp_path.iterdir()) == [path.name]
+
+
+def test_weak_scaling_shows_a_failed_run_with_its_status_and_time():
+    """benchmarks/weak_scaling.py: a run that exited non-zero is a row with its status and wall
+    time in the table, and the projection, which needs the 1-rank run, is left out instead of
+    stopping the script."""
+    import weak_scaling
+
+    failed = rows.failed_row("failed: exit 137", 1234.5, case="d1/L1", ranks=1, lev=6, exit_code=137,
+                             wall_s=1234.5, commit="abc")
+    text = weak_scaling.markdown({"machine": {"cores": 2}, "rows": [failed]})
+    assert "| 1 | 6 | failed: exit 137 after 1234 s |" in text
+    assert weak_scaling.projection([failed]) == {}
