@@ -213,8 +213,10 @@ class _StepRecorder:
                  checkpoint: Checkpoint | None, stop: threading.Event, warnings: Recorder):
         self.problem, self._stop = problem, stop
         self.summary = _start_summary(case, problem, checkpoint)
-        # the summary's warnings are the run's (a restart's after the earlier run's), recorded as they come
-        warnings.records[:0] = self.summary.get("warnings", [])
+        # the summary's warnings are the run's as they come: a restart's after the earlier run's, without
+        # the ones it repeats (the checks of the mesh)
+        earlier = self.summary.get("warnings", [])
+        warnings.records[:] = earlier + [record for record in warnings.records if record not in earlier]
         self.summary["warnings"] = warnings.records
         # the first step that takes up the whole fit (a press fit's error is estimated from it)
         self._fit_step = next((i for i, step in enumerate(case.steps) if step.fit is None or step.fit == 1.0), None)

@@ -83,6 +83,20 @@ def _check_pressures(step: dict, slave: str, mean: float) -> None:
         assert low < mean < high < 1.6 * mean
 
 
+def test_a_restart_keeps_the_warnings_and_does_not_repeat_them(mpi_tmp_path):
+    """The hub-slave fit in two steps, stopped after the first and restarted: the summary keeps the
+    first run's two warnings, once each (the restart's check of the mesh repeats the first; the
+    pressure estimate belongs to step 1, which the restart does not solve again)."""
+    case = parse_case({**_case("hub"), "steps": [{"load": 1.0}, {"load": 1.0}]})
+    out = mpi_tmp_path / "restarted"
+    first, code = run_case(case, out, plot=False, stop_after=1)
+    assert code == 3 and [r["key"] for r in first["warnings"]] == ["meshed_interference", "solved_interference"]
+    summary, code = run_case(case, out, plot=False, restart=True)
+    assert code == 0 and len(summary["steps"]) == 2
+    assert summary["warnings"] == first["warnings"]
+    assert json.loads((out / "summary.json").read_text())["warnings"] == first["warnings"]
+
+
 def test_a_warning_is_recorded_by_every_active_recorder_and_logged_on_rank_0(caplog):
     """:func:`warn` appends ``{key, message, numbers}`` (floats) to the recorders active, none
     after their block, and logs on rank 0 only."""
