@@ -27,7 +27,7 @@ from contactqvi.contact.nodal import State
 from contactqvi.contact.postprocess import contact_summary
 from contactqvi.contact.problem import assemble_contact_problem
 from contactqvi.contact.scd_newton import SCDNewtonSolver
-from contactqvi.contact.surface import FRICTIONLESS_STATE_NAMES, STATE_NAMES, contact_facet_areas
+from contactqvi.contact.surface import FRICTIONLESS_STATE_NAMES, STATE_NAMES, contact_facet_areas, pressure_range
 from contactqvi.elasticity import body_materials
 from contactqvi.laws import Coulomb, Frictionless
 from contactqvi.meshes import read_gmsh, split_by_body
@@ -193,3 +193,14 @@ def test_figure_words():
     both = _state_labels({True, False})
     assert both[State.SLIDING] == "sliding / in contact (frictionless pairs)" and both[State.STICKING] == "sticking"
     assert "seed" not in " ".join(both.values())
+
+
+@pytest.mark.one_rank(reason="a function of two arrays")
+def test_the_robust_pressure_range_leaves_out_nodes_of_small_area():
+    """5th and 95th area percentiles of the loaded nodes: one node of 1 % of the area at 100 (a
+    corner) and the unloaded ones do not move them; a uniform pressure is its own range."""
+    pressure = np.array([0.0, 1.0, 2.0, 3.0, 4.0, 100.0])
+    area = np.array([5.0, 1.0, 1.0, 1.0, 0.96, 0.04])
+    assert pressure_range(pressure, area) == [1.0, 4.0]
+    assert pressure_range(np.full(3, 7.0), np.array([1.0, 2.0, 3.0])) == [7.0, 7.0]
+    assert pressure_range(np.zeros(2), np.ones(2)) == [0.0, 0.0]

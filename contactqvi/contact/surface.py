@@ -48,6 +48,7 @@ __all__ = [
     "contact_facet_areas",
     "labelled",
     "pressure_measure",
+    "pressure_range",
     "pressure_summary",
     "state_names",
     "vertex_blocks",
@@ -225,8 +226,7 @@ def pressure_summary(problem: ContactProblem, result: SCDNewtonResult) -> dict[s
     the facet's nodal values, so one node (a corner where the nodal areas are cut) moves it by
     a third (a quarter on quadrilaterals) of its excess only; ``max_nodal_contact_pressure``
     and ``max_nodal_contact_pressure_at``: the largest p_j and its node's reference position (m);
-    ``contact_pressure_range``: the robust range, :data:`PRESSURE_PERCENTILES` of the p_j of
-    the nodes with a normal force, weighted by A_j; ``contact_pressure_measure``:
+    ``contact_pressure_range``: the robust range, :func:`pressure_range`; ``contact_pressure_measure``:
     :func:`pressure_measure`.
     """
     comm = problem.comm
@@ -240,23 +240,27 @@ def pressure_summary(problem: ContactProblem, result: SCDNewtonResult) -> dict[s
     top = int(np.argmax(pressure)) if len(pressure) else -1
     value, at = max(comm.allgather((float(pressure[top]), x[top].tolist()) if top >= 0 else (-np.inf, None)),
                     key=lambda item: item[0])
-    loaded = result.normal_force > 0.0
-    p = np.concatenate(comm.allgather(pressure[loaded]))
-    area = np.concatenate(comm.allgather(problem.contact_area[loaded]))
+    p = np.concatenate(comm.allgather(pressure))
+    area = np.concatenate(comm.allgather(problem.contact_area))
     return {"max_contact_pressure": comm.allreduce(float(facet_mean.max(initial=0.0)), op=MPI.MAX),
             "max_nodal_contact_pressure": max(value, 0.0), "max_nodal_contact_pressure_at": at,
-            "contact_pressure_range": _weighted_percentiles(p, area, PRESSURE_PERCENTILES),
+            "contact_pressure_range": pressure_range(p, area),
             "contact_pressure_measure": pressure_measure(problem)}
 
 
-def _weighted_percentiles(values: np.ndarray, weights: np.ndarray, percentiles: typing.Sequence[float]) -> list[float]:
-    """Percentiles (%) of ``values`` weighted by ``weights``: the value where the cumulative weight,
-    each value's at its middle, reaches the percentile (linear between); [0, ...] without values."""
+def pressure_range(pressure: np.ndarray, area: np.ndarray) -> list[float]:
+    """The robust range [low, high] (Pa) of nodal contact pressures ``pressure`` with nodal areas
+    ``area`` (all nodes: gathered): the :data:`PRESSURE_PERCENTILES` q of the pressures > 0 weighted
+    by their areas, each the least pressure whose nodes, with those of lower pressure, hold q % of
+    the loaded area (no interpolation: a node of small area cannot pull it); [0, 0] if none is loaded."""
+    loaded = pressure > 0.0
+    values, weights = pressure[loaded], area[loaded]
     if len(values) == 0:
-        return [0.0] * len(percentiles)
+        return [0.0] * len(PRESSURE_PERCENTILES)
     order = np.argsort(values)
-    cumulative = np.cumsum(weights[order]) - 0.5 * weights[order]
-    return [float(np.interp(q / 100.0 * weights.sum(), cumulative, values[order])) for q in percentiles]
+    reached = np.cumsum(weights[order]) / weights.sum()
+    return [float(values[order][min(np.searchsorted(reached, q / 100.0 * (1.0 - 1e-12)), len(values) - 1)])
+            for q in PRESSURE_PERCENTILES]
 
 
 def labelled(name: str) -> str:
