@@ -1,9 +1,13 @@
-"""Shared pieces of the Coulomb benchmark scripts: machine record, memory, result files."""
+"""Shared pieces of the Coulomb benchmark scripts: machine record, memory, result files.
+
+The rows of a table, a failed run's among them, and reading an earlier run's file back are
+:mod:`rows`' (no MPI there, so scripts that start solver processes use it too); ``merge_rows``
+is re-exported here.
+"""
 
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import pathlib
 import platform
@@ -15,6 +19,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from contactqvi import tables
+from rows import merge_rows  # noqa: F401 (the scripts call benchlib.merge_rows)
 from contactqvi.cli import parse_args
 from contactqvi.contact.driver import solve_level, solve_nested
 from contactqvi.contact.scd_newton import PARAMETERS
@@ -63,15 +68,6 @@ def peak_rss_mib(comm: MPI.Comm, op: MPI.Op = MPI.MAX) -> float:
     """Peak resident memory so far (MiB, from the OS): the largest of any rank, or with
     ``op=MPI.SUM`` the ranks' peaks added (what the job needs at most)."""
     return comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, op=op)
-
-
-def merge_rows(path: pathlib.Path, rows: list[dict], key: tuple[str, ...]) -> list[dict]:
-    """``rows`` plus the rows already in the JSON file ``path`` that they do not replace (same ``key``)."""
-    if not path.exists():
-        return rows
-    new = {tuple(r[k] for k in key) for r in rows}
-    old = [r for r in json.loads(path.read_text())["rows"] if tuple(r.get(k) for k in key) not in new]
-    return old + rows
 
 
 def emit(comm: MPI.Comm, out: pathlib.Path, name: str, rows: list[dict], markdown: str) -> None:

@@ -55,6 +55,7 @@ import numpy as np
 
 import benchlib
 import ranks
+from rows import read_table
 from contactqvi import tables
 from contactqvi.case import load_case
 from contactqvi.contact.load_path import solve_load_path
@@ -323,7 +324,7 @@ def main() -> None:
     PETSc.Log.begin()
     args.output.mkdir(parents=True, exist_ok=True)
     path = args.output / f"{NAME}.json"
-    data = json.loads(path.read_text()) if path.is_file() else {}
+    data = read_table(path)
     commit = ranks.checkout_commit()
     if "ratio" in args.parts:
         data["ratio"] = {"commit": commit, "rows": ratio_part(comm, args.mesh, args.settled)}

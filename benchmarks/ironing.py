@@ -67,9 +67,9 @@ def ours(directory: pathlib.Path) -> dict:
     """Steps, times, F_y, F_x, Newton counts and cuts of one of our runs."""
     summary = json.loads((directory / "summary.json").read_text())
     steps = [step for step in summary["steps"] if step["converged"]]  # a path that failed: up to its last step
-    translation = np.array([s["translation"] for s in steps])
-    pair = np.array([s["pair_forces"][PAIR] for s in steps])
-    support = np.array([s["reaction_forces"][SUPPORT] for s in steps])
+    translation = np.array([s["translation"] for s in steps], dtype=float).reshape(-1, 3)  # no step: (0, 3)
+    pair = np.array([s["pair_forces"][PAIR] for s in steps], dtype=float).reshape(-1, 3)
+    support = np.array([s["reaction_forces"][SUPPORT] for s in steps], dtype=float).reshape(-1, 3)
     cuts = [len({h.get("substep") for h in s["history"] if h.get("substep") is not None}) for s in steps]
     searches = [max((h.get("search", 0) for h in s["history"]), default=0) for s in steps]
     record = {"status": summary["status"], "n": summary["n"], "p": summary["p"], "mpi_size": summary["mpi_size"],
@@ -198,7 +198,7 @@ def main() -> int:
         fy, fx, fxp = (np.asarray(run[k]) for k in ("F_y", "F_x", "F_x_pair"))
         ratio = np.abs(fxp) / np.where(fy > 0, fy, np.nan)
         slide = np.asarray(run["t"]) > 1.0
-        checks[name] = {"max_ratio_all_steps": float(np.nanmax(ratio)),
+        checks[name] = {"max_ratio_all_steps": float(np.nanmax(ratio, initial=0.0)),
                         "max_ratio_sliding": float(np.nanmax(ratio[slide])) if slide.any() else None,
                         "mean_ratio_plateau": float(np.nanmean(ratio[(np.asarray(run["t"]) >= PLATEAU[0])
                                                                     & (np.asarray(run["t"]) <= PLATEAU[1])]))
@@ -223,7 +223,7 @@ def main() -> int:
     for name, run in runs.items():
         notes.append(f"ours {name}: {run['status']}, {len(run['t'])} steps, n = {run['n']} free dofs, p = {run['p']} "
                      f"slave nodes, {run['mpi_size']} rank(s), Newton {sum(run['newton'])} "
-                     f"(per step {min(run['newton'])}-{max(run['newton'])}), steps cut: "
+                     f"(per step {min(run['newton'], default=0)}-{max(run['newton'], default=0)}), steps cut: "
                      f"{sum(1 for s in run['substeps'] if s > 1)}, solver {sum(run['solver_seconds']):.0f} s"
                      + (f", wall {run['wall_time']:.0f} s" if "wall_time" in run else ""))
     for name, run in peers.items():

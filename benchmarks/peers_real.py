@@ -56,6 +56,7 @@ ROOT = HERE.parent
 sys.path.insert(0, str(HERE / "peers"))
 import common  # noqa: E402
 import export  # noqa: E402
+from rows import cell, failed, failed_row, order, read_table, write_text  # noqa: E402
 
 #: Tolerance ladders, loosest first: ours ``rtol`` (||y^|| <= rtol ||y^0||), GetFEM ``max_res``
 #: (residual in GPa units), Kratos' relative tolerances.
@@ -317,7 +318,7 @@ def main() -> int:
     args = parser.parse_args()
     if args.rewrite:
         stem = pathlib.Path(args.output) / "peers_real"
-        stem.with_suffix(".md").write_text(markdown(json.loads(stem.with_suffix(".json").read_text())))
+        write_text(stem.with_suffix(".md"), markdown(read_table(stem.with_suffix(".json"))))
         return 0
 
     work = pathlib.Path(args.work)
@@ -357,10 +358,10 @@ def main() -> int:
 
     rows, settings_trials = [], []
     previous = pathlib.Path(args.output) / "peers_real.json"
-    old_rows = json.loads(previous.read_text()) if previous.exists() else {}
+    old_rows = read_table(previous)
     getfem_options = old_rows.get("getfem_options", ["--lsolver", "mumps"])  # a sweep of an earlier run
     sufficed: dict[tuple[str, str], float] = {}  # (code, problem) -> tolerance that sufficed on the last size
-    for row in sorted(old_rows.get("rows", []), key=lambda r: r["dofs"]):  # earlier runs' largest sizes
+    for row in sorted(old_rows.get("rows", []), key=order("dofs")):  # earlier runs' largest sizes
         if row.get("best") and row["code"] in TOLERANCES:
             sufficed[(row["code"], row["problem"])] = row["best"]["tolerance"]
     for start in args.start:  # e.g. getfem=1e-8: a ladder known to need no looser run
@@ -397,8 +398,9 @@ def main() -> int:
     for problem, size, case in cases:
         print(f"{problem} {size}: {case}", flush=True)
         reference = runner.run("ours", case, ["--pc", args.reference_pc, "--rtol", "1e-12"])
-        if reference["status"] != "converged":
-            rows.append({"problem": problem, "size": size, **reference, "code": "reference"})
+        if reference["status"] != "converged":  # a row of its own, with the time it used; no peer runs
+            rows.append(failed_row(reference["status"], reference["process_seconds"], problem=problem, size=size,
+                                   code="reference", case=str(case), output=reference["output"]))
             continue
         base = {"problem": problem, "size": size, "case": str(case), "dofs": reference["dofs"],
                 "contact_nodes": reference["contact_nodes"], "ours_commit": sha}
@@ -454,9 +456,9 @@ def save(out: pathlib.Path, sha: str, accuracy: float, getfem_options: list[str]
             "rows": [r for r in old.get("rows", []) if (r["problem"], r["size"], r["code"]) not in keys] + rows,
             "load_average_end": os.getloadavg()}
     data["limits"] = limits(data)
-    (out / "peers_real.json").write_text(json.dumps(data, indent=1) + "\n")
+    write_text(out / "peers_real.json", json.dumps(data, indent=1) + "\n")
     text = markdown(data)
-    (out / "peers_real.md").write_text(text)
+    write_text(out / "peers_real.md", text)
     return text
 
 
@@ -468,7 +470,15 @@ def _fmt(value, spec: str = ".3g") -> str:
     return str(value)
 
 
+def _failed(row: dict) -> bool:
+    """A failed run's row (:func:`rows.failed_row`), or a failed reference's row as runs before
+    issue 46 wrote it (its status, no flag)."""
+    return failed(row) or (row["code"] == "reference" and not str(row.get("status")).startswith("converged"))
+
+
 def _timed_run(row: dict) -> dict | None:
+    if _failed(row):
+        return None
     return row if row["code"] == "reference" else row.get("best")
 
 
@@ -482,7 +492,7 @@ EXTRAPOLATE_MIN_SECONDS = 5.0
 def _row_order(row: dict) -> tuple:
     problem = PROBLEM_ORDER.index(row["problem"]) if row["problem"] in PROBLEM_ORDER else len(PROBLEM_ORDER)
     code = CODE_ORDER.index(row["code"]) if row["code"] in CODE_ORDER else len(CODE_ORDER)
-    return problem, row["dofs"], code
+    return problem, *order("dofs")(row), code
 
 
 def limits(data: dict, seconds: float = 600.0, memory_mib: float = 20 * 1024) -> list[dict]:
@@ -552,6 +562,12 @@ def markdown(data: dict) -> str:
     ]
     for row in sorted(data["rows"], key=_row_order):
         run = _timed_run(row)
+        if _failed(row):
+            seconds = row.get("seconds", row.get("process_seconds"))
+            lines.append(f"| {row['problem']} | {row['size']} | {cell(row, 'dofs')} | {row['code']} | "
+                         f"**failed after {_fmt(seconds, '.0f')} s: {str(row.get('status', '')).splitlines()[0][:70]}** "
+                         "| | | | | | | | | | | |")
+            continue
         if run is None:
             last = (row.get("runs") or [{}])[-1]
             lines.append(f"| {row['problem']} | {row['size']} | {row['dofs']} | {row['code']} | "

@@ -51,6 +51,8 @@ import time
 
 import numpy as np
 
+from rows import read_table
+
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 PYTHON = sys.executable
 MPIENV = {"OMPI_MCA_rmaps_base_oversubscribe": "1", "PRTE_MCA_rmaps_default_mapping_policy": ":oversubscribe",
@@ -331,7 +333,7 @@ def main() -> None:
     out = pathlib.Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     path = out / "ranks.json"
-    data = json.loads(path.read_text()) if path.is_file() else {}
+    data = read_table(path)
     work = pathlib.Path(tempfile.mkdtemp(prefix="contactqvi-ranks-"))
     try:
         if args.levels or not args.no_hertz or args.bodies:

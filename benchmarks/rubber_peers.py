@@ -18,7 +18,6 @@ normal (:func:`force_directions`). Writes ``--table``.json/.md (:func:`contactqv
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import pathlib
 import platform
@@ -37,6 +36,7 @@ sys.path.insert(0, str(HERE / "peers"))
 sys.path.insert(0, str(ROOT))
 import common  # noqa: E402
 import export  # noqa: E402
+from rows import failed_row, read_table  # noqa: E402
 
 from contactqvi.tables import write_table  # noqa: E402
 
@@ -92,7 +92,9 @@ def ours(case: pathlib.Path, out: pathlib.Path) -> dict:
     """Our solver on ``case``: per-step roller force (N), Newton steps, process wall time."""
     code, wall = run([str(ROOT / ".venv" / "bin" / "python"), "-m", "contactqvi", "run", str(case),
                       "--output", str(out), "--no-plot"], out.with_suffix(".log"))
-    summary = json.loads((out / "summary.json").read_text())
+    summary = read_table(out / "summary.json")
+    if not summary:  # it stopped before its first step's summary: a failed run
+        return _failed(code, wall)
     steps = summary["steps"]
     return {"status": summary["status"] if code == 0 else f"exit {code}", "wall_time": wall,
             "force": [s["pair_forces"]["top/obstacle"] for s in steps],
@@ -103,10 +105,17 @@ def getfem(case: pathlib.Path, out: pathlib.Path, options: list[str]) -> dict:
     """``peers/getfem_rubber.py`` on ``case``: the same fields as :func:`ours` (steps it finished)."""
     code, wall = run(["/usr/bin/python3", str(HERE / "peers" / "getfem_rubber.py"), str(case),
                       "--output", str(out), *options], out.with_suffix(".log"))
-    result = json.loads((out / "result.json").read_text())
+    result = read_table(out / "result.json")
+    if not result:
+        return _failed(code, wall) | {"nodes": None, "law_check": None}
     return {"status": result["status"], "wall_time": wall, "solve_time": result["solve_time"],
             "force": result["contact_force_per_step"], "newton": result["newton_per_step"],
             "nodes": result["dofs"] // 3, "law_check": result["law_check"], "settings": result["settings"]}
+
+
+def _failed(code: int, wall: float) -> dict:
+    """The record of a run that wrote no result: its exit code and wall time (s), no steps."""
+    return failed_row(f"failed: exit {code}, no result file", wall) | {"wall_time": wall, "force": [], "newton": []}
 
 
 def force_directions(case: pathlib.Path, out: pathlib.Path, translation: np.ndarray) -> dict:
@@ -239,10 +248,11 @@ def main() -> int:
     work.mkdir(parents=True, exist_ok=True)
     table = pathlib.Path(args.table)
     if args.rewrite:
-        data = json.loads(table.with_suffix(".json").read_text())
+        data = read_table(table.with_suffix(".json"))
         write_table(MPI.COMM_WORLD, table, data, markdown(data), echo=False)
         return 0
-    data = json.loads(table.with_suffix(".json").read_text()) if args.update else {"meshes": {}}
+    data = read_table(table.with_suffix(".json")) if args.update else {}
+    data.setdefault("meshes", {})
     data |= {"case": str(CASE.relative_to(ROOT)), "getfem_options": args.getfem_options}
     data.setdefault("machine", {})
     for mesh in args.meshes:

@@ -13,7 +13,6 @@ solvers go on the command line under their prefixes (``-friction_ksp_view``, ``-
 
 from __future__ import annotations
 
-import json
 import pathlib
 import time
 import typing
@@ -25,6 +24,7 @@ from contactqvi.cli import make_parser, parse_args
 from contactqvi.friction import DISCRETISATIONS
 from contactqvi.problems.stadler import PAPER
 
+from rows import read_table
 from stadler_runs import TABLES, Cases
 
 RESULTS = pathlib.Path(__file__).resolve().parent / "results"
@@ -160,8 +160,8 @@ def summary(out: pathlib.Path) -> str:
     """The paper beside Q1 and FD (from the JSON files in ``out``), then every table written so far."""
 
     def value(name: str, d: str, extract: typing.Callable[[dict], typing.Any]) -> typing.Any:
-        path = out / f"{stem(name, d)}.json"
-        return extract(json.loads(path.read_text())) if path.is_file() else None
+        data = read_table(out / f"{stem(name, d)}.json")
+        return extract(data) if data else None
 
     rows = [[row, paper, value(name, "q1", f), value(name, "fd", f)] for row, name, paper, f in SUMMARY]
     parts = [out / f"{stem(name, d)}.md" for name in TABLES for d in DISCRETISATIONS]

@@ -59,6 +59,7 @@ import typing
 import numpy as np
 
 from ranks import PYTHON, ROOT, checkout_commit, mpirun
+from rows import failed, failed_row, read_table
 
 #: PETSc's global per-process counters behind -log_view's "MPI Msg Count", "MPI Msg Len" and "MPI Reductions".
 COUNTERS = ("petsc_send_ct", "petsc_isend_ct", "petsc_recv_ct", "petsc_irecv_ct", "petsc_send_len",
@@ -247,7 +248,7 @@ def measure(n: int, lev: int, args: argparse.Namespace, work: pathlib.Path, targ
                                   "wall_s": round(seconds, 1), "commit": args.commit}
     if code != 0 or not (run / "worker.json").is_file():
         print((run / "run.log").read_text()[-3000:], file=sys.stderr, flush=True)
-        return row
+        return failed_row(f"failed: exit {code}" + ("" if code else ", no worker.json"), seconds, **row)
     result = json.loads((run / "worker.json").read_text())
     log = parse_log_view(log_view.read_text())
     steps = result["it"]
@@ -291,9 +292,9 @@ def projection(rows: list[dict]) -> dict[str, typing.Any]:
       communication seconds = messages x latency + bytes / bandwidth + reductions x log2(P) x allreduce level.
     """
     measured = [r for r in rows if "per_newton_step" in r]
-    serial = next(r for r in measured if r["ranks"] == 1)
+    serial = next((r for r in measured if r["ranks"] == 1), None)
     parallel = [r for r in measured if r["ranks"] > 1 and r.get("ghost_dofs")]
-    if not parallel:
+    if not parallel or serial is None:  # a failed run is a row, not a measurement
         return {}
     ref = max(parallel, key=lambda r: r["ranks"])
     steps = ref["newton"]
@@ -349,8 +350,10 @@ def markdown(data: dict) -> str:
             "Reductions Max.\n\n"]
     table = []
     for r in rows:
-        if "per_newton_step" not in r:
-            table.append([r["ranks"], r["lev"], *[None] * 12, r.get("commit")])
+        if "per_newton_step" not in r:  # a failed run: its status and the time it used
+            status = r.get("status", "failed") if failed(r) else f"failed: exit {r.get('exit_code')}"
+            table.append([r["ranks"], r["lev"], f"{status} after {r.get('seconds', r.get('wall_s', 0.0)):.0f} s",
+                          *[None] * 11, r.get("commit")])
             continue
         s = r["per_newton_step"]
         whole = r["log_view"]["summary"]
@@ -430,8 +433,8 @@ def main() -> None:
 
         from contactqvi.tables import write_table
 
-        data = json.loads((out / "weak_scaling.json").read_text())
-        data["projection"] = projection(data["rows"])
+        data = read_table(out / "weak_scaling.json")
+        data["projection"] = projection(data.get("rows", []))
         write_table(MPI.COMM_SELF, out / "weak_scaling", data, markdown(data))
         return
     levels = weak_levels(args.lev, args.ranks)

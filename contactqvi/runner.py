@@ -38,7 +38,7 @@ from contactqvi.contact.path_state import PathState
 from contactqvi.contact.figure_data import ShownStep
 from contactqvi.contact.figures import plot_contact_states, plot_deformed_bodies, plot_forces
 from contactqvi.contact.force_history import write_force_table
-from contactqvi.contact.postprocess import ContactResultsWriter
+from contactqvi.contact.postprocess import ContactResultsWriter, warn_solved_fits
 from contactqvi.contact.interface import BodyPair, ObstaclePair
 from contactqvi.contact.problem import ContactProblem, assemble_contact_problem, build_contact_problem
 from contactqvi.contact.scd_newton import SCDNewtonResult
@@ -48,6 +48,7 @@ from contactqvi.elasticity import body_materials
 from contactqvi.meshes import create_contact_body, read_gmsh, split_by_body
 from contactqvi.parameters import ParameterError, require
 from contactqvi.problems.coulomb import gap_function
+from contactqvi.records import Recorder, warn
 from contactqvi.result import Status
 
 __all__ = ["EXIT_CODES", "PREFIX", "OutputError", "build_problem", "read_mesh", "run_case"]
@@ -167,15 +168,17 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
     require(stop_after is None or stop_after >= 1, "--stop-after", f"must be a step number >= 1, got {stop_after}")
     steps = case.steps[:stop_after]
     _check_output(comm, output)
-    checkpoint = _checkpoint(case, output, comm, restart)
+    warnings = Recorder()  # every warning of the run, for the summary
+    with warnings:
+        checkpoint = _checkpoint(case, output, comm, restart)
     if checkpoint is not None and checkpoint.step >= len(steps):
         logger.info("the checkpoint in %s holds every step asked for: nothing to solve", output)
         status = Status[checkpoint.summary["status"].upper()]
         return checkpoint.summary, EXIT_CODES["converged" if status.converged else "not converged"]
-    with default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, _stop_signals() as stop:
+    with warnings, default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, _stop_signals() as stop:
         logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks",
                     problem.n_contact, problem.n_free, len(case.steps), comm.size)
-        recorder = _StepRecorder(case, problem, output, checkpoint, stop)
+        recorder = _StepRecorder(case, problem, output, checkpoint, stop, warnings)
         state = PathState.at_rest(problem) if checkpoint is None else checkpoint.resume(problem)
         first, u = state.done, problem.A.createVecRight()
         try:
@@ -199,7 +202,7 @@ def _checkpoint(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm, r
     checkpoint = read_checkpoint(comm, output, case.to_dict()) if restart else None
     if checkpoint is None:
         if restart:
-            logger.warning("no checkpoint in %s: the run starts from step 1", output)
+            warn(comm, logger, "no_checkpoint", f"no checkpoint in {output}: the run starts from step 1")
         remove_checkpoints(comm, output)
     return checkpoint
 
@@ -208,9 +211,16 @@ class _StepRecorder:
     """What the runner does after each load step: result files, summary, checkpoint, signals."""
 
     def __init__(self, case: ContactCase, problem: ContactProblem, output: str | pathlib.Path,
-                 checkpoint: Checkpoint | None, stop: threading.Event):
+                 checkpoint: Checkpoint | None, stop: threading.Event, warnings: Recorder):
         self.problem, self._stop = problem, stop
         self.summary = _start_summary(case, problem, checkpoint)
+        # the summary's warnings are the run's as they come: a restart's after the earlier run's, without
+        # the ones it repeats (the checks of the mesh)
+        earlier = self.summary.get("warnings", [])
+        warnings.records[:] = earlier + [record for record in warnings.records if record not in earlier]
+        self.summary["warnings"] = warnings.records
+        # the first step that takes up the whole fit (a press fit's error is estimated from it)
+        self._fit_step = next((i for i, step in enumerate(case.steps) if step.fit is None or step.fit == 1.0), None)
         self.writer = ContactResultsWriter(output, problem.comm, keep=0 if checkpoint is None else checkpoint.step)
         self.checkpoints = CheckpointWriter(output, problem, 0 if checkpoint is None else checkpoint.step)
 
@@ -238,6 +248,8 @@ class _StepRecorder:
         try:
             if result.converged:
                 entry.update(writer.write(self.problem, u, result, t=index + 1))
+                if index == self._fit_step:
+                    warn_solved_fits(self.problem, u)
                 tables.write_solution_npz(writer.out / "solution.npz", writer.last.displacement)
             summary["steps"].append(entry)
             summary["status"] = str(result.status)
@@ -319,7 +331,7 @@ def _stop_signals() -> typing.Iterator[threading.Event]:
         return
 
     def handler(signum: int, frame: typing.Any) -> None:
-        logger.warning("signal %d: stopping at the next Newton step", signum)
+        warn(MPI.COMM_WORLD, logger, "signal", f"signal {signum}: stopping at the next Newton step", signal=signum)
         stop.set()
 
     previous = {number: signal.signal(number, handler) for number in (signal.SIGTERM, signal.SIGINT)}

@@ -19,7 +19,7 @@ import pytest
 from dolfinx import fem
 
 from contactqvi import meshes
-from contactqvi.case import load_case
+from contactqvi.case import load_case, parse_case
 from contactqvi.contact import build_contact_problem
 from contactqvi.contact.figure_data import ShownStep, state_labels
 from contactqvi.contact.figures import _pair_text
@@ -28,7 +28,7 @@ from contactqvi.contact.nodal import State
 from contactqvi.contact.postprocess import contact_summary
 from contactqvi.contact.problem import assemble_contact_problem
 from contactqvi.contact.scd_newton import SCDNewtonSolver
-from contactqvi.contact.surface import FRICTIONLESS_STATE_NAMES, STATE_NAMES, contact_facet_areas
+from contactqvi.contact.surface import FRICTIONLESS_STATE_NAMES, STATE_NAMES, contact_facet_areas, pressure_range
 from contactqvi.elasticity import body_materials
 from contactqvi.laws import Coulomb, Frictionless
 from contactqvi.meshes import read_gmsh, split_by_body
@@ -128,6 +128,57 @@ def test_case_with_bodies_only_reports_the_total_contact_force(mpi_tmp_path):
     assert step["contact_area"] == pytest.approx(1.0, rel=1e-12)
 
 
+DATA = ROOT / "tests" / "data"
+#: A neo-Hookean block, quarter model 10 x 10 x 10 mm on rollers (issue 46's ``uniaxial_h2.msh``),
+#: pressed by a frictionless plate 0.3 mm down (3 %): a homogeneous uniaxial compression.
+UNIAXIAL = {"mesh": {"file": str(DATA / "uniaxial_h2.msh")},
+            "material": {"young": 5e6, "poisson": 0.45, "model": "neo_hookean"},
+            "boundary": {"displacement": {"symmetry_x": {"x": 0.0}, "symmetry_y": {"y": 0.0}, "bottom": {"z": 0.0}}},
+            "contact": {"surface": "top", "law": "frictionless"},
+            "obstacle": {"type": "plane", "point": [0.0, 0.0, 0.01], "normal": [0.0, 0.0, -1.0]},
+            "steps": [{"translation": [0.0, 0.0, -3e-4]}]}
+
+
+def test_the_uniaxial_blocks_contact_area_is_its_top_face(mpi_tmp_path):
+    """Issue 46's uniaxial block: ``contact_area`` is the top face, 1e-4 m^2, to 1e-12;
+    ``deformed_contact_area`` the deformed top face (1 + u_x)(1 + u_y) at the corner (x, y) =
+    (A, B), the deformation being homogeneous; the pressure (nominal: searched once) is uniform,
+    so its facet maximum, nodal maximum and robust range agree, and times the face it is the force."""
+    summary, code = run_case(parse_case(UNIAXIAL), mpi_tmp_path / "uniaxial", plot=False)
+    assert code == 0
+    step = summary["steps"][-1]
+    assert abs(step["contact_area"] - 1e-4) <= 1e-12 * 1e-4
+    solution = np.load(mpi_tmp_path / "uniaxial" / "solution.npz")
+    corner = np.flatnonzero(np.isclose(solution["x"], [0.01, 0.01, 0.01], rtol=0.0, atol=1e-9).all(axis=1))
+    stretched = np.prod(0.01 + solution["u"][corner[0], :2])
+    assert stretched > 1.02e-4 and step["deformed_contact_area"] == pytest.approx(stretched, rel=1e-10)
+    assert step["contact_pressure_measure"] == "nominal"
+    p = step["max_contact_pressure"]
+    assert step["max_nodal_contact_pressure"] == pytest.approx(p, rel=1e-8)
+    assert step["contact_pressure_range"] == pytest.approx([p, p], rel=1e-8)
+    assert p * 1e-4 == pytest.approx(-step["contact_force"][2], rel=1e-8)
+
+
+def test_side_facets_touched_at_a_corner_add_no_contact_area(mpi_tmp_path):
+    """Issue 46's rubber seal strip (``seal_half_h1.0.msh``): its contact group is the top face,
+    10 x 2 mm, and the upper half of the free side. After the first step (0.075 mm) the top is in
+    contact and the side's upper nodes touch at the edge only: ``contact_area`` is the top face
+    to 0.2 % (2.0021e-5 m^2; the side facets counted by their touching nodes, 2.066e-5 before
+    issue 46; the remaining 0.1 % are top and side facets tilted by the bulge, projected)."""
+    case = {**UNIAXIAL, "mesh": {"file": str(DATA / "seal_half_h1.0.msh")},
+            "material": {"young": 5e6, "poisson": 0.45, "model": "neo_hookean"},
+            "boundary": {"displacement": {"symmetry_x": {"x": 0.0}, "symmetry_y": {"y": 0.0}, "back": {"y": 0.0},
+                                          "bottom": {"z": 0.0}}},
+            "contact": {"surface": "contact", "law": "coulomb", "friction": 0.4},
+            "obstacle": {"type": "plane", "point": [0.0, 0.0, 0.005], "normal": [0.0, 0.0, -1.0]},
+            "steps": [{"translation": [0.0, 0.0, -7.5e-5]}]}
+    summary, code = run_case(parse_case(case), mpi_tmp_path / "seal", plot=False)
+    assert code == 0
+    step = summary["steps"][-1]
+    assert step["state_counts"]["no contact"] > 0  # the side's lower nodes
+    assert 2e-5 <= step["contact_area"] <= 2e-5 * 1.002
+
+
 def test_figure_words():
     """Titles and legends of ``contact_states.png``: the step, the pairs slave on master, and
     states named for the laws drawn (frictionless contact is "in contact")."""
@@ -143,3 +194,14 @@ def test_figure_words():
     both = state_labels({True, False})
     assert both[State.SLIDING] == "sliding / in contact (frictionless pairs)" and both[State.STICKING] == "sticking"
     assert "seed" not in " ".join(both.values())
+
+
+@pytest.mark.one_rank(reason="a function of two arrays")
+def test_the_robust_pressure_range_leaves_out_nodes_of_small_area():
+    """5th and 95th area percentiles of the loaded nodes: one node of 1 % of the area at 100 (a
+    corner) and the unloaded ones do not move them; a uniform pressure is its own range."""
+    pressure = np.array([0.0, 1.0, 2.0, 3.0, 4.0, 100.0])
+    area = np.array([5.0, 1.0, 1.0, 1.0, 0.96, 0.04])
+    assert pressure_range(pressure, area) == [1.0, 4.0]
+    assert pressure_range(np.full(3, 7.0), np.array([1.0, 2.0, 3.0])) == [7.0, 7.0]
+    assert pressure_range(np.zeros(2), np.ones(2)) == [0.0, 0.0]

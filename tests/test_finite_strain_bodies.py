@@ -152,3 +152,8 @@ def test_two_body_hertz_at_a_small_load_is_the_linear_solution(mpi_tmp_path):
     linear, neo = results[None], results["neo_hookean"]
     assert abs(neo["contact_force"][2] / linear["contact_force"][2] - 1.0) <= 1e-3
     assert abs(neo["max_contact_pressure"] / linear["max_contact_pressure"] - 1.0) <= 1e-3
+    # the pressure named for what it is (issue 46): per deformed area where the pair is searched on the
+    # deformed surfaces at finite strain; its area there differs from the reference one by the strains
+    assert (linear["contact_pressure_measure"], neo["contact_pressure_measure"]) == ("nominal", "cauchy")
+    assert "deformed_contact_area" not in linear
+    assert abs(neo["deformed_contact_area"] / neo["contact_area"] - 1.0) <= 1e-2

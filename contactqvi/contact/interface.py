@@ -38,8 +38,9 @@ from contactqvi.load_steps import SEARCHES, Rotation, placed, rigid_increment
 from contactqvi.meshes import boundary_facets
 from contactqvi.obstacles import Obstacle, tangent_frames
 from contactqvi.parameters import require
+from contactqvi.records import warn
 
-__all__ = ["BodyPair", "Interface", "ObstaclePair", "build_interfaces", "search_again"]
+__all__ = ["MESHED_INTERFERENCE", "BodyPair", "Interface", "MeshedFit", "ObstaclePair", "build_interfaces", "search_again"]
 
 logger = logging.getLogger(__name__)
 
@@ -126,6 +127,9 @@ class Interface:
             any translation of it; for a body pair weighted with the C of the last search.
         searched_at: (m, 3) displacement of the slave nodes in the configuration an obstacle
             pair was searched in (its gap is linearised about it), or None: the reference.
+        meshed_fit: a body pair that declares an interference: its mean overlap as meshed
+            and mean declared interference (:class:`MeshedFit`, from the reference search;
+            a search again keeps it); None otherwise.
     """
 
     pair: Pair
@@ -135,6 +139,7 @@ class Interface:
     coupling: MortarCoupling | None
     initial_gap: np.ndarray
     searched_at: np.ndarray | None = None
+    meshed_fit: MeshedFit | None = None
 
     @property
     def obstacle(self) -> Obstacle | None:
@@ -244,7 +249,8 @@ def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: t
         if isinstance(interface.pair, ObstaclePair):
             return _obstacle_interface(V, facet_tags, interface.pair, constrained, x,
                                        displacement if finite_strain else None, translation, rotation)
-        return _body_interface(V, facet_tags, interface.pair, constrained, x)
+        return dataclasses.replace(_body_interface(V, facet_tags, interface.pair, constrained, x),
+                                   meshed_fit=interface.meshed_fit)
 
     return [again(i) if i.searched_each_step else i for i in interfaces]
 
@@ -307,19 +313,32 @@ def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: Body
     normal = coupling.normal * ~constrained[coupling.slave_blk]
     normal /= np.linalg.norm(normal, axis=1)[:, None]
     gap = np.einsum("ij,ij->i", normal, coupling.separation)
+    fit = None
     if displacement is None:
-        _check_interference(comm, V, gap, pair, coupling.weight, V.tabulate_dof_coordinates()[coupling.slave_blk])
-    return Interface(pair, coupling.slave_blk, tangent_frames(normal), coupling.weight, coupling, gap)
+        fit = _check_interference(comm, V, gap, pair, coupling.weight,
+                                  V.tabulate_dof_coordinates()[coupling.slave_blk])
+    return Interface(pair, coupling.slave_blk, tangent_frames(normal), coupling.weight, coupling, gap,
+                     meshed_fit=fit)
 
 
 #: A declared interference is reported (a warning) when the surfaces as meshed overlap by more
-#: than this fraction more or less on average: the chords of curved surfaces lie inside them by
-#: h^2 / (8 R), which changes a small fit (docs/press_fit.md).
+#: than this fraction more or less on average, and when the solved fit pushes them apart by more
+#: than it more or less: the chords of curved surfaces lie inside them by h^2 / (8 R), which
+#: changes a small fit (docs/press_fit.md).
 MESHED_INTERFERENCE = 0.01
 
 
+class MeshedFit(typing.NamedTuple):
+    """A declared interference as the mesh has it (m): ``overlap``, the mean overlap as meshed
+    -sum_i D_ii g_i / sum_i D_ii over the slave nodes; ``declared``, the mean declared one
+    sum_i D_ii delta(x_i) / sum_i D_ii."""
+
+    overlap: float
+    declared: float
+
+
 def _check_interference(comm: MPI.Comm, V: fem.FunctionSpace, gap: np.ndarray, pair: BodyPair,
-                        weight: np.ndarray, x: np.ndarray) -> None:
+                        weight: np.ndarray, x: np.ndarray) -> MeshedFit | None:
     """Raise if the declared interference δ(x_i) of a body pair is negative at a slave node (x its
     slave nodes' reference positions), if a slave node overlaps the master body by more than
     δ(x_i) plus the faceting allowance :data:`FACETING` sqrt(D_ii) (m), or if a declared
@@ -338,7 +357,7 @@ def _check_interference(comm: MPI.Comm, V: fem.FunctionSpace, gap: np.ndarray, p
     _check_overlap(comm, V, gap, pair.name, f"nodes of {pair.slave!r} lie inside the body of "
                    f"{pair.master!r} by more than {allowance}", declared + faceting, hint)
     if not fit:
-        return
+        return None
     reached = comm.allreduce(float(np.max(faceting - gap - declared, initial=-np.inf)), op=MPI.MAX)
     overlap = comm.allreduce(float(np.max(-gap, initial=0.0)), op=MPI.MAX)
     require(reached >= 0.0, f"{pair.name}: interference", f"declared {text}, but the surfaces "
@@ -350,11 +369,13 @@ def _check_interference(comm: MPI.Comm, V: fem.FunctionSpace, gap: np.ndarray, p
     expected = interference.value if interference.uniform else comm.allreduce(float(weight @ declared),
                                                                               op=MPI.SUM) / area
     if abs(mean / expected - 1.0) > MESHED_INTERFERENCE:
-        logger.warning("%s: the surfaces overlap by %.4e m on average as meshed, %+.1f %% of the declared "
-                       "interference %.4e m%s; the fit solved is the meshed one (chords lie inside a curved "
-                       "surface by h^2 / (8 R)): mesh both surfaces in equal segments (docs/press_fit.md)",
-                       pair.name, mean, 100.0 * (mean / expected - 1.0), expected,
-                       "" if interference.uniform else " (its mean over the surface)")
+        warn(comm, logger, "meshed_interference",
+             f"{pair.name}: the surfaces overlap by {mean:.4e} m on average as meshed, "
+             f"{100.0 * (mean / expected - 1.0):+.1f} % of the declared interference {expected:.4e} m"
+             f"{'' if interference.uniform else ' (its mean over the surface)'}; the fit solved is the meshed one "
+             "(chords lie inside a curved surface by h^2 / (8 R)): mesh both surfaces in equal segments "
+             "(docs/press_fit.md)", mean_overlap=mean, declared=expected, relative_difference=mean / expected - 1.0)
+    return MeshedFit(mean, expected)
 
 
 def _check_sign(comm: MPI.Comm, declared: np.ndarray, pair: BodyPair) -> None:

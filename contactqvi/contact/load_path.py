@@ -71,6 +71,7 @@ from contactqvi.lifetime import PETScOwner
 from contactqvi.contact.surface import contact_facet_areas
 from contactqvi.load_steps import LoadStep, Rotation, check_steps, interpolated
 from contactqvi.parameters import Parameter, Parameters
+from contactqvi.records import warn
 from contactqvi.result import Status, Timings
 
 __all__ = ["PATH_PARAMETERS", "SOLVER_PARAMETERS", "LoadStep", "PathState", "Rotation", "check_steps",
@@ -175,8 +176,8 @@ def _cuts_after(problem: ContactProblem, u: PETSc.Vec, state: PathState, index: 
         return cuts - 1 if cuts > 0 else None  # a part of the step: grow back toward its end
     if result.status == Status.INTERRUPTED or cuts >= allowed:
         return None
-    logger.warning("step %d: %s at load factor %g; cut to %g of what remains of it", index + 1, result.status,
-                   step.load, 0.5 ** (cuts + 1))
+    warn(problem.comm, logger, "step_cut", f"step {index + 1}: {result.status} at load factor {step.load:g}; cut to "
+         f"{0.5 ** (cuts + 1):g} of what remains of it", step=index + 1, load=step.load, fraction=0.5 ** (cuts + 1))
     return cuts + 1
 
 
@@ -341,8 +342,9 @@ def _settle(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSt
             if still or change <= path["geometry_tol"] * increment:
                 break
             if len(solves) > path["max_searches"]:
-                logger.warning("step %d: the configuration did not settle in %d searches (last change %.3g m "
-                               "of an increment of %.3g m)", index + 1, path["max_searches"], change, increment)
+                warn(problem.comm, logger, "not_settled", f"step {index + 1}: the configuration did not settle in "
+                     f"{path['max_searches']} searches (last change {change:.3g} m of an increment of {increment:.3g} m)",
+                     step=index + 1, searches=path["max_searches"], change=change, increment=increment)
                 status = Status.DIVERGED_MAX_IT
                 break
             solver = _search_reached(problem, step, u, state, reached, solver)
@@ -409,7 +411,8 @@ def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: Path
     u.array.reshape(-1, 3)[problem.contact_blk[touching], :2] = 0.0
 
 
-def contact_resultants(problem: ContactProblem, result: SCDNewtonResult) -> dict[str, typing.Any]:
+def contact_resultants(problem: ContactProblem, result: SCDNewtonResult,
+                       displacement: fem.Function | None = None) -> dict[str, typing.Any]:
     """Contact forces (N, global components) and contact, sticking and sliding areas (m^2) of a solved step.
 
     ``pair_forces``: per contact pair, the force of the master side (obstacle or body) on
@@ -417,7 +420,8 @@ def contact_resultants(problem: ContactProblem, result: SCDNewtonResult) -> dict
     master sides on the slave bodies; ``obstacle_force``: the part of it from rigid
     obstacles (forces between bodies cancel in the global balance, so this is the one the
     equilibrium of all bodies together has). ``contact_area``: the area of the slave
-    facets in contact (:func:`~contactqvi.contact.surface.contact_facet_areas`);
+    facets in contact (:func:`~contactqvi.contact.surface.contact_facet_areas`, the facets'
+    normals those of the surface displaced by ``displacement`` if given: at finite strain);
     ``sticking_area`` and ``sliding_area`` split it by the states of the facets' nodes and
     add up to it.
     """
@@ -431,7 +435,7 @@ def contact_resultants(problem: ContactProblem, result: SCDNewtonResult) -> dict
         total += force
         if interface.obstacle is not None:
             obstacles += force
-    sticking, sliding = problem.comm.allreduce(contact_facet_areas(problem, result.states), op=MPI.SUM)
+    sticking, sliding = problem.comm.allreduce(contact_facet_areas(problem, result.states, displacement), op=MPI.SUM)
     return {
         "contact_force": total.tolist(),
         "obstacle_force": obstacles.tolist(),

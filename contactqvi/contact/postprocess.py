@@ -27,15 +27,18 @@ the groups prescribing it, shared equally, :func:`~contactqvi.postprocess.reacti
 so it does not depend on the order of the groups), applied force (N) and the relative
 equilibrium error of their sum with the rigid obstacles' forces, each body's force
 balance (several bodies), contact/sticking/sliding areas (m^2, the slave facets by the
-share of their nodes in each state, :func:`~contactqvi.contact.surface.contact_facet_areas`),
-node counts per state (named for each pair's law), the largest contact pressure and von
-Mises stress (Pa), the global l2 norm of u~ (m; the number demos print to compare runs).
+share of their nodes in each state, projected on the contact plane,
+:func:`~contactqvi.contact.surface.contact_facet_areas`; at finite strain also on the deformed
+surface), node counts per state (named for each pair's law), the contact pressure's facet and
+nodal maxima, robust range and measure (:func:`~contactqvi.contact.surface.pressure_summary`),
+the largest von Mises stress (Pa), the global l2 norm of u~ (m; the number demos print to
+compare runs).
 """
 
 from __future__ import annotations
 
 import dataclasses
-
+import logging
 import os
 import typing
 
@@ -47,13 +50,16 @@ import numpy as np
 from dolfinx import fem
 
 from contactqvi.contact.figures import plot_contact_states, plot_deformed_bodies
+from contactqvi.contact.interface import MESHED_INTERFERENCE
 from contactqvi.contact.load_path import contact_resultants
 from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult
-from contactqvi.contact.surface import STATE_NAMES, UNITS, ContactSurface, labelled, state_names
+from contactqvi.contact.surface import (STATE_NAMES, UNITS, ContactSurface, contact_facet_areas, labelled,
+                                        pressure_summary, state_names)
 from contactqvi.paraview import MeshPiece, VTXDatasetWriter
 from contactqvi.postprocess import StressFields, applied_force, reaction_forces
+from contactqvi.records import warn
 from contactqvi.tables import prepare_output_dir, write_solution_npz
 
 __all__ = [
@@ -61,8 +67,12 @@ __all__ = [
     "UNITS",
     "ContactResultsWriter",
     "contact_summary",
+    "fit_separations",
+    "warn_solved_fits",
     "write_contact_results",
 ]
+
+logger = logging.getLogger(__name__)
 
 
 def contact_summary(
@@ -86,12 +96,12 @@ def contact_summary(
     reactions = reaction_forces(displacement, problem.body, problem.load_factor, problem.dirichlet_dofs_loc,
                                 problem.nodal_contact_forces(result.normal_force, result.friction_force))
     applied = applied_force(problem.V.mesh, problem.body, problem.load_factor, displacement)
-    resultants = contact_resultants(problem, result)
+    finite_strain = problem.hyperelastic is not None
+    resultants = contact_resultants(problem, result, displacement if finite_strain else None)
     obstacle_force = np.asarray(resultants["obstacle_force"])  # forces between bodies cancel in the sum
     total = sum(reactions.values(), np.zeros(3)) + obstacle_force + applied
     scale = max([np.linalg.norm(applied), np.linalg.norm(obstacle_force)]
                 + [np.linalg.norm(r) for r in reactions.values()])
-    pressure = result.normal_force / problem.contact_area
     summary = {
         "contact_force": resultants["contact_force"],
         "pair_forces": resultants["pair_forces"],
@@ -102,9 +112,12 @@ def contact_summary(
         "sticking_area": resultants["sticking_area"],
         "sliding_area": resultants["sliding_area"],
         "state_counts": _state_counts(problem, result.states),
-        "max_contact_pressure": comm.allreduce(float(pressure.max(initial=0.0)), op=MPI.MAX),
+        **pressure_summary(problem, result),
         "displacement_norm": displacement.x.petsc_vec.norm(),
     }
+    if finite_strain:
+        summary["deformed_contact_area"] = comm.allreduce(
+            float(contact_facet_areas(problem, result.states, displacement, deformed=True).sum()), op=MPI.SUM)
     if problem.node_body is not None:
         summary["body_equilibrium_errors"] = _body_equilibrium(problem, reactions, resultants["pair_forces"],
                                                                displacement)
@@ -113,6 +126,50 @@ def contact_summary(
         summary["max_von_mises"] = comm.allreduce(float(von_mises.x.array[:n_cells].max(initial=0.0)), op=MPI.MAX)
     summary["units"] = {name: UNITS[name] for name in summary if name in UNITS}
     return summary
+
+
+def fit_separations(problem: ContactProblem, u: PETSc.Vec) -> dict[str, dict[str, float]]:
+    """How far a solved step that takes up the whole fit pushed the surfaces of each body pair
+    with a declared interference apart (m; docs/press_fit.md, "How wrong a faceted fit is").
+    Collective.
+
+    Per pair: ``overlap``, the mean overlap as meshed (:class:`~contactqvi.contact.interface.MeshedFit`);
+    ``opening``, the mean gap after deformation of its slave nodes, sum_i D_ii g~_i / sum_i D_ii
+    (g~_i the third component of the solver's variables ``u``, the weighted gap after deformation:
+    0 where a node touches, > 0 where it was left open); ``separation``, their sum, the mean
+    normal displacement of the slave surface relative to the master; ``declared``, the mean declared
+    interference; ``pressure_error`` = ``separation`` / ``declared`` - 1. The problem is linear in
+    the fit, so the pressures are those of the declared fit times 1 + ``pressure_error``.
+    """
+    gap_after = u.array.reshape(-1, 3)[problem.contact_blk, 2]
+    out = {}
+    for k, interface in enumerate(problem.interfaces):
+        fit = interface.meshed_fit
+        if fit is None:
+            continue
+        mine = problem.interface_of_node == k
+        area = problem.comm.allreduce(float(problem.contact_area[mine].sum()), op=MPI.SUM)
+        opening = problem.comm.allreduce(float(problem.contact_area[mine] @ gap_after[mine]), op=MPI.SUM) / area
+        separation = fit.overlap + opening
+        out[interface.pair.name] = {"overlap": fit.overlap, "opening": opening, "separation": separation,
+                                    "declared": fit.declared, "pressure_error": separation / fit.declared - 1.0}
+    return out
+
+
+def warn_solved_fits(problem: ContactProblem, u: PETSc.Vec) -> None:
+    """Warn (``solved_interference``, :func:`~contactqvi.records.warn`) for each pair of
+    :func:`fit_separations` whose ``pressure_error`` exceeds
+    :data:`~contactqvi.contact.interface.MESHED_INTERFERENCE` in size: the estimate of how far the
+    pressures are off those of the declared fit. Collective."""
+    for name, fit in fit_separations(problem, u).items():
+        error = fit["pressure_error"]
+        if abs(error) > MESHED_INTERFERENCE:
+            warn(problem.comm, logger, "solved_interference",
+                 f"{name}: the fit as solved pushed the surfaces apart by {fit['separation']:.4e} m on average, "
+                 f"{100.0 * error:+.1f} % of the declared interference {fit['declared']:.4e} m (the overlap as "
+                 f"meshed {fit['overlap']:.4e} m plus {fit['opening']:.4e} m of slave nodes left open where they "
+                 f"cannot follow the master's facets): the contact pressures are about {100.0 * error:+.1f} % off "
+                 "those of the declared fit; mesh both surfaces in equal segments (docs/press_fit.md)", **fit)
 
 
 def _state_counts(problem: ContactProblem, states: np.ndarray) -> dict[str, int]:

@@ -1,0 +1,96 @@
+"""A failed benchmark run is a row of its table, written and read back without a crash (issue 46, item 5).
+
+``benchmarks/peers_real.py`` stopped with ``KeyError: 'dofs'`` writing its table after the
+reference run of a case timed out, and every later run stopped reading that JSON. The
+table writer and the reader are checked here on such rows; no benchmark is run.
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+import sys
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "benchmarks"))
+import peers_real  # noqa: E402
+import rows  # noqa: E402
+
+pytestmark = pytest.mark.one_rank(reason="tables of rows in files of a per-rank tmp_path, no MPI")
+
+TIMEOUT = "failed: timeout after 900 s"
+
+
+def _converged(problem: str, size: str, dofs: int) -> dict:
+    """A converged reference row with the fields the table reads."""
+    return {"problem": problem, "size": size, "dofs": dofs, "code": "reference", "status": "converged",
+            "newton_iterations": 6, "solve_time": 1.5, "solve_cpu_time": 1.4, "process_cpu_seconds": 3.0,
+            "process_seconds": 3.2, "wall_time": 1.5, "peak_memory_mib": 250.0, "contact_force": [0.0, 0.0, -10.0],
+            "force_error": 0.0, "displacement_error": 0.0, "load_average": 0.5, "closed_form_error": 0.01}
+
+
+def _data(table_rows: list[dict]) -> dict:
+    return {"machine": {"cpu": "test", "cores": 2, "memory_gib": 1.0}, "ours_commit": "0" * 40, "accuracy": 1e-6,
+            "tolerances": peers_real.TOLERANCES, "getfem_options": [], "getfem_settings_trials": [],
+            "rows": table_rows, "load_average_end": [0.5, 0.5, 0.5]}
+
+
+def test_a_failed_row_holds_its_key_status_and_time():
+    assert rows.failed_row(TIMEOUT, 900.4, problem="hertz_bodies", size="fine", code="reference") == {
+        "problem": "hertz_bodies", "size": "fine", "code": "reference", "status": TIMEOUT, "seconds": 900.4,
+        "failed": True}
+    assert rows.failed(rows.failed_row("diverged_max_it", 1.0)) and not rows.failed(_converged("hertz", "c", 9))
+    table = [{"dofs": 30}, {"dofs": None}, {}, {"dofs": 10}]
+    assert [r.get("dofs") for r in sorted(table, key=rows.order("dofs"))] == [10, 30, None, None]
+    assert rows.cell({"a": 0.123456}, "a") == "0.123" and rows.cell({}, "a") == "\u2013"
+
+
+def test_peers_real_writes_and_reads_back_a_table_with_failed_references(tmp_path):
+    """The reference of one case timed out (a row without dofs, as :func:`rows.failed_row` makes
+    it), another failed as runs before issue 46 wrote it (its record's status, no flag): the
+    table says so with the time used, the limits leave them out, and the file written reads back
+    into the same table; the next run's rows merge with it."""
+    failed = rows.failed_row(TIMEOUT, 900.4, problem="hertz_bodies", size="fine", code="reference",
+                             case="hertz_bodies_fine.toml", output="runs/x")
+    old_style = {"problem": "hertz", "size": "medium", "code": "reference", "status": "failed: exit 1",
+                 "process_seconds": 12.0}
+    data = _data([_converged("hertz", "coarse", 3000), failed, old_style])
+    text = peers_real.markdown(data)
+    assert f"| hertz_bodies | fine | \u2013 | reference | **failed after 900 s: {TIMEOUT}** |" in text
+    assert "| hertz | medium | \u2013 | reference | **failed after 12 s: failed: exit 1** |" in text
+    assert "| hertz | coarse | 3000 | reference |" in text
+    written = peers_real.save(tmp_path, "0" * 40, 1e-6, [], [], data["rows"], {})
+    again = rows.read_table(tmp_path / "peers_real.json")
+    assert peers_real.markdown(again) == written == (tmp_path / "peers_real.md").read_text()
+    assert again["limits"] == []  # only reference rows: no code timed
+    merged = rows.merge_rows(tmp_path / "peers_real.json", [_converged("hertz_bodies", "fine", 9000)],
+                             ("problem", "size", "code"))
+    assert [(r["problem"], r["size"], r.get("dofs")) for r in merged] == [
+        ("hertz", "coarse", 3000), ("hertz", "medium", None), ("hertz_bodies", "fine", 9000)]
+
+
+def test_an_unreadable_table_is_an_empty_one(tmp_path, capsys):
+    """A truncated JSON file (a run stopped while writing, before writes were atomic) reads as no
+    rows, said on stderr; a missing one silently."""
+    path = tmp_path / "peers_real.json"
+    assert rows.read_table(path) == {}
+    path.write_text(json.dumps(_data([_converged("hertz", "coarse", 3000)]))[:-20])
+    assert rows.read_table(path) == {}
+    assert "peers_real.json: not read" in capsys.readouterr().err
+    rows.write_text(path, "{\"rows\": []}\n")
+    assert rows.read_table(path) == {"rows": []} and sorted(p.name for p in tmp_path.iterdir()) == [path.name]
+
+
+def test_weak_scaling_shows_a_failed_run_with_its_status_and_time():
+    """benchmarks/weak_scaling.py: a run that exited non-zero is a row with its status and wall
+    time in the table, and the projection, which needs the 1-rank run, is left out instead of
+    stopping the script."""
+    import weak_scaling
+
+    failed = rows.failed_row("failed: exit 137", 1234.5, case="d1/L1", ranks=1, lev=6, exit_code=137,
+                             wall_s=1234.5, commit="abc")
+    text = weak_scaling.markdown({"machine": {"cores": 2}, "rows": [failed]})
+    assert "| 1 | 6 | failed: exit 137 after 1234 s |" in text
+    assert weak_scaling.projection([failed]) == {}
