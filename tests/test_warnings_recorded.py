@@ -70,7 +70,7 @@ def _check_pressures(step: dict, slave: str, mean: float) -> None:
     """The same runs' pressure fields (issue 46, item 3): the nodal maximum (314 MPa with the hub
     the slave, at a corner of the slice: a symmetry plane and a flat face; 509 MPa with the shaft)
     is more than twice the facet maximum ``max_contact_pressure`` (132 and 215 MPa) and lies on
-    the slave surface; with the hub the robust range (5-95 %) holds the mean pressure (82 MPa)
+    the slave surface; with the hub the robust range (fenced 1-99 %) holds the mean pressure (82 MPa)
     and leaves the corners out (62-123 MPa)."""
     at = step["max_nodal_contact_pressure_at"]
     radius = B if slave == "hub" else B + DELTA

@@ -29,7 +29,7 @@ import typing
 import numpy as np
 
 from contactqvi.contact.nodal import State
-from contactqvi.contact.surface import state_names
+from contactqvi.contact.surface import FENCE, robust_range, state_names
 from contactqvi.contact.surface_views import SurfaceView, contact_limits, number, surface_views
 from contactqvi.load_steps import Rotation, placed
 from contactqvi.obstacles import Cylinder, Obstacle, Plane, Sphere, tangent_frames
@@ -158,31 +158,15 @@ def stress_unit(value: float) -> tuple[str, float]:
 LOG_SCALE_RANGE = 100.0
 
 
-#: Values beyond the quartiles by more than this many interquartile ranges are outliers (Tukey's fences).
-FENCE = 1.5
-
-
-def _robust_range(values: np.ndarray, fenced: bool) -> tuple[float, float]:
-    """The 1st and 99th percentile of ``values``, ``fenced`` within Tukey's fences
-    (:data:`FENCE` interquartile ranges beyond the quartiles): on a coarse mesh a few corner
-    nodes at a symmetry plane are more than 1 % of the pressing nodes (a press fit's 4 of 67),
-    and the fences keep them from setting the range, while a Hertz distribution lies within
-    them. A stress map is not fenced: its contact zone is a few percent of the boundary's
-    cells, outside the fences of the rest."""
-    first, lower, upper, last = np.percentile(values, [1.0, 25.0, 75.0, 99.0])
-    spread = FENCE * (upper - lower) if fenced else np.inf
-    return float(max(first, lower - spread)), float(min(last, upper + spread))
-
-
 def robust_scale(name: str, values: np.ndarray, at: np.ndarray, what: str, stress_map: bool = False) -> ColourScale:
     """The colour scale of ``values`` (Pa) at positions ``at`` (m): the robust range of the
-    positive values (:func:`_robust_range`, fenced unless a ``stress_map``), so that a few
+    positive values (:func:`~contactqvi.contact.surface.robust_range`, fenced unless a ``stress_map``), so that a few
     singular values (corner nodes at a symmetry plane) do not set it; the largest value and
     its position stated in ``note``. A ``stress_map`` starts at zero, or is logarithmic when
     the percentiles span more than :data:`LOG_SCALE_RANGE`.
     ``what`` names the values the percentiles are of."""
     positive = values[values > 0.0]
-    low, high = _robust_range(positive, not stress_map) if len(positive) else (0.0, 1.0)
+    low, high = robust_range(positive, not stress_map) if len(positive) else (0.0, 1.0)
     log = bool(stress_map and low * LOG_SCALE_RANGE < high)
     if log:
         low = max(low, 1e-4 * high)
