@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import difflib
 import logging
 import pathlib
 import signal
@@ -31,7 +30,7 @@ from petsc4py import PETSc
 from dolfinx import mesh as dmesh
 
 from contactqvi import tables
-from contactqvi.case import Body, ContactCase, ContactPair, check_groups, check_solver
+from contactqvi.case import Body, ContactCase, ContactPair, check_bodies, check_groups, check_solver
 from contactqvi.contact.checkpoint import Checkpoint, CheckpointWriter, read_checkpoint, remove_checkpoints
 from contactqvi.contact.load_path import SOLVER_PARAMETERS, LoadStep, solve_load_path
 from contactqvi.contact.path_state import PathState
@@ -95,12 +94,7 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
     """The contact problem of a case with ``[[bodies]]`` and ``[[contacts]]``; each body's
     ``boundary.body_force`` (N/m^3) acts on its own cells."""
     msh, facet_tags, cell_tags = read_gmsh(case.mesh.file, comm)
-    for i, body in enumerate(case.bodies):
-        if body.name not in cell_tags.names:
-            close = difflib.get_close_matches(body.name, list(cell_tags.names), n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
-            raise ParameterError(f"bodies[{i}].name", f"no physical volume {body.name!r} in the mesh{hint}; it has: "
-                                 f"{', '.join(sorted(cell_tags.names))}")
+    check_bodies(case, cell_tags.names)
     tags = split_by_body(msh, facet_tags, cell_tags)
     check_groups(case, tags.names)
     young, poisson = body_materials(msh, cell_tags, {b.name: (b.material.young, b.material.poisson)
