@@ -57,6 +57,9 @@ slave surface with a master surface (``"body.group"``) or with a rigid obstacle
     [mesh]
     file = "../meshes/patch_blocks.geo"
 
+    # [material]
+    # model = "neo_hookean"             # optional: every body's model unless its material names one
+
     [[bodies]]
     name = "lower"                      # physical volume group
     material = {young = 1e9, poisson = 0.3}
@@ -213,7 +216,8 @@ class Material:
         poisson: Poisson's ratio nu, in (-1, 0.5).
         model: None (linear elasticity, small strain) or a hyperelastic material of
             :data:`contactqvi.materials.MATERIALS` (finite strain: ``"neo_hookean"``,
-            ``"saint_venant_kirchhoff"``); one body against rigid obstacles.
+            ``"saint_venant_kirchhoff"``). With ``[[bodies]]`` every body takes the same model;
+            a case file's ``[material]`` may then hold ``model`` alone, the default of the bodies.
     """
 
     young: float
@@ -385,7 +389,8 @@ class ContactCase:
         if self.bodies or self.contacts:
             for name in ("material", "boundary", "contact", "obstacle"):
                 require(getattr(self, name) is None, name, "not used with [[bodies]]: give each body its "
-                        "material and boundary, and each contact pair its obstacle")
+                        "material (Body(material=Material(young, poisson, model))) and boundary, and each contact "
+                        "pair its obstacle")
             require(self.mesh.file is not None, "mesh.file", "several bodies need a gmsh file with one "
                     "physical volume per body")
             checked["bodies"] = _check_bodies(self.bodies)
@@ -450,8 +455,10 @@ def parse_case(data: collections.abc.Mapping, base_dir: str | pathlib.Path = "."
         "petsc": _table(top.get("petsc", {}), "petsc"),
     }
     if top.get("bodies") or top.get("contacts"):
-        return ContactCase(**common, **{name: top[name] for name in _ONE_BODY if name in top},
-                           bodies=tuple(_parse_body(b, f"bodies[{i}]") for i, b in enumerate(_array(top, "bodies"))),
+        model = _default_model(top)
+        return ContactCase(**common, **{name: top[name] for name in _ONE_BODY if name in top and name != "material"},
+                           bodies=tuple(_parse_body(b, f"bodies[{i}]", model)
+                                        for i, b in enumerate(_array(top, "bodies"))),
                            contacts=tuple(_parse_pair(c, f"contacts[{i}]")
                                           for i, c in enumerate(_array(top, "contacts"))))
     return ContactCase(
@@ -492,9 +499,23 @@ def _parse_boundary(boundary: dict[str, typing.Any], path: str) -> Boundary:
     return Boundary(**boundary)
 
 
-def _parse_body(value: typing.Any, path: str) -> Body:
+def _default_model(top: dict[str, typing.Any]) -> str | None:
+    """``[material] model`` of a case with ``[[bodies]]``: the model of every body that names none."""
+    if "material" not in top:
+        return None
+    material = _table(top["material"], "material", Material, required=False)
+    for key in material:
+        require(key == "model", f"material.{key}", "with [[bodies]], [material] gives only the default model of "
+                f"the bodies; give {key} in each body's material (bodies[i].material = {{young = ..., poisson = "
+                "...}})")
+    return material.get("model")
+
+
+def _parse_body(value: typing.Any, path: str, model: str | None = None) -> Body:
+    """A ``[[bodies]]`` entry; ``model``: the default of its material's model (``[material] model``)."""
     body = _table(value, path, Body)
-    body["material"] = Material(**_table(body["material"], f"{path}.material", Material))
+    material = _table(body["material"], f"{path}.material", Material)
+    body["material"] = Material(**{"model": model, **material})
     if "boundary" in body:
         body["boundary"] = _parse_boundary(_table(body["boundary"], f"{path}.boundary", Boundary), f"{path}.boundary")
     return Body(**body)

@@ -19,6 +19,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import logging
+import math
 import pathlib
 import signal
 import threading
@@ -38,6 +39,7 @@ from contactqvi.contact.figure_data import ShownStep
 from contactqvi.contact.figures import plot_contact_states, plot_deformed_bodies, plot_forces
 from contactqvi.contact.force_history import write_force_table
 from contactqvi.contact.postprocess import ContactResultsWriter, warn_solved_fits
+from contactqvi.contact.reach import check_reach
 from contactqvi.contact.interface import BodyPair, ObstaclePair
 from contactqvi.contact.problem import ContactProblem, assemble_contact_problem, build_contact_problem
 from contactqvi.contact.scd_newton import SCDNewtonResult
@@ -117,6 +119,13 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
                                     rotations=_rotations(case))
 
 
+def _largest_prescribed(case: ContactCase) -> float:
+    """The largest length (m) of a prescribed displacement of the case at load factor 1."""
+    boundaries = [case.boundary] if case.boundary is not None else [body.boundary for body in case.bodies]
+    lengths = [math.hypot(*d.components().values()) for b in boundaries for d in b.displacement.values()]
+    return max(lengths, default=0.0)
+
+
 def _rotations(case: ContactCase) -> bool:
     """Whether a step of ``case`` rotates the moved groups (the problem then builds the rotations' loads)."""
     return any(step.rotation is not None for step in case.steps)
@@ -172,6 +181,7 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
     with warnings, default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, _stop_signals() as stop:
         logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks",
                     problem.n_contact, problem.n_free, len(case.steps), comm.size)
+        check_reach(problem, case.steps, _largest_prescribed(case))
         recorder = _StepRecorder(case, problem, output, checkpoint, stop, warnings)
         state = PathState.at_rest(problem) if checkpoint is None else checkpoint.resume(problem)
         first, u = state.done, problem.A.createVecRight()
