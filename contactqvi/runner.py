@@ -33,6 +33,7 @@ from dolfinx import mesh as dmesh
 from contactqvi import tables
 from contactqvi.case import Body, ContactCase, ContactPair, check_bodies, check_groups, check_solver
 from contactqvi.contact.checkpoint import Checkpoint, CheckpointWriter, read_checkpoint, remove_checkpoints
+from contactqvi.contact.diagnosis import failure_cause
 from contactqvi.contact.load_path import SOLVER_PARAMETERS, LoadStep, solve_load_path
 from contactqvi.contact.path_state import PathState
 from contactqvi.contact.figure_data import ShownStep
@@ -248,6 +249,8 @@ class _StepRecorder:
             entry["rotation"] = dataclasses.asdict(step.rotation)
         if index == 0 or self.problem.searched_each_step:  # the search this step's problem comes from
             entry.update(p=self.problem.n_contact, search_seconds=dict(self.problem.setup_seconds))
+        if not result.converged:
+            entry["failure"] = failure_cause(self.problem, result)
         writer, summary = self.writer, self.summary
         try:
             if result.converged:
@@ -257,6 +260,8 @@ class _StepRecorder:
                 tables.write_solution_npz(writer.out / "solution.npz", writer.last.displacement)
             summary["steps"].append(entry)
             summary["status"] = str(result.status)
+            summary.pop("failure", None)
+            summary.update({"failure": entry["failure"]} if "failure" in entry else {})
             tables.write_summary(self.problem.comm, writer.out / "summary.json", summary)
             write_force_table(self.problem.comm, writer.out / "forces.csv", summary["steps"])
             if result.converged:
@@ -305,6 +310,8 @@ def _log_step(index: int, result: SCDNewtonResult, entry: dict[str, typing.Any])
     logger.info("step %d: %s, %d Newton steps, %d Krylov; contact forces (N) %s; contact area %.4g m^2",
                 index + 1, result.status, result.iterations, result.inner_iterations, forces or "-",
                 entry.get("contact_area", float("nan")))
+    if "failure" in entry:
+        logger.error("step %d failed: %s", index + 1, entry["failure"])
 
 
 def _check_output(comm: MPI.Comm, output: str | pathlib.Path) -> None:
