@@ -11,13 +11,8 @@ suggestion backwards; following it, ``m20b_...``, gave the opposite error).
 from __future__ import annotations
 
 import dataclasses
-import os
 import pathlib
 import re
-import shutil
-import subprocess
-import sys
-import tempfile
 
 from mpi4py import MPI
 
@@ -27,10 +22,9 @@ from contactqvi.case import ContactCase, check_bodies, load_case
 from contactqvi.contact.reach import body_travel, check_reach
 from contactqvi.parameters import ParameterError
 from contactqvi.runner import EXIT_CODES, build_problem, run_case
+from program_runs import run_program
 
 DATA = pathlib.Path(__file__).resolve().parent / "data" / "mistakes"
-MPIENV = {"OMPI_MCA_rmaps_base_oversubscribe": "1", "PRTE_MCA_rmaps_default_mapping_policy": ":oversubscribe",
-          "OMPI_MCA_btl": "self,sm", "OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1"}
 
 #: The obstacle of m08 starts on the block's top face (z = 10 mm) with its normal +z, pointing
 #: out of the block, and moves down 0.3 mm per step: the top face's nodes are 0.3 mm from it at
@@ -68,15 +62,7 @@ def test_a_mistake_is_named_before_any_solve(name, mpi_tmp_path):
 @pytest.mark.parametrize("name", MISTAKES)
 def test_a_mistake_exits_2_with_its_message_on_1_and_3_ranks(tmp_path, name, ranks):
     """``python -m contactqvi run`` on each mistake: exit 2 and the named error, on 1 and 3 ranks."""
-    command = [sys.executable, "-m", "contactqvi", "run", str(DATA / f"{name}.toml"), "--output",
-               str(tmp_path / "out"), "--no-plot"]
-    session = tempfile.mkdtemp(prefix="prte-")
-    try:
-        done = subprocess.run(["mpirun", "-n", str(ranks), *command] if ranks > 1 else command,
-                              capture_output=True, text=True, timeout=180,
-                              env=os.environ | MPIENV | {"TMPDIR": session})
-    finally:
-        shutil.rmtree(session, ignore_errors=True)
+    done = run_program(DATA / f"{name}.toml", tmp_path / "out", ranks)
     assert done.returncode == EXIT_CODES["bad input"], done.stderr[-3000:]
     assert f"error: {MISTAKES[name]}" in done.stderr, done.stderr[-3000:]
     assert "Traceback" not in done.stderr and "MPI_ABORT" not in done.stderr
