@@ -53,7 +53,7 @@ def test_the_tangential_load_leaves_out_what_the_supports_take():
     normal is z: 50 N along the plane, to round-off."""
     case = load_case(PUSHED)
     with build_problem(case, MPI.COMM_WORLD) as problem:  # at load factor 1
-        assert tangential_load(problem, problem.interfaces[0]) == pytest.approx(50.0, rel=1e-12)
+        assert tangential_load(problem, 0) == pytest.approx(50.0, rel=1e-12)
 
 
 def test_friction_that_holds_the_load_converges_without_a_failure(mpi_tmp_path):

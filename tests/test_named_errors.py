@@ -43,7 +43,8 @@ TWO_GROUPS = ("mesh: the physical groups 'contact' and 'side_x' share 26 facets 
 #: body is misspelt, and both cases point at the mesh's name.
 MISSPELT = ("bodies[1].name: no physical volume 'midle' in the mesh (did you mean 'middle', which contacts[0].slave "
             "and contacts[1].master name?); it has: base, middle, topblk")
-FOLLOWED = "bodies[1].name: no physical volume 'midle' in the mesh (did you mean 'middle'?); it has: base, middle, topblk"
+FOLLOWED = ("bodies[1].name: no physical volume 'midle' in the mesh (did you mean 'middle'?); it has: base, middle, "
+            "topblk")
 MISTAKES = {"m08_normal_flipped": NEVER, "facet_in_two_groups": TWO_GROUPS, "m20_wrong_body_name": MISSPELT,
             "m20b_wrong_body_name_followed_hint": FOLLOWED}
 

@@ -36,7 +36,7 @@ def failure_cause(problem: ContactProblem, result: SCDNewtonResult) -> str | Non
     if result.converged:
         return None
     if result.status in (Status.DIVERGED_LINE_SEARCH, Status.DIVERGED_MAX_IT):
-        for k, interface in enumerate(problem.interfaces):
+        for k in range(len(problem.interfaces)):
             overload = _friction_overload(problem, result, k)
             if overload is not None:
                 return overload
@@ -78,7 +78,7 @@ def _friction_overload(problem: ContactProblem, result: SCDNewtonResult, k: int)
         return None
     normal_force = comm.allreduce(float(result.normal_force[mine].sum()), op=MPI.SUM)
     bound = comm.allreduce(float(problem.law.bound(result.normal_force)[mine].sum()), op=MPI.SUM)
-    load = tangential_load(problem, interface)
+    load = tangential_load(problem, k)
     if load <= bound or normal_force <= 0.0:
         return None
     return (f"no equilibrium: the tangential load exceeds μ × the normal force on pair {interface.pair.name}: the "
@@ -88,16 +88,16 @@ def _friction_overload(problem: ContactProblem, result: SCDNewtonResult, k: int)
             "sticks); lower the tangential load, raise the friction or hold the body along the plane")
 
 
-def tangential_load(problem: ContactProblem, interface: Interface) -> float:
+def tangential_load(problem: ContactProblem, k: int) -> float:
     """The resultant (N) of the tractions, pressures and body force at the current load factor on the
-    slave body of ``interface``, its components that a support of that body prescribes left out,
+    slave body of interface ``k``, its components that a support of that body prescribes left out,
     along the pair's contact plane (normal to the area-weighted mean of its nodes' normals). Collective."""
-    comm = problem.comm
+    comm, interface = problem.comm, problem.interfaces[k]
     name = None if problem.node_body is None else interface.slave_surface.split(".", 1)[0]
     body = _loads_of(problem.body, name)
     force = applied_force(problem.V.mesh, body, problem.load_factor)
     force[list(_held(body))] = 0.0
-    mine = problem.interface_of_node == problem.interfaces.index(interface)
+    mine = problem.interface_of_node == k
     normal = comm.allreduce(problem.contact_area[mine] @ problem.frames[mine, 2], op=MPI.SUM)
     normal = normal / np.linalg.norm(normal)
     return float(np.linalg.norm(force - (force @ normal) * normal))

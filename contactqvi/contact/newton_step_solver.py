@@ -73,8 +73,9 @@ class NewtonStepSolver(PETScOwner):
 
     A Krylov solve that fails (a negative converged reason: out of iterations, a breakdown)
     is done again by a direct solve (:data:`FALLBACK`, MUMPS LU) for that Newton step alone:
-    a large load step can leave a preconditioner built for another J far behind (an 80 %
-    step of the rubber pad: 2 005 Krylov iterations, where exact Newton steps converge in 6).
+    a large load step can leave a preconditioner built for another J far behind (issue 46: an
+    80 % step with cuts off ended in ``diverged_linear_solve`` after 2 005 Krylov iterations,
+    where exact Newton steps converge in 6).
     It is logged and recorded (:attr:`fallback`); the next step tries the Krylov solver again.
 
     Attributes:

@@ -58,12 +58,10 @@ def check_reach(problem: ContactProblem, steps: typing.Sequence[LoadStep], presc
             of it, the obstacle's travel, the bodies' travel and the likely cause (an obstacle
             facing away from the body, a contact group on the wrong face).
     """
-    if not steps:
-        return
-    approaches = [_approach(problem, steps, k) for k in range(len(problem.interfaces))]
-    base = body_travel(problem, steps, prescribed)
+    base = body_travel(problem, steps, prescribed) if steps else None
     if base is None:
         return
+    approaches = [_approach(problem, steps, k) for k in range(len(problem.interfaces))]
     pushes = [max(0.0, -a.gap) for a in approaches]
     for k, (interface, approach) in enumerate(zip(problem.interfaces, approaches)):
         travel = base + sum(push for j, push in enumerate(pushes) if j != k)
@@ -157,9 +155,9 @@ def _cause(problem: ContactProblem, step: LoadStep, interface: Interface, gap: f
     total = comm.allreduce(len(distance), op=MPI.SUM)
     deepest = comm.allreduce(float(distance.min(initial=np.inf)), op=MPI.MIN)
     if behind:
-        return (f"the obstacle faces away from the body: {behind} of its {total} nodes lie behind the obstacle's surface "
-                f"(signed distance down to {deepest:.4g} m, at {step_position(step)}); a plane's normal must "
-                "point into the body's side (flip obstacle.normal)")
+        return (f"the obstacle faces away from the body: {behind} of its {total} nodes lie behind the obstacle's "
+                f"surface (signed distance down to {deepest:.4g} m, at {step_position(step)}); a plane's normal "
+                "must point into the body's side (flip obstacle.normal)")
     if deepest < gap:
         return (f"a wrong contact group: nodes of the body off {interface.slave_surface!r} come within "
                 f"{deepest:.4g} m of the obstacle, nearer than the group; name the face that meets it")
