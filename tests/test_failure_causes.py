@@ -82,3 +82,17 @@ def test_a_failed_krylov_solve_falls_back_to_a_direct_one(mpi_tmp_path):
                for entry in solves)
     assert not any("direct_fallback" in entry for entry in reference["history"])
     assert np.isfinite(step["equilibrium_error"]) and step["equilibrium_error"] < 1e-10
+
+
+def test_a_stall_where_friction_holds_is_not_called_no_equilibrium(mpi_tmp_path):
+    """Friction 0.6 from rest (``solver.start = "rest"``): nothing holds the block along y or z
+    before a node touches, the line search fails at the first Newton step with no node sliding;
+    the failure says so and does not claim that friction cannot hold the load."""
+    case = load_case(PUSHED)
+    rest = dataclasses.replace(case, solver={**case.solver, "start": "rest"},
+                               contact=dataclasses.replace(case.contact, law=dataclasses.replace(case.contact.law,
+                                                                                                 friction=0.6)))
+    summary, code = run_case(rest, mpi_tmp_path / "out", plot=False)
+    assert code == EXIT_CODES["not converged"] and summary["status"] == "diverged_line_search"
+    assert re.fullmatch(r"the line search accepted no step size \(\|\|y\^\|\| = \S+ N at Newton step 0, 1\.00e\+00 of "
+                        r"the start; target \S+ N\)", summary["failure"]), summary["failure"]
