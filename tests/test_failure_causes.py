@@ -81,6 +81,10 @@ def test_a_failed_krylov_solve_falls_back_to_a_direct_one(mpi_tmp_path):
     assert all(entry["direct_fallback"] == "DIVERGED_MAX_IT" and entry["direct_reason"] == "CONVERGED_ITS"
                for entry in solves)
     assert not any("direct_fallback" in entry for entry in reference["history"])
+    records = [record for record in summary["warnings"] if record["key"] == "direct_fallback"]
+    assert len(records) == len(solves) and not any(r["key"] == "direct_fallback" for r in exact["warnings"])
+    assert records[0]["message"] == ("the Krylov solve of a Newton step failed (DIVERGED_MAX_IT after 0 iterations): "
+                                     "solved by lu (MUMPS) instead, CONVERGED_ITS")
     assert np.isfinite(step["equilibrium_error"]) and step["equilibrium_error"] < 1e-10
 
 

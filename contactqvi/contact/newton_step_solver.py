@@ -18,6 +18,7 @@ import numpy as np
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import OptionsDict, create_ksp, default_options, ksp_converged_reason, preset
 from contactqvi.multigrid import GalerkinUpdate, is_multigrid, set_up
+from contactqvi.records import warn
 
 __all__ = ["FALLBACK", "NEWTON_STEP_SOLVERS", "NewtonStepSolver"]
 
@@ -76,7 +77,8 @@ class NewtonStepSolver(PETScOwner):
     a large load step can leave a preconditioner built for another J far behind (issue 46: an
     80 % step with cuts off ended in ``diverged_linear_solve`` after 2 005 Krylov iterations,
     where exact Newton steps converge in 6).
-    It is logged and recorded (:attr:`fallback`); the next step tries the Krylov solver again.
+    It is a warning (``direct_fallback``, :func:`~contactqvi.records.warn`: in ``summary.json`` of a
+    case run) and in the step's history (:attr:`fallback`); the next step tries the Krylov solver again.
 
     Attributes:
         ksp: the Krylov solver.
@@ -156,9 +158,9 @@ class NewtonStepSolver(PETScOwner):
         self._direct.setOperators(J)
         self._direct.solve(rhs, du)
         self.fallback = {"direct_fallback": self.reason, "direct_reason": ksp_converged_reason(self._direct)}
-        if self.comm.rank == 0:
-            logger.warning("the Krylov solve of a Newton step failed (%s after %d iterations): solved by %s (MUMPS) "
-                           "instead, %s", self.reason, self.iterations, FALLBACK, self.fallback["direct_reason"])
+        warn(self.comm, logger, "direct_fallback", f"the Krylov solve of a Newton step failed ({self.reason} after "
+             f"{self.iterations} iterations): solved by {FALLBACK} (MUMPS) instead, {self.fallback['direct_reason']}",
+             krylov_iterations=self.iterations)
         return self._direct.getConvergedReason()
 
     def set_up_levels(self, A: PETSc.Mat) -> bool:
