@@ -18,7 +18,7 @@ from mpi4py import MPI
 
 import pytest
 
-from contactqvi.case import ContactCase, check_bodies, load_case
+from contactqvi.case import ContactCase, Displacement, check_bodies, load_case
 from contactqvi.contact.reach import body_travel, check_reach
 from contactqvi.parameters import ParameterError
 from contactqvi.runner import EXIT_CODES, build_problem, run_case
@@ -87,21 +87,24 @@ def test_a_pair_that_can_touch_passes():
         check_reach(problem, loaded.steps)
 
 
-def test_a_prescribed_motion_that_may_close_the_gap_passes():
-    """The plate 1 mm above the block, which a prescribed displacement lifts by up to 0.6 mm: the
-    gap exceeds the travel, but not twice it (a node may move farther than its support), so the
-    pair may touch; with 0.4 mm it cannot, and the error names the travel and the gap."""
+def test_a_prescribed_motion_that_may_close_the_gap_passes(mpi_tmp_path):
+    """The plate 1 mm above the block, whose bottom a prescribed displacement lifts: by 0.6 mm the
+    gap exceeds the travel but not twice it (a node may move farther than its support), so the
+    pair may touch; by 0.4 mm it cannot, and the runner's error names the travel and the gap."""
     case = _flipped()
     above = dataclasses.replace(case.obstacle, point=(0.0, 0.0, 0.011), normal=(0.0, 0.0, -1.0))
     steps = tuple(dataclasses.replace(step, translation=(0.0, 0.0, 0.0)) for step in case.steps)
     with build_problem(dataclasses.replace(case, obstacle=above, steps=steps), MPI.COMM_WORLD) as problem:
         assert body_travel(problem, steps, 6e-4) == pytest.approx(6e-4, rel=1e-15)
         check_reach(problem, steps, 6e-4)
-        with pytest.raises(ParameterError, match=re.escape(
-                "top/obstacle: the pair can never touch: no node of 'top' comes nearer than 0.001 m to the obstacle "
-                "in the 10 load steps (the smallest gap, at step 1; the obstacle travels up to 0 m), and nothing "
-                "moves the bodies more than 0.0004 m") + ".* Likely cause: the obstacle is placed"):
-            check_reach(problem, steps, 4e-4)
+    lifted = dataclasses.replace(case.boundary, displacement={**case.boundary.displacement,
+                                                              "bottom": Displacement(z=4e-4)})
+    with pytest.raises(ParameterError, match=re.escape(
+            "top/obstacle: the pair can never touch: no node of 'top' comes nearer than 0.001 m to the obstacle in "
+            "the 10 load steps (the smallest gap, at step 1; the obstacle travels up to 0 m), and nothing moves the "
+            "bodies more than 0.0004 m") + ".* Likely cause: the obstacle is placed"):
+        run_case(dataclasses.replace(case, obstacle=above, steps=steps, boundary=lifted), mpi_tmp_path / "out",
+                 plot=False)
 
 
 @pytest.mark.one_rank(reason="case-file checks on dataclasses against a list of names: no mesh")
