@@ -57,6 +57,9 @@ slave surface with a master surface (``"body.group"``) or with a rigid obstacle
     [mesh]
     file = "../meshes/patch_blocks.geo"
 
+    # [material]
+    # model = "neo_hookean"             # optional: every body's model unless its material names one
+
     [[bodies]]
     name = "lower"                      # physical volume group
     material = {young = 1e9, poisson = 0.3}
@@ -158,6 +161,7 @@ __all__ = [
     "PaperBody",
     "Rotation",
     "Step",
+    "check_bodies",
     "check_groups",
     "check_solver",
     "load_case",
@@ -212,7 +216,8 @@ class Material:
         poisson: Poisson's ratio nu, in (-1, 0.5).
         model: None (linear elasticity, small strain) or a hyperelastic material of
             :data:`contactqvi.materials.MATERIALS` (finite strain: ``"neo_hookean"``,
-            ``"saint_venant_kirchhoff"``); one body against rigid obstacles.
+            ``"saint_venant_kirchhoff"``). With ``[[bodies]]`` every body takes the same model;
+            a case file's ``[material]`` may then hold ``model`` alone, the default of the bodies.
     """
 
     young: float
@@ -384,11 +389,12 @@ class ContactCase:
         if self.bodies or self.contacts:
             for name in ("material", "boundary", "contact", "obstacle"):
                 require(getattr(self, name) is None, name, "not used with [[bodies]]: give each body its "
-                        "material and boundary, and each contact pair its obstacle")
+                        "material (Body(material=Material(young, poisson, model))) and boundary, and each contact "
+                        "pair its obstacle")
             require(self.mesh.file is not None, "mesh.file", "several bodies need a gmsh file with one "
                     "physical volume per body")
             checked["bodies"] = _check_bodies(self.bodies)
-            checked["contacts"] = _check_contacts(self.contacts, checked["bodies"])
+            checked["contacts"] = _check_contacts(self.contacts)
         else:
             for name in ("material", "boundary", "contact", "obstacle"):
                 require(getattr(self, name) is not None, name, f"required table [{name}] missing")
@@ -449,8 +455,10 @@ def parse_case(data: collections.abc.Mapping, base_dir: str | pathlib.Path = "."
         "petsc": _table(top.get("petsc", {}), "petsc"),
     }
     if top.get("bodies") or top.get("contacts"):
-        return ContactCase(**common, **{name: top[name] for name in _ONE_BODY if name in top},
-                           bodies=tuple(_parse_body(b, f"bodies[{i}]") for i, b in enumerate(_array(top, "bodies"))),
+        model = _default_model(top)
+        return ContactCase(**common, **{name: top[name] for name in _ONE_BODY if name in top and name != "material"},
+                           bodies=tuple(_parse_body(b, f"bodies[{i}]", model)
+                                        for i, b in enumerate(_array(top, "bodies"))),
                            contacts=tuple(_parse_pair(c, f"contacts[{i}]")
                                           for i, c in enumerate(_array(top, "contacts"))))
     return ContactCase(
@@ -491,9 +499,23 @@ def _parse_boundary(boundary: dict[str, typing.Any], path: str) -> Boundary:
     return Boundary(**boundary)
 
 
-def _parse_body(value: typing.Any, path: str) -> Body:
+def _default_model(top: dict[str, typing.Any]) -> str | None:
+    """``[material] model`` of a case with ``[[bodies]]``: the model of every body that names none."""
+    if "material" not in top:
+        return None
+    material = _table(top["material"], "material", Material, required=False)
+    for key in material:
+        require(key == "model", f"material.{key}", "with [[bodies]], [material] gives only the default model of "
+                f"the bodies; give {key} in each body's material (bodies[i].material = {{young = ..., poisson = "
+                "...}})")
+    return material.get("model")
+
+
+def _parse_body(value: typing.Any, path: str, model: str | None = None) -> Body:
+    """A ``[[bodies]]`` entry; ``model``: the default of its material's model (``[material] model``)."""
     body = _table(value, path, Body)
-    body["material"] = Material(**_table(body["material"], f"{path}.material", Material))
+    material = _table(body["material"], f"{path}.material", Material)
+    body["material"] = Material(**{"model": model, **material})
     if "boundary" in body:
         body["boundary"] = _parse_boundary(_table(body["boundary"], f"{path}.boundary", Boundary), f"{path}.boundary")
     return Body(**body)
@@ -688,9 +710,9 @@ def _check_bodies(bodies: typing.Sequence[Body]) -> tuple[Body, ...]:
     return tuple(checked)
 
 
-def _check_contacts(contacts: typing.Sequence[ContactPair], bodies: tuple[Body, ...]) -> tuple[ContactPair, ...]:
+def _check_contacts(contacts: typing.Sequence[ContactPair]) -> tuple[ContactPair, ...]:
+    """The ``[[contacts]]`` pairs checked; their bodies are checked with the mesh (:func:`check_bodies`)."""
     require(_is_list(contacts) and len(contacts) > 0, "contacts", "give at least one [[contacts]] pair")
-    names = [b.name for b in bodies]
     checked = []
     for i, pair in enumerate(contacts):
         path = f"contacts[{i}]"
@@ -698,11 +720,7 @@ def _check_contacts(contacts: typing.Sequence[ContactPair], bodies: tuple[Body, 
         for key in ("slave", "master") if pair.master is not None else ("slave",):
             value = _name(getattr(pair, key), f"{path}.{key}")
             body, _, group = value.partition(".")
-            require(group != "", f"{path}.{key}", f"must be 'body.group', got {value!r}")
-            if body not in names:
-                close = difflib.get_close_matches(body, names, n=1)
-                hint = f" (did you mean {close[0]!r}?)" if close else ""
-                raise ParameterError(f"{path}.{key}", f"unknown body {body!r}{hint}; bodies: {', '.join(names)}")
+            require(body != "" and group != "", f"{path}.{key}", f"must be 'body.group', got {value!r}")
         require((pair.master is None) != (pair.obstacle is None), path, "give exactly one of 'master' and 'obstacle'")
         obstacle = None if pair.obstacle is None else _check_obstacle(pair.obstacle, f"{path}.obstacle")
         require(pair.master != pair.slave, f"{path}.master", "must differ from the slave surface")
@@ -846,6 +864,38 @@ def check_groups(case: ContactCase, names_in_mesh: typing.Iterable[str]) -> None
             close = difflib.get_close_matches(name, known, n=1)
             hint = f" (did you mean {close[0]!r}?)" if close else ""
             raise ParameterError(path, f"unknown physical group {name!r}{hint}; the mesh has: {', '.join(known)}")
+
+
+def check_bodies(case: ContactCase, volumes: typing.Iterable[str]) -> None:
+    """Check the bodies of a case with ``[[bodies]]`` against the mesh's physical volumes, then
+    the bodies its ``[[contacts]]`` name against its bodies.
+
+    Call it right after reading the mesh (``cell_tags.names``): which of two names that differ
+    is misspelt, a body's or a pair's, only the mesh tells.
+
+    Raises:
+        ParameterError: ``bodies[i].name`` naming the closest volume (and the pairs that name
+            it), or ``contacts[i].slave`` / ``.master`` naming the closest body.
+    """
+    known = sorted(volumes)
+    names = [body.name for body in case.bodies]
+    uses = [(f"contacts[{i}].{key}", getattr(pair, key).partition(".")[0]) for i, pair in enumerate(case.contacts)
+            for key in ("slave", "master") if getattr(pair, key) is not None]
+    for i, name in enumerate(names):
+        if name not in known:
+            close = difflib.get_close_matches(name, known, n=1)
+            hint = ""
+            if close:
+                named = [path for path, body in uses if body == close[0]]
+                also = f", which {' and '.join(named)} name{'s' if len(named) == 1 else ''}" if named else ""
+                hint = f" (did you mean {close[0]!r}{also}?)"
+            raise ParameterError(f"bodies[{i}].name", f"no physical volume {name!r} in the mesh{hint}; it has: "
+                                 f"{', '.join(known)}")
+    for path, body in uses:
+        if body not in names:
+            close = difflib.get_close_matches(body, names, n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise ParameterError(path, f"unknown body {body!r}{hint}; the [[bodies]] are: {', '.join(names)}")
 
 
 def _group_uses(case: ContactCase) -> list[tuple[str, str]]:

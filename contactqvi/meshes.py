@@ -318,7 +318,7 @@ def _read_model(path: pathlib.Path, gdim: int) -> _GmshModel:
     node_tags, node_x, _ = gmsh.model.mesh.getNodes()
     nodes = _Nodes(np.asarray(node_tags, dtype=np.int64), np.asarray(node_x, dtype=float).reshape(-1, 3))
     shared, fault = _mesh_faults(facets, cells, entities, nodes)
-    fault = _mixed_cells(kinds) or fault
+    fault = _facets_in_two_groups(gdim - 1, groups[gdim - 1]) or _mixed_cells(kinds) or fault
     counts = {name: sum(len(rows) for rows in facets[name]) for name in facets}
     return _GmshModel(groups[gdim - 1], groups[gdim], counts, shared, fault)
 
@@ -334,6 +334,31 @@ def _element_rows(dim: int, tag: int) -> list[np.ndarray]:
         rows += [np.asarray(tags, dtype=np.int64).reshape(-1, gmsh.model.mesh.getElementProperties(kind)[3])
                  for kind, tags in zip(types, nodes)]
     return rows
+
+
+def _facets_in_two_groups(dim: int, groups: dict[str, int]) -> str | None:
+    """The error text when gmsh surfaces (facets) are in two facet groups, else None.
+
+    DOLFINx 0.9 gives each facet one tag, so a facet in two physical groups is kept in
+    one of them only (which one depends on the tags): the other group loses it.
+    """
+    import gmsh
+
+    entities = {name: set(gmsh.model.getEntitiesForPhysicalGroup(dim, tag)) for name, tag in groups.items()}
+    shared = []
+    for first, second in itertools.combinations(sorted(groups), 2):
+        common = sorted(entities[first] & entities[second])
+        if common:
+            count = sum(len(tags) for entity in common for tags in gmsh.model.mesh.getElements(dim, entity)[1])
+            kind = "surface" if dim == 2 else "curve"
+            listed = ", ".join(str(int(entity)) for entity in common)
+            shared.append(f"{first!r} and {second!r} share {count} facets (gmsh {kind}{'s' * (len(common) > 1)} "
+                          f"{listed})")
+    if not shared:
+        return None
+    return (f"the physical groups {'; '.join(shared)}: a facet may be in one physical group only (DOLFINx keeps "
+            "one group per facet, and the other group loses those facets). Remove the shared surfaces from one "
+            "of the two groups (a group the case does not name can go), or split them into surfaces of their own")
 
 
 def _element_kinds(dim: int, tag: int) -> set[str]:

@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import difflib
 import logging
+import math
 import pathlib
 import signal
 import threading
@@ -31,14 +31,16 @@ from petsc4py import PETSc
 from dolfinx import mesh as dmesh
 
 from contactqvi import tables
-from contactqvi.case import Body, ContactCase, ContactPair, check_groups, check_solver
+from contactqvi.case import Body, ContactCase, ContactPair, check_bodies, check_groups, check_solver
 from contactqvi.contact.checkpoint import Checkpoint, CheckpointWriter, read_checkpoint, remove_checkpoints
+from contactqvi.contact.diagnosis import failure_cause
 from contactqvi.contact.load_path import SOLVER_PARAMETERS, LoadStep, solve_load_path
 from contactqvi.contact.path_state import PathState
 from contactqvi.contact.figure_data import ShownStep
 from contactqvi.contact.figures import plot_contact_states, plot_deformed_bodies, plot_forces
 from contactqvi.contact.force_history import write_force_table
 from contactqvi.contact.postprocess import ContactResultsWriter, warn_solved_fits
+from contactqvi.contact.reach import check_reach
 from contactqvi.contact.interface import BodyPair, ObstaclePair
 from contactqvi.contact.problem import ContactProblem, assemble_contact_problem, build_contact_problem
 from contactqvi.contact.scd_newton import SCDNewtonResult
@@ -95,12 +97,7 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
     """The contact problem of a case with ``[[bodies]]`` and ``[[contacts]]``; each body's
     ``boundary.body_force`` (N/m^3) acts on its own cells."""
     msh, facet_tags, cell_tags = read_gmsh(case.mesh.file, comm)
-    for i, body in enumerate(case.bodies):
-        if body.name not in cell_tags.names:
-            close = difflib.get_close_matches(body.name, list(cell_tags.names), n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
-            raise ParameterError(f"bodies[{i}].name", f"no physical volume {body.name!r} in the mesh{hint}; it has: "
-                                 f"{', '.join(sorted(cell_tags.names))}")
+    check_bodies(case, cell_tags.names)
     tags = split_by_body(msh, facet_tags, cell_tags)
     check_groups(case, tags.names)
     young, poisson = body_materials(msh, cell_tags, {b.name: (b.material.young, b.material.poisson)
@@ -121,6 +118,13 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
                                     displacements=displacements, cell_tags=cell_tags, moved=moved,
                                     material=_material(case.bodies[0].material.model), pressures=pressures,
                                     rotations=_rotations(case))
+
+
+def _largest_prescribed(case: ContactCase) -> float:
+    """The largest length (m) of a prescribed displacement of the case at load factor 1."""
+    boundaries = [case.boundary] if case.boundary is not None else [body.boundary for body in case.bodies]
+    lengths = [math.hypot(*d.components().values()) for b in boundaries for d in b.displacement.values()]
+    return max(lengths, default=0.0)
 
 
 def _rotations(case: ContactCase) -> bool:
@@ -178,6 +182,7 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
     with warnings, default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, _stop_signals() as stop:
         logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks",
                     problem.n_contact, problem.n_free, len(case.steps), comm.size)
+        check_reach(problem, case.steps, _largest_prescribed(case))
         recorder = _StepRecorder(case, problem, output, checkpoint, stop, warnings)
         state = PathState.at_rest(problem) if checkpoint is None else checkpoint.resume(problem)
         first, u = state.done, problem.A.createVecRight()
@@ -244,6 +249,8 @@ class _StepRecorder:
             entry["rotation"] = dataclasses.asdict(step.rotation)
         if index == 0 or self.problem.searched_each_step:  # the search this step's problem comes from
             entry.update(p=self.problem.n_contact, search_seconds=dict(self.problem.setup_seconds))
+        if not result.converged:
+            entry["failure"] = failure_cause(self.problem, result)
         writer, summary = self.writer, self.summary
         try:
             if result.converged:
@@ -253,6 +260,8 @@ class _StepRecorder:
                 tables.write_solution_npz(writer.out / "solution.npz", writer.last.displacement)
             summary["steps"].append(entry)
             summary["status"] = str(result.status)
+            summary.pop("failure", None)
+            summary.update({"failure": entry["failure"]} if "failure" in entry else {})
             tables.write_summary(self.problem.comm, writer.out / "summary.json", summary)
             write_force_table(self.problem.comm, writer.out / "forces.csv", summary["steps"])
             if result.converged:
@@ -301,6 +310,8 @@ def _log_step(index: int, result: SCDNewtonResult, entry: dict[str, typing.Any])
     logger.info("step %d: %s, %d Newton steps, %d Krylov; contact forces (N) %s; contact area %.4g m^2",
                 index + 1, result.status, result.iterations, result.inner_iterations, forces or "-",
                 entry.get("contact_area", float("nan")))
+    if "failure" in entry:
+        logger.error("step %d failed: %s", index + 1, entry["failure"])
 
 
 def _check_output(comm: MPI.Comm, output: str | pathlib.Path) -> None:

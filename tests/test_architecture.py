@@ -252,7 +252,7 @@ PARALLEL_NAMES = {
 }
 #: Modules of tests/ that tests import helpers from.
 TEST_HELPERS = ("conftest", "law_checks", "friction_checks", "mortar_checks", "output_files", "petsc_audit",
-                "shipped_runs")
+                "program_runs", "shipped_runs")
 
 
 def _test_namespace(tree: ast.Module, helpers: dict[str, ast.Module]) -> dict[str, ast.AST]:

@@ -382,13 +382,14 @@ BODIES = {
 
 @pytest.mark.one_rank(reason="case-file parsing and checks on dataclasses: no mesh")
 @pytest.mark.parametrize("change, name, text", [
-    (lambda d: d["contacts"][0].update(slave="uper.interface"), "contacts[0].slave", "unknown body 'uper'"),
     (lambda d: d["contacts"][0].update(master="lower"), "contacts[0].master", "must be 'body.group'"),
     (lambda d: d["contacts"][0].update(obstacle={"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 1]}),
      "contacts[0]", "exactly one of 'master' and 'obstacle'"),
     (lambda d: d["contacts"][0].update(law="coulomb"), "contacts[0].friction", "needs a friction coefficient"),
     (lambda d: d["bodies"][1].update(name="lower"), "bodies[1].name", "listed twice"),
-    (lambda d: d.update(material={"young": 1e9, "poisson": 0.3}), "material", "not used with [[bodies]]"),
+    (lambda d: d.update(material={"young": 1e9, "poisson": 0.3}), "material.young",
+     "with [[bodies]], [material] gives only the default model of the bodies; give young in each body's material"),
+    (lambda d: d.update(material={"model": "rubber"}), "bodies[0].material.model", "must be one of"),
     (lambda d: [b.pop("boundary") for b in d["bodies"]], "bodies", "at least one must be held"),
 ])
 def test_bad_several_body_case_is_named(change, name, text):
@@ -416,3 +417,17 @@ def test_several_body_case_names_unknown_groups_and_volumes():
     with pytest.raises(ParameterError, match="no physical volume 'uper'") as info:
         build_problem(parse_case(data, ROOT / "cases"), MPI.COMM_WORLD)
     assert info.value.name == "bodies[1].name"
+
+
+@pytest.mark.one_rank(reason="case-file parsing and checks on dataclasses: no mesh")
+def test_material_model_is_the_default_of_every_body():
+    """With [[bodies]], ``[material] model`` is the model of every body whose material names
+    none; a body naming another one is named by its key."""
+    data = copy.deepcopy(BODIES)
+    data["material"] = {"model": "neo_hookean"}
+    case = parse_case(data, ROOT / "cases")
+    assert [b.material.model for b in case.bodies] == ["neo_hookean", "neo_hookean"]
+    assert case.material is None and parse_case(case.to_dict()) == case
+    data["bodies"][1]["material"]["model"] = "saint_venant_kirchhoff"
+    with pytest.raises(ParameterError, match=re.escape("bodies[1].material.model: all bodies take the same model")):
+        parse_case(data, ROOT / "cases")

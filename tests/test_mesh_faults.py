@@ -12,13 +12,8 @@ a hexahedral body on a tetrahedral one (``mixed_cells.geo``) ended in ``MPI_ERR_
 
 from __future__ import annotations
 
-import os
 import pathlib
 import re
-import shutil
-import subprocess
-import sys
-import tempfile
 import tomllib
 
 from mpi4py import MPI
@@ -29,10 +24,9 @@ from contactqvi.case import parse_case
 from contactqvi.meshes import read_gmsh, split_by_body
 from contactqvi.parameters import ParameterError
 from contactqvi.runner import EXIT_CODES, run_case
+from program_runs import run_program
 
 DATA = pathlib.Path(__file__).resolve().parent / "data" / "mesh_faults"
-MPIENV = {"OMPI_MCA_rmaps_base_oversubscribe": "1", "PRTE_MCA_rmaps_default_mapping_policy": ":oversubscribe",
-          "OMPI_MCA_btl": "self,sm", "OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1"}
 #: What the error says of touching.geo: the bodies, the shared nodes (count and where), the
 #: facets left on no cell, and the fix.
 MERGED = ("mesh: physical volumes 'block' and 'cyl' share 3 nodes (x = 0, y in [0, 0.2], z = 0), and 12 facets "
@@ -76,14 +70,7 @@ def test_merged_nodes_give_exit_code_2_with_the_message_on_any_number_of_ranks(t
     ranks (an MPI abort with exit 6 before)."""
     case = tmp_path / "touching.toml"
     case.write_text(_case("touching.geo"))
-    command = [sys.executable, "-m", "contactqvi", "run", str(case), "--output", str(tmp_path / "out"), "--no-plot"]
-    session = tempfile.mkdtemp(prefix="prte-")
-    try:
-        done = subprocess.run(["mpirun", "-n", str(ranks), *command] if ranks > 1 else command,
-                              capture_output=True, text=True, timeout=120,
-                              env=os.environ | MPIENV | {"TMPDIR": session})
-    finally:
-        shutil.rmtree(session, ignore_errors=True)
+    done = run_program(case, tmp_path / "out", ranks)
     assert done.returncode == EXIT_CODES["bad input"], done.stderr[-3000:]
     assert f"error: {MERGED}" in done.stderr and "MPI_ABORT" not in done.stderr, done.stderr[-3000:]
     assert not (tmp_path / "out" / "summary.json").exists()

@@ -75,7 +75,7 @@ from contactqvi.records import warn
 from contactqvi.result import Status, Timings
 
 __all__ = ["PATH_PARAMETERS", "SOLVER_PARAMETERS", "LoadStep", "PathState", "Rotation", "check_steps",
-           "contact_resultants", "solve_load_path"]
+           "contact_resultants", "solve_load_path", "step_position"]
 
 logger = logging.getLogger(__name__)
 
@@ -176,7 +176,7 @@ def _cuts_after(problem: ContactProblem, u: PETSc.Vec, state: PathState, index: 
         return cuts - 1 if cuts > 0 else None  # a part of the step: grow back toward its end
     if result.status == Status.INTERRUPTED or cuts >= allowed:
         return None
-    warn(problem.comm, logger, "step_cut", f"step {index + 1}: {result.status} at load factor {step.load:g}; cut to "
+    warn(problem.comm, logger, "step_cut", f"step {index + 1}: {result.status} at {step_position(step)}; cut to "
          f"{0.5 ** (cuts + 1):g} of what remains of it", step=index + 1, load=step.load, fraction=0.5 ** (cuts + 1))
     return cuts + 1
 
@@ -229,6 +229,16 @@ def _toward(state: PathState, step: LoadStep, cuts: int) -> LoadStep:
                     fit)
 
 
+def step_position(step: LoadStep) -> str:
+    """A (part of a) load step in the log: load factor, translation and rotation to 7 significant
+    digits, so that the parts of a step cut again and again stay apart."""
+    text = (f"load factor {step.load:.7g}, translation of the obstacles and moved groups ("
+            + ", ".join(f"{t:.7g}" for t in step.translation) + ") m")
+    if step.rotation is not None:
+        text += f", rotation {step.rotation.angle:.7g} degrees about {step.rotation.axis}"
+    return text
+
+
 def _cut(attempts: list[tuple[LoadStep, SCDNewtonResult]], status: Status) -> SCDNewtonResult:
     """One step's result of its parts and failed attempts (:func:`_merged`), each history entry
     marked with its ``substep``, that part's load factor and its status."""
@@ -278,9 +288,7 @@ def _start(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSta
     given (or rest) for the first step, else the predictor of :func:`_continue`; a problem
     searched each step is searched first in the configuration of the step before, which
     updates the levels of ``step_solver`` (if any) for the new A."""
-    turned = "" if step.rotation is None else f", rotation {step.rotation.angle:g} degrees about {step.rotation.axis}"
-    logger.info("step %d: load factor %g, translation of the obstacles and moved groups %s m%s", state.done + 1,
-                step.load, np.array2string(np.asarray(step.translation), precision=4), turned)
+    logger.info("step %d: %s", state.done + 1, step_position(step))
     if state.solved == 0:
         problem.set_step(step.load, step.translation, rotation=step.rotation, fit=step.fit_fraction)
         if from_rest:

@@ -7,6 +7,7 @@ preconditioner's reuse from step to step (multigrid levels kept Galerkin-exact b
 
 from __future__ import annotations
 
+import logging
 import typing
 
 from mpi4py import MPI
@@ -17,8 +18,15 @@ import numpy as np
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import OptionsDict, create_ksp, default_options, ksp_converged_reason, preset
 from contactqvi.multigrid import GalerkinUpdate, is_multigrid, set_up
+from contactqvi.records import warn
 
-__all__ = ["NEWTON_STEP_SOLVERS", "NewtonStepSolver"]
+__all__ = ["FALLBACK", "NEWTON_STEP_SOLVERS", "NewtonStepSolver"]
+
+logger = logging.getLogger(__name__)
+
+#: The preset of the direct solve a Newton step falls back to, once, when its Krylov solve
+#: fails (:data:`contactqvi.linalg.KSP_PRESETS`; options prefix ``{prefix}fallback_``).
+FALLBACK = "lu"
 
 #: Newton-step solvers selectable by the SCD parameter ``pc``, each a preset of
 #: :data:`contactqvi.linalg.KSP_PRESETS` applied under the solver's options prefix
@@ -64,10 +72,21 @@ class NewtonStepSolver(PETScOwner):
         initial_guess: start the Krylov solve from ``du`` as given (it holds the
             exact values of the eliminated rows); direct solvers need none.
 
+    A Krylov solve that fails (a negative converged reason: out of iterations, a breakdown)
+    is done again by a direct solve (:data:`FALLBACK`, MUMPS LU) for that Newton step alone:
+    a large load step can leave a preconditioner built for another J far behind (issue 46: an
+    80 % step with cuts off ended in ``diverged_linear_solve`` after 2 005 Krylov iterations,
+    where exact Newton steps converge in 6).
+    It is a warning (``direct_fallback``, :func:`~contactqvi.records.warn`: in ``summary.json`` of a
+    case run) and in the step's history (:attr:`fallback`); the next step tries the Krylov solver again.
+
     Attributes:
         ksp: the Krylov solver.
         galerkin: the Galerkin updates of the current multigrid set-up (None before
             it, and for other preconditioners).
+        fallback: the history record of the last solve's fall-back to the direct solve
+            (``direct_fallback``: the Krylov solve's reason; ``direct_reason``: the direct
+            solve's), empty if it did not fall back.
     """
 
     def __init__(self, comm: MPI.Comm, prefix: str, pc: str, multigrid_options: OptionsDict, *, rtol: float,
@@ -81,9 +100,11 @@ class NewtonStepSolver(PETScOwner):
         self._rebuilds = _smoothed_aggregation(prefix, self._options)
         self.galerkin: GalerkinUpdate | None = None
         self._pc_kinds: np.ndarray | None = None  # contact node kinds when the preconditioner was last built
+        self._direct: PETSc.KSP | None = None  # made at the first fall-back
+        self.fallback: dict[str, str] = {}
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [self.galerkin, self.ksp]
+        return [self.galerkin, self.ksp, self._direct]
 
     @property
     def iterations(self) -> int:
@@ -124,7 +145,23 @@ class NewtonStepSolver(PETScOwner):
                 set_up(self.ksp)
                 self.galerkin = GalerkinUpdate(self.ksp.getPC())
             self.ksp.solve(rhs, du)
+        self.fallback = {}
+        if self.ksp.getConvergedReason() < 0 and self.ksp.getType() != "preonly":
+            return self._solve_directly(J, rhs, du)
         return self.ksp.getConvergedReason()
+
+    def _solve_directly(self, J: PETSc.Mat, rhs: PETSc.Vec, du: PETSc.Vec) -> int:
+        """Solve J du = rhs by the direct :data:`FALLBACK` after the Krylov solve failed; log it and
+        keep it in :attr:`fallback`. Returns the direct solve's converged reason."""
+        if self._direct is None:
+            self._direct = create_ksp(self.comm, f"{self.ksp.getOptionsPrefix()}fallback_", preset(FALLBACK))
+        self._direct.setOperators(J)
+        self._direct.solve(rhs, du)
+        self.fallback = {"direct_fallback": self.reason, "direct_reason": ksp_converged_reason(self._direct)}
+        warn(self.comm, logger, "direct_fallback", f"the Krylov solve of a Newton step failed ({self.reason} after "
+             f"{self.iterations} iterations): solved by {FALLBACK} (MUMPS) instead, {self.fallback['direct_reason']}",
+             krylov_iterations=self.iterations)
+        return self._direct.getConvergedReason()
 
     def set_up_levels(self, A: PETSc.Mat) -> bool:
         """Set the multigrid levels up on ``A`` (with its near-nullspace) before the first

@@ -646,7 +646,8 @@ class SCDNewtonSolver(PETScOwner):
             kinds_previous, previous_norm = kinds, point.norm
             with result.timings.phase("linear_solve"):
                 reason = self.linear_solve(J, kinds, entry["tol"])
-            entry.update(krylov_iterations=self.step_solver.iterations, ksp_reason=self.step_solver.reason)
+            entry.update(krylov_iterations=self.step_solver.iterations, ksp_reason=self.step_solver.reason,
+                         **self.step_solver.fallback)
             result.inner_iterations += entry["krylov_iterations"]
             if reason < 0:
                 result.status = Status.DIVERGED_LINEAR_SOLVE

@@ -1,0 +1,131 @@
+"""Why a load step did not converge, in words and numbers, for the log and ``summary.json``.
+
+A status (``diverged_line_search``) says what the solver saw, not why: a block pushed
+sideways past what friction holds ended in a bare ``diverged_line_search`` (issue 46).
+:func:`failure_cause` names the cause: for a step whose Newton iteration stalled (no
+step size accepted, or out of iterations) with every node of a frictional pair that
+touches sliding at its bound, it compares the load along the pair's contact plane that
+no support takes with what friction holds at the iterate's normal force; otherwise it
+states the status's own cause with the numbers of the last Newton step. Collective.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import typing
+
+from mpi4py import MPI
+
+import numpy as np
+
+from contactqvi.contact.interface import Interface
+from contactqvi.contact.nodal import State
+from contactqvi.contact.problem import ContactProblem
+from contactqvi.contact.scd_newton import SCDNewtonResult
+from contactqvi.postprocess import ElasticBody, applied_force
+from contactqvi.result import Status
+
+__all__ = ["failure_cause", "tangential_load"]
+
+#: States of a touching node that friction holds in place.
+HOLDING = (State.STICKING, State.WEAK_STICKING, State.WEAK_CONTACT_STICKING)
+
+
+def failure_cause(problem: ContactProblem, result: SCDNewtonResult) -> str | None:
+    """The cause of a step that did not converge (None if it did), ``problem`` at that step. Collective."""
+    if result.converged:
+        return None
+    if result.status in (Status.DIVERGED_LINE_SEARCH, Status.DIVERGED_MAX_IT):
+        for k in range(len(problem.interfaces)):
+            overload = _friction_overload(problem, result, k)
+            if overload is not None:
+                return overload
+    return _status_cause(result)
+
+
+def _status_cause(result: SCDNewtonResult) -> str:
+    """What the status means, with the last Newton step's numbers."""
+    last = result.history[-1] if result.history else {}
+    k, norm = last.get("k", 0), last.get("residual", float("nan"))
+    where = f"||y^|| = {norm:.3e} N at Newton step {k}, {last.get('relative_residual', float('nan')):.2e} of the start"
+    causes = {
+        Status.DIVERGED_LINE_SEARCH: f"the line search accepted no step size ({where}; target {result.target:.3e} N)",
+        Status.DIVERGED_MAX_IT: (f"the configuration did not settle in its searches ({where})" if norm <= result.target
+                                 else f"out of Newton steps ({where}; target {result.target:.3e} N)"),
+        Status.DIVERGED_LINEAR_SOLVE: (f"the linear solve of Newton step {k} failed: {last.get('ksp_reason')} after "
+                                       f"{last.get('krylov_iterations')} Krylov iterations"
+                                       + (f", and the direct solve after it: {last['direct_reason']}"
+                                          if "direct_reason" in last else "")),
+        Status.DIVERGED_FUNCTION_DOMAIN: ("the residual is undefined at the step's initial guess: an element is "
+                                          "inverted (det F <= 0); take smaller load steps (solver.max_cuts)"),
+        Status.INTERRUPTED: "stopped from outside (SIGTERM, SIGINT) or after the step asked for (--stop-after)",
+    }
+    return causes.get(result.status, str(result.status))
+
+
+def _friction_overload(problem: ContactProblem, result: SCDNewtonResult, k: int) -> str | None:
+    """The cause text when every touching node of frictional pair ``k`` slides and the load along
+    its contact plane exceeds the friction bound at the iterate's normal force, else None."""
+    interface = problem.interfaces[k]
+    if not interface.pair.law.frictional or len(result.states) != len(problem.contact_blk):
+        return None
+    comm = problem.comm
+    mine = problem.interface_of_node == k
+    states = result.states[mine]
+    sliding = comm.allreduce(int(np.count_nonzero(states == State.SLIDING)), op=MPI.SUM)
+    holding = comm.allreduce(int(np.count_nonzero(np.isin(states, HOLDING))), op=MPI.SUM)
+    if sliding == 0 or holding > 0:
+        return None
+    normal_force = comm.allreduce(float(result.normal_force[mine].sum()), op=MPI.SUM)
+    bound = comm.allreduce(float(problem.law.bound(result.normal_force)[mine].sum()), op=MPI.SUM)
+    load = tangential_load(problem, k)
+    if load <= bound or normal_force <= 0.0:
+        return None
+    return (f"no equilibrium: the tangential load exceeds μ × the normal force on pair {interface.pair.name}: the "
+            f"loads on {_body_name(problem, interface)} that no support takes push along the contact plane with "
+            f"{load:.4g} N, and friction holds at most {bound / normal_force:.4g} × {normal_force:.4g} N = "
+            f"{bound:.4g} N there ({sliding} nodes of {interface.slave_surface!r} slide at their bound, none "
+            "sticks); lower the tangential load, raise the friction or hold the body along the plane")
+
+
+def tangential_load(problem: ContactProblem, k: int) -> float:
+    """The resultant (N) of the tractions, pressures and body force at the current load factor on the
+    slave body of interface ``k``, its components that a support of that body prescribes left out,
+    along the pair's contact plane (normal to the area-weighted mean of its nodes' normals). Collective."""
+    comm, interface = problem.comm, problem.interfaces[k]
+    name = None if problem.node_body is None else interface.slave_surface.split(".", 1)[0]
+    body = _loads_of(problem.body, name)
+    force = applied_force(problem.V.mesh, body, problem.load_factor)
+    force[list(_held(body))] = 0.0
+    mine = problem.interface_of_node == k
+    normal = comm.allreduce(problem.contact_area[mine] @ problem.frames[mine, 2], op=MPI.SUM)
+    normal = normal / np.linalg.norm(normal)
+    return float(np.linalg.norm(force - (force @ normal) * normal))
+
+
+def _loads_of(body: ElasticBody, name: str | None) -> ElasticBody:
+    """``body`` with the loads and supports of the body ``name`` only (groups ``"name.group"``;
+    None: one body, all of them)."""
+    if name is None:
+        return body
+
+    def own(groups: dict[str, typing.Any]) -> dict[str, typing.Any]:
+        return {group: value for group, value in groups.items() if group.split(".", 1)[0] == name}
+
+    force = body.body_force
+    force = force.get(name) if isinstance(force, dict) else force
+    return dataclasses.replace(body, tractions=own(body.tractions), pressures=own(body.pressures),
+                               body_force=None if force is None else {name: force},
+                               supports=tuple(own(dict.fromkeys(body.supports))),
+                               prescribed=own(body.prescribed))
+
+
+def _held(body: ElasticBody) -> set[int]:
+    """The components (0, 1, 2) some support of ``body`` prescribes (a support not listed in
+    ``prescribed``: all three)."""
+    return set().union(*(body.prescribed.get(support, (0, 1, 2)) for support in body.supports))
+
+
+def _body_name(problem: ContactProblem, interface: Interface) -> str:
+    """The slave body in a message."""
+    return "the body" if problem.node_body is None else f"the body {interface.slave_surface.split('.', 1)[0]!r}"

@@ -1,0 +1,102 @@
+"""A step that fails says why, in the log and in ``summary.json`` (issue 46).
+
+* A block pushed past what friction holds (``tests/data/friction_capacity/pushed_block.toml``:
+  50 N along the plane, 1 MPa on 1 cm^2 pressing it, friction 0.3) ended in a bare
+  ``diverged_line_search`` / ``diverged_max_it``; now ``failure`` names the pair, the load and
+  the friction bound.
+* A Krylov solve that fails falls back once to a direct solve (MUMPS LU) for that Newton step:
+  with no Krylov iteration allowed at all, the patch test takes exactly the Newton steps of
+  exact solves, and every Newton step records the fall-back.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import pathlib
+import re
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+
+from contactqvi.case import load_case
+from contactqvi.contact.diagnosis import tangential_load
+from contactqvi.runner import EXIT_CODES, build_problem, run_case
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+PUSHED = ROOT / "tests" / "data" / "friction_capacity" / "pushed_block.toml"
+
+
+def test_a_load_beyond_what_friction_holds_is_named(mpi_tmp_path):
+    """No equilibrium: the failure names the pair, the 50 N along the plane (the front face's
+    0.5 MPa on 1 cm^2; the roller's x component left out) and friction 0.3 times the normal force."""
+    summary, code = run_case(load_case(PUSHED), mpi_tmp_path / "out", plot=False)
+    assert code == EXIT_CODES["not converged"] and summary["status"] == "diverged_max_it"
+    failure = summary["failure"]
+    match = re.fullmatch(r"no equilibrium: the tangential load exceeds μ × the normal force on pair bottom/obstacle: "
+                         r"the loads on the body that no support takes push along the contact plane with (\S+) N, and "
+                         r"friction holds at most (\S+) × (\S+) N = (\S+) N there \((\d+) nodes of 'bottom' slide at "
+                         r"their bound, none sticks\); lower the tangential load, raise the friction or hold the body "
+                         r"along the plane", failure)
+    assert match, failure
+    load, mu, normal, bound = (float(match[i]) for i in range(1, 5))
+    assert load == pytest.approx(50.0, rel=1e-4) and mu == pytest.approx(0.3, rel=1e-4)
+    assert bound == pytest.approx(mu * normal, rel=1e-3) and load > bound and normal > 0.0
+    assert summary["steps"][-1]["failure"] == failure
+    assert json.loads((mpi_tmp_path / "out" / "summary.json").read_text())["failure"] == failure
+
+
+def test_the_tangential_load_leaves_out_what_the_supports_take():
+    """The resultant of the loads is (0, 50, -100) N; the roller takes x (none here), the plane's
+    normal is z: 50 N along the plane, to round-off."""
+    case = load_case(PUSHED)
+    with build_problem(case, MPI.COMM_WORLD) as problem:  # at load factor 1
+        assert tangential_load(problem, 0) == pytest.approx(50.0, rel=1e-12)
+
+
+def test_friction_that_holds_the_load_converges_without_a_failure(mpi_tmp_path):
+    """Friction 0.6 holds the 50 N (60 N at 100 N pressing): converged, no ``failure``."""
+    case = load_case(PUSHED)
+    held = dataclasses.replace(case, contact=dataclasses.replace(case.contact, law=dataclasses.replace(
+        case.contact.law, friction=0.6)))
+    summary, code = run_case(held, mpi_tmp_path / "out", plot=False)
+    assert code == EXIT_CODES["converged"] and "failure" not in summary
+    assert summary["steps"][-1]["pair_forces"]["bottom/obstacle"][1] == pytest.approx(-50.0, rel=1e-9)
+
+
+def test_a_failed_krylov_solve_falls_back_to_a_direct_one(mpi_tmp_path):
+    """``ksp_max_it = 0``: every Krylov solve fails, each Newton step is solved by LU instead and
+    says so; the Newton steps and the solution are those of exact solves (pc = "lu")."""
+    case = load_case(ROOT / "cases" / "patch_test.toml")
+    exact, _ = run_case(dataclasses.replace(case, solver={"pc": "lu"}), mpi_tmp_path / "lu", plot=False)
+    summary, code = run_case(dataclasses.replace(case, petsc={"ksp_max_it": 0}), mpi_tmp_path / "krylov", plot=False)
+    assert code == EXIT_CODES["converged"]
+    step, reference = summary["steps"][-1], exact["steps"][-1]
+    assert step["iterations"] == reference["iterations"] > 0
+    assert step["displacement_norm"] == pytest.approx(reference["displacement_norm"], rel=1e-12)
+    solves = [entry for entry in step["history"] if "ksp_reason" in entry]
+    assert len(solves) == step["iterations"]
+    assert all(entry["direct_fallback"] == "DIVERGED_MAX_IT" and entry["direct_reason"] == "CONVERGED_ITS"
+               for entry in solves)
+    assert not any("direct_fallback" in entry for entry in reference["history"])
+    records = [record for record in summary["warnings"] if record["key"] == "direct_fallback"]
+    assert len(records) == len(solves) and not any(r["key"] == "direct_fallback" for r in exact["warnings"])
+    assert records[0]["message"] == ("the Krylov solve of a Newton step failed (DIVERGED_MAX_IT after 0 iterations): "
+                                     "solved by lu (MUMPS) instead, CONVERGED_ITS")
+    assert np.isfinite(step["equilibrium_error"]) and step["equilibrium_error"] < 1e-10
+
+
+def test_a_stall_where_friction_holds_is_not_called_no_equilibrium(mpi_tmp_path):
+    """Friction 0.6 from rest (``solver.start = "rest"``): nothing holds the block along y or z
+    before a node touches, the line search fails at the first Newton step with no node sliding;
+    the failure says so and does not claim that friction cannot hold the load."""
+    case = load_case(PUSHED)
+    rest = dataclasses.replace(case, solver={**case.solver, "start": "rest"},
+                               contact=dataclasses.replace(case.contact, law=dataclasses.replace(case.contact.law,
+                                                                                                 friction=0.6)))
+    summary, code = run_case(rest, mpi_tmp_path / "out", plot=False)
+    assert code == EXIT_CODES["not converged"] and summary["status"] == "diverged_line_search"
+    assert re.fullmatch(r"the line search accepted no step size \(\|\|y\^\|\| = \S+ N at Newton step 0, 1\.00e\+00 of "
+                        r"the start; target \S+ N\)", summary["failure"]), summary["failure"]
