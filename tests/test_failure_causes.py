@@ -100,3 +100,28 @@ def test_a_stall_where_friction_holds_is_not_called_no_equilibrium(mpi_tmp_path)
     assert code == EXIT_CODES["not converged"] and summary["status"] == "diverged_line_search"
     assert re.fullmatch(r"the line search accepted no step size \(\|\|y\^\|\| = \S+ N at Newton step 0, 1\.00e\+00 of "
                         r"the start; target \S+ N\)", summary["failure"]), summary["failure"]
+
+
+@pytest.mark.one_rank(reason="a function of a result's history")
+def test_a_cut_step_names_where_its_parts_stopped():
+    """A step cut until its cuts ran out: the failure names the last converged part and the nearest
+    attempt beyond it (the seal of docs/finite_strain.md Sect. 11 ends so, 3 nm beyond its last
+    equilibrium); a step that was never cut adds nothing."""
+    from contactqvi.contact.diagnosis import _path_end
+    from contactqvi.contact.scd_newton import SCDNewtonResult
+    from contactqvi.result import Status
+
+    def part(j: int, z: float, status: str) -> dict:
+        return {"k": 0, "substep": j, "substep_load": 1.0, "substep_translation": [0.0, 0.0, z],
+                "substep_status": status}
+
+    history = [part(0, -1.35e-3, "diverged_max_it"), part(1, -1.3125e-3, "diverged_max_it"),
+               part(2, -1.29375e-3, "converged_atol"), part(3, -1.303125e-3, "diverged_max_it"),
+               part(4, -1.2984375e-3, "diverged_max_it")]
+    result = SCDNewtonResult(status=Status.DIVERGED_MAX_IT, iterations=0, gamma=1.0, target=1.0, states=np.empty(0),
+                             normal_force=np.empty(0), friction_force=np.empty((0, 2)), history=history)
+    text = _path_end(result)
+    assert "2 attempts failed after the step was cut" in text
+    assert "converged up to load factor 1, translation (0, 0, -0.00129375) m" in text
+    assert "the nearest attempt beyond, to load factor 1, translation (0, 0, -0.001298437) m, failed" in text
+    assert _path_end(dataclasses.replace(result, history=[part(0, -1.35e-3, "diverged_max_it")])) == ""

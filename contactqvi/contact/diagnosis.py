@@ -6,7 +6,9 @@ sideways past what friction holds ended in a bare ``diverged_line_search`` (issu
 step size accepted, or out of iterations) with every node of a frictional pair that
 touches sliding at its bound, it compares the load along the pair's contact plane that
 no support takes with what friction holds at the iterate's normal force; otherwise it
-states the status's own cause with the numbers of the last Newton step. Collective.
+states the status's own cause with the numbers of the last Newton step and, for a step cut
+until its cuts ran out, how far its parts got and the nearest attempt beyond that failed (the
+path's likely end at a limit point, docs/finite_strain.md Sect. 11). Collective.
 """
 
 from __future__ import annotations
@@ -40,7 +42,37 @@ def failure_cause(problem: ContactProblem, result: SCDNewtonResult) -> str | Non
             overload = _friction_overload(problem, result, k)
             if overload is not None:
                 return overload
-    return _status_cause(result)
+    stalled = result.status in (Status.DIVERGED_LINE_SEARCH, Status.DIVERGED_MAX_IT)
+    return _status_cause(result) + (_path_end(result) if stalled else "")
+
+
+def _path_end(result: SCDNewtonResult) -> str:
+    """Where the parts of a cut step stopped (from the history's ``substep`` marks of
+    :func:`~contactqvi.contact.load_path.solve_load_path`): the last converged part and the
+    nearest attempt beyond it, which failed; "" for a step that was not cut."""
+    parts = {entry["substep"]: entry for entry in result.history if "substep_status" in entry}
+    done = [j for j, entry in parts.items() if entry["substep_status"].startswith("converged")]
+    failed = [entry for j, entry in parts.items() if j > max(done, default=-1)]
+    if len(parts) < 2 or not failed:
+        return ""
+    start = parts[max(done)] if done else None
+
+    def position(entry: dict) -> str:
+        return (f"load factor {entry['substep_load']:.7g}, translation "
+                f"({', '.join(f'{t:.7g}' for t in entry['substep_translation'])}) m")
+
+    def distance(entry: dict) -> float:
+        if start is None:
+            return abs(entry["substep_load"])
+        moved = np.subtract(entry["substep_translation"], start["substep_translation"])
+        return float(np.linalg.norm(moved)) + abs(entry["substep_load"] - start["substep_load"])
+
+    nearest = min(failed, key=distance)
+    reached = "no part of the step converged" if start is None else f"its parts converged up to {position(start)}"
+    return (f"; {len(failed)} attempts failed after the step was cut: {reached}, and the nearest attempt "
+            f"beyond, to {position(nearest)}, failed too. A path that cannot move on by so little most likely "
+            "ends at a limit point of the quasi-static problem, where no equilibrium lies near the last one "
+            "(a snap, or a frictional stick-slip event: docs/finite_strain.md, Sect. 11)")
 
 
 def _status_cause(result: SCDNewtonResult) -> str:

@@ -44,7 +44,7 @@ instead, halved again if that fails too, up to ``max_cuts`` halvings in a row
 (:data:`PATH_PARAMETERS`; by default only for hyperelastic bodies); after each part that
 converges the next one is twice as large, up to the rest of the step. The step's result
 holds all its parts and attempts (history entries marked ``substep``, ``substep_load``,
-``substep_status``); the path stops when the cuts are used up.
+``substep_translation``, ``substep_status``); the path stops when the cuts are used up.
 """
 
 from __future__ import annotations
@@ -241,9 +241,10 @@ def step_position(step: LoadStep) -> str:
 
 def _cut(attempts: list[tuple[LoadStep, SCDNewtonResult]], status: Status) -> SCDNewtonResult:
     """One step's result of its parts and failed attempts (:func:`_merged`), each history entry
-    marked with its ``substep``, that part's load factor and its status."""
-    marks = [{"substep": j, "substep_load": step.load, "substep_status": str(result.status)}
-             for j, (step, result) in enumerate(attempts)]
+    marked with its ``substep``, that part's load factor, translation and its status (so a failed
+    step tells how far its converged parts went)."""
+    marks = [{"substep": j, "substep_load": step.load, "substep_translation": list(step.translation),
+              "substep_status": str(result.status)} for j, (step, result) in enumerate(attempts)]
     return _merged([result for _, result in attempts], status, marks)
 
 
