@@ -1,0 +1,233 @@
+"""Implicit dynamic contact: the contact-stabilised Newmark method, each step solved by SCD Newton.
+
+Newmark's average acceleration rule (beta = 1/4, gamma = 1/2) with the contact-stabilised
+predictor of Deuflhard, Krause and Ertel (2008); derivation and energy identity in
+docs/dynamics.md. With tau the time step, M the mass and K the stiffness in the solver's
+variables w (M = T^T M_K T, K = T^T A_K T of :mod:`contactqvi.contact.problem`), F the
+load and K the admissible set (the contact conditions), a step from (w_n, v_n) is
+
+1. predictor   w_pred = w_n + tau v_n,
+2. projection  w_bar = argmin_{w in K} 1/2 ||w - w_pred||_M^2, i.e. the GE
+               0 in M (w - w_pred) + Q_0(w) (frictionless Q) -- a contact problem with A = M,
+3. step        0 in (4/tau^2) M (w - w_bar) + K w - F - (F - K w_n) + Q(w)         (dynamics.md (2.3))
+               -- a contact problem with A_eff = K + (4/tau^2) M and a shifted load,
+4. velocity    v_{n+1} = v_n + (2/tau) (w_{n+1} - w_bar).
+
+Steps 2 and 3 are the GE 0 in A u - l + Q(u) of seed 000 (6.3) in the shifted variables
+u = w + d of :meth:`~contactqvi.contact.problem.ContactProblem.set_step` (slip measured
+from w_n: u_t is the slip increment over the step, slip rate times tau), solved by
+:class:`~contactqvi.contact.scd_newton.SCDNewtonSolver` unchanged. All that a step reads
+from the steps before is one :class:`DynamicState`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import typing
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import numpy as np
+import ufl
+
+import dolfinx.fem.petsc
+from dolfinx import fem
+
+from contactqvi.contact.problem import ContactProblem
+from contactqvi.contact.scd_newton import SCDNewtonResult, SCDNewtonSolver
+from contactqvi.laws import Frictionless
+from contactqvi.lifetime import PETScOwner
+from contactqvi.linalg import default_options
+
+__all__ = ["BETA", "ENERGY_TERMS", "DynamicState", "StabilisedNewmark", "mass_matrix"]
+
+logger = logging.getLogger(__name__)
+
+#: Newmark's beta of the average acceleration rule (its gamma is 1/2).
+BETA = 0.25
+#: The energy terms of a step (J), as in ``summary.json`` (docs/dynamics.md, Sect. 4).
+ENERGY_TERMS = ("kinetic", "elastic", "external_work", "friction_dissipation", "contact_work", "balance_error")
+
+
+def mass_matrix(problem: ContactProblem, density: float | fem.Function) -> PETSc.Mat:
+    """M = T^T M_K T in the solver's variables, M_K = (rho u, v) the consistent mass matrix
+    with zero rows and columns at the prescribed dofs (so that A + c M keeps A's identity rows)."""
+    V = problem.V
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    M_K = dolfinx.fem.petsc.assemble_matrix(fem.form(density * ufl.inner(u, v) * ufl.dx))
+    M_K.assemble()
+    n_owned = 3 * V.dofmap.index_map.size_local
+    owned = problem.dirichlet_dofs_loc[problem.dirichlet_dofs_loc < n_owned]
+    M_K.zeroRowsColumns((owned + 3 * V.dofmap.index_map.local_range[0]).astype(PETSc.IntType), diag=0.0)
+    T = problem.to_global
+    if T is None:
+        return M_K
+    with default_options("", {"mat_product_clear": True}):
+        M = M_K.PtAP(T)
+    M_K.destroy()
+    return M
+
+
+@dataclasses.dataclass
+class DynamicState(PETScOwner):
+    """A time integration after its first ``done`` steps: all that the next step reads.
+
+    Attributes:
+        done: number of converged time steps.
+        time: t_done (s).
+        displacement: w_n in the solver's variables (without the shift).
+        velocity: v_n in the solver's variables (m/s).
+        energy: the step's energy terms (:data:`ENERGY_TERMS`), the works and the dissipation
+            summed from time 0 (J).
+        initial_energy: kinetic + elastic energy at time 0 (J).
+    """
+
+    done: int
+    time: float
+    displacement: PETSc.Vec
+    velocity: PETSc.Vec
+    energy: dict[str, float]
+    initial_energy: float
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [self.displacement, self.velocity]
+
+
+class StabilisedNewmark(PETScOwner):
+    """The contact-stabilised Newmark method (module docstring) on a linear ``problem``.
+
+    Turns ``problem.A`` into A_eff = K + M / (beta tau^2) in place (K is kept as a copy for
+    the energies) and owns the two SCD solvers: the M-projection of the predictor and the
+    implicit step. The problem's contact is searched once (the mass and T of the reference
+    configuration). ``parameters`` and ``prefix`` are the SCD solver's; the projection's
+    Krylov solver reads its options under ``prefix + "predictor_"``.
+
+    Attributes:
+        prescribed: owned local indices of the prescribed dofs in the solver's variables.
+    """
+
+    def __init__(self, problem: ContactProblem, density: float | fem.Function, dt: float,
+                 parameters: dict | None = None, prefix: str = "dynamics_"):
+        self.problem, self.dt = problem, float(dt)
+        self.mass = mass_matrix(problem, density)
+        self.stiffness = problem.A.duplicate(copy=True)
+        problem.A.axpy(1.0 / (BETA * self.dt**2), self.mass, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        self.projection_matrix = self.mass.duplicate(copy=True)
+        diagonal = self.mass.getDiagonal()
+        self.prescribed = _zero_rows(diagonal)
+        diagonal.set(0.0)
+        diagonal.array[self.prescribed] = 1.0
+        self.projection_matrix.setDiagonal(diagonal, addv=PETSc.InsertMode.ADD_VALUES)
+        diagonal.destroy()
+        self.projection = dataclasses.replace(problem, A=self.projection_matrix, load=problem.load.duplicate(),
+                                              law=Frictionless().lumped(problem.contact_area), hyperelastic=None)
+        self.predictor_solver = SCDNewtonSolver(self.projection, parameters, prefix=prefix + "predictor_")
+        self.solver = SCDNewtonSolver(problem, parameters, prefix=prefix)
+        self._work = [problem.A.createVecRight() for _ in range(5)]
+
+    def petsc_objects(self) -> list[typing.Any]:
+        """The solvers, M, K, the projection's matrix and load, the work vectors (not the problem's)."""
+        return [self.predictor_solver, self.solver, self.mass, self.stiffness, self.projection_matrix,
+                self.projection.load, *self._work]
+
+    def initial_state(self, velocity: PETSc.Vec | None = None) -> DynamicState:
+        """The state at time 0: at rest in the reference configuration with the initial velocity
+        ``velocity`` (solver variables; None: zero), zero at the prescribed dofs."""
+        w, v = self.problem.A.createVecRight(), self.problem.A.createVecRight()
+        w.set(0.0)
+        v.set(0.0)
+        if velocity is not None:
+            velocity.copy(v)
+            v.array[self.prescribed] = 0.0
+        energy = {name: 0.0 for name in ENERGY_TERMS}
+        energy["kinetic"] = 0.5 * _energy_norm(self.mass, v, self._work[0])
+        return DynamicState(0, 0.0, w, v, energy, energy["kinetic"])
+
+    def step(self, state: DynamicState, u: PETSc.Vec, stop: typing.Callable[[], bool] | None = None
+             ) -> tuple[SCDNewtonResult, SCDNewtonResult]:
+        """One time step from ``state``: the projected predictor (2) and the step (3) of the module
+        docstring, each solved by SCD Newton; ``u`` holds the step's solution (shifted). The state
+        is updated (:meth:`record`) only when both converged. Returns both results."""
+        problem, tau = self.problem, self.dt
+        predicted, projected = self._work[1], self._work[2]
+        problem.set_step(1.0, previous=state.displacement)  # d: gaps, slip measured from w_n
+        predicted.waxpy(tau, state.velocity, state.displacement)
+        self.projection_matrix.mult(predicted, self.projection.load)
+        self.projection_matrix.multAdd(problem.shift, self.projection.load, self.projection.load)
+        u.waxpy(1.0, predicted, problem.shift)
+        projection = self.predictor_solver.solve(u, stop=stop)
+        if not projection.converged:
+            return projection, projection
+        projected.waxpy(-1.0, problem.shift, u)
+        self._add_inertia(state, projected)
+        result = self.solver.solve(u, stop=stop)
+        if result.converged:
+            self.record(state, u, result, predicted, projected)
+        return projection, result
+
+    def _add_inertia(self, state: DynamicState, projected: PETSc.Vec) -> None:
+        """The step's load (2.3): l = F + K_eff d (set_step) + M w_bar / (beta tau^2) + (F - K w_n),
+        the last term zero at the prescribed rows."""
+        problem, work = self.problem, self._work[0]
+        self.mass.mult(projected, work)
+        problem.load.axpy(1.0 / (BETA * self.dt**2), work)
+        self.stiffness.mult(state.displacement, work)
+        work.aypx(-1.0, problem.applied)
+        work.array[self.prescribed] = 0.0
+        problem.load.axpy(1.0, work)
+
+    def record(self, state: DynamicState, u: PETSc.Vec, result: SCDNewtonResult, predicted: PETSc.Vec,
+               projected: PETSc.Vec) -> None:
+        """Advance ``state`` over the step just solved: w_{n+1} = u - d, v_{n+1} (4), the energies
+        (docs/dynamics.md, Sect. 4)."""
+        problem, tau, work = self.problem, self.dt, self._work[0]
+        increment, velocity_change = self._work[3], self._work[4]
+        w_next = u.copy()
+        w_next.axpy(-1.0, problem.shift)
+        increment.waxpy(-1.0, state.displacement, w_next)
+        predicted.aypx(-1.0, projected)  # delta = w_bar - w_pred
+        velocity_change.waxpy(-1.0, projected, w_next)
+        velocity_change.scale(2.0 / tau)  # v_{n+1} - v_n
+        self.mass.mult(velocity_change, work)
+        projection_work = -predicted.dot(work) / tau
+        state.velocity.axpy(1.0, velocity_change)
+        w_next.copy(state.displacement)
+        w_next.destroy()
+        normal, friction = _contact_work(problem, result, increment)
+        energy = state.energy
+        energy["external_work"] += increment.dot(problem.applied)
+        energy["friction_dissipation"] -= friction
+        energy["contact_work"] += normal + projection_work
+        energy["kinetic"] = 0.5 * _energy_norm(self.mass, state.velocity, work)
+        energy["elastic"] = 0.5 * _energy_norm(self.stiffness, state.displacement, work)
+        stored = energy["kinetic"] + energy["elastic"] - state.initial_energy
+        energy["balance_error"] = (stored - energy["external_work"] - energy["contact_work"]
+                                   + energy["friction_dissipation"])
+        state.done += 1
+        state.time += tau
+
+
+def _zero_rows(diagonal: PETSc.Vec) -> np.ndarray:
+    """Owned local rows of M whose diagonal vanishes (to round-off of the largest): the prescribed
+    dofs in the solver's variables (in nodal frames at a contact node with a roller), where M_K
+    has zero rows and columns and A has identity rows."""
+    largest = diagonal.norm(PETSc.NormType.NORM_INFINITY)
+    return np.flatnonzero(np.abs(diagonal.array) <= 1e-12 * largest)
+
+
+def _energy_norm(A: PETSc.Mat, x: PETSc.Vec, work: PETSc.Vec) -> float:
+    """x^T A x (collective)."""
+    A.mult(x, work)
+    return x.dot(work)
+
+
+def _contact_work(problem: ContactProblem, result: SCDNewtonResult, increment: PETSc.Vec) -> tuple[float, float]:
+    """The work of the step's contact forces R over the increment Delta w (dynamics.md (4.2)):
+    1/2 lambda . Delta w_n (normal) and 1/2 R_t . Delta w_t (friction, <= 0), summed over the
+    contact nodes (nodal frames; the relative displacement at a body pair's slave nodes). Collective."""
+    nodal = increment.array.reshape(-1, 3)[problem.contact_blk]
+    normal = 0.5 * float(np.dot(result.normal_force, nodal[:, 2]))
+    friction = 0.5 * float(np.sum(result.friction_force * nodal[:, :2]))
+    return problem.comm.allreduce(normal, op=MPI.SUM), problem.comm.allreduce(friction, op=MPI.SUM)
