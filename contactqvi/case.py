@@ -354,8 +354,8 @@ class Dynamics:
 
     Attributes:
         dt: the time step (s) > 0.
-        end: the end time (s) >= dt; the steps are t_k = k dt up to it (the last one
-            shortened to end there, never below dt / 1e6).
+        end: the end time (s) >= dt; the steps are t_k = k dt, k = 1, ..., ceil(end / dt)
+            (all of length dt: the last one ends at ``end`` or just after it).
         scheme: one of :data:`DYNAMICS_SCHEMES`.
         initial_velocity: the body's velocity at time 0 (m/s), one body; with ``[[bodies]]``
             each body's ``initial_velocity``. None: at rest.
@@ -366,10 +366,10 @@ class Dynamics:
     scheme: str = "newmark"
     initial_velocity: Vector | None = None
 
-    def times(self) -> list[float]:
-        """The time points t_1, ..., t_N = end (s)."""
-        count = math.ceil(self.end / self.dt * (1.0 - 1e-12))
-        return [min((k + 1) * self.dt, self.end) for k in range(count)]
+    @property
+    def steps(self) -> int:
+        """The number of time steps, ceil(end / dt) (an end within 1e-9 dt of a step is that step)."""
+        return math.ceil(self.end / self.dt - 1e-9)
 
 
 @dataclasses.dataclass(frozen=True)

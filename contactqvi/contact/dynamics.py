@@ -41,7 +41,7 @@ from contactqvi.laws import Frictionless
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import default_options
 
-__all__ = ["BETA", "ENERGY_TERMS", "DynamicState", "StabilisedNewmark", "mass_matrix"]
+__all__ = ["BETA", "ENERGY_TERMS", "BodyMotion", "DynamicState", "StabilisedNewmark", "mass_matrix"]
 
 logger = logging.getLogger(__name__)
 
@@ -207,6 +207,43 @@ class StabilisedNewmark(PETScOwner):
                                    + energy["friction_dissipation"])
         state.done += 1
         state.time += tau
+
+
+class BodyMotion(PETScOwner):
+    """Each body's mean velocity, the mass-weighted v_b = z_b^T M v / z_b^T M z_b per axis, with
+    z_b = T^-1 e_b the rigid translation e_b of body b in the solver's variables (the momentum
+    of the free dofs over their mass; a component prescribed on all of a body has no mass: 0).
+
+    Args:
+        problem: the contact problem (``node_body`` names the bodies; None: one body ``"body"``).
+        mass: M of :func:`mass_matrix`.
+    """
+
+    def __init__(self, problem: ContactProblem, mass: PETSc.Mat):
+        self.mass = mass
+        names = list(problem.body.cell_tags.names) if problem.node_body is not None else ["body"]
+        node_body = problem.node_body if problem.node_body is not None else np.zeros(
+            problem.V.dofmap.index_map.size_local + problem.V.dofmap.index_map.num_ghosts, dtype=np.int32)
+        field = fem.Function(problem.V)
+        self.translations: dict[str, list[PETSc.Vec]] = {}
+        for k, name in enumerate(names):
+            self.translations[name] = []
+            for axis in range(3):
+                field.x.array[:] = 0.0
+                field.x.array.reshape(-1, 3)[node_body == k, axis] = 1.0
+                self.translations[name].append(problem.solver_variables(field, problem.A.createVecRight()))
+        self._work = problem.A.createVecRight()
+        self.masses = {name: [_energy_norm(mass, z, self._work) for z in zs] for name, zs in self.translations.items()}
+
+    def petsc_objects(self) -> list[typing.Any]:
+        """The translations and the work vector (not M)."""
+        return [*(z for zs in self.translations.values() for z in zs), self._work]
+
+    def velocities(self, velocity: PETSc.Vec) -> dict[str, list[float]]:
+        """Each body's mean velocity (m/s, global axes) of ``velocity`` (solver variables). Collective."""
+        self.mass.mult(velocity, self._work)
+        return {name: [z.dot(self._work) / m if m > 0.0 else 0.0 for z, m in zip(zs, self.masses[name])]
+                for name, zs in self.translations.items()}
 
 
 def _zero_rows(diagonal: PETSc.Vec) -> np.ndarray:
