@@ -5,7 +5,7 @@ Each converged time step is one time (s) of ``OUTPUT/body.bp`` (``displacement``
 ``velocity``, global components), one entry of ``OUTPUT/summary.json`` (time, Newton and
 Krylov counts of the projection and of the step, the energy terms of
 :data:`~contactqvi.contact.dynamics.ENERGY_TERMS`, each body's mean velocity, the step's
-mean contact force) and a checkpoint (``OUTPUT/checkpoint/``: the
+mean contact force, each body's mass-weighted mean displacement) and a checkpoint (``OUTPUT/checkpoint/``: the
 :class:`~contactqvi.contact.dynamics.DynamicState` whole, displacement and velocity in the
 solver's variables, read back bitwise on the same number of ranks); ``OUTPUT/energy.png``
 draws the energies over time.
@@ -123,6 +123,7 @@ def _entry(problem: ContactProblem, state: DynamicState, projection: SCDNewtonRe
     return {"step": state.done, "time": state.time, **result.summary(),
             "predictor": {"iterations": projection.iterations, "inner_iterations": projection.inner_iterations},
             "energy": dict(state.energy), "body_velocity": motion.velocities(state.velocity),
+            "body_displacement": motion.velocities(state.displacement),
             **contact_resultants(problem, mean)}
 
 

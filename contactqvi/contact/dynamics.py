@@ -240,7 +240,8 @@ class BodyMotion(PETScOwner):
         return [*(z for zs in self.translations.values() for z in zs), self._work]
 
     def velocities(self, velocity: PETSc.Vec) -> dict[str, list[float]]:
-        """Each body's mean velocity (m/s, global axes) of ``velocity`` (solver variables). Collective."""
+        """Each body's mean velocity (m/s, global axes) of ``velocity`` (solver variables); of a
+        displacement, its mean displacement (m). Collective."""
         self.mass.mult(velocity, self._work)
         return {name: [z.dot(self._work) / m if m > 0.0 else 0.0 for z, m in zip(zs, self.masses[name])]
                 for name, zs in self.translations.items()}
