@@ -1,14 +1,19 @@
 """Run a case with ``[dynamics]``: the contact-stabilised Newmark method over time (docs/dynamics.md).
 
 ``python -m contactqvi run CASE.toml`` comes here when the case has a ``[dynamics]`` table.
-Each converged time step is one time (s) of ``OUTPUT/body.bp`` (``displacement``,
-``velocity``, global components), one entry of ``OUTPUT/summary.json`` (time, Newton and
-Krylov counts of the projection and of the step, the energy terms of
-:data:`~contactqvi.contact.dynamics.ENERGY_TERMS`, each body's mean velocity, the step's
-mean contact force, each body's mass-weighted mean displacement) and a checkpoint (``OUTPUT/checkpoint/``: the
-:class:`~contactqvi.contact.dynamics.DynamicState` whole, displacement and velocity in the
-solver's variables, read back bitwise on the same number of ranks); ``OUTPUT/energy.png``
-draws the energies over time.
+Each converged time step is
+
+* one time (s) of ``OUTPUT/body.bp``: ``displacement``, ``velocity`` and ``acceleration``
+  (the step's mean, Delta v / tau), global components;
+* one entry of ``OUTPUT/summary.json``: time, Newton and Krylov counts of the projection and
+  of the step, the energy terms of :data:`~contactqvi.contact.dynamics.ENERGY_TERMS`, each
+  body's mass-weighted mean velocity, displacement and acceleration, the step's mean contact
+  force;
+* a checkpoint (``OUTPUT/checkpoint/``): the :class:`~contactqvi.contact.dynamics.DynamicState`
+  whole (displacement, velocity and acceleration in the solver's variables, time, energies),
+  read back bitwise on the same number of ranks.
+
+``OUTPUT/energy.png`` draws the energies over time.
 """
 
 from __future__ import annotations
@@ -89,7 +94,8 @@ def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: B
     u = problem.A.createVecRight()
     displacement = fem.Function(problem.V, name="displacement")
     velocity = fem.Function(problem.V, name="velocity")
-    writer = _BodyWriter(out, displacement, velocity)
+    acceleration = fem.Function(problem.V, name="acceleration")
+    writer = _BodyWriter(out, [displacement, velocity, acceleration])
     try:
         while state.done < count:
             projection, result = integrator.step(state, u)
@@ -102,6 +108,7 @@ def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: B
             summary["steps"].append(_entry(problem, state, projection, result, motion))
             problem.physical_displacement(u, displacement)
             _global(problem, state.velocity, velocity)
+            _global(problem, state.acceleration, acceleration)
             writer.write(state.time)
             tables.write_summary(problem.comm, out / "summary.json", summary)
             write_dynamic_checkpoint(problem, out, state, summary)
@@ -124,6 +131,7 @@ def _entry(problem: ContactProblem, state: DynamicState, projection: SCDNewtonRe
             "predictor": {"iterations": projection.iterations, "inner_iterations": projection.inner_iterations},
             "energy": dict(state.energy), "body_velocity": motion.velocities(state.velocity),
             "body_displacement": motion.velocities(state.displacement),
+            "body_acceleration": motion.velocities(state.acceleration),
             **contact_resultants(problem, mean)}
 
 
@@ -158,13 +166,13 @@ def _global(problem: ContactProblem, velocity: PETSc.Vec, out: fem.Function) -> 
 
 
 class _BodyWriter:
-    """``body.bp``: displacement and velocity at every converged time (VTX, BP4), renamed into
-    place when closed (a restart writes the steps after its checkpoint only)."""
+    """``body.bp``: the ``fields`` (displacement, velocity, acceleration) at every converged time
+    (VTX, BP4), renamed into place when closed (a restart writes the steps after its checkpoint only)."""
 
-    def __init__(self, out: pathlib.Path, displacement: fem.Function, velocity: fem.Function):
-        self._atomic = tables.atomic_path(displacement.function_space.mesh.comm, out / "body.bp")
-        self._writer = io.VTXWriter(displacement.function_space.mesh.comm, str(self._atomic.__enter__()),
-                                    [displacement, velocity], engine="BP4")
+    def __init__(self, out: pathlib.Path, fields: list[fem.Function]):
+        comm = fields[0].function_space.mesh.comm
+        self._atomic = tables.atomic_path(comm, out / "body.bp")
+        self._writer = io.VTXWriter(comm, str(self._atomic.__enter__()), fields, engine="BP4")
 
     def write(self, t: float) -> None:
         self._writer.write(t)
@@ -176,8 +184,9 @@ class _BodyWriter:
 
 def write_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, state: DynamicState,
                              summary: dict[str, typing.Any]) -> None:
-    """Checkpoint ``state``: w_n and v_n in the solver's variables (adios4dolfinx, against the mesh's
-    input order) and a marker with the step, time, energies and the summary, written last. Collective."""
+    """Checkpoint ``state``: w_n, v_n and the last acceleration in the solver's variables
+    (adios4dolfinx, against the mesh's input order) and a marker with the step, time, energies and
+    the summary, written last. Collective."""
     comm, directory = problem.comm, out / _CHECKPOINT
     tables.prepare_output_dir(comm, directory)
     name = f"time_{state.done:06d}.bp"
@@ -197,10 +206,10 @@ def write_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, state: 
 
 
 def _state_functions(V: fem.FunctionSpace, state: DynamicState, fill: bool) -> list[fem.Function]:
-    """Functions on ``V`` for the state's displacement and velocity vectors, holding them if ``fill``."""
-    fields = [fem.Function(V, name="solver_variables"), fem.Function(V, name="solver_velocity")]
+    """Functions on ``V`` for the state's displacement, velocity and acceleration, holding them if ``fill``."""
+    fields = [fem.Function(V, name=name) for name in ("solver_variables", "solver_velocity", "solver_acceleration")]
     if fill:
-        for field, vector in zip(fields, (state.displacement, state.velocity)):
+        for field, vector in zip(fields, (state.displacement, state.velocity, state.acceleration)):
             field.x.array[: vector.getLocalSize()] = vector.array
             field.x.scatter_forward()
     return fields
@@ -219,7 +228,7 @@ def read_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, case: Co
         raise ParameterError("--restart", f"the checkpoint in {marker.parent} was written for another case; use a "
                              "new --output directory")
     fields = _state_functions(problem.V, state, fill=False)
-    for field, vector in zip(fields, (state.displacement, state.velocity)):
+    for field, vector in zip(fields, (state.displacement, state.velocity, state.acceleration)):
         adios4dolfinx.read_function(marker.parent / data["file"], field, engine="BP4", time=float(data["step"]),
                                     name=field.name)
         vector.array[:] = field.x.array[: vector.getLocalSize()]

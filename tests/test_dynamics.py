@@ -92,6 +92,8 @@ def test_block_slides_to_a_stop(mpi_tmp_path):
     last = summary["steps"][-1]
     assert last["body_displacement"]["body"][0] == pytest.approx(V0**2 / (2 * mu * g), rel=0.01)
     assert abs(last["body_velocity"]["body"][0]) < 1e-4 * V0  # at rest but for its elastic vibration
+    for step in summary["steps"][:19]:  # sliding: the mean acceleration -mu g
+        assert step["body_acceleration"]["body"][0] == pytest.approx(-mu * g, rel=1e-3)
     kinetic = RHO * 0.2 * 0.1 * 0.1 * V0**2 / 2
     assert last["energy"]["friction_dissipation"] == pytest.approx(kinetic, rel=0.01)
     assert abs(last["energy"]["balance_error"]) < 1e-6 * kinetic

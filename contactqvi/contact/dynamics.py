@@ -79,6 +79,8 @@ class DynamicState(PETScOwner):
         time: t_done (s).
         displacement: w_n in the solver's variables (without the shift).
         velocity: v_n in the solver's variables (m/s).
+        acceleration: (v_n - v_{n-1}) / tau, the last step's mean acceleration (m/s^2; the
+            trapezoidal rule's acceleration at t_{n - 1/2}), zero at time 0; output only, no step reads it.
         energy: the step's energy terms (:data:`ENERGY_TERMS`), the works and the dissipation
             summed from time 0 (J).
         initial_energy: kinetic + elastic energy at time 0 (J).
@@ -88,11 +90,12 @@ class DynamicState(PETScOwner):
     time: float
     displacement: PETSc.Vec
     velocity: PETSc.Vec
+    acceleration: PETSc.Vec
     energy: dict[str, float]
     initial_energy: float
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [self.displacement, self.velocity]
+        return [self.displacement, self.velocity, self.acceleration]
 
 
 class StabilisedNewmark(PETScOwner):
@@ -135,15 +138,15 @@ class StabilisedNewmark(PETScOwner):
     def initial_state(self, velocity: PETSc.Vec | None = None) -> DynamicState:
         """The state at time 0: at rest in the reference configuration with the initial velocity
         ``velocity`` (solver variables; None: zero), zero at the prescribed dofs."""
-        w, v = self.problem.A.createVecRight(), self.problem.A.createVecRight()
-        w.set(0.0)
-        v.set(0.0)
+        w, v, a = (self.problem.A.createVecRight() for _ in range(3))
+        for vector in (w, v, a):
+            vector.set(0.0)
         if velocity is not None:
             velocity.copy(v)
             v.array[self.prescribed] = 0.0
         energy = {name: 0.0 for name in ENERGY_TERMS}
         energy["kinetic"] = 0.5 * _energy_norm(self.mass, v, self._work[0])
-        return DynamicState(0, 0.0, w, v, energy, energy["kinetic"])
+        return DynamicState(0, 0.0, w, v, a, energy, energy["kinetic"])
 
     def step(self, state: DynamicState, u: PETSc.Vec, stop: typing.Callable[[], bool] | None = None
              ) -> tuple[SCDNewtonResult, SCDNewtonResult]:
@@ -193,6 +196,8 @@ class StabilisedNewmark(PETScOwner):
         self.mass.mult(velocity_change, work)
         projection_work = -predicted.dot(work) / tau
         state.velocity.axpy(1.0, velocity_change)
+        velocity_change.copy(state.acceleration)
+        state.acceleration.scale(1.0 / tau)
         w_next.copy(state.displacement)
         w_next.destroy()
         normal, friction = _contact_work(problem, result, increment)
