@@ -168,7 +168,8 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
         The summary (also in ``output/summary.json``) and the exit code (:data:`EXIT_CODES`):
         0 when every step converged, 1 when one did not, 3 when interrupted.
     """
-    require(case.dynamics is None, "dynamics", "a case with [dynamics] runs by contactqvi.dynamic_runner.run_dynamics")
+    require(case.dynamics is None, "dynamics", "a case with [dynamics] is a time integration: "
+            "contactqvi.dynamic_runner.run_dynamics")
     parameters = check_solver(case, SOLVER_PARAMETERS)
     require(stop_after is None or stop_after >= 1, "--stop-after", f"must be a step number >= 1, got {stop_after}")
     steps = case.steps[:stop_after]
