@@ -20,9 +20,13 @@ import pytest
 
 from contactqvi.case import (Body, Boundary, Contact, ContactCase, ContactPair, Displacement, Dynamics, Material,
                              MeshSource, ObstacleShape, Step, parse_case)
+from contactqvi.contact.dynamics import BodyMotion, StabilisedNewmark
 from contactqvi.dynamic_runner import run_dynamics
 from contactqvi.laws import Coulomb, Frictionless
 from contactqvi.parameters import ParameterError
+from contactqvi.runner import build_problem
+
+from petsc_audit import assert_frees_petsc_objects
 
 DATA = pathlib.Path(__file__).parent / "data"
 E, NU, RHO, V0, L = 210e9, 0.3, 7800.0, 1.0, 1.0
@@ -77,17 +81,22 @@ def test_restart_mid_impact(mpi_tmp_path):
         assert b["body_velocity"] == a["body_velocity"]
 
 
+def block(mu: float, g: float, solver: dict) -> ContactCase:
+    """The block of tests/data/dynamic_block.geo sliding at V0 on the plane z = 0, friction mu,
+    gravity g; dt = a twentieth of its stopping time, to 1.1 times it."""
+    stop = V0 / (mu * g)
+    return ContactCase(mesh=MeshSource(file=DATA / "dynamic_block.geo"), material=Material(E, NU, density=RHO),
+                       boundary=Boundary(body_force=(0.0, 0.0, -RHO * g)), contact=Contact("bottom", Coulomb(mu)),
+                       obstacle=ObstacleShape("plane", point=(0, 0, 0), normal=(0, 0, 1)),
+                       dynamics=Dynamics(stop / 20, 1.1 * stop, initial_velocity=(V0, 0.0, 0.0)), solver=solver)
+
+
 def test_block_slides_to_a_stop(mpi_tmp_path):
     """mu = 0.3, v = 1 m/s, g = 9.81 m/s^2: it stops at v^2 / (2 mu g) = 0.16989 m after v / (mu g);
     dt = that time / 20 (the stop falls on a step). Measured: distance within 1e-6, dissipation
-    equal to the kinetic energy to 1e-7."""
+    equal to the kinetic energy to 1e-7, the mean acceleration -mu g (asserted to 1e-3) while it slides."""
     mu, g = 0.3, 9.81
-    stop = V0 / (mu * g)
-    case = ContactCase(mesh=MeshSource(file=DATA / "dynamic_block.geo"), material=Material(E, NU, density=RHO),
-                       boundary=Boundary(body_force=(0.0, 0.0, -RHO * g)), contact=Contact("bottom", Coulomb(mu)),
-                       obstacle=ObstacleShape("plane", point=(0, 0, 0), normal=(0, 0, 1)),
-                       dynamics=Dynamics(stop / 20, 1.1 * stop, initial_velocity=(V0, 0.0, 0.0)), solver={"pc": "lu"})
-    summary, code = run_dynamics(case, mpi_tmp_path, plot=False)
+    summary, code = run_dynamics(block(mu, g, {"pc": "lu"}), mpi_tmp_path, plot=False)
     assert code == 0
     last = summary["steps"][-1]
     assert last["body_displacement"]["body"][0] == pytest.approx(V0**2 / (2 * mu * g), rel=0.01)
@@ -97,6 +106,23 @@ def test_block_slides_to_a_stop(mpi_tmp_path):
     kinetic = RHO * 0.2 * 0.1 * 0.1 * V0**2 / 2
     assert last["energy"]["friction_dissipation"] == pytest.approx(kinetic, rel=0.01)
     assert abs(last["energy"]["balance_error"]) < 1e-6 * kinetic
+
+
+def test_the_integrator_frees_its_petsc_objects(mpi_tmp_path):
+    """Three time steps with the default multigrid Newton-step solvers, then destroy()."""
+
+    def run():
+        case = block(0.3, 9.81, {})
+        problem = build_problem(case, MPI.COMM_WORLD)
+        integrator = StabilisedNewmark(problem, RHO, case.dynamics.dt, prefix="dyn_life_")
+        motion = BodyMotion(problem, integrator.mass)
+        state, u = integrator.initial_state(), problem.A.createVecRight()
+        for _ in range(3):
+            assert all(result.converged for result in integrator.step(state, u))
+        assert motion.velocities(state.velocity)["body"][2] == pytest.approx(0.0, abs=1e-3)
+        return [motion, integrator, state, u, problem]
+
+    assert_frees_petsc_objects(run, mpi_tmp_path)
 
 
 def _case_file(**dynamics) -> dict:
