@@ -67,15 +67,17 @@ def test_bars_meet_head_on(mpi_tmp_path):
 
 
 def test_restart_mid_impact(mpi_tmp_path):
-    """Stopped after step 20 of 40 (inside the contact) and restarted: the uninterrupted run's numbers."""
-    case = bars(DURATION / 40, DURATION)
+    """Stopped after step 10 of 20 (dt = (2L/c)/40: in the middle of the contact) and restarted:
+    the uninterrupted run's numbers."""
+    case = bars(DURATION / 40, DURATION / 2)
     whole, _ = run_dynamics(case, mpi_tmp_path / "whole", plot=False)
-    _, code = run_dynamics(case, mpi_tmp_path / "cut", plot=False, stop_after=20)
+    _, code = run_dynamics(case, mpi_tmp_path / "cut", plot=False, stop_after=10)
     assert code == 3
     resumed, code = run_dynamics(case, mpi_tmp_path / "cut", plot=False, restart=True)
-    assert code == 0 and resumed["restarts"] == [{"after_step": 20, "mpi_size": MPI.COMM_WORLD.size}]
-    assert len(resumed["steps"]) == len(whole["steps"]) == 40
-    for a, b in zip(whole["steps"][20:], resumed["steps"][20:]):
+    assert code == 0 and resumed["restarts"] == [{"after_step": 10, "mpi_size": MPI.COMM_WORLD.size}]
+    assert len(resumed["steps"]) == len(whole["steps"]) == 20
+    assert all(step["contact_area"] > 0.0 for step in whole["steps"])
+    for a, b in zip(whole["steps"][10:], resumed["steps"][10:]):
         for term in ("kinetic", "elastic", "contact_work"):
             assert b["energy"][term] == pytest.approx(a["energy"][term], rel=1e-12, abs=1e-12)
         assert b["body_velocity"] == a["body_velocity"]

@@ -40,6 +40,7 @@ from contactqvi.contact.scd_newton import SCDNewtonResult, SCDNewtonSolver
 from contactqvi.laws import Frictionless
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import default_options
+from contactqvi.parameters import require
 
 __all__ = ["BETA", "ENERGY_TERMS", "BodyMotion", "DynamicState", "StabilisedNewmark", "mass_matrix"]
 
@@ -113,6 +114,9 @@ class StabilisedNewmark(PETScOwner):
 
     def __init__(self, problem: ContactProblem, density: float | fem.Function, dt: float,
                  parameters: dict | None = None, prefix: str = "dynamics_"):
+        require(problem.hyperelastic is None and not problem.searched_each_step, "dynamics",
+                "the contact-stabilised Newmark step takes a linear elastic problem searched once (docs/dynamics.md)")
+        require(dt > 0.0, "dynamics.dt", f"the time step must be > 0 (s), got {dt!r}")
         self.problem, self.dt = problem, float(dt)
         self.mass = mass_matrix(problem, density)
         self.stiffness = problem.A.duplicate(copy=True)
