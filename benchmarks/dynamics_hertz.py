@@ -103,15 +103,19 @@ def main() -> None:
     args = parse()
     comm = MPI.COMM_WORLD
     directory = pathlib.Path(comm.bcast(tempfile.mkdtemp(prefix="hertz-drop-") if comm.rank == 0 else None, root=0))
-    rows = [run(h, args.far, k, directory) for h in args.sizes for k in args.steps]
     header = ["h at contact (mm)", "tau", "free dofs", "duration / t_c", "peak force / F_max", "energy after / before",
               "seconds"]
-    text = (f"# Hertz drop of a sphere on a rigid plane (benchmarks/dynamics_hertz.py, {comm.size} rank(s))\n\n"
-            f"R = {R} m, E = {E:g} Pa, nu = {NU}, rho = {RHO} kg/m^3, v = {V0} m/s (a quarter sphere, rollers on "
-            f"the symmetry planes): t_c = {T_C * 1e6:.1f} us, F_max = {F_MAX / 1e3:.2f} kN, delta_max = "
-            f"{DELTA * 1e6:.1f} um. Step-mean contact force (docs/dynamics.md, Sect. 3).\n\n"
-            + tables.markdown_table(header, rows))
-    tables.write_table(comm, pathlib.Path(args.output) / "dynamics_hertz", {"header": header, "rows": rows}, text)
+    rows = []
+    for h in args.sizes:
+        for k in args.steps:  # the table is written after every run: a long grid keeps what it finished
+            rows.append(run(h, args.far, k, directory))
+            text = (f"# Hertz drop of a sphere on a rigid plane (benchmarks/dynamics_hertz.py, {comm.size} rank(s))\n\n"
+                    f"R = {R} m, E = {E:g} Pa, nu = {NU}, rho = {RHO} kg/m^3, v = {V0} m/s (a quarter sphere, rollers "
+                    f"on the symmetry planes): t_c = {T_C * 1e6:.1f} us, F_max = {F_MAX / 1e3:.2f} kN, delta_max = "
+                    f"{DELTA * 1e6:.1f} um. Step-mean contact force (docs/dynamics.md, Sect. 3).\n\n"
+                    + tables.markdown_table(header, rows))
+            tables.write_table(comm, pathlib.Path(args.output) / "dynamics_hertz", {"header": header, "rows": rows},
+                               text, echo=False)
 
 
 if __name__ == "__main__":
