@@ -9,7 +9,7 @@ load and K the admissible set (the contact conditions), a step from (w_n, v_n) i
 1. predictor   w_pred = w_n + tau v_n,
 2. projection  w_bar = argmin_{w in K} 1/2 ||w - w_pred||_M^2, i.e. the GE
                0 in M (w - w_pred) + Q_0(w) (frictionless Q) -- a contact problem with A = M,
-3. step        0 in (4/tau^2) M (w - w_bar) + K w - F - (F - K w_n) + Q(w)         (dynamics.md (2.3))
+3. step        0 in (4/tau^2) M (w - w_bar) + K w - F - (F - K w_n) + Q(w)      (docs/dynamics.md (3.3))
                -- a contact problem with A_eff = K + (4/tau^2) M and a shifted load,
 4. velocity    v_{n+1} = v_n + (2/tau) (w_{n+1} - w_bar).
 
@@ -99,6 +99,27 @@ class DynamicState(PETScOwner):
         return [self.displacement, self.velocity, self.acceleration]
 
 
+@dataclasses.dataclass
+class _Work(PETScOwner):
+    """The vectors of one time step (solver variables), reused by every step: ``scratch`` for
+    products, the predictor w_pred (3.1) (then delta = w_bar - w_pred), the projected w_bar (3.2),
+    the next displacement w_{n+1}, its increment Delta w and the velocity change (3.4)."""
+
+    scratch: PETSc.Vec
+    predicted: PETSc.Vec
+    projected: PETSc.Vec
+    next_displacement: PETSc.Vec
+    increment: PETSc.Vec
+    velocity_change: PETSc.Vec
+
+    @classmethod
+    def create(cls, A: PETSc.Mat) -> _Work:
+        return cls(*(A.createVecRight() for _ in dataclasses.fields(cls)))
+
+    def petsc_objects(self) -> list[PETSc.Vec]:
+        return [getattr(self, f.name) for f in dataclasses.fields(self)]
+
+
 class StabilisedNewmark(PETScOwner):
     """The contact-stabilised Newmark method (module docstring) on a linear ``problem``.
 
@@ -132,12 +153,12 @@ class StabilisedNewmark(PETScOwner):
                                               law=Frictionless().lumped(problem.contact_area), hyperelastic=None)
         self.predictor_solver = SCDNewtonSolver(self.projection, parameters, prefix=prefix + "predictor_")
         self.solver = SCDNewtonSolver(problem, parameters, prefix=prefix)
-        self._work = [problem.A.createVecRight() for _ in range(5)]
+        self._work = _Work.create(problem.A)
 
     def petsc_objects(self) -> list[typing.Any]:
         """The solvers, M, K, the projection's matrix and load, the work vectors (not the problem's)."""
         return [self.predictor_solver, self.solver, self.mass, self.stiffness, self.projection_matrix,
-                self.projection.load, *self._work]
+                self.projection.load, self._work]
 
     def initial_state(self, velocity: PETSc.Vec | None = None) -> DynamicState:
         """The state at time 0: at rest in the reference configuration with the initial velocity
@@ -149,16 +170,16 @@ class StabilisedNewmark(PETScOwner):
             velocity.copy(v)
             v.array[self.prescribed] = 0.0
         energy = {name: 0.0 for name in ENERGY_TERMS}
-        energy["kinetic"] = 0.5 * _energy_norm(self.mass, v, self._work[0])
+        energy["kinetic"] = 0.5 * _energy_norm(self.mass, v, self._work.scratch)
         return DynamicState(0, 0.0, w, v, a, energy, energy["kinetic"])
 
     def step(self, state: DynamicState, u: PETSc.Vec, stop: typing.Callable[[], bool] | None = None
              ) -> tuple[SCDNewtonResult, SCDNewtonResult]:
-        """One time step from ``state``: the projected predictor (2) and the step (3) of the module
-        docstring, each solved by SCD Newton; ``u`` holds the step's solution (shifted). The state
-        is updated (:meth:`record`) only when both converged. Returns both results."""
+        """One time step from ``state``: the projected predictor (3.1)-(3.2) and the step (3.3) of
+        docs/dynamics.md, each solved by SCD Newton; ``u`` holds the step's solution (shifted). The
+        state is advanced (:meth:`_record`) only when both converged. Returns both results."""
         problem, tau = self.problem, self.dt
-        predicted, projected = self._work[1], self._work[2]
+        predicted, projected = self._work.predicted, self._work.projected
         problem.set_step(1.0, previous=state.displacement)  # d: gaps, slip measured from w_n
         predicted.waxpy(tau, state.velocity, state.displacement)
         self.projection_matrix.mult(predicted, self.projection.load)
@@ -171,13 +192,13 @@ class StabilisedNewmark(PETScOwner):
         self._add_inertia(state, projected)
         result = self.solver.solve(u, stop=stop)
         if result.converged:
-            self.record(state, u, result, predicted, projected)
+            self._record(state, u, result)
         return projection, result
 
     def _add_inertia(self, state: DynamicState, projected: PETSc.Vec) -> None:
-        """The step's load (2.3): l = F + K_eff d (set_step) + M w_bar / (beta tau^2) + (F - K w_n),
+        """The step's load of (3.3): l = F + A_eff d (set_step) + M w_bar / (beta tau^2) + (F - K w_n),
         the last term zero at the prescribed rows."""
-        problem, work = self.problem, self._work[0]
+        problem, work = self.problem, self._work.scratch
         self.mass.mult(projected, work)
         problem.load.axpy(1.0 / (BETA * self.dt**2), work)
         self.stiffness.mult(state.displacement, work)
@@ -185,32 +206,29 @@ class StabilisedNewmark(PETScOwner):
         work.array[self.prescribed] = 0.0
         problem.load.axpy(1.0, work)
 
-    def record(self, state: DynamicState, u: PETSc.Vec, result: SCDNewtonResult, predicted: PETSc.Vec,
-               projected: PETSc.Vec) -> None:
-        """Advance ``state`` over the step just solved: w_{n+1} = u - d, v_{n+1} (4), the energies
-        (docs/dynamics.md, Sect. 4)."""
-        problem, tau, work = self.problem, self.dt, self._work[0]
-        increment, velocity_change = self._work[3], self._work[4]
-        w_next = u.copy()
-        w_next.axpy(-1.0, problem.shift)
+    def _record(self, state: DynamicState, u: PETSc.Vec, result: SCDNewtonResult) -> None:
+        """Advance ``state`` over the step just solved: w_{n+1} = u - d, v_{n+1} (3.4), the step's
+        mean acceleration and the energy terms (4.1) of docs/dynamics.md."""
+        problem, tau, work = self.problem, self.dt, self._work
+        w_next, increment, velocity_change = work.next_displacement, work.increment, work.velocity_change
+        w_next.waxpy(-1.0, problem.shift, u)
         increment.waxpy(-1.0, state.displacement, w_next)
-        predicted.aypx(-1.0, projected)  # delta = w_bar - w_pred
-        velocity_change.waxpy(-1.0, projected, w_next)
+        work.predicted.aypx(-1.0, work.projected)  # delta = w_bar - w_pred
+        velocity_change.waxpy(-1.0, work.projected, w_next)
         velocity_change.scale(2.0 / tau)  # v_{n+1} - v_n
-        self.mass.mult(velocity_change, work)
-        projection_work = -predicted.dot(work) / tau
+        self.mass.mult(velocity_change, work.scratch)
+        projection_work = -work.predicted.dot(work.scratch) / tau
         state.velocity.axpy(1.0, velocity_change)
         velocity_change.copy(state.acceleration)
         state.acceleration.scale(1.0 / tau)
         w_next.copy(state.displacement)
-        w_next.destroy()
         normal, friction = _contact_work(problem, result, increment)
         energy = state.energy
         energy["external_work"] += increment.dot(problem.applied)
         energy["friction_dissipation"] -= friction
         energy["contact_work"] += normal + projection_work
-        energy["kinetic"] = 0.5 * _energy_norm(self.mass, state.velocity, work)
-        energy["elastic"] = 0.5 * _energy_norm(self.stiffness, state.displacement, work)
+        energy["kinetic"] = 0.5 * _energy_norm(self.mass, state.velocity, work.scratch)
+        energy["elastic"] = 0.5 * _energy_norm(self.stiffness, state.displacement, work.scratch)
         stored = energy["kinetic"] + energy["elastic"] - state.initial_energy
         energy["balance_error"] = (stored - energy["external_work"] - energy["contact_work"]
                                    + energy["friction_dissipation"])
@@ -271,7 +289,7 @@ def _energy_norm(A: PETSc.Mat, x: PETSc.Vec, work: PETSc.Vec) -> float:
 
 
 def _contact_work(problem: ContactProblem, result: SCDNewtonResult, increment: PETSc.Vec) -> tuple[float, float]:
-    """The work of the step's contact forces R over the increment Delta w (dynamics.md (4.2)):
+    """The work of the step's contact forces over the increment Delta w (docs/dynamics.md (4.1)):
     1/2 lambda . Delta w_n (normal) and 1/2 R_t . Delta w_t (friction, <= 0), summed over the
     contact nodes (nodal frames; the relative displacement at a body pair's slave nodes). Collective."""
     nodal = increment.array.reshape(-1, 3)[problem.contact_blk]
