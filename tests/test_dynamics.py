@@ -83,6 +83,27 @@ def test_restart_mid_impact(mpi_tmp_path):
         assert b["body_velocity"] == a["body_velocity"]
 
 
+@pytest.mark.ranks(2)
+def test_restart_on_another_number_of_ranks(mpi_tmp_path):
+    """Written on 2 ranks (stopped after step 10 of 20, in the contact), continued on rank 0 alone:
+    the 2-rank run's energies and velocities to 1e-9 (another partition: round-off apart)."""
+    world = MPI.COMM_WORLD
+    alone = world.Split(world.rank, 0)
+    case = bars(DURATION / 40, DURATION / 2)
+    whole, _ = run_dynamics(case, mpi_tmp_path / "whole", world, plot=False)
+    _, code = run_dynamics(case, mpi_tmp_path / "cut", world, plot=False, stop_after=10)
+    assert code == 3
+    if world.rank == 0:
+        resumed, code = run_dynamics(case, mpi_tmp_path / "cut", alone, plot=False, restart=True)
+        assert code == 0 and resumed["restarts"] == [{"after_step": 10, "mpi_size": 1}]
+        for a, b in zip(whole["steps"][10:], resumed["steps"][10:]):
+            for term in ("kinetic", "elastic", "contact_work"):
+                assert b["energy"][term] == pytest.approx(a["energy"][term], rel=1e-9, abs=1e-9)
+            assert b["body_velocity"]["right"] == pytest.approx(a["body_velocity"]["right"], rel=1e-9, abs=1e-12)
+    world.Barrier()
+    alone.Free()
+
+
 def block(mu: float, g: float, solver: dict) -> ContactCase:
     """The block of tests/data/dynamic_block.geo sliding at V0 on the plane z = 0, friction mu,
     gravity g; dt = a twentieth of its stopping time, to 1.1 times it."""
