@@ -443,7 +443,7 @@ class ContactCase:
                         "pair its obstacle")
             require(self.mesh.file is not None, "mesh.file", "several bodies need a gmsh file with one "
                     "physical volume per body")
-            checked["bodies"] = _check_bodies(self.bodies)
+            checked["bodies"] = _check_bodies(self.bodies, held=self.dynamics is None)
             checked["contacts"] = _check_contacts(self.contacts)
         else:
             for name in ("material", "boundary", "contact", "obstacle"):
@@ -745,7 +745,9 @@ def _check_law(law: ContactLaw | None, path: str) -> ContactLaw:
     return law.checked(path)
 
 
-def _check_bodies(bodies: typing.Sequence[Body]) -> tuple[Body, ...]:
+def _check_bodies(bodies: typing.Sequence[Body], held: bool = True) -> tuple[Body, ...]:
+    """The ``[[bodies]]`` checked; ``held``: some body must have a support (not with ``[dynamics]``,
+    where the mass holds them)."""
     require(_is_list(bodies) and len(bodies) > 0, "bodies", "give at least one [[bodies]] entry")
     checked = []
     for i, body in enumerate(bodies):
@@ -764,7 +766,7 @@ def _check_bodies(bodies: typing.Sequence[Body]) -> tuple[Body, ...]:
         checked.append(Body(name, material, _check_boundary(body.boundary, f"{path}.boundary", supported=False),
                             velocity))
     supported = any(b.boundary.clamped or b.boundary.displacement or b.boundary.moved for b in checked)
-    require(supported, "bodies", "no body has a clamped group or a prescribed displacement; at least one "
+    require(supported or not held, "bodies", "no body has a clamped group or a prescribed displacement; at least one "
             "must be held (the others may be held by contact)")
     return tuple(checked)
 

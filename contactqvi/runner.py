@@ -117,7 +117,7 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
     return assemble_contact_problem(msh, tags, young, poisson, tractions, pairs, clamped, body_force or None,
                                     displacements=displacements, cell_tags=cell_tags, moved=moved,
                                     material=_material(case.bodies[0].material.model), pressures=pressures,
-                                    rotations=_rotations(case))
+                                    rotations=_rotations(case), inertia=case.dynamics is not None)
 
 
 def _largest_prescribed(case: ContactCase) -> float:
