@@ -41,6 +41,7 @@ def run(argv: list[str]) -> int:
     from contactqvi import cli
     from contactqvi.case import load_case
     from contactqvi.parameters import ParameterError
+    from contactqvi.dynamic_runner import run_dynamics
     from contactqvi.runner import EXIT_CODES, PREFIX, OutputError, run_case
 
     parser = cli.make_parser("Solve a contact case file (TOML) along its load path.", "results/case",
@@ -57,8 +58,9 @@ def run(argv: list[str]) -> int:
     try:
         args = cli.parse_args(parser, argv)
         case = load_case(args.case)
-        _, code = run_case(case, args.output, MPI.COMM_WORLD, plot=not args.no_plot, restart=args.restart,
-                           stop_after=args.stop_after)
+        run = run_case if case.dynamics is None else run_dynamics  # [dynamics]: a time integration
+        _, code = run(case, args.output, MPI.COMM_WORLD, plot=not args.no_plot, restart=args.restart,
+                      stop_after=args.stop_after)
     except ParameterError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_CODES["bad input"]

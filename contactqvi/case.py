@@ -84,6 +84,18 @@ slave surface with a master surface (``"body.group"``) or with a rigid obstacle
     #                                   # linear in x (a taper): {value = 1e-4, at = [0, 0, 0],
     #                                   # slope = [0, 0, 2e-3]}, delta(x) = value + slope . (x - at)
 
+Time (implicit dynamics, docs/dynamics.md): a ``[dynamics]`` table makes the case a
+time integration instead of a quasi-static load path; every body needs its density, the
+loads are constant in time (no ``[[steps]]``)::
+
+    [dynamics]
+    scheme = "newmark"                  # contact-stabilised Newmark, beta = 1/4, gamma = 1/2
+    dt = 1e-5                           # time step (s) > 0
+    end = 1e-3                          # end time (s)
+    initial_velocity = [0.0, 0.0, -1.0] # m/s; with [[bodies]]: each body's own key
+    [material]
+    density = 7800.0                    # kg/m^3 (each body's material with [[bodies]])
+
 Contact laws (:data:`contactqvi.laws.LAWS`; ``law`` may be left out for ``coulomb``),
 with the keys each takes beside ``law`` (checked by the law's class, errors named by
 the key path, ``contacts[0].friction``):
@@ -152,6 +164,8 @@ __all__ = [
     "Boundary",
     "Contact",
     "ContactCase",
+    "DYNAMICS_SCHEMES",
+    "Dynamics",
     "ContactPair",
     "Displacement",
     "Interference",
@@ -218,11 +232,13 @@ class Material:
             :data:`contactqvi.materials.MATERIALS` (finite strain: ``"neo_hookean"``,
             ``"saint_venant_kirchhoff"``). With ``[[bodies]]`` every body takes the same model;
             a case file's ``[material]`` may then hold ``model`` alone, the default of the bodies.
+        density: mass density rho (kg/m^3) > 0, required with ``[dynamics]`` (unused without).
     """
 
     young: float
     poisson: float
     model: str | None = None
+    density: float | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -317,11 +333,43 @@ class Body:
         boundary: conditions on facet groups where they bound this body (group names
             without the body's name; at least one body needs a support, the others
             may be held by contact alone).
+        initial_velocity: the body's velocity at time 0 (m/s) with ``[dynamics]``; None: at rest.
     """
 
     name: str
     material: Material
     boundary: Boundary = Boundary()
+    initial_velocity: Vector | None = None
+
+
+#: Time-stepping schemes of ``[dynamics] scheme`` (docs/dynamics.md): Newmark's average
+#: acceleration (beta = 1/4, gamma = 1/2) with the contact-stabilised predictor of
+#: Deuflhard, Krause and Ertel (2008).
+DYNAMICS_SCHEMES = ("newmark",)
+
+
+@dataclasses.dataclass(frozen=True)
+class Dynamics:
+    """``[dynamics]``: an implicit time integration instead of a quasi-static load path.
+
+    Attributes:
+        dt: the time step (s) > 0.
+        end: the end time (s) >= dt; the steps are t_k = k dt, k = 1, ..., ceil(end / dt)
+            (all of length dt: the last one ends at ``end`` or just after it).
+        scheme: one of :data:`DYNAMICS_SCHEMES`.
+        initial_velocity: the body's velocity at time 0 (m/s), one body; with ``[[bodies]]``
+            each body's ``initial_velocity``. None: at rest.
+    """
+
+    dt: float
+    end: float
+    scheme: str = "newmark"
+    initial_velocity: Vector | None = None
+
+    @property
+    def steps(self) -> int:
+        """The number of time steps, ceil(end / dt) (an end within 1e-9 dt of a step is that step)."""
+        return math.ceil(self.end / self.dt - 1e-9)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -367,6 +415,7 @@ class ContactCase:
     Attributes:
         mesh, material, boundary, contact, obstacle: the sections of the same names.
         steps: the load path, at least one step.
+        dynamics: the time integration (:class:`Dynamics`), or None: a quasi-static path.
         solver: SCD Newton parameters (names of ``contactqvi.contact.scd_newton.PARAMETERS``).
         petsc: PETSc options (without ``-`` and prefix) set under the solver's prefix;
             ``True`` is a flag without value.
@@ -382,6 +431,7 @@ class ContactCase:
     petsc: dict[str, typing.Any] = dataclasses.field(default_factory=dict)
     bodies: tuple[Body, ...] = ()
     contacts: tuple[ContactPair, ...] = ()
+    dynamics: Dynamics | None = None
 
     def __post_init__(self):
         checked = {"mesh": _check_mesh(self.mesh), "steps": _check_steps(self.steps),
@@ -393,13 +443,13 @@ class ContactCase:
                         "pair its obstacle")
             require(self.mesh.file is not None, "mesh.file", "several bodies need a gmsh file with one "
                     "physical volume per body")
-            checked["bodies"] = _check_bodies(self.bodies)
+            checked["bodies"] = _check_bodies(self.bodies, held=self.dynamics is None)
             checked["contacts"] = _check_contacts(self.contacts)
         else:
             for name in ("material", "boundary", "contact", "obstacle"):
                 require(getattr(self, name) is not None, name, f"required table [{name}] missing")
             checked.update(material=_check_material(self.material, "material"),
-                           boundary=_check_boundary(self.boundary, "boundary"),
+                           boundary=_check_boundary(self.boundary, "boundary", supported=self.dynamics is None),
                            contact=_check_contact(self.contact), obstacle=_check_obstacle(self.obstacle, "obstacle"))
         for name, value in checked.items():
             object.__setattr__(self, name, value)
@@ -407,6 +457,8 @@ class ContactCase:
             _check_consistency(self)
         _check_rotations(self)
         _check_fits(self)
+        if self.dynamics is not None:
+            object.__setattr__(self, "dynamics", _check_dynamics(self))
 
     @property
     def groups(self) -> list[str]:
@@ -453,6 +505,7 @@ def parse_case(data: collections.abc.Mapping, base_dir: str | pathlib.Path = "."
         "steps": tuple(_parse_step(step, f"steps[{i}]") for i, step in enumerate(_array(top, "steps"))),
         "solver": _table(top.get("solver", {}), "solver"),
         "petsc": _table(top.get("petsc", {}), "petsc"),
+        "dynamics": Dynamics(**_table(top["dynamics"], "dynamics", Dynamics)) if "dynamics" in top else None,
     }
     if top.get("bodies") or top.get("contacts"):
         model = _default_model(top)
@@ -631,7 +684,11 @@ def _check_material(material: Material, path: str) -> Material:
     require(-1.0 < poisson < 0.5, f"{path}.poisson", f"must lie in (-1, 0.5), got {material.poisson!r}")
     if material.model is not None:
         require_choice(f"{path}.model", material.model, ["linear", *MATERIALS])
-    return Material(young, poisson, None if material.model == "linear" else material.model)
+    density = material.density
+    if density is not None:
+        require_positive(f"{path}.density", density)
+        density = float(density)
+    return Material(young, poisson, None if material.model == "linear" else material.model, density)
 
 
 def _check_boundary(boundary: Boundary, path: str, supported: bool = True) -> Boundary:
@@ -688,7 +745,9 @@ def _check_law(law: ContactLaw | None, path: str) -> ContactLaw:
     return law.checked(path)
 
 
-def _check_bodies(bodies: typing.Sequence[Body]) -> tuple[Body, ...]:
+def _check_bodies(bodies: typing.Sequence[Body], held: bool = True) -> tuple[Body, ...]:
+    """The ``[[bodies]]`` checked; ``held``: some body must have a support (not with ``[dynamics]``,
+    where the mass holds them)."""
     require(_is_list(bodies) and len(bodies) > 0, "bodies", "give at least one [[bodies]] entry")
     checked = []
     for i, body in enumerate(bodies):
@@ -703,9 +762,11 @@ def _check_bodies(bodies: typing.Sequence[Body]) -> tuple[Body, ...]:
                 f"all bodies take the same model (each its own young and poisson), got {material.model!r} here "
                 f"and {first!r} in bodies[0]: a stiff part beside a hyperelastic one can be "
                 "'saint_venant_kirchhoff' (linear elasticity at small strain, exact under large rotations)")
-        checked.append(Body(name, material, _check_boundary(body.boundary, f"{path}.boundary", supported=False)))
+        velocity = None if body.initial_velocity is None else _vector(body.initial_velocity, f"{path}.initial_velocity")
+        checked.append(Body(name, material, _check_boundary(body.boundary, f"{path}.boundary", supported=False),
+                            velocity))
     supported = any(b.boundary.clamped or b.boundary.displacement or b.boundary.moved for b in checked)
-    require(supported, "bodies", "no body has a clamped group or a prescribed displacement; at least one "
+    require(supported or not held, "bodies", "no body has a clamped group or a prescribed displacement; at least one "
             "must be held (the others may be held by contact)")
     return tuple(checked)
 
@@ -847,6 +908,59 @@ def _check_consistency(case: ContactCase) -> None:
     surface = case.contact.surface
     require(surface not in case.boundary.clamped, "contact.surface",
             f"group {surface!r} is clamped (u = 0) and cannot come into contact")
+
+
+def _check_dynamics(case: ContactCase) -> Dynamics:
+    """``[dynamics]`` checked against the case: a known scheme, dt > 0, end >= dt, a density
+    for every body (none for some and one for others is named as such), loads constant in
+    time (no ``[[steps]]``, no moved groups, zero prescribed values), linear elasticity,
+    contact searched once (docs/dynamics.md, what is not done yet)."""
+    dynamics = case.dynamics
+    _instance(dynamics, Dynamics, "dynamics")
+    require_choice("dynamics.scheme", dynamics.scheme, DYNAMICS_SCHEMES)
+    dt = require_number("dynamics.dt", dynamics.dt)
+    require(dt > 0.0, "dynamics.dt", f"the time step must be > 0 (s), got {dynamics.dt!r}")
+    end = require_number("dynamics.end", dynamics.end)
+    require(end >= dt, "dynamics.end", f"must be >= dt = {dt:g} s, got {dynamics.end!r}")
+    bodies = case.bodies or (Body("body", case.material, case.boundary, dynamics.initial_velocity),)
+    prefix = [f"bodies[{i}]" for i in range(len(case.bodies))] or [""]
+    velocity = None if dynamics.initial_velocity is None else _vector(dynamics.initial_velocity,
+                                                                       "dynamics.initial_velocity")
+    require(velocity is None or not case.bodies, "dynamics.initial_velocity",
+            "with [[bodies]] each body gives its own initial_velocity")
+    _check_masses(bodies, prefix)
+    for body, path in zip(bodies, prefix):
+        where = f"{path}." if path else ""
+        require(body.material.model is None, f"{where}material.model", "[dynamics] is linear elasticity for now, "
+                f"got {body.material.model!r}")
+        require(not body.boundary.moved, f"{where}boundary.moved", "[dynamics] takes loads constant in time: no "
+                "moved groups yet")
+        for name, given in body.boundary.displacement.items():
+            require(all(v == 0.0 for v in given.components().values()), f"{where}boundary.displacement.{name}",
+                    "[dynamics] takes zero prescribed components (rollers, clamps) for now")
+    require(len(case.steps) == 1 and case.steps[0] == Step(), "steps",
+            "not used with [dynamics]: the loads are constant in time, the steps are dt up to end")
+    searches = [case.contact.search] if case.contact is not None else [p.search for p in case.contacts]
+    for i, search in enumerate(searches):
+        key = "contact.search" if case.contact is not None else f"contacts[{i}].search"
+        require(search in (None, "once"), key, f"[dynamics] searches the contact once for now, got {search!r}")
+    return Dynamics(dt, end, dynamics.scheme, velocity)
+
+
+def _check_masses(bodies: typing.Sequence[Body], paths: typing.Sequence[str]) -> None:
+    """Every body has a density with ``[dynamics]``; a body without one next to a body with
+    one is its own error (a massless body beside a massive one is not a time integration
+    this scheme makes: its rows of M vanish)."""
+    given = [(body, path) for body, path in zip(bodies, paths) if body.material.density is not None]
+    for body, path in zip(bodies, paths):
+        key = f"{path}.material.density" if path else "material.density"
+        if body.material.density is not None:
+            continue
+        if given:
+            other, other_path = given[0]
+            raise ParameterError(key, f"a body with no mass next to one with mass ({other_path}, "
+                                 f"{other.material.density:g} kg/m^3): give every body its density")
+        raise ParameterError(key, "required with [dynamics] (kg/m^3)")
 
 
 def check_groups(case: ContactCase, names_in_mesh: typing.Iterable[str]) -> None:

@@ -21,6 +21,7 @@ __all__ = [
     "body_force_form",
     "body_forces",
     "body_materials",
+    "cellwise",
     "lame_parameters",
     "orthonormalize",
     "strain",
@@ -83,6 +84,16 @@ def body_materials(
     missing = msh.comm.allreduce(int(np.count_nonzero(np.isnan(young.x.array[:n_cells]))))
     require(missing == 0, "bodies", f"{missing} cells belong to no body (every cell needs a material)")
     return young, poisson
+
+
+def cellwise(msh: dmesh.Mesh, cell_tags: dmesh.MeshTags, values: dict[str, float], name: str) -> fem.Function:
+    """A DG0 function with the value ``values[body]`` on each body's cells (a density, kg/m^3)."""
+    field = fem.Function(fem.functionspace(msh, ("DG", 0)), name=name)
+    for body, value in values.items():
+        require(body in cell_tags.names, f"bodies.{body}", f"no cell group {body!r} in the mesh")
+        field.x.array[cell_tags.find(cell_tags.names[body])] = value
+    field.x.scatter_forward()
+    return field
 
 
 def strain(u: ufl.core.expr.Expr) -> ufl.core.expr.Expr:

@@ -117,7 +117,7 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
     return assemble_contact_problem(msh, tags, young, poisson, tractions, pairs, clamped, body_force or None,
                                     displacements=displacements, cell_tags=cell_tags, moved=moved,
                                     material=_material(case.bodies[0].material.model), pressures=pressures,
-                                    rotations=_rotations(case))
+                                    rotations=_rotations(case), inertia=case.dynamics is not None)
 
 
 def _largest_prescribed(case: ContactCase) -> float:
@@ -168,6 +168,8 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
         The summary (also in ``output/summary.json``) and the exit code (:data:`EXIT_CODES`):
         0 when every step converged, 1 when one did not, 3 when interrupted.
     """
+    require(case.dynamics is None, "dynamics", "a case with [dynamics] is a time integration: "
+            "contactqvi.dynamic_runner.run_dynamics")
     parameters = check_solver(case, SOLVER_PARAMETERS)
     require(stop_after is None or stop_after >= 1, "--stop-after", f"must be a step number >= 1, got {stop_after}")
     steps = case.steps[:stop_after]

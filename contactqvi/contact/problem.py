@@ -594,6 +594,7 @@ def assemble_contact_problem(
     cell_tags: dmesh.MeshTags | None = None,
     moved: typing.Sequence[str] = (),
     material: Material | None = None, pressures: dict[str, float] | None = None, rotations: bool = False,
+    inertia: bool = False,
 ) -> ContactProblem:
     """Assemble the GE (6.3) of one or several bodies with contact pairs, at load factor 1.
 
@@ -602,7 +603,8 @@ def assemble_contact_problem(
     ``cell_tags`` one named cell group per body (each gets its own rigid-body modes);
     ``body_force`` one vector (N/m^3) for all bodies or one per body, ``{body: f}``
     (:func:`~contactqvi.elasticity.body_forces`; each body's weight enters its balance);
-    ``moved``, ``material``, ``pressures``, ``rotations`` as in :func:`build_contact_problem`.
+    ``moved``, ``material``, ``pressures``, ``rotations`` as in :func:`build_contact_problem`;
+    ``inertia``: the bodies have mass (a time step, :mod:`contactqvi.contact.dynamics`): none need be held.
 
     Raises ``ParameterError`` as :func:`~contactqvi.contact.interface.build_interfaces`,
     and for nonzero prescribed components on contact nodes or a body nothing holds.
@@ -622,9 +624,7 @@ def assemble_contact_problem(
     elastic = ElasticSystem(A, loads, constrained, owned_dirichlet)
     searched = any(i.searched_each_step for i in interfaces)
     fields, variables_seconds = _timed(msh.comm, _contact_fields, elastic, interfaces, searched)
-    node_body = None if cell_tags is None else _node_body(V, cell_tags)
-    if node_body is not None:
-        _check_held(V, facet_tags, cell_tags, node_body, constrained, interfaces)
+    node_body = _bodies(V, facet_tags, cell_tags, constrained, interfaces, held=not inertia)
     supports, comm = tuple(dict.fromkeys([*clamped, *(displacements or {}), *moved])), msh.comm
     problem = ContactProblem(
         V=V, load=fields["applied"].duplicate(), shift=fields["applied"].duplicate(),
@@ -868,6 +868,18 @@ def _prescribed_components(clamped: typing.Sequence[str], displacements: dict[st
     for name, components in displacements.items():
         prescribed.setdefault(name, set()).update(components)
     return {name: tuple(sorted(components)) for name, components in prescribed.items()}
+
+
+def _bodies(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, cell_tags: dmesh.MeshTags | None,
+            constrained: np.ndarray, interfaces: typing.Sequence[Interface], held: bool) -> np.ndarray | None:
+    """Each local node's body (:func:`_node_body`), None without cell tags; with ``held``, every
+    body checked to be held (:func:`_check_held`)."""
+    if cell_tags is None:
+        return None
+    node_body = _node_body(V, cell_tags)
+    if held:
+        _check_held(V, facet_tags, cell_tags, node_body, constrained, interfaces)
+    return node_body
 
 
 def _check_held(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, cell_tags: dmesh.MeshTags,

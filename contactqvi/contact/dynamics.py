@@ -1,0 +1,298 @@
+"""Implicit dynamic contact: the contact-stabilised Newmark method, each step solved by SCD Newton.
+
+Newmark's average acceleration rule (beta = 1/4, gamma = 1/2) with the contact-stabilised
+predictor of Deuflhard, Krause and Ertel (2008); derivation and energy identity in
+docs/dynamics.md. With tau the time step, M the mass and K the stiffness in the solver's
+variables w (M = T^T M_K T, K = T^T A_K T of :mod:`contactqvi.contact.problem`), F the
+load and K the admissible set (the contact conditions), a step from (w_n, v_n) is
+
+1. predictor   w_pred = w_n + tau v_n,
+2. projection  w_bar = argmin_{w in K} 1/2 ||w - w_pred||_M^2, i.e. the GE
+               0 in M (w - w_pred) + Q_0(w) (frictionless Q) -- a contact problem with A = M,
+3. step        0 in (4/tau^2) M (w - w_bar) + K w - F - (F - K w_n) + Q(w)      (docs/dynamics.md (3.3))
+               -- a contact problem with A_eff = K + (4/tau^2) M and a shifted load,
+4. velocity    v_{n+1} = v_n + (2/tau) (w_{n+1} - w_bar).
+
+Steps 2 and 3 are the GE 0 in A u - l + Q(u) of seed 000 (6.3) in the shifted variables
+u = w + d of :meth:`~contactqvi.contact.problem.ContactProblem.set_step` (slip measured
+from w_n: u_t is the slip increment over the step, slip rate times tau), solved by
+:class:`~contactqvi.contact.scd_newton.SCDNewtonSolver` unchanged. All that a step reads
+from the steps before is one :class:`DynamicState`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import typing
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import numpy as np
+import ufl
+
+import dolfinx.fem.petsc
+from dolfinx import fem
+
+from contactqvi.contact.problem import ContactProblem
+from contactqvi.contact.scd_newton import SCDNewtonResult, SCDNewtonSolver
+from contactqvi.laws import Frictionless
+from contactqvi.lifetime import PETScOwner
+from contactqvi.linalg import default_options
+from contactqvi.parameters import require
+
+__all__ = ["BETA", "ENERGY_TERMS", "BodyMotion", "DynamicState", "StabilisedNewmark", "mass_matrix"]
+
+logger = logging.getLogger(__name__)
+
+#: Newmark's beta of the average acceleration rule (its gamma is 1/2).
+BETA = 0.25
+#: The energy terms of a step (J), as in ``summary.json`` (docs/dynamics.md, Sect. 4).
+ENERGY_TERMS = ("kinetic", "elastic", "external_work", "friction_dissipation", "contact_work", "balance_error")
+
+
+def mass_matrix(problem: ContactProblem, density: float | fem.Function) -> PETSc.Mat:
+    """M = T^T M_K T in the solver's variables, M_K = (rho u, v) the consistent mass matrix
+    with zero rows and columns at the prescribed dofs (so that A + c M keeps A's identity rows)."""
+    V = problem.V
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    M_K = dolfinx.fem.petsc.assemble_matrix(fem.form(density * ufl.inner(u, v) * ufl.dx))
+    M_K.assemble()
+    n_owned = 3 * V.dofmap.index_map.size_local
+    owned = problem.dirichlet_dofs_loc[problem.dirichlet_dofs_loc < n_owned]
+    M_K.zeroRowsColumns((owned + 3 * V.dofmap.index_map.local_range[0]).astype(PETSc.IntType), diag=0.0)
+    T = problem.to_global
+    if T is None:
+        return M_K
+    with default_options("", {"mat_product_clear": True}):
+        M = M_K.PtAP(T)
+    M_K.destroy()
+    return M
+
+
+@dataclasses.dataclass
+class DynamicState(PETScOwner):
+    """A time integration after its first ``done`` steps: all that the next step reads.
+
+    Attributes:
+        done: number of converged time steps.
+        time: t_done (s).
+        displacement: w_n in the solver's variables (without the shift).
+        velocity: v_n in the solver's variables (m/s).
+        acceleration: (v_n - v_{n-1}) / tau, the last step's mean acceleration (m/s^2; the
+            trapezoidal rule's acceleration at t_{n - 1/2}), zero at time 0; output only, no step reads it.
+        energy: the step's energy terms (:data:`ENERGY_TERMS`), the works and the dissipation
+            summed from time 0 (J).
+        initial_energy: kinetic + elastic energy at time 0 (J).
+    """
+
+    done: int
+    time: float
+    displacement: PETSc.Vec
+    velocity: PETSc.Vec
+    acceleration: PETSc.Vec
+    energy: dict[str, float]
+    initial_energy: float
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [self.displacement, self.velocity, self.acceleration]
+
+
+@dataclasses.dataclass
+class _Work(PETScOwner):
+    """The vectors of one time step (solver variables), reused by every step: ``scratch`` for
+    products, the predictor w_pred (3.1) (then delta = w_bar - w_pred), the projected w_bar (3.2),
+    the next displacement w_{n+1}, its increment Delta w and the velocity change (3.4)."""
+
+    scratch: PETSc.Vec
+    predicted: PETSc.Vec
+    projected: PETSc.Vec
+    next_displacement: PETSc.Vec
+    increment: PETSc.Vec
+    velocity_change: PETSc.Vec
+
+    @classmethod
+    def create(cls, A: PETSc.Mat) -> _Work:
+        return cls(*(A.createVecRight() for _ in dataclasses.fields(cls)))
+
+    def petsc_objects(self) -> list[PETSc.Vec]:
+        return [getattr(self, f.name) for f in dataclasses.fields(self)]
+
+
+class StabilisedNewmark(PETScOwner):
+    """The contact-stabilised Newmark method (module docstring) on a linear ``problem``.
+
+    Turns ``problem.A`` into A_eff = K + M / (beta tau^2) in place (K is kept as a copy for
+    the energies) and owns the two SCD solvers: the M-projection of the predictor and the
+    implicit step. The problem's contact is searched once (the mass and T of the reference
+    configuration). ``parameters`` and ``prefix`` are the SCD solver's; the projection's
+    Krylov solver reads its options under ``prefix + "predictor_"``.
+
+    Attributes:
+        prescribed: owned local indices of the prescribed dofs in the solver's variables.
+    """
+
+    def __init__(self, problem: ContactProblem, density: float | fem.Function, dt: float,
+                 parameters: dict | None = None, prefix: str = "dynamics_"):
+        require(problem.hyperelastic is None and not problem.searched_each_step, "dynamics",
+                "the contact-stabilised Newmark step takes a linear elastic problem searched once (docs/dynamics.md)")
+        require(dt > 0.0, "dynamics.dt", f"the time step must be > 0 (s), got {dt!r}")
+        self.problem, self.dt = problem, float(dt)
+        self.mass = mass_matrix(problem, density)
+        self.stiffness = problem.A.duplicate(copy=True)
+        problem.A.axpy(1.0 / (BETA * self.dt**2), self.mass, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        self.projection_matrix = self.mass.duplicate(copy=True)
+        diagonal = self.mass.getDiagonal()
+        self.prescribed = _zero_rows(diagonal)
+        diagonal.set(0.0)
+        diagonal.array[self.prescribed] = 1.0
+        self.projection_matrix.setDiagonal(diagonal, addv=PETSc.InsertMode.ADD_VALUES)
+        diagonal.destroy()
+        self.projection = dataclasses.replace(problem, A=self.projection_matrix, load=problem.load.duplicate(),
+                                              law=Frictionless().lumped(problem.contact_area), hyperelastic=None)
+        self.predictor_solver = SCDNewtonSolver(self.projection, parameters, prefix=prefix + "predictor_")
+        self.solver = SCDNewtonSolver(problem, parameters, prefix=prefix)
+        self._work = _Work.create(problem.A)
+
+    def petsc_objects(self) -> list[typing.Any]:
+        """The solvers, M, K, the projection's matrix and load, the work vectors (not the problem's)."""
+        return [self.predictor_solver, self.solver, self.mass, self.stiffness, self.projection_matrix,
+                self.projection.load, self._work]
+
+    def initial_state(self, velocity: PETSc.Vec | None = None) -> DynamicState:
+        """The state at time 0: at rest in the reference configuration with the initial velocity
+        ``velocity`` (solver variables; None: zero), zero at the prescribed dofs."""
+        w, v, a = (self.problem.A.createVecRight() for _ in range(3))
+        for vector in (w, v, a):
+            vector.set(0.0)
+        if velocity is not None:
+            velocity.copy(v)
+            v.array[self.prescribed] = 0.0
+        energy = {name: 0.0 for name in ENERGY_TERMS}
+        energy["kinetic"] = 0.5 * _energy_norm(self.mass, v, self._work.scratch)
+        return DynamicState(0, 0.0, w, v, a, energy, energy["kinetic"])
+
+    def step(self, state: DynamicState, u: PETSc.Vec, stop: typing.Callable[[], bool] | None = None
+             ) -> tuple[SCDNewtonResult, SCDNewtonResult]:
+        """One time step from ``state``: the projected predictor (3.1)-(3.2) and the step (3.3) of
+        docs/dynamics.md, each solved by SCD Newton; ``u`` holds the step's solution (shifted). The
+        state is advanced (:meth:`_record`) only when both converged. Returns both results."""
+        problem, tau = self.problem, self.dt
+        predicted, projected = self._work.predicted, self._work.projected
+        problem.set_step(1.0, previous=state.displacement)  # d: gaps, slip measured from w_n
+        predicted.waxpy(tau, state.velocity, state.displacement)
+        self.projection_matrix.mult(predicted, self.projection.load)
+        self.projection_matrix.multAdd(problem.shift, self.projection.load, self.projection.load)
+        u.waxpy(1.0, predicted, problem.shift)
+        projection = self.predictor_solver.solve(u, stop=stop)
+        if not projection.converged:
+            return projection, projection
+        projected.waxpy(-1.0, problem.shift, u)
+        self._add_inertia(state, projected)
+        result = self.solver.solve(u, stop=stop)
+        if result.converged:
+            self._record(state, u, result)
+        return projection, result
+
+    def _add_inertia(self, state: DynamicState, projected: PETSc.Vec) -> None:
+        """The step's load of (3.3): l = F + A_eff d (set_step) + M w_bar / (beta tau^2) + (F - K w_n),
+        the last term zero at the prescribed rows."""
+        problem, work = self.problem, self._work.scratch
+        self.mass.mult(projected, work)
+        problem.load.axpy(1.0 / (BETA * self.dt**2), work)
+        self.stiffness.mult(state.displacement, work)
+        work.aypx(-1.0, problem.applied)
+        work.array[self.prescribed] = 0.0
+        problem.load.axpy(1.0, work)
+
+    def _record(self, state: DynamicState, u: PETSc.Vec, result: SCDNewtonResult) -> None:
+        """Advance ``state`` over the step just solved: w_{n+1} = u - d, v_{n+1} (3.4), the step's
+        mean acceleration and the energy terms (4.1) of docs/dynamics.md."""
+        problem, tau, work = self.problem, self.dt, self._work
+        w_next, increment, velocity_change = work.next_displacement, work.increment, work.velocity_change
+        w_next.waxpy(-1.0, problem.shift, u)
+        increment.waxpy(-1.0, state.displacement, w_next)
+        work.predicted.aypx(-1.0, work.projected)  # delta = w_bar - w_pred
+        velocity_change.waxpy(-1.0, work.projected, w_next)
+        velocity_change.scale(2.0 / tau)  # v_{n+1} - v_n
+        self.mass.mult(velocity_change, work.scratch)
+        projection_work = -work.predicted.dot(work.scratch) / tau
+        state.velocity.axpy(1.0, velocity_change)
+        velocity_change.copy(state.acceleration)
+        state.acceleration.scale(1.0 / tau)
+        w_next.copy(state.displacement)
+        normal, friction = _contact_work(problem, result, increment)
+        energy = state.energy
+        energy["external_work"] += increment.dot(problem.applied)
+        energy["friction_dissipation"] -= friction
+        energy["contact_work"] += normal + projection_work
+        energy["kinetic"] = 0.5 * _energy_norm(self.mass, state.velocity, work.scratch)
+        energy["elastic"] = 0.5 * _energy_norm(self.stiffness, state.displacement, work.scratch)
+        stored = energy["kinetic"] + energy["elastic"] - state.initial_energy
+        energy["balance_error"] = (stored - energy["external_work"] - energy["contact_work"]
+                                   + energy["friction_dissipation"])
+        state.done += 1
+        state.time += tau
+
+
+class BodyMotion(PETScOwner):
+    """Each body's mean velocity, the mass-weighted v_b = z_b^T M v / z_b^T M z_b per axis, with
+    z_b = T^-1 e_b the rigid translation e_b of body b in the solver's variables (the momentum
+    of the free dofs over their mass; a component prescribed on all of a body has no mass: 0).
+
+    Args:
+        problem: the contact problem (``node_body`` names the bodies; None: one body ``"body"``).
+        mass: M of :func:`mass_matrix`.
+    """
+
+    def __init__(self, problem: ContactProblem, mass: PETSc.Mat):
+        self.mass = mass
+        names = list(problem.body.cell_tags.names) if problem.node_body is not None else ["body"]
+        node_body = problem.node_body if problem.node_body is not None else np.zeros(
+            problem.V.dofmap.index_map.size_local + problem.V.dofmap.index_map.num_ghosts, dtype=np.int32)
+        field = fem.Function(problem.V)
+        self.translations: dict[str, list[PETSc.Vec]] = {}
+        for k, name in enumerate(names):
+            self.translations[name] = []
+            for axis in range(3):
+                field.x.array[:] = 0.0
+                field.x.array.reshape(-1, 3)[node_body == k, axis] = 1.0
+                self.translations[name].append(problem.solver_variables(field, problem.A.createVecRight()))
+        self._work = problem.A.createVecRight()
+        self.masses = {name: [_energy_norm(mass, z, self._work) for z in zs] for name, zs in self.translations.items()}
+
+    def petsc_objects(self) -> list[typing.Any]:
+        """The translations and the work vector (not M)."""
+        return [*(z for zs in self.translations.values() for z in zs), self._work]
+
+    def velocities(self, velocity: PETSc.Vec) -> dict[str, list[float]]:
+        """Each body's mean velocity (m/s, global axes) of ``velocity`` (solver variables); of a
+        displacement, its mean displacement (m). Collective."""
+        self.mass.mult(velocity, self._work)
+        return {name: [z.dot(self._work) / m if m > 0.0 else 0.0 for z, m in zip(zs, self.masses[name])]
+                for name, zs in self.translations.items()}
+
+
+def _zero_rows(diagonal: PETSc.Vec) -> np.ndarray:
+    """Owned local rows of M whose diagonal vanishes (to round-off of the largest): the prescribed
+    dofs in the solver's variables (in nodal frames at a contact node with a roller), where M_K
+    has zero rows and columns and A has identity rows."""
+    largest = diagonal.norm(PETSc.NormType.NORM_INFINITY)
+    return np.flatnonzero(np.abs(diagonal.array) <= 1e-12 * largest)
+
+
+def _energy_norm(A: PETSc.Mat, x: PETSc.Vec, work: PETSc.Vec) -> float:
+    """x^T A x (collective)."""
+    A.mult(x, work)
+    return x.dot(work)
+
+
+def _contact_work(problem: ContactProblem, result: SCDNewtonResult, increment: PETSc.Vec) -> tuple[float, float]:
+    """The work of the step's contact forces over the increment Delta w (docs/dynamics.md (4.1)):
+    1/2 lambda . Delta w_n (normal) and 1/2 R_t . Delta w_t (friction, <= 0), summed over the
+    contact nodes (nodal frames; the relative displacement at a body pair's slave nodes). Collective."""
+    nodal = increment.array.reshape(-1, 3)[problem.contact_blk]
+    normal = 0.5 * float(np.dot(result.normal_force, nodal[:, 2]))
+    friction = 0.5 * float(np.sum(result.friction_force * nodal[:, :2]))
+    return problem.comm.allreduce(normal, op=MPI.SUM), problem.comm.allreduce(friction, op=MPI.SUM)

@@ -1,0 +1,273 @@
+"""Run a case with ``[dynamics]``: the contact-stabilised Newmark method over time (docs/dynamics.md).
+
+``python -m contactqvi run CASE.toml`` comes here when the case has a ``[dynamics]`` table.
+Each converged time step is
+
+* one time (s) of ``OUTPUT/body.bp``: ``displacement``, ``velocity`` and ``acceleration``
+  (the step's mean, Delta v / tau), global components;
+* one entry of ``OUTPUT/summary.json``: time, Newton and Krylov counts of the projection and
+  of the step, the energy terms of :data:`~contactqvi.contact.dynamics.ENERGY_TERMS`, each
+  body's mass-weighted mean velocity, displacement and acceleration, the step's mean contact
+  force;
+* a checkpoint (``OUTPUT/checkpoint/``): the :class:`~contactqvi.contact.dynamics.DynamicState`
+  whole (displacement, velocity and acceleration in the solver's variables, time, energies),
+  read back bitwise on the same number of ranks.
+
+``OUTPUT/energy.png`` draws the energies over time.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import logging
+import pathlib
+import shutil
+import typing
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import adios4dolfinx
+from dolfinx import fem, io
+
+from contactqvi import tables
+from contactqvi.case import ContactCase, check_solver
+from contactqvi.contact.dynamics import ENERGY_TERMS, BodyMotion, DynamicState, StabilisedNewmark
+from contactqvi.contact.load_path import contact_resultants
+from contactqvi.contact.problem import ContactProblem
+from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult
+from contactqvi.elasticity import cellwise
+from contactqvi.linalg import default_options
+from contactqvi.parameters import ParameterError
+from contactqvi.result import Status
+from contactqvi.runner import EXIT_CODES, PREFIX, build_problem
+
+__all__ = ["read_dynamic_checkpoint", "run_dynamics"]
+
+logger = logging.getLogger(__name__)
+
+_CHECKPOINT = "checkpoint"
+_MARKER = "dynamics.json"
+
+
+def run_dynamics(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
+                 plot: bool = True, restart: bool = False,
+                 stop_after: int | None = None) -> tuple[dict[str, typing.Any], int]:
+    """Integrate ``case`` (with ``[dynamics]``) over its time steps and write the results to ``output``.
+
+    ``restart`` continues after the last checkpoint in ``output`` (from time 0 when there is
+    none); ``stop_after`` = k stops after time step k (status ``interrupted``). Returns the
+    summary and the exit code (:data:`~contactqvi.runner.EXIT_CODES`).
+    """
+    parameters = check_solver(case, PARAMETERS)
+    dynamics = case.dynamics
+    count = dynamics.steps if stop_after is None else min(stop_after, dynamics.steps)
+    out = tables.prepare_output_dir(comm, output)
+    with default_options(PREFIX, case.petsc), build_problem(case, comm) as problem:
+        with StabilisedNewmark(problem, _density(case, problem), dynamics.dt, parameters, PREFIX) as integrator, \
+                BodyMotion(problem, integrator.mass) as motion:
+            velocity = _initial_velocity(case, problem)
+            state = integrator.initial_state(velocity)
+            velocity.destroy()
+            summary = {"problem": "dynamic contact case", "case": case.to_dict(), "mpi_size": comm.size,
+                       "p": problem.n_contact, "n": problem.n_free, "scheme": "contact-stabilised Newmark "
+                       "(Deuflhard, Krause, Ertel 2008), beta = 1/4, gamma = 1/2", "steps": []}
+            if restart:
+                summary = read_dynamic_checkpoint(problem, out, case, state, summary)
+            try:
+                code = _integrate(problem, integrator, motion, state, summary, out, count)
+            finally:
+                state.destroy()
+    if code == EXIT_CODES["converged"] and count < dynamics.steps:
+        summary["status"] = str(Status.INTERRUPTED)
+        code = EXIT_CODES["interrupted"]
+    if plot and summary["steps"]:
+        summary["energy_plot"] = plot_energy(out / "energy.png", summary["steps"], comm)
+    tables.write_summary(comm, out / "summary.json", summary)
+    return summary, code
+
+
+def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: BodyMotion, state: DynamicState,
+               summary: dict[str, typing.Any], out: pathlib.Path, count: int) -> int:
+    """The time steps after ``state.done`` up to ``count``: solve, record, write; the exit code."""
+    u = problem.A.createVecRight()
+    displacement = fem.Function(problem.V, name="displacement")
+    velocity = fem.Function(problem.V, name="velocity")
+    acceleration = fem.Function(problem.V, name="acceleration")
+    writer = _BodyWriter(out, [displacement, velocity, acceleration])
+    try:
+        while state.done < count:
+            projection, result = integrator.step(state, u)
+            converged = projection.converged and result.converged
+            summary["status"] = str(result.status if projection.converged else projection.status)
+            if not converged:
+                summary["steps"].append({"step": state.done + 1, "converged": False, "status": summary["status"]})
+                tables.write_summary(problem.comm, out / "summary.json", summary)
+                return EXIT_CODES["not converged"]
+            summary["steps"].append(_entry(problem, state, projection, result, motion))
+            problem.physical_displacement(u, displacement)
+            _global(problem, state.velocity, velocity)
+            _global(problem, state.acceleration, acceleration)
+            writer.write(state.time)
+            tables.write_summary(problem.comm, out / "summary.json", summary)
+            write_dynamic_checkpoint(problem, out, state, summary)
+    finally:
+        writer.close()
+        u.destroy()
+    return EXIT_CODES["converged"]
+
+
+def _entry(problem: ContactProblem, state: DynamicState, projection: SCDNewtonResult, result: SCDNewtonResult,
+           motion: BodyMotion) -> dict[str, typing.Any]:
+    """The summary entry of the time step just recorded in ``state``. The contact force is the
+    step's mean, half the multiplier of the step's GE (docs/dynamics.md, Sect. 3)."""
+    mean = dataclasses.replace(result, normal_force=0.5 * result.normal_force,
+                               friction_force=0.5 * result.friction_force)
+    logger.info("time step %d, t = %.6g s: %d + %d Newton steps; kinetic %.6g J, elastic %.6g J, balance error "
+                "%.3g J", state.done, state.time, projection.iterations, result.iterations,
+                state.energy["kinetic"], state.energy["elastic"], state.energy["balance_error"])
+    return {"step": state.done, "time": state.time, **result.summary(),
+            "predictor": {"iterations": projection.iterations, "inner_iterations": projection.inner_iterations},
+            "energy": dict(state.energy), "body_velocity": motion.velocities(state.velocity),
+            "body_displacement": motion.velocities(state.displacement),
+            "body_acceleration": motion.velocities(state.acceleration),
+            **contact_resultants(problem, mean)}
+
+
+def _density(case: ContactCase, problem: ContactProblem) -> float | fem.Function:
+    """rho of the one body, or a DG0 function of the bodies' densities (kg/m^3)."""
+    if not case.bodies:
+        return case.material.density
+    return cellwise(problem.V.mesh, problem.body.cell_tags, {b.name: b.material.density for b in case.bodies},
+                    "density")
+
+
+def _initial_velocity(case: ContactCase, problem: ContactProblem) -> PETSc.Vec:
+    """The initial velocity in the solver's variables (each body's vector, zero where none)."""
+    field = fem.Function(problem.V)
+    values = field.x.array.reshape(-1, 3)
+    if not case.bodies:
+        values[:] = case.dynamics.initial_velocity or (0.0, 0.0, 0.0)
+    else:
+        for k, body in enumerate(case.bodies):
+            tag = list(problem.body.cell_tags.names).index(body.name)
+            values[problem.node_body == tag] = body.initial_velocity or (0.0, 0.0, 0.0)
+    return problem.solver_variables(field, problem.A.createVecRight())
+
+
+def _global(problem: ContactProblem, velocity: PETSc.Vec, out: fem.Function) -> None:
+    """T v: a velocity in the solver's variables in global components (no shift, no offsets)."""
+    if problem.to_global is None:
+        velocity.copy(out.x.petsc_vec)
+    else:
+        problem.to_global.mult(velocity, out.x.petsc_vec)
+    out.x.scatter_forward()
+
+
+class _BodyWriter:
+    """``body.bp``: the ``fields`` (displacement, velocity, acceleration) at every converged time
+    (VTX, BP4), renamed into place when closed (a restart writes the steps after its checkpoint only)."""
+
+    def __init__(self, out: pathlib.Path, fields: list[fem.Function]):
+        comm = fields[0].function_space.mesh.comm
+        self._atomic = tables.atomic_path(comm, out / "body.bp")
+        self._writer = io.VTXWriter(comm, str(self._atomic.__enter__()), fields, engine="BP4")
+
+    def write(self, t: float) -> None:
+        self._writer.write(t)
+
+    def close(self) -> None:
+        self._writer.close()
+        self._atomic.__exit__(None, None, None)
+
+
+def write_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, state: DynamicState,
+                             summary: dict[str, typing.Any]) -> None:
+    """Checkpoint ``state``: w_n, v_n and the last acceleration in the solver's variables
+    (adios4dolfinx, against the mesh's input order) and a marker with the step, time, energies and
+    the summary, written last. Collective."""
+    comm, directory = problem.comm, out / _CHECKPOINT
+    tables.prepare_output_dir(comm, directory)
+    name = f"time_{state.done:06d}.bp"
+    fields = _state_functions(problem.V, state, fill=True)
+    with tables.atomic_path(comm, directory / name) as tmp:
+        for field in fields:
+            adios4dolfinx.write_function_on_input_mesh(tmp, field, engine="BP4", time=float(state.done),
+                                                       name=field.name)
+    tables.write_summary(comm, directory / _MARKER, {"step": state.done, "time": state.time, "file": name,
+                                                     "energy": state.energy, "initial_energy": state.initial_energy,
+                                                     "summary": summary})
+    if comm.rank == 0:
+        for old in directory.glob("time_*.bp"):
+            if old.name != name:
+                shutil.rmtree(old, ignore_errors=True)
+    comm.Barrier()
+
+
+def _state_functions(V: fem.FunctionSpace, state: DynamicState, fill: bool) -> list[fem.Function]:
+    """Functions on ``V`` for the state's displacement, velocity and acceleration, holding them if ``fill``."""
+    fields = [fem.Function(V, name=name) for name in ("solver_variables", "solver_velocity", "solver_acceleration")]
+    if fill:
+        for field, vector in zip(fields, (state.displacement, state.velocity, state.acceleration)):
+            field.x.array[: vector.getLocalSize()] = vector.array
+            field.x.scatter_forward()
+    return fields
+
+
+def read_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, case: ContactCase, state: DynamicState,
+                            summary: dict[str, typing.Any]) -> dict[str, typing.Any]:
+    """Fill ``state`` from the last checkpoint in ``out`` and return its summary (``summary``
+    unchanged when there is none). Any number of ranks. Collective."""
+    comm, marker = problem.comm, out / _CHECKPOINT / _MARKER
+    data = comm.bcast(json.loads(marker.read_text()) if comm.rank == 0 and marker.exists() else None, root=0)
+    if data is None:
+        logger.warning("no checkpoint in %s: the run starts at time 0", out)
+        return summary
+    if data["summary"].get("case") != tables.to_builtin(case.to_dict()):
+        raise ParameterError("--restart", f"the checkpoint in {marker.parent} was written for another case; use a "
+                             "new --output directory")
+    fields = _state_functions(problem.V, state, fill=False)
+    for field, vector in zip(fields, (state.displacement, state.velocity, state.acceleration)):
+        adios4dolfinx.read_function(marker.parent / data["file"], field, engine="BP4", time=float(data["step"]),
+                                    name=field.name)
+        vector.array[:] = field.x.array[: vector.getLocalSize()]
+    state.done, state.time = int(data["step"]), float(data["time"])
+    state.energy, state.initial_energy = {k: float(data["energy"][k]) for k in ENERGY_TERMS}, data["initial_energy"]
+    data["summary"].setdefault("restarts", []).append({"after_step": state.done, "mpi_size": comm.size})
+    return data["summary"]
+
+
+def plot_energy(path: pathlib.Path, steps: list[dict[str, typing.Any]], comm: MPI.Comm) -> bool:
+    """``energy.png``: kinetic, elastic, their sum, the loads' work, the friction dissipation, the
+    contact's work and the balance error over time, drawn on rank 0 (Agg). Returns whether it was written."""
+    ok = False
+    if comm.rank == 0:
+        try:
+            with tables.atomic_path(MPI.COMM_SELF, path) as tmp:
+                _draw_energy(tmp, steps)
+            ok = True
+        except Exception as exc:  # a figure must never end a run
+            logger.warning("%s is skipped: %s", path, exc)
+    return bool(comm.bcast(ok, root=0))
+
+
+def _draw_energy(path: pathlib.Path, steps: list[dict[str, typing.Any]]) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    done = [s for s in steps if "energy" in s]
+    time = [s["time"] for s in done]
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for term in ENERGY_TERMS:
+        ax.plot(time, [s["energy"][term] for s in done], label=term.replace("_", " "))
+    ax.plot(time, [s["energy"]["kinetic"] + s["energy"]["elastic"] for s in done], "k--", label="kinetic + elastic")
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("energy (J)")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, format="png", dpi=120)
+    plt.close(fig)
