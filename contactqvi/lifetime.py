@@ -11,9 +11,10 @@ checks the rule, ``tests/petsc_audit.py`` that ``destroy()`` leaves nothing aliv
 
 from __future__ import annotations
 
+import dataclasses
 import typing
 
-__all__ = ["PETScOwner"]
+__all__ = ["PETScOwner", "VectorSet"]
 
 
 class PETScOwner:
@@ -35,3 +36,16 @@ class PETScOwner:
 
     def __exit__(self, *exc: object) -> None:
         self.destroy()
+
+
+class VectorSet(PETScOwner):
+    """A dataclass of named work vectors of one matrix's column layout, each field a ``PETSc.Vec``
+    (a solver's vectors, reused by its every iteration); :meth:`create` makes them, :meth:`destroy` frees them."""
+
+    @classmethod
+    def create(cls, A: typing.Any) -> typing.Self:
+        """One new vector of A's column layout per field."""
+        return cls(*(A.createVecRight() for _ in dataclasses.fields(cls)))
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [getattr(self, field.name) for field in dataclasses.fields(self)]

@@ -38,7 +38,7 @@ from dolfinx import fem
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult, SCDNewtonSolver
 from contactqvi.laws import Frictionless
-from contactqvi.lifetime import PETScOwner
+from contactqvi.lifetime import PETScOwner, VectorSet
 from contactqvi.linalg import default_options
 from contactqvi.parameters import require
 
@@ -100,7 +100,7 @@ class DynamicState(PETScOwner):
 
 
 @dataclasses.dataclass
-class _Work(PETScOwner):
+class _Work(VectorSet):
     """The vectors of one time step (solver variables), reused by every step: ``scratch`` for
     products, the predictor w_pred (3.1) (then delta = w_bar - w_pred), the projected w_bar (3.2),
     the next displacement w_{n+1}, its increment Delta w and the velocity change (3.4)."""
@@ -111,13 +111,6 @@ class _Work(PETScOwner):
     next_displacement: PETSc.Vec
     increment: PETSc.Vec
     velocity_change: PETSc.Vec
-
-    @classmethod
-    def create(cls, A: PETSc.Mat) -> _Work:
-        return cls(*(A.createVecRight() for _ in dataclasses.fields(cls)))
-
-    def petsc_objects(self) -> list[PETSc.Vec]:
-        return [getattr(self, f.name) for f in dataclasses.fields(self)]
 
 
 class StabilisedNewmark(PETScOwner):

@@ -43,7 +43,7 @@ from contactqvi.contact.nodal import State, classify, contact_states, resolvent,
 from contactqvi.contact.newton_matrix import NewtonMatrix
 from contactqvi.contact.newton_step_solver import NEWTON_STEP_SOLVERS, NewtonStepSolver
 from contactqvi.contact.problem import ContactProblem
-from contactqvi.lifetime import PETScOwner
+from contactqvi.lifetime import PETScOwner, VectorSet
 from contactqvi.linalg import power_iteration
 from contactqvi.parameters import Parameter, Parameters
 from contactqvi.result import Result, Status
@@ -179,7 +179,7 @@ class GammaVectors(PETScOwner):
 
 
 @dataclasses.dataclass(eq=False)
-class WorkVectors(PETScOwner):
+class WorkVectors(VectorSet):
     """Vectors of A's layout that carry one Newton iteration from step to step.
 
     Created once per :class:`SCDNewtonSolver` and reused by every iteration of every
@@ -211,14 +211,6 @@ class WorkVectors(PETScOwner):
     u_trial: PETSc.Vec
     r_trial: PETSc.Vec
     d_trial: PETSc.Vec
-
-    @classmethod
-    def create(cls, A: PETSc.Mat) -> WorkVectors:
-        """One new vector of A's column layout per field."""
-        return cls(*(A.createVecRight() for _ in dataclasses.fields(cls)))
-
-    def petsc_objects(self) -> list[PETSc.Vec]:
-        return [getattr(self, field.name) for field in dataclasses.fields(self)]
 
 
 class SCDNewtonSolver(PETScOwner):
