@@ -29,7 +29,8 @@ from contactqvi.materials import NeoHookean
 from contactqvi.meshes import create_contact_body
 
 
-def krylov_counts(lev: int, poisson: float, formulation: str, steps: int, compression: float) -> list[tuple[int, int]]:
+def krylov_counts(lev: int, poisson: float, formulation: str, steps: int, compression: float,
+                  pc: str = "gamg") -> list[tuple[int, int]]:
     """(Newton steps, Krylov iterations) of each load step of the block's compression."""
     msh, tags = create_contact_body(MPI.COMM_WORLD, lev, lambda x, y: np.zeros_like(x), length=1.0, width=1.0,
                                     height=1.0, cell_type="tetrahedron")
@@ -39,7 +40,8 @@ def krylov_counts(lev: int, poisson: float, formulation: str, steps: int, compre
                                     material=NeoHookean(), formulation=formulation)
     with problem:
         u = problem.A.createVecRight()
-        results = solve_load_path(problem, [LoadStep((k + 1) / steps) for k in range(steps)], u, from_rest=True)
+        results = solve_load_path(problem, [LoadStep((k + 1) / steps) for k in range(steps)], u, {"pc": pc},
+                                  from_rest=True)
         u.destroy()
     return [(r.iterations, r.inner_iterations) for r in results]
 
@@ -51,11 +53,15 @@ def main() -> None:
     parser.add_argument("--poisson", type=float, nargs="+", default=[0.45, 0.49, 0.499], help="Poisson's ratios")
     parser.add_argument("--steps", type=int, default=3, help="load steps")
     parser.add_argument("--compression", type=float, default=0.1, help="of the height")
+    parser.add_argument("--pc", default="gamg", help="Newton-step solver (SCD parameter pc)")
+    parser.add_argument("--formulations", nargs="+", default=["displacement", "nodal_pressure"],
+                        help="formulations compared")
     args = parser.parse_args()
-    rows = ["| nu | formulation | Newton steps per step | Krylov per step | Krylov per Newton step |", "|---|---|---|---|---|"]
+    rows = [f"| nu | formulation | Newton steps per step | Krylov per step ({args.pc}) | Krylov per Newton step |",
+            "|---|---|---|---|---|"]
     for poisson in args.poisson:
-        for formulation in ("displacement", "nodal_pressure"):
-            counts = krylov_counts(args.lev, poisson, formulation, args.steps, args.compression)
+        for formulation in args.formulations:
+            counts = krylov_counts(args.lev, poisson, formulation, args.steps, args.compression, args.pc)
             newton, krylov = (sum(c[i] for c in counts) for i in (0, 1))
             rows.append(f"| {poisson} | {formulation} | {' '.join(str(c[0]) for c in counts)} | "
                         f"{' '.join(str(c[1]) for c in counts)} | {krylov / max(newton, 1):.1f} |")
