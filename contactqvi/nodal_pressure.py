@@ -66,14 +66,18 @@ Formulation = str | dict[str, str]
 
 
 def formulation_indicator(msh: dolfinx.mesh.Mesh, formulation: Formulation,
-                          cell_tags: dolfinx.mesh.MeshTags | None = None) -> fem.Function | None:
+                          cell_tags: dolfinx.mesh.MeshTags | None = None,
+                          poisson: float | fem.Function | None = None) -> fem.Function | None:
     """chi of (1): 1 in the cells of the bodies with ``"nodal_pressure"``, 0 elsewhere (DG0), or
     None where no body takes it. ``formulation``: one name for all cells, or one per body
-    (cell group of ``cell_tags``; bodies not listed: ``"displacement"``)."""
+    (cell group of ``cell_tags``; bodies not listed: ``"displacement"``). With ``poisson`` (a
+    number or DG0) the plain P1 cells are checked by :func:`recommend`. Collective."""
     given = formulation if isinstance(formulation, dict) else {None: formulation}
     for body, name in given.items():
         require_choice("formulation" if body is None else f"bodies.{body}.formulation", name, FORMULATIONS)
     if all(name == "displacement" for name in given.values()):
+        if poisson is not None:
+            recommend(poisson, None, msh.comm)
         return None
     chi = fem.Function(fem.functionspace(msh, ("DG", 0)), name="nodal_pressure")
     for body, name in given.items():
@@ -84,6 +88,8 @@ def formulation_indicator(msh: dolfinx.mesh.Mesh, formulation: Formulation,
                 "no cell group of that name in the mesh")
         chi.x.array[cell_tags.find(cell_tags.names[body])] = float(name == "nodal_pressure")
     chi.x.scatter_forward()
+    if poisson is not None:
+        recommend(poisson, chi, msh.comm)
     return chi
 
 

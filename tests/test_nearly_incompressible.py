@@ -141,7 +141,6 @@ def test_wavy_foundation_force_on_any_number_of_ranks():
     assert forces["displacement"] > 1.05 * forces["nodal_pressure"]
 
 
-@pytest.mark.one_rank(reason="the recommendation's arithmetic on a number")
 def test_plain_p1_above_049_is_warned(caplog):
     """nu > 0.49 on plain P1 logs the recommendation; nodal pressure or nu = 0.45 does not."""
     assert recommend(0.499, None, MPI.COMM_WORLD) == 0.499

@@ -66,8 +66,7 @@ from contactqvi.materials import Material
 from contactqvi.linalg import assemble_system, default_options, nonzero_rows
 from contactqvi.load_steps import Rotation
 from contactqvi.meshes import boundary_facets
-from contactqvi.nodal_pressure import (Formulation, VolumetricTangent, formulation_indicator, recommend,
-                                       small_strain_stiffness)
+from contactqvi.nodal_pressure import Formulation, VolumetricTangent, formulation_indicator, small_strain_stiffness
 from contactqvi.obstacles import Obstacle, Plane
 from contactqvi.parameters import require
 from contactqvi.postprocess import ElasticBody
@@ -598,10 +597,9 @@ def assemble_contact_problem(
     body_force: BodyForce | None = None,
     displacements: dict[str, dict[int, float]] | None = None,
     cell_tags: dmesh.MeshTags | None = None,
-    moved: typing.Sequence[str] = (),
+    moved: typing.Sequence[str] = (), formulation: Formulation = "displacement",
     material: Material | None = None, pressures: dict[str, float] | None = None, rotations: bool = False,
     inertia: bool = False,
-    formulation: Formulation = "displacement",
 ) -> ContactProblem:
     """Assemble the GE (6.3) of one or several bodies with contact pairs, at load factor 1.
 
@@ -618,18 +616,12 @@ def assemble_contact_problem(
     """
     require(msh.geometry.dim == 3, "mesh", "the contact problem is three-dimensional")
     V = fem.functionspace(msh, ("Lagrange", 1, (3,)))
-    nodal = formulation_indicator(msh, formulation, cell_tags)
-    recommend(poisson, nodal, msh.comm)
+    nodal = formulation_indicator(msh, formulation, cell_tags, poisson)
     a, L = elasticity_forms(V, young, poisson, facet_tags, tractions, body_force, cell_tags, pressures, nodal)
     msh.topology.create_connectivity(msh.topology.dim - 1, msh.topology.dim)  # for the facet dofs
     bcs, moved_bc = _dirichlet_conditions(V, facet_tags, clamped, displacements or {}, moved)
     dirichlet_dofs_loc = np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs] + [np.empty(0, np.int32)]))
-    A, applied = assemble_system(a, L, bcs)
-    with small_strain_stiffness(V, lame_parameters(young, poisson)[1], nodal, bcs) as volumetric:
-        if volumetric is not None:  # A_K += lambda B^T M_L^-1 B, with its lifting
-            volumetric.add_to(A, _DIFFERENT)
-            volumetric.lift(applied, bcs)
-        loads = [applied, *_unit_translations(V, a, moved_bc, dirichlet_dofs_loc, rotations, volumetric)]
+    A, loads = _stiffness(a, L, bcs, moved_bc, dirichlet_dofs_loc, rotations, young, poisson, nodal)
     index_map = V.dofmap.index_map
     constrained = np.isin(np.arange(3 * (index_map.size_local + index_map.num_ghosts)), dirichlet_dofs_loc).reshape(-1, 3)
     owned_dirichlet = dirichlet_dofs_loc[dirichlet_dofs_loc < 3 * index_map.size_local]
@@ -654,6 +646,21 @@ def assemble_contact_problem(
     problem.set_step()
     _make_hyperelastic(problem, material, young, poisson, L, bcs, facet_tags, nodal)
     return problem
+
+
+def _stiffness(a: fem.Form, L: fem.Form, bcs: list[fem.DirichletBC], moved_bc: fem.DirichletBC | None,
+               dirichlet_dofs_loc: np.ndarray, rotations: bool, young: float | fem.Function,
+               poisson: float | fem.Function, nodal: fem.Function | None) -> tuple[PETSc.Mat, list[PETSc.Vec]]:
+    """A_K and the lifted loads of ``L`` and of the moved groups (:func:`_unit_translations`);
+    with ``nodal`` (the cells of averaged bodies) A_K gains lambda B^T M_L^-1 B and every load
+    its lifting (:func:`~contactqvi.nodal_pressure.small_strain_stiffness`)."""
+    A, applied = assemble_system(a, L, bcs)
+    V = a.function_spaces[0]
+    with small_strain_stiffness(V, lame_parameters(young, poisson)[1], nodal, bcs) as volumetric:
+        if volumetric is not None:
+            volumetric.add_to(A, _DIFFERENT)
+            volumetric.lift(applied, bcs)
+        return A, [applied, *_unit_translations(V, a, moved_bc, dirichlet_dofs_loc, rotations, volumetric)]
 
 
 def _make_hyperelastic(problem: ContactProblem, material: Material | None, young: float | fem.Function,
