@@ -621,7 +621,7 @@ def assemble_contact_problem(
     msh.topology.create_connectivity(msh.topology.dim - 1, msh.topology.dim)  # for the facet dofs
     bcs, moved_bc = _dirichlet_conditions(V, facet_tags, clamped, displacements or {}, moved)
     dirichlet_dofs_loc = np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs] + [np.empty(0, np.int32)]))
-    A, loads = _stiffness(a, L, bcs, moved_bc, dirichlet_dofs_loc, rotations, young, poisson, nodal)
+    A, loads = _stiffness(V, a, L, bcs, moved_bc, dirichlet_dofs_loc, rotations, young, poisson, nodal)
     index_map = V.dofmap.index_map
     constrained = np.isin(np.arange(3 * (index_map.size_local + index_map.num_ghosts)), dirichlet_dofs_loc).reshape(-1, 3)
     owned_dirichlet = dirichlet_dofs_loc[dirichlet_dofs_loc < 3 * index_map.size_local]
@@ -648,14 +648,13 @@ def assemble_contact_problem(
     return problem
 
 
-def _stiffness(a: fem.Form, L: fem.Form, bcs: list[fem.DirichletBC], moved_bc: fem.DirichletBC | None,
+def _stiffness(V: fem.FunctionSpace, a: fem.Form, L: fem.Form, bcs: list[fem.DirichletBC], moved_bc: fem.DirichletBC | None,
                dirichlet_dofs_loc: np.ndarray, rotations: bool, young: float | fem.Function,
                poisson: float | fem.Function, nodal: fem.Function | None) -> tuple[PETSc.Mat, list[PETSc.Vec]]:
     """A_K and the lifted loads of ``L`` and of the moved groups (:func:`_unit_translations`);
     with ``nodal`` (the cells of averaged bodies) A_K gains lambda B^T M_L^-1 B and every load
     its lifting (:func:`~contactqvi.nodal_pressure.small_strain_stiffness`)."""
     A, applied = assemble_system(a, L, bcs)
-    V = a.function_spaces[0]
     with small_strain_stiffness(V, lame_parameters(young, poisson)[1], nodal, bcs) as volumetric:
         if volumetric is not None:
             volumetric.add_to(A, _DIFFERENT)
