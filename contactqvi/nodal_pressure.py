@@ -53,6 +53,7 @@ from contactqvi.elasticity import strain, stress
 from contactqvi.lifetime import PETScOwner
 from contactqvi.materials import FORMULATIONS, Material
 from contactqvi.parameters import require, require_choice
+from contactqvi.records import warn
 
 __all__ = ["NodalPressure", "VolumetricTangent", "averaged_stress", "formulation_indicator", "internal_work",
            "recommend", "remainder_piola", "small_strain_stiffness"]
@@ -294,7 +295,8 @@ def small_strain_stiffness(V: fem.FunctionSpace, lmbda: typing.Any, chi: fem.Fun
 
 
 def recommend(poisson: float | fem.Function, chi: fem.Function | None, comm: MPI.Comm) -> float:
-    """Log a warning when a cell on plain P1 (chi = 0) has nu > :data:`LOCKING_POISSON`: linear
+    """Warn (:func:`contactqvi.records.warn`, key ``volumetric_locking``: logged once and kept for
+    ``summary.json``) when a cell on plain P1 (chi = 0) has nu > :data:`LOCKING_POISSON`: linear
     tetrahedra lock there (docs/nearly_incompressible.md). Returns that largest nu (collective)."""
     if isinstance(poisson, fem.Function):
         n_cells = poisson.function_space.mesh.topology.index_map(3).size_local
@@ -303,7 +305,7 @@ def recommend(poisson: float | fem.Function, chi: fem.Function | None, comm: MPI
     else:
         largest = float(poisson) if chi is None else -1.0
     if largest > LOCKING_POISSON:
-        logger.warning("Poisson's ratio %.4g on linear elements with the displacement formulation: they lock "
-                       "volumetrically (too stiff, speckled pressures); give the material formulation = "
-                       "\"nodal_pressure\"", largest)
+        warn(comm, logger, "volumetric_locking", f"Poisson's ratio {largest:.4g} on linear elements with the "
+             "displacement formulation: they lock volumetrically (too stiff, a shrunken contact area, speckled "
+             "pressures); give the material formulation = \"nodal_pressure\"", poisson=largest)
     return largest

@@ -25,8 +25,9 @@ from contactqvi.elasticity import elasticity_forms, lame_parameters
 from contactqvi.laws import Frictionless
 from contactqvi.materials import NeoHookean
 from contactqvi.meshes import create_contact_body
-from contactqvi.nodal_pressure import formulation_indicator, recommend
+from contactqvi.nodal_pressure import formulation_indicator
 from contactqvi.parameters import ParameterError
+from contactqvi.records import Recorder
 
 YOUNG = 10e6  # Pa
 #: The wavy foundation's contact force (N), nodal pressure, measured on 1 rank (2 ranks: 1e-14 apart).
@@ -141,13 +142,15 @@ def test_wavy_foundation_force_on_any_number_of_ranks():
     assert forces["displacement"] > 1.05 * forces["nodal_pressure"]
 
 
-def test_plain_p1_above_049_is_warned(caplog):
-    """nu > 0.49 on plain P1 logs the recommendation; nodal pressure or nu = 0.45 does not."""
-    assert recommend(0.499, None, MPI.COMM_WORLD) == 0.499
-    assert "nodal_pressure" in caplog.text
-    caplog.clear()
-    recommend(0.45, None, MPI.COMM_WORLD)
-    assert caplog.text == ""
+def test_plain_p1_above_049_is_warned():
+    """nu > 0.49 on plain P1 is a recorded warning; nu = 0.45 and the averaged cells are not."""
+    msh, _ = _block()
+    with Recorder() as recorder:
+        assert formulation_indicator(msh, "displacement", poisson=0.499) is None
+        formulation_indicator(msh, "displacement", poisson=0.45)
+        formulation_indicator(msh, "nodal_pressure", poisson=0.499)
+    assert [r["key"] for r in recorder.records] == ["volumetric_locking"]
+    assert recorder.records[0]["numbers"] == {"poisson": 0.499}
 
 
 @pytest.mark.one_rank(reason="a material's method, no mesh")
