@@ -54,12 +54,18 @@ def _compressed(poisson: float, material, compression: float, steps: int) -> lis
         rows.append({"load": step.load, "x": x, "u": state.displacement.x.array.reshape(-1, 3)[: len(x)].copy(),
                      "pressure": result.normal_force / problem.contact_area, "result": result})
 
+    _solve(problem, [(k + 1) / steps for k in range(steps)], record)
+    return rows
+
+
+def _solve(problem, loads: list[float], on_step=None) -> list:
+    """The path of ``loads`` (load factors) from rest with exact Newton steps; its results. Frees the problem."""
     with problem:
         u = problem.A.createVecRight()
-        solve_load_path(problem, [LoadStep((k + 1) / steps) for k in range(steps)], u, {"pc": "lu"},
-                        on_step=record, from_rest=True)
+        results = solve_load_path(problem, [LoadStep(load) for load in loads], u, {"pc": "lu"}, on_step=on_step,
+                                  from_rest=True)
         u.destroy()
-    return rows
+    return results
 
 
 def _largest(values: np.ndarray) -> float:
@@ -133,11 +139,8 @@ def test_wavy_foundation_force_on_any_number_of_ranks():
                                         contact="contact", displacements={"dirichlet": {0: 0.0}, "front": {1: 0.0},
                                                                           "top": {2: -0.01}},
                                         formulation=formulation)
-        with problem:
-            u = problem.A.createVecRight()
-            results = solve_load_path(problem, [LoadStep(1.0)], u, {"pc": "lu"}, from_rest=True)
-            forces[formulation] = MPI.COMM_WORLD.allreduce(float(results[-1].normal_force.sum()), op=MPI.SUM)
-            u.destroy()
+        normal_force = _solve(problem, [1.0])[-1].normal_force
+        forces[formulation] = MPI.COMM_WORLD.allreduce(float(normal_force.sum()), op=MPI.SUM)
     assert forces["nodal_pressure"] == pytest.approx(NODAL_FORCE, rel=1e-9)
     assert forces["displacement"] > 1.05 * forces["nodal_pressure"]
 
