@@ -181,8 +181,8 @@ class NodalPressure:
         return out
 
     def _assemble(self, form: fem.Form, out: fem.Function, volume: fem.Function | None) -> None:
-        """``out`` = the vector of ``form`` (summed over the ranks), per V_a of ``volume`` if given
-        (and ``empty`` where V_a = 0); ghosts updated."""
+        """``out`` = the vector of ``form`` (summed over the ranks), divided by V_a of ``volume`` if
+        given (0 where V_a = 0); ghosts updated."""
         vec = out.x.petsc_vec
         with vec.localForm() as local:
             local.set(0.0)

@@ -11,6 +11,8 @@
 
 from __future__ import annotations
 
+import pathlib
+
 from mpi4py import MPI
 
 import numpy as np
@@ -19,6 +21,7 @@ import scipy.optimize
 
 from dolfinx import fem
 
+from contactqvi.case import parse_case
 from contactqvi.contact import LoadStep, build_contact_problem, solve_load_path
 from contactqvi.contact.hyperelastic import create_hyperelastic_system
 from contactqvi.elasticity import elasticity_forms, lame_parameters
@@ -28,7 +31,9 @@ from contactqvi.meshes import create_contact_body
 from contactqvi.nodal_pressure import formulation_indicator
 from contactqvi.parameters import ParameterError
 from contactqvi.records import Recorder
+from contactqvi.runner import build_problem
 
+DATA = pathlib.Path(__file__).parent / "data"
 YOUNG = 10e6  # Pa
 #: The wavy foundation's contact force (N), nodal pressure, measured on 1 rank (2 ranks: 1e-14 apart).
 NODAL_FORCE = 52107.3715212761
@@ -162,3 +167,29 @@ def test_saint_venant_kirchhoff_has_no_volumetric_part():
 
     with pytest.raises(ParameterError, match="material.formulation"):
         SaintVenantKirchhoff().volumetric_energy(1.0, 1.0)
+
+
+def _seal_case(formulation: str) -> dict:
+    """The new user's seal strip (tests/data/seal_half_h1.0.msh) as case-file data, one step."""
+    return {"mesh": {"file": str(DATA / "seal_half_h1.0.msh")},
+            "material": {"young": 5e6, "poisson": 0.499, "model": "neo_hookean", "formulation": formulation},
+            "boundary": {"displacement": {"symmetry_x": {"x": 0.0}, "symmetry_y": {"y": 0.0}, "back": {"y": 0.0},
+                                          "bottom": {"z": 0.0}}},
+            "contact": {"surface": "contact", "law": "coulomb", "friction": 0.4},
+            "obstacle": {"type": "plane", "point": [0.0, 0.0, 0.005], "normal": [0.0, 0.0, -1.0]},
+            "steps": [{"translation": [0.0, 0.0, -7.5e-5]}]}
+
+
+def test_a_case_file_selects_the_formulation():
+    """``[material] formulation``: the averaged body's A holds the wider stencil of B^T D B, the
+    plain one is warned about at nu = 0.499; an unknown name is a named error."""
+    nonzeros = {}
+    for formulation in ("nodal_pressure", "displacement"):
+        with Recorder() as recorder, build_problem(parse_case(_seal_case(formulation)), MPI.COMM_WORLD) as problem:
+            nonzeros[formulation] = problem.A.getInfo()["nz_used"]
+            assert (problem.body.nodal is None) == (formulation == "displacement")
+            assert [r["key"] for r in recorder.records] == ([] if problem.body.nodal else ["volumetric_locking"])
+    assert MPI.COMM_WORLD.allreduce(nonzeros["nodal_pressure"]) > 1.5 * MPI.COMM_WORLD.allreduce(
+        nonzeros["displacement"])
+    with pytest.raises(ParameterError, match="material.formulation"):
+        parse_case(_seal_case("mixed"))
