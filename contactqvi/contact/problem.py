@@ -648,9 +648,10 @@ def assemble_contact_problem(
     return problem
 
 
-def _stiffness(V: fem.FunctionSpace, a: fem.Form, L: fem.Form, bcs: list[fem.DirichletBC], moved_bc: fem.DirichletBC | None,
-               dirichlet_dofs_loc: np.ndarray, rotations: bool, young: float | fem.Function,
-               poisson: float | fem.Function, nodal: fem.Function | None) -> tuple[PETSc.Mat, list[PETSc.Vec]]:
+def _stiffness(V: fem.FunctionSpace, a: fem.Form, L: fem.Form, bcs: list[fem.DirichletBC],
+               moved_bc: fem.DirichletBC | None, dirichlet_dofs_loc: np.ndarray, rotations: bool,
+               young: float | fem.Function, poisson: float | fem.Function,
+               nodal: fem.Function | None) -> tuple[PETSc.Mat, list[PETSc.Vec]]:
     """A_K and the lifted loads of ``L`` and of the moved groups (:func:`_unit_translations`);
     with ``nodal`` (the cells of averaged bodies) A_K gains lambda B^T M_L^-1 B and every load
     its lifting (:func:`~contactqvi.nodal_pressure.small_strain_stiffness`)."""
