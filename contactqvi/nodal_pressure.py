@@ -25,10 +25,11 @@ with p_h held fixed; the second couples every two nodes that share a neighbour, 
 stencil than the cell-wise stiffness (the problem's A is created with it once,
 :class:`VolumetricTangent`). The linear version is (3) at u = 0: the stiffness of
 2 mu eps : eps plus lambda B^T M_L^-1 B, B = int chi phi_a div phi_i (U''(1) = lambda for
-every material here, the linearisation's lambda). Known weaknesses (docs/nearly_incompressible.md):
-the averaged pressure is not inf-sup stable (checkerboard-like pressure modes on structured
-meshes), the remainder psi - U keeps the shear stiffness cell-wise, and the cells at a
-corner keep a stiff remainder of size mu.
+every material here, the linearisation's lambda). Known weaknesses, measured in
+docs/nearly_incompressible.md: the P1/P1 pair of displacement and nodal pressure is not inf-sup
+stable, the remainder psi - U keeps the constant-strain tetrahedron's shear stiffness, the
+stencil is wider (3.7 times A's nonzeros on the seal strip), and with GAMG the Krylov
+iterations grow with lambda.
 """
 
 from __future__ import annotations
