@@ -12,6 +12,8 @@ step and the time. A failed run is a row. docs/finite_strain.md, Sect. 11, reads
 
     .venv/bin/python benchmarks/seal_squeeze.py --poisson 0.3 0.4 0.45 0.49 --friction 0.2 0.3 0.4 0.5
     .venv/bin/python benchmarks/seal_squeeze.py --poisson 0.45 --friction 0.4 --max-cuts 14 --table seal_path_end
+    .venv/bin/python benchmarks/seal_squeeze.py --poisson 0.45 0.49 --formulation nodal_pressure \
+        --table seal_squeeze_nodal_pressure
 """
 
 from __future__ import annotations
@@ -35,16 +37,18 @@ MESHES = {"h1.0": "seal_half_h1.0.msh", "h0.5": "seal_half_h0.5.msh"}
 HALF_HEIGHT = 5e-3
 
 
-def run(poisson: float, friction: float, mesh: str, max_cuts: int | None, work: pathlib.Path) -> dict:
-    """One run of the seal case; its row of the table."""
+def run(poisson: float, friction: float, mesh: str, max_cuts: int | None, work: pathlib.Path,
+        formulation: str = "displacement") -> dict:
+    """One run of the seal case (the strip's ``formulation``, docs/nearly_incompressible.md); its row of the table."""
     data = tomllib.loads(CASE.read_text())
+    data["material"]["formulation"] = formulation
     data["mesh"]["file"] = MESHES[mesh]
     data["material"]["poisson"] = poisson
     data["contact"]["friction"] = friction
     if max_cuts is not None:
         data.setdefault("solver", {})["max_cuts"] = max_cuts
     case = parse_case(data, CASE.parent)
-    name = f"{mesh}_nu{poisson:g}_mu{friction:g}" + ("" if max_cuts is None else f"_cuts{max_cuts}")
+    name = f"{mesh}_nu{poisson:g}_mu{friction:g}_{formulation}" + ("" if max_cuts is None else f"_cuts{max_cuts}")
     start = time.perf_counter()
     summary, code = run_case(case, work / name, MPI.COMM_WORLD, plot=False)
     seconds = time.perf_counter() - start
@@ -80,14 +84,16 @@ def main() -> int:
     parser.add_argument("--friction", type=float, nargs="+", default=[0.2, 0.3, 0.4, 0.5])
     parser.add_argument("--meshes", nargs="+", choices=tuple(MESHES), default=["h1.0"])
     parser.add_argument("--max-cuts", type=int, default=None, help="[solver] max_cuts (default: the solver's)")
+    parser.add_argument("--formulation", default="displacement", help="[material] formulation of the strip")
     parser.add_argument("--work", default="/tmp/seal_squeeze", help="where the runs write their results")
     parser.add_argument("--table", default="seal_squeeze", help="name of the table in benchmarks/results")
     args = parser.parse_args()
     work = pathlib.Path(args.work)
-    rows = [run(nu, mu, mesh, args.max_cuts, work)
+    rows = [run(nu, mu, mesh, args.max_cuts, work, args.formulation)
             for mesh in args.meshes for nu in args.poisson for mu in args.friction]
     write_table(MPI.COMM_WORLD, HERE / "results" / args.table, {"case": str(CASE.relative_to(HERE.parent)),
-                                                                "runs": rows}, markdown(rows))
+                                                                "formulation": args.formulation, "runs": rows},
+                markdown(rows))
     return 0
 
 

@@ -147,7 +147,7 @@ from contactqvi import obstacles
 from contactqvi.interference import Interference, check_interference
 from contactqvi.laws import LAWS, ContactLaw, create_law, parameter_names
 from contactqvi.load_steps import SEARCHES, Rotation, check_fit, check_rotation, check_steps, rotates
-from contactqvi.materials import MATERIALS
+from contactqvi.materials import FORMULATIONS, MATERIALS
 from contactqvi.load_steps import LoadStep as Step
 from contactqvi.parameters import (
     ParameterError,
@@ -233,12 +233,17 @@ class Material:
             ``"saint_venant_kirchhoff"``). With ``[[bodies]]`` every body takes the same model;
             a case file's ``[material]`` may then hold ``model`` alone, the default of the bodies.
         density: mass density rho (kg/m^3) > 0, required with ``[dynamics]`` (unused without).
+        formulation: how the volume change is discretised, one of
+            :data:`contactqvi.materials.FORMULATIONS`: ``"displacement"`` (plain P1) or
+            ``"nodal_pressure"`` (averaged at the nodes: for nearly incompressible bodies,
+            docs/nearly_incompressible.md); with ``[[bodies]]`` each body its own.
     """
 
     young: float
     poisson: float
     model: str | None = None
     density: float | None = None
+    formulation: str = "displacement"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -688,7 +693,9 @@ def _check_material(material: Material, path: str) -> Material:
     if density is not None:
         require_positive(f"{path}.density", density)
         density = float(density)
-    return Material(young, poisson, None if material.model == "linear" else material.model, density)
+    require_choice(f"{path}.formulation", material.formulation, FORMULATIONS)
+    return Material(young, poisson, None if material.model == "linear" else material.model, density,
+                    material.formulation)
 
 
 def _check_boundary(boundary: Boundary, path: str, supported: bool = True) -> Boundary:

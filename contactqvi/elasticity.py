@@ -116,6 +116,7 @@ def elasticity_forms(
     body_force: BodyForce | None = None,
     cell_tags: dmesh.MeshTags | None = None,
     pressures: dict[str, float] | None = None,
+    nodal: fem.Function | None = None,
 ) -> tuple[fem.Form, fem.Form]:
     """Compiled bilinear form a(u, v) = (sigma(u), eps(v)) and load l(v).
 
@@ -131,8 +132,13 @@ def elasticity_forms(
         cell_tags: named cell groups, one per body (needed for a force per body).
         pressures: pressure p (Pa, > 0 pushes into the body) per boundary name: the traction
             -p N of the reference normal here (:func:`pressure_form`).
+        nodal: the indicator chi of the cells whose volume change is averaged at the nodes
+            (:mod:`contactqvi.nodal_pressure`): a then holds lambda (1 - chi) only, the rest is
+            lambda B^T M_L^-1 B. None: every cell takes lambda.
     """
     mu, lmbda = lame_parameters(young, poisson)
+    if nodal is not None:
+        lmbda = lmbda * (1 - nodal)
     msh = V.mesh
     gdim = msh.geometry.dim
     u, v = ufl.TrialFunction(V), ufl.TestFunction(V)

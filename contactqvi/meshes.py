@@ -148,9 +148,10 @@ def contact_body_sizes(lev: int) -> dict[str, int]:
 
 
 def create_contact_body(
-    comm: MPI.Comm, lev: int, gap: GapFunction, length: float = 2.0, width: float = 1.0, height: float = 1.0
+    comm: MPI.Comm, lev: int, gap: GapFunction, length: float = 2.0, width: float = 1.0, height: float = 1.0,
+    cell_type: str = "hexahedron",
 ) -> tuple[dmesh.Mesh, dmesh.MeshTags]:
-    """Hexahedral mesh of Omega(d) = {(x1, x2) in (0,L)x(0,W), d(x1,x2) < x3 < H}.
+    """Hexahedral (or, ``cell_type="tetrahedron"``, tetrahedral: six per hexahedron) mesh of Omega(d) = {(x1, x2) in (0,L)x(0,W), d(x1,x2) < x3 < H}.
 
     Seed 000, Sect. 7: the box is cut into nx1 nx2 nx3 hexahedra (see
     :func:`contact_body_sizes`) and the vertices are moved vertically to
@@ -167,11 +168,13 @@ def create_contact_body(
     sizes = contact_body_sizes(lev)
     for name, value in (("length", length), ("width", width), ("height", height)):
         require(value > 0, name, f"must be > 0, got {value!r}")
+    kinds = {"hexahedron": dmesh.CellType.hexahedron, "tetrahedron": dmesh.CellType.tetrahedron}
+    require(cell_type in kinds, "cell_type", f"must be one of {sorted(kinds)}, got {cell_type!r}")
     msh = dmesh.create_box(
         comm,
         [np.zeros(3), np.array([length, width, height])],
         [sizes["nx1"], sizes["nx2"], sizes["nx3"]],
-        dmesh.CellType.hexahedron,
+        kinds[cell_type],
         partitioner=cell_partitioner(comm),
     )
     x = msh.geometry.x

@@ -33,6 +33,7 @@ from dolfinx import mesh as dmesh
 from contactqvi.elasticity import BodyForce, body_force_form, lame_parameters, pressure_form, strain, stress
 from contactqvi.materials import Material
 from contactqvi.meshes import boundary_facets, tag_of
+from contactqvi.nodal_pressure import averaged_stress, internal_work
 from contactqvi.parameters import require
 
 __all__ = ["ElasticBody", "StressFields", "applied_force", "reaction_forces", "stress_fields", "von_mises"]
@@ -63,6 +64,8 @@ class ElasticBody:
             stress P F^T / det F), or None for linear elasticity.
         pressures: pressure (Pa, > 0 into the body) per boundary name, at load factor 1
             (on the deformed surface for a hyperelastic body).
+        nodal: the indicator of the cells whose volume change is averaged at the nodes
+            (:mod:`contactqvi.nodal_pressure`), or None.
     """
 
     young: float
@@ -75,6 +78,7 @@ class ElasticBody:
     cell_tags: dmesh.MeshTags | None = None
     material: Material | None = None
     pressures: dict[str, float] = dataclasses.field(default_factory=dict)
+    nodal: fem.Function | None = None
 
 
 def von_mises(sigma: np.ndarray) -> np.ndarray:
@@ -96,7 +100,8 @@ class StressFields:
         von_mises: DG0 function named ``von_mises`` (Pa).
     """
 
-    def __init__(self, u: fem.Function, young: float, poisson: float, material: Material | None = None):
+    def __init__(self, u: fem.Function, young: float, poisson: float, material: Material | None = None,
+                 nodal: fem.Function | None = None):
         msh = u.function_space.mesh
         require(msh.geometry.dim == 3, "mesh", "stress_fields: three-dimensional bodies only")
         mu, lmbda = lame_parameters(young, poisson)
@@ -104,7 +109,11 @@ class StressFields:
         Q = fem.functionspace(msh, ("DG", 0))
         self._n_cells = msh.topology.index_map(msh.topology.dim).size_local
         self._volume = fem.assemble_vector(fem.form(ufl.TestFunction(Q) * ufl.dx)).array[: self._n_cells]
-        if material is None:
+        self._averaged = None
+        if nodal is not None:  # the nodally averaged volume change (contactqvi.nodal_pressure)
+            self._averaged = internal_work(u, ufl.TestFunction(u.function_space), material, mu, lmbda, nodal)[1]
+            integral = ufl.inner(averaged_stress(self._averaged, mu, lmbda), ufl.TestFunction(W)) * ufl.dx
+        elif material is None:
             integral = ufl.inner(stress(u, mu, lmbda), ufl.TestFunction(W)) * ufl.dx
         else:
             integral = ufl.inner(material.cauchy_stress(u, mu, lmbda), ufl.TestFunction(W)) * material.dx()
@@ -115,6 +124,8 @@ class StressFields:
     def update(self) -> tuple[fem.Function, fem.Function]:
         """Both fields of the current ``u``: ``(stress, von_mises)``."""
         n_cells = self._n_cells
+        if self._averaged is not None:
+            self._averaged.update()
         integral = fem.assemble_vector(self._integral)
         owned = integral.array[: 9 * n_cells].reshape(n_cells, 9) / self._volume[:, None]
         self.stress.x.array[: 9 * n_cells] = owned.ravel()
@@ -209,7 +220,10 @@ def _nodal_residual(u: fem.Function, body: ElasticBody, load_factor: float) -> n
     V = u.function_space
     mu, lmbda = lame_parameters(body.young, body.poisson)
     v = ufl.TestFunction(V)
-    if body.material is None:
+    if body.nodal is not None:
+        internal, averaged = internal_work(u, v, body.material, mu, lmbda, body.nodal)
+        averaged.update()
+    elif body.material is None:
         internal = ufl.inner(stress(u, mu, lmbda), strain(v)) * ufl.dx
     else:
         internal = ufl.inner(body.material.first_piola(u, mu, lmbda), ufl.grad(v)) * body.material.dx()

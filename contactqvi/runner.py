@@ -90,6 +90,7 @@ def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
         obstacle=case.obstacle.create(), body_force=b.body_force,
         displacements={name: d.components() for name, d in b.displacement.items()}, moved=b.moved,
         material=_material(case.material.model), pressures=dict(b.pressure), rotations=_rotations(case),
+        formulation=case.material.formulation,
     )
 
 
@@ -117,7 +118,8 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
     return assemble_contact_problem(msh, tags, young, poisson, tractions, pairs, clamped, body_force or None,
                                     displacements=displacements, cell_tags=cell_tags, moved=moved,
                                     material=_material(case.bodies[0].material.model), pressures=pressures,
-                                    rotations=_rotations(case), inertia=case.dynamics is not None)
+                                    rotations=_rotations(case), inertia=case.dynamics is not None,
+                                    formulation={b.name: b.material.formulation for b in case.bodies})
 
 
 def _largest_prescribed(case: ContactCase) -> float:

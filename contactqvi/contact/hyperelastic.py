@@ -48,6 +48,7 @@ from contactqvi.elasticity import Modulus, lame_parameters, pressure_form
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import reassemble_matrix
 from contactqvi.materials import Material
+from contactqvi.nodal_pressure import VolumetricTangent, internal_work
 
 __all__ = ["HyperelasticSystem", "create_hyperelastic_system", "prescribed_rows"]
 
@@ -80,6 +81,9 @@ class HyperelasticSystem(PETScOwner):
             cannot be driven below about 1e-10 of the first residual. Measured: Newton stalls
             at 0.5 eps (two-body Hertz at 1 um) and 1.2 eps (patch blocks at 1e-6 strain) of
             it. The solver's ``floor`` (45 eps) is relative to this scale.
+        volumetric: the nodally averaged volume change of the bodies that take it
+            (:mod:`contactqvi.nodal_pressure`: its nodal pressure is updated before each
+            assembly, and its B^T D B added to K_T, whose pattern then holds it), or None.
     """
 
     material: Material
@@ -95,9 +99,10 @@ class HyperelasticSystem(PETScOwner):
     load_factor: fem.Constant
     force_scale: float
     transformed: PETSc.Mat | None = None
+    volumetric: VolumetricTangent | None = None
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [self.transformed, self.stiffness, self.internal, self.external]
+        return [self.transformed, self.stiffness, self.internal, self.external, self.volumetric]
 
     def assemble_residual(self, load_factor: float) -> PETSc.Vec:
         """r_K at :attr:`displacement` (global components, zero on the prescribed rows) into
@@ -106,6 +111,8 @@ class HyperelasticSystem(PETScOwner):
         self.load_factor.value = load_factor
         with r.localForm() as local:
             local.set(0.0)
+        if self.volumetric is not None:
+            self.volumetric.nodal.update()
         dolfinx.fem.petsc.assemble_vector(r, self.residual_form)
         r.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         r.axpy(-load_factor, self.external)
@@ -116,12 +123,22 @@ class HyperelasticSystem(PETScOwner):
         """K_T's matrix in global components (of the linear stiffness' pattern), made once."""
         if self.stiffness is None:
             self.stiffness = dolfinx.fem.petsc.create_matrix(self.tangent_form)
+            if self.volumetric is not None:  # the wider stencil of B^T D B, added once
+                reassemble_matrix(self.stiffness, self.tangent_form, self.bcs)
+                self.volumetric.nodal.update()
+                self.volumetric.add_to(self.stiffness, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
         return self.stiffness
 
     def assemble_tangent(self, out: PETSc.Mat) -> PETSc.Mat:
         """K_T at :attr:`displacement` (identity rows and columns at prescribed dofs) into ``out``
-        (of the linear stiffness' pattern), which is returned."""
-        return reassemble_matrix(out, self.tangent_form, self.bcs)
+        (of the linear stiffness' pattern), which is returned; with :attr:`volumetric` (3) of
+        :mod:`contactqvi.nodal_pressure`: the cell-wise part with p_h fixed plus B^T D B."""
+        if self.volumetric is None:
+            return reassemble_matrix(out, self.tangent_form, self.bcs)
+        self.volumetric.nodal.update()
+        reassemble_matrix(out, self.tangent_form, self.bcs)
+        self.volumetric.add_to(out)
+        return out
 
     def transformed_tangent(self, transform: PETSc.Mat) -> PETSc.Mat:
         """T^T K_T T at :attr:`displacement` for the change of variables T = ``transform``, in
@@ -146,6 +163,7 @@ def create_hyperelastic_system(
     V: fem.FunctionSpace, material: Material, young: Modulus, poisson: Modulus, load: fem.Form,
     bcs: list[fem.DirichletBC], dirichlet_dofs_loc: np.ndarray, rotation: PETSc.Mat | None,
     pressures: dict[str, float] | None = None, facet_tags: dmesh.MeshTags | None = None,
+    nodal: fem.Function | None = None,
 ) -> HyperelasticSystem:
     """The hyperelastic residual and tangent of ``material`` on V (compiled here, once).
 
@@ -158,10 +176,16 @@ def create_hyperelastic_system(
             reference surface: they follow the deformed surface here (the difference of
             :func:`~contactqvi.elasticity.pressure_form` with and without u, times the load
             factor :attr:`HyperelasticSystem.load_factor`).
+        nodal: the indicator chi of the cells whose volume change is averaged at the nodes
+            (:func:`~contactqvi.nodal_pressure.formulation_indicator`), or None.
     """
     mu, lmbda = lame_parameters(young, poisson)
     u, v = fem.Function(V, name="displacement"), ufl.TestFunction(V)
-    residual = ufl.inner(material.first_piola(u, mu, lmbda), ufl.grad(v)) * material.dx()
+    volumetric = None
+    if nodal is None:
+        residual = ufl.inner(material.first_piola(u, mu, lmbda), ufl.grad(v)) * material.dx()
+    else:  # (1)-(2) of contactqvi.nodal_pressure
+        residual, averaged = internal_work(u, v, material, mu, lmbda, nodal)
     load_factor = fem.Constant(V.mesh, PETSc.ScalarType(1.0))
     if pressures:
         msh = V.mesh
@@ -169,6 +193,8 @@ def create_hyperelastic_system(
                                    - pressure_form(msh, v, facet_tags, pressures))
     tangent = ufl.derivative(residual, u, ufl.TrialFunction(V))
     residual_form, tangent_form = fem.form(residual), fem.form(tangent)
+    if nodal is not None:
+        volumetric = VolumetricTangent.create(averaged, bcs)
     index_map, bs = V.dofmap.index_map, V.dofmap.index_map_bs
     n_owned = index_map.size_local * bs
     dirichlet_owned = dirichlet_dofs_loc[dirichlet_dofs_loc < n_owned].astype(np.int32)
@@ -180,7 +206,7 @@ def create_hyperelastic_system(
     external.array[dirichlet_owned] = 0.0
     return HyperelasticSystem(material, u, residual_form, tangent_form, list(bcs), external, external.duplicate(),
                               None, dirichlet_owned, prescribed_rows(external, dirichlet_owned, rotation),
-                              load_factor, _force_scale(V, mu, material))
+                              load_factor, _force_scale(V, mu, material), volumetric=volumetric)
 
 
 def _force_scale(V: fem.FunctionSpace, mu: typing.Any, material: Material) -> float:

@@ -259,7 +259,7 @@ class ContactResultsWriter:
         self._problem = problem
         self._displacement = fem.Function(problem.V, name="displacement")
         self._stress = StressFields(self._displacement, problem.body.young, problem.body.poisson,
-                                    problem.body.material)
+                                    problem.body.material, problem.body.nodal)
         self._body = MeshPiece(problem.V.mesh)
         self._surface = ContactSurface(problem)
         self._cell_data = {}

@@ -59,13 +59,14 @@ from dolfinx import mesh as dmesh
 
 from contactqvi.contact.hyperelastic import HyperelasticSystem, create_hyperelastic_system, prescribed_rows
 from contactqvi.contact.interface import BodyPair, Interface, ObstaclePair, Pair, build_interfaces, search_again
-from contactqvi.elasticity import BodyForce, elasticity_forms, orthonormalize, rigid_motions_nullspace
+from contactqvi.elasticity import BodyForce, elasticity_forms, lame_parameters, orthonormalize, rigid_motions_nullspace
 from contactqvi.laws import ContactLaw, Frictionless, NodalLaw, StackedLaw
 from contactqvi.lifetime import PETScOwner
 from contactqvi.materials import Material
 from contactqvi.linalg import assemble_system, default_options, nonzero_rows
 from contactqvi.load_steps import Rotation
 from contactqvi.meshes import boundary_facets
+from contactqvi.nodal_pressure import Formulation, VolumetricTangent, formulation_indicator, small_strain_stiffness
 from contactqvi.obstacles import Obstacle, Plane
 from contactqvi.parameters import require
 from contactqvi.postprocess import ElasticBody
@@ -541,6 +542,7 @@ def build_contact_problem(
     search: str = "once",
     pressures: dict[str, float] | None = None,
     rotations: bool = False,
+    formulation: Formulation = "displacement",
 ) -> ContactProblem:
     """Assemble the GE (6.3) for a body against a rigid obstacle, at load factor 1.
 
@@ -567,6 +569,9 @@ def build_contact_problem(
             factor; on the deformed surface for a hyperelastic ``material``.
         rotations: build the loads of rotations of the ``moved`` groups (nine more lifted loads),
             for steps with a ``rotation`` (:class:`~contactqvi.load_steps.LoadStep`).
+        formulation: ``"displacement"`` (plain P1) or ``"nodal_pressure"`` (the volume change
+            averaged at the nodes, :mod:`contactqvi.nodal_pressure`), or one per body (several
+            bodies, ``{body: name}``).
 
     Raises:
         ParameterError: bad values, unknown boundary names, or a contact node inside
@@ -578,7 +583,7 @@ def build_contact_problem(
     pair = ObstaclePair(contact, obstacle, law, search)
     return assemble_contact_problem(msh, facet_tags, young, poisson, tractions, [pair], clamped, body_force,
                                     displacements, moved=moved, material=material,
-                                    pressures=pressures, rotations=rotations)
+                                    pressures=pressures, rotations=rotations, formulation=formulation)
 
 
 def assemble_contact_problem(
@@ -592,7 +597,7 @@ def assemble_contact_problem(
     body_force: BodyForce | None = None,
     displacements: dict[str, dict[int, float]] | None = None,
     cell_tags: dmesh.MeshTags | None = None,
-    moved: typing.Sequence[str] = (),
+    moved: typing.Sequence[str] = (), formulation: Formulation = "displacement",
     material: Material | None = None, pressures: dict[str, float] | None = None, rotations: bool = False,
     inertia: bool = False,
 ) -> ContactProblem:
@@ -603,7 +608,7 @@ def assemble_contact_problem(
     ``cell_tags`` one named cell group per body (each gets its own rigid-body modes);
     ``body_force`` one vector (N/m^3) for all bodies or one per body, ``{body: f}``
     (:func:`~contactqvi.elasticity.body_forces`; each body's weight enters its balance);
-    ``moved``, ``material``, ``pressures``, ``rotations`` as in :func:`build_contact_problem`;
+    ``moved``, ``material``, ``pressures``, ``rotations``, ``formulation`` as in :func:`build_contact_problem`;
     ``inertia``: the bodies have mass (a time step, :mod:`contactqvi.contact.dynamics`): none need be held.
 
     Raises ``ParameterError`` as :func:`~contactqvi.contact.interface.build_interfaces`,
@@ -611,12 +616,12 @@ def assemble_contact_problem(
     """
     require(msh.geometry.dim == 3, "mesh", "the contact problem is three-dimensional")
     V = fem.functionspace(msh, ("Lagrange", 1, (3,)))
-    a, L = elasticity_forms(V, young, poisson, facet_tags, tractions, body_force, cell_tags, pressures)
+    nodal = formulation_indicator(msh, formulation, cell_tags, poisson)
+    a, L = elasticity_forms(V, young, poisson, facet_tags, tractions, body_force, cell_tags, pressures, nodal)
     msh.topology.create_connectivity(msh.topology.dim - 1, msh.topology.dim)  # for the facet dofs
     bcs, moved_bc = _dirichlet_conditions(V, facet_tags, clamped, displacements or {}, moved)
     dirichlet_dofs_loc = np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs] + [np.empty(0, np.int32)]))
-    A, applied = assemble_system(a, L, bcs)
-    loads = [applied, *_unit_translations(V, a, moved_bc, dirichlet_dofs_loc, rotations)]
+    A, loads = _stiffness(V, a, L, bcs, moved_bc, dirichlet_dofs_loc, rotations, young, poisson, nodal)
     index_map = V.dofmap.index_map
     constrained = np.isin(np.arange(3 * (index_map.size_local + index_map.num_ghosts)), dirichlet_dofs_loc).reshape(-1, 3)
     owned_dirichlet = dirichlet_dofs_loc[dirichlet_dofs_loc < 3 * index_map.size_local]
@@ -632,20 +637,35 @@ def assemble_contact_problem(
             [boundary_facets(facet_tags, i.slave_surface) for i in interfaces])).astype(np.int32),
         body=ElasticBody(young, poisson, facet_tags, supports, dict(tractions), body_force,
                          _prescribed_components(clamped, displacements or {}, moved), cell_tags,
-                         pressures=dict(pressures or {})),
+                         pressures=dict(pressures or {}), nodal=nodal),
         dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32), node_body=node_body,
         n_free=comm.allreduce(3 * index_map.size_local - len(owned_dirichlet), op=MPI.SUM),
         setup_seconds={"contact_search": search_seconds, "change_of_variables": variables_seconds},
         elastic=elastic if searched else None, **fields,
     )
     problem.set_step()
-    _make_hyperelastic(problem, material, young, poisson, L, bcs, facet_tags)
+    _make_hyperelastic(problem, material, young, poisson, L, bcs, facet_tags, nodal)
     return problem
+
+
+def _stiffness(V: fem.FunctionSpace, a: fem.Form, L: fem.Form, bcs: list[fem.DirichletBC],
+               moved_bc: fem.DirichletBC | None, dirichlet_dofs_loc: np.ndarray, rotations: bool,
+               young: float | fem.Function, poisson: float | fem.Function,
+               nodal: fem.Function | None) -> tuple[PETSc.Mat, list[PETSc.Vec]]:
+    """A_K and the lifted loads of ``L`` and of the moved groups (:func:`_unit_translations`);
+    with ``nodal`` (the cells of averaged bodies) A_K gains lambda B^T M_L^-1 B and every load
+    its lifting (:func:`~contactqvi.nodal_pressure.small_strain_stiffness`)."""
+    A, applied = assemble_system(a, L, bcs)
+    with small_strain_stiffness(V, lame_parameters(young, poisson)[1], nodal, bcs) as volumetric:
+        if volumetric is not None:
+            volumetric.add_to(A, _DIFFERENT)
+            volumetric.lift(applied, bcs)
+        return A, [applied, *_unit_translations(V, a, moved_bc, dirichlet_dofs_loc, rotations, volumetric)]
 
 
 def _make_hyperelastic(problem: ContactProblem, material: Material | None, young: float | fem.Function,
                        poisson: float | fem.Function, load: fem.Form, bcs: list[fem.DirichletBC],
-                       facet_tags: dmesh.MeshTags) -> None:
+                       facet_tags: dmesh.MeshTags, nodal: fem.Function | None = None) -> None:
     """Give ``problem`` the finite-strain f of a hyperelastic ``material`` (its ``hyperelastic``
     system, :mod:`contactqvi.contact.hyperelastic`, and the material of its volume results).
     Nothing for a linear material (None)."""
@@ -653,7 +673,7 @@ def _make_hyperelastic(problem: ContactProblem, material: Material | None, young
         return
     problem.hyperelastic = create_hyperelastic_system(problem.V, material, young, poisson, load, bcs,
                                                       problem.dirichlet_dofs_loc, problem.rotation,
-                                                      problem.body.pressures, facet_tags)
+                                                      problem.body.pressures, facet_tags, nodal)
     problem.body = dataclasses.replace(problem.body, material=material)
 
 
@@ -747,18 +767,20 @@ def _solver_variables(
 
 
 def _unit_translations(V: fem.FunctionSpace, a: fem.Form, moved_bc: fem.DirichletBC | None,
-                       dirichlet_dofs_loc: np.ndarray, rotations: bool = False) -> list[PETSc.Vec]:
+                       dirichlet_dofs_loc: np.ndarray, rotations: bool = False,
+                       volumetric: VolumetricTangent | None = None) -> list[PETSc.Vec]:
     """The lifted loads of a unit translation e_c (c = x, y, z) of the moved groups, all
     other prescribed values zero: -A_K e_c at free dofs, e_c at the moved ones; with
     ``rotations`` then those of the nine fields e_a X_b (a, b = x, y, z, row-major) on the
-    moved groups, of which a rotation's (Q - I) X is made (:meth:`ContactProblem.rigid_motion`)."""
+    moved groups, of which a rotation's (Q - I) X is made (:meth:`ContactProblem.rigid_motion`);
+    ``volumetric``: the averaged part of A_K, lifted too."""
     if moved_bc is None:
         return []
     value = moved_bc.g
     loads = []
     for c in range(3):
         value.value[:] = np.eye(3)[c]
-        loads.append(_lifted(a, moved_bc, dirichlet_dofs_loc))
+        loads.append(_lifted(a, moved_bc, dirichlet_dofs_loc, volumetric))
     value.value[:] = 0.0
     if rotations:
         field = fem.Function(V)
@@ -767,18 +789,21 @@ def _unit_translations(V: fem.FunctionSpace, a: fem.Form, moved_bc: fem.Dirichle
         for c in range(9):
             field.x.array[:] = 0.0
             field.x.array.reshape(-1, 3)[:, c // 3] = x[:, c % 3]
-            loads.append(_lifted(a, rotated_bc, dirichlet_dofs_loc))
+            loads.append(_lifted(a, rotated_bc, dirichlet_dofs_loc, volumetric))
     return loads
 
 
-def _lifted(a: fem.Form, bc: fem.DirichletBC, dirichlet_dofs_loc: np.ndarray) -> PETSc.Vec:
+def _lifted(a: fem.Form, bc: fem.DirichletBC, dirichlet_dofs_loc: np.ndarray,
+            volumetric: VolumetricTangent | None = None) -> PETSc.Vec:
     """The lifted load of ``bc``'s values alone: -A_K g at free dofs, g at ``bc``'s dofs, zero at
-    the other prescribed dofs ``dirichlet_dofs_loc``."""
+    the other prescribed dofs ``dirichlet_dofs_loc`` (A_K: ``a`` and the averaged ``volumetric``)."""
     V = a.function_spaces[0]
     b = dolfinx.la.create_petsc_vector(V.dofmap.index_map, V.dofmap.index_map_bs)  # ghosted, for the lifting
     b.set(0.0)
     dolfinx.fem.petsc.apply_lifting(b, [a], bcs=[[bc]])
     b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    if volumetric is not None:
+        volumetric.lift(b, [bc])
     b.array[dirichlet_dofs_loc[dirichlet_dofs_loc < b.getLocalSize()]] = 0.0
     dolfinx.fem.petsc.set_bc(b, [bc])
     return b

@@ -9,10 +9,10 @@ and a linear one agree at small strain. A new model is a module here (a
 :class:`Material` subclass with ``name`` and ``strain_energy``) and an import below.
 """
 
-from contactqvi.materials.base import MATERIALS, Material, create_material
+from contactqvi.materials.base import FORMULATIONS, MATERIALS, Material, create_material
 
 # Imported in this order, the materials are listed in this order (MATERIALS, error messages).
 from contactqvi.materials.neo_hookean import NeoHookean
 from contactqvi.materials.saint_venant_kirchhoff import SaintVenantKirchhoff
 
-__all__ = ["MATERIALS", "Material", "NeoHookean", "SaintVenantKirchhoff", "create_material"]
+__all__ = ["FORMULATIONS", "MATERIALS", "Material", "NeoHookean", "SaintVenantKirchhoff", "create_material"]

@@ -7,12 +7,17 @@ import typing
 
 import ufl
 
-from contactqvi.parameters import require_choice
+from contactqvi.parameters import ParameterError, require_choice
 
-__all__ = ["MATERIALS", "Material", "create_material"]
+__all__ = ["FORMULATIONS", "MATERIALS", "Material", "create_material"]
 
 #: Hyperelastic materials by name, registered by defining a subclass of :class:`Material`.
 MATERIALS: dict[str, type[Material]] = {}
+
+#: The discretisations of a body's volume change (``formulation`` of a case's material):
+#: ``"displacement"`` (plain P1, cell-wise) and ``"nodal_pressure"`` (the nodally averaged
+#: volume change of :mod:`contactqvi.nodal_pressure`, for nearly incompressible bodies).
+FORMULATIONS = ("displacement", "nodal_pressure")
 
 
 class Material(abc.ABC):
@@ -36,6 +41,16 @@ class Material(abc.ABC):
     @abc.abstractmethod
     def strain_energy(self, F: ufl.core.expr.Expr, mu: typing.Any, lmbda: typing.Any) -> ufl.core.expr.Expr:
         """psi(F) for the Lamé parameters ``mu``, ``lmbda`` (numbers or UFL expressions)."""
+
+    def volumetric_energy(self, J: ufl.core.expr.Expr, lmbda: typing.Any) -> ufl.core.expr.Expr:
+        """U(J): the part of psi that carries lambda and depends on J = det F alone, with
+        U''(1) = lambda (the nodally averaged formulation averages it, :mod:`contactqvi.nodal_pressure`).
+
+        Raises:
+            ParameterError: the material has no such part (``material.formulation``).
+        """
+        raise ParameterError("material.formulation", f"'nodal_pressure' needs a volumetric energy U(J); "
+                             f"{self.name} has none (use 'neo_hookean')")
 
     def first_piola(self, u: ufl.core.expr.Expr, mu: typing.Any, lmbda: typing.Any) -> ufl.core.expr.Expr:
         """P = d psi / d F at F = I + grad u (Pa), by UFL's differentiation of psi."""

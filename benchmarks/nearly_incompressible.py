@@ -1,0 +1,73 @@
+"""Newton-step Krylov counts against Poisson's ratio, plain P1 and nodal pressure (issue 43, item 3).
+
+This benchmark illustrates how to:
+
+* build the tetrahedral block of the uniaxial closed form (docs/finite_strain.md, Sect. 6)
+  with either formulation (``formulation`` of :func:`~contactqvi.contact.build_contact_problem`);
+* solve its compression with the default Newton-step solver (GAMG, the hyperelastic
+  Krylov tolerance) and count Newton steps and Krylov iterations per load step.
+
+The O-ring and seal runs behind ``benchmarks/results/nearly_incompressible.md`` are case
+files run by ``python -m contactqvi run`` (docs/nearly_incompressible.md lists them).
+
+::
+
+    python benchmarks/nearly_incompressible.py --lev 2 --poisson 0.45 0.49 0.499
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from mpi4py import MPI
+
+import numpy as np
+
+from contactqvi.contact import LoadStep, build_contact_problem, solve_load_path
+from contactqvi.laws import Frictionless
+from contactqvi.materials import NeoHookean
+from contactqvi.meshes import create_contact_body
+
+
+def krylov_counts(lev: int, poisson: float, formulation: str, steps: int, compression: float,
+                  pc: str = "gamg") -> list[tuple[int, int]]:
+    """(Newton steps, Krylov iterations) of each load step of the block's compression."""
+    msh, tags = create_contact_body(MPI.COMM_WORLD, lev, lambda x, y: np.zeros_like(x), length=1.0, width=1.0,
+                                    height=1.0, cell_type="tetrahedron")
+    problem = build_contact_problem(msh, tags, 10e6, poisson, {}, Frictionless(), clamped=(), contact="contact",
+                                    displacements={"dirichlet": {0: 0.0}, "front": {1: 0.0},
+                                                   "top": {2: -compression}},
+                                    material=NeoHookean(), formulation=formulation)
+    with problem:
+        u = problem.A.createVecRight()
+        results = solve_load_path(problem, [LoadStep((k + 1) / steps) for k in range(steps)], u, {"pc": pc},
+                                  from_rest=True)
+        u.destroy()
+    return [(r.iterations, r.inner_iterations) for r in results]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser.add_argument("--lev", type=int, default=2, help="block level (create_contact_body)")
+    parser.add_argument("--poisson", type=float, nargs="+", default=[0.45, 0.49, 0.499], help="Poisson's ratios")
+    parser.add_argument("--steps", type=int, default=3, help="load steps")
+    parser.add_argument("--compression", type=float, default=0.1, help="of the height")
+    parser.add_argument("--pc", default="gamg", help="Newton-step solver (SCD parameter pc)")
+    parser.add_argument("--formulations", nargs="+", default=["displacement", "nodal_pressure"],
+                        help="formulations compared")
+    args = parser.parse_args()
+    rows = [f"| nu | formulation | Newton steps per step | Krylov per step ({args.pc}) | Krylov per Newton step |",
+            "|---|---|---|---|---|"]
+    for poisson in args.poisson:
+        for formulation in args.formulations:
+            counts = krylov_counts(args.lev, poisson, formulation, args.steps, args.compression, args.pc)
+            newton, krylov = (sum(c[i] for c in counts) for i in (0, 1))
+            rows.append(f"| {poisson} | {formulation} | {' '.join(str(c[0]) for c in counts)} | "
+                        f"{' '.join(str(c[1]) for c in counts)} | {krylov / max(newton, 1):.1f} |")
+    if MPI.COMM_WORLD.rank == 0:
+        print("\n".join(rows))
+
+
+if __name__ == "__main__":
+    main()

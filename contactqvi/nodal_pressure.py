@@ -1,0 +1,312 @@
+"""The nodally averaged volumetric tetrahedron: a locking-free P1 formulation for nearly
+incompressible bodies (Bonet & Burton 1998; Bonet, Marriott & Hassan 2001).
+
+Linear tetrahedra lock when the bulk modulus dominates: one volume constraint per cell
+against about one free node per five cells. Averaging the volume change at the vertices
+leaves one constraint per node instead. With the strain energy split as
+
+    psi(F) = [psi(F) - U(J)] + U(J),   U the material's volumetric energy (lambda-weighted),
+
+the remainder psi - U is integrated cell-wise as before, and U at the vertices a:
+
+    Pi_vol(u) = sum_a V_a U(Jbar_a),   V_a = int chi phi_a dX,   Jbar_a = int chi phi_a J dX / V_a,   (1)
+
+chi the (DG0) indicator of the cells whose body takes this formulation (bodies share no
+nodes, so a vertex belongs to one body) and J = det F (finite strain) or 1 + div u (small
+strain, U = lambda/2 (J - 1)^2). With the nodal pressure p_h = sum_a U'(Jbar_a) phi_a (P1):
+
+    residual   d Pi_vol[v] = int chi p_h J F^-T : grad v dX,                          (2)
+    tangent    d2 Pi_vol[v, w] = int chi p_h d(J F^-T : grad v)[w] dX + (B v)^T D (B w),  (3)
+               B_(a,i) = int chi phi_a J F^-T : grad phi_i dX,   D = diag(U''(Jbar_a) / V_a).
+
+On P1 tetrahedra J is constant per cell and p_h linear, so every integral of (1)-(3) is
+exact with the materials' quadrature. The first term of (3) is ``ufl.derivative`` of (2)
+with p_h held fixed; the second couples every two nodes that share a neighbour, a wider
+stencil than the cell-wise stiffness (the problem's A is created with it once,
+:class:`VolumetricTangent`). The linear version is (3) at u = 0: the stiffness of
+2 mu eps : eps plus lambda B^T M_L^-1 B, B = int chi phi_a div phi_i (U''(1) = lambda for
+every material here, the linearisation's lambda). Known weaknesses, measured in
+docs/nearly_incompressible.md: the P1/P1 pair of displacement and nodal pressure is not inf-sup
+stable, the remainder psi - U keeps the constant-strain tetrahedron's shear stiffness, the
+stencil is wider (3.7 times A's nonzeros on the seal strip), and with GAMG the Krylov
+iterations grow with lambda.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import logging
+import typing
+
+from mpi4py import MPI
+
+from petsc4py import PETSc
+
+import numpy as np
+import ufl
+
+import dolfinx.fem.petsc
+import dolfinx.la
+from dolfinx import fem
+
+from contactqvi.elasticity import strain, stress
+from contactqvi.lifetime import PETScOwner
+from contactqvi.materials import FORMULATIONS, Material
+from contactqvi.parameters import require, require_choice
+from contactqvi.records import warn
+
+__all__ = ["NodalPressure", "VolumetricTangent", "averaged_stress", "formulation_indicator", "internal_work",
+           "recommend", "remainder_piola", "small_strain_stiffness"]
+
+logger = logging.getLogger(__name__)
+
+#: Poisson's ratio above which a plain P1 body is told about ``"nodal_pressure"`` (:func:`recommend`).
+LOCKING_POISSON = 0.49
+
+Formulation = str | dict[str, str]
+
+
+def formulation_indicator(msh: dolfinx.mesh.Mesh, formulation: Formulation,
+                          cell_tags: dolfinx.mesh.MeshTags | None = None,
+                          poisson: float | fem.Function | None = None) -> fem.Function | None:
+    """chi of (1): 1 in the cells of the bodies with ``"nodal_pressure"``, 0 elsewhere (DG0), or
+    None where no body takes it. ``formulation``: one name for all cells, or one per body
+    (cell group of ``cell_tags``; bodies not listed: ``"displacement"``). With ``poisson`` (a
+    number or DG0) the plain P1 cells are checked by :func:`recommend`. Collective."""
+    given = formulation if isinstance(formulation, dict) else {None: formulation}
+    for body, name in given.items():
+        require_choice("formulation" if body is None else f"bodies.{body}.formulation", name, FORMULATIONS)
+    if all(name == "displacement" for name in given.values()):
+        if poisson is not None:
+            recommend(poisson, None, msh.comm)
+        return None
+    chi = fem.Function(fem.functionspace(msh, ("DG", 0)), name="nodal_pressure")
+    for body, name in given.items():
+        if body is None:
+            chi.x.array[:] = float(name == "nodal_pressure")
+            continue
+        require(cell_tags is not None and body in cell_tags.names, f"bodies.{body}.formulation",
+                "no cell group of that name in the mesh")
+        chi.x.array[cell_tags.find(cell_tags.names[body])] = float(name == "nodal_pressure")
+    chi.x.scatter_forward()
+    if poisson is not None:
+        recommend(poisson, chi, msh.comm)
+    return chi
+
+
+def volumetric_energy(material: Material | None, J: ufl.core.expr.Expr, lmbda: typing.Any) -> ufl.core.expr.Expr:
+    """U(J) of (1): the material's (:meth:`~contactqvi.materials.Material.volumetric_energy`), or
+    lambda/2 (J - 1)^2 of linear elasticity (``material`` None)."""
+    return lmbda / 2 * (J - 1) ** 2 if material is None else material.volumetric_energy(J, lmbda)
+
+
+def _volume_change(u: ufl.core.expr.Expr, finite: bool) -> tuple[ufl.core.expr.Expr, typing.Callable]:
+    """J and its derivative dJ[v]: det F and J F^-T : grad v (finite strain), or 1 + div u and
+    div v (small strain)."""
+    if not finite:
+        return 1 + ufl.div(u), ufl.div
+    F = ufl.Identity(len(u)) + ufl.grad(u)
+    J = ufl.det(F)
+    return J, lambda v: J * ufl.inner(ufl.inv(F).T, ufl.grad(v))
+
+
+def remainder_piola(material: Material, u: ufl.core.expr.Expr, mu: typing.Any, lmbda: typing.Any,
+                    chi: fem.Function) -> ufl.core.expr.Expr:
+    """d (psi - chi U(J)) / dF at F = I + grad u: the cell-wise part of the stress of (1)."""
+    F = ufl.variable(ufl.Identity(len(u)) + ufl.grad(u))
+    psi = material.strain_energy(F, mu, lmbda) - chi * material.volumetric_energy(ufl.det(F), lmbda)
+    return ufl.diff(psi, F)
+
+
+def internal_work(u: fem.Function, v: ufl.core.expr.Expr, material: Material | None, mu: typing.Any,
+                  lmbda: typing.Any, chi: fem.Function) -> tuple[ufl.Form, NodalPressure]:
+    """The internal virtual work of (1): the remainder psi - chi U cell-wise plus (2), UFL, with
+    the :class:`NodalPressure` whose p_h it holds (update it before each assembly). Small strain
+    (``material`` None): 2 mu eps : eps + lambda (1 - chi) tr eps tr eps plus (2)."""
+    averaged = NodalPressure(u, chi, lmbda, material)
+    if material is None:
+        cellwise = ufl.inner(stress(u, mu, lmbda * (1 - chi)), strain(v)) * ufl.dx
+    else:
+        cellwise = ufl.inner(remainder_piola(material, u, mu, lmbda, chi), ufl.grad(v)) * material.dx()
+    return cellwise + averaged.term(v), averaged
+
+
+def averaged_stress(averaged: NodalPressure, mu: typing.Any, lmbda: typing.Any) -> ufl.core.expr.Expr:
+    """The Cauchy stress of (1) at ``averaged.u``: the remainder's plus chi p_h I (U'(J) I is the
+    Cauchy stress of U; small strain: lambda theta_bar I), UFL."""
+    u, chi, material = averaged.u, averaged.chi, averaged.material
+    volumetric = chi * averaged.pressure * ufl.Identity(len(u))
+    if material is None:
+        return stress(u, mu, lmbda * (1 - chi)) + volumetric
+    F = ufl.Identity(len(u)) + ufl.grad(u)
+    return remainder_piola(material, u, mu, lmbda, chi) * F.T / ufl.det(F) + volumetric
+
+
+class NodalPressure:
+    """The nodal fields of (1)-(2) for a displacement ``u``: V_a, lambda_a, Jbar_a, p_a = U'(Jbar_a)
+    and U''(Jbar_a), as P1 functions, with the compiled forms that make them (no PETSc
+    objects kept). Nodes outside chi's cells have V_a = 0, Jbar_a = 1, p_a = U''_a = 0.
+
+    Args:
+        u: the displacement (vector P1); its values are read at :meth:`update`.
+        chi: the indicator of :func:`formulation_indicator`.
+        lmbda: Lamé's lambda (number or DG0 expression).
+        material: the hyperelastic material (finite strain), or None (small strain).
+    """
+
+    def __init__(self, u: fem.Function, chi: fem.Function, lmbda: typing.Any, material: Material | None):
+        self.u, self.chi, self.material = u, chi, material
+        msh = u.function_space.mesh
+        self.Q = fem.functionspace(msh, ("Lagrange", 1))
+        q = ufl.TestFunction(self.Q)
+        self.dx = ufl.dx(metadata={"quadrature_degree": 2})
+        J, self.dJ = _volume_change(u, material is not None)
+        self.volume = self._nodal(chi * q * self.dx, None, "nodal_volume")
+        self.lame = self._nodal(chi * lmbda * q * self.dx, self.volume, "nodal_lambda")
+        self._mean_form = fem.form(chi * J * q * self.dx)
+        self.mean = fem.Function(self.Q, name="nodal_volume_ratio")
+        self.pressure = fem.Function(self.Q, name="nodal_pressure")
+        self.modulus = fem.Function(self.Q, name="nodal_bulk_modulus")
+        mean = ufl.variable(self.mean)
+        energy = volumetric_energy(material, mean, self.lame)
+        points = self.Q.element.interpolation_points()
+        self._derivatives = (fem.Expression(ufl.diff(energy, mean), points),
+                             fem.Expression(ufl.diff(ufl.diff(energy, mean), mean), points))
+        self.coupling_form = fem.form(chi * q * self.dJ(ufl.TrialFunction(u.function_space)) * self.dx)
+
+    def _nodal(self, integral: ufl.Form, volume: fem.Function | None, name: str) -> fem.Function:
+        """The P1 function of the assembled ``integral`` (divided by ``volume`` where it is > 0)."""
+        out = fem.Function(self.Q, name=name)
+        self._assemble(fem.form(integral), out, volume)
+        return out
+
+    def _assemble(self, form: fem.Form, out: fem.Function, volume: fem.Function | None) -> None:
+        """``out`` = the vector of ``form`` (summed over the ranks), divided by V_a of ``volume`` if
+        given (0 where V_a = 0); ghosts updated."""
+        vec = out.x.petsc_vec
+        with vec.localForm() as local:
+            local.set(0.0)
+        dolfinx.fem.petsc.assemble_vector(vec, form)
+        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        if volume is not None:
+            v = volume.x.petsc_vec.array_r
+            vec.array[:] = np.divide(vec.array_r, v, out=np.zeros_like(v), where=v > 0)
+        out.x.scatter_forward()
+
+    def update(self) -> None:
+        """Jbar, p = U'(Jbar) and U''(Jbar) at the nodes for the current ``u`` (collective)."""
+        self._assemble(self._mean_form, self.mean, self.volume)
+        empty = self.volume.x.array <= 0
+        self.mean.x.array[empty] = 1.0
+        self.pressure.interpolate(self._derivatives[0])
+        self.modulus.interpolate(self._derivatives[1])
+
+    def term(self, v: ufl.core.expr.Expr) -> ufl.Form:
+        """(2): int chi p_h dJ[v] dX, UFL (p_h of the last :meth:`update`)."""
+        return self.chi * self.pressure * self.dJ(v) * self.dx
+
+
+@dataclasses.dataclass
+class VolumetricTangent(PETScOwner):
+    """The second term B^T D B of (3) as PETSc matrices, for the Jacobian and the linear stiffness.
+
+    Attributes:
+        nodal: the nodal fields (:class:`NodalPressure`).
+        bcs: the Dirichlet conditions: B's columns at prescribed dofs are zero, so B^T D B has
+            zero rows and columns there (the identity rows of the stiffness stay).
+        B: the coupling of (3) (P1 scalar rows, displacement columns).
+        D: diag(U''(Jbar_a) / V_a).
+        product: B^T D B of the last :meth:`add_to` (its symbolic part kept), or None.
+    """
+
+    nodal: NodalPressure
+    bcs: list[fem.DirichletBC]
+    B: PETSc.Mat
+    D: PETSc.Mat
+    product: PETSc.Mat | None = None
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [self.product, self.D, self.B]
+
+    @classmethod
+    def create(cls, nodal: NodalPressure, bcs: list[fem.DirichletBC]) -> VolumetricTangent:
+        """B of ``nodal``'s coupling form and an empty diagonal D (assembled at :meth:`add_to`)."""
+        B = dolfinx.fem.petsc.create_matrix(nodal.coupling_form)
+        index_map = nodal.Q.dofmap.index_map
+        sizes = (index_map.size_local, index_map.size_global)
+        D = PETSc.Mat().createAIJ(size=(sizes, sizes), nnz=(1, 0), comm=B.getComm())
+        D.setUp()
+        return cls(nodal, list(bcs), B, D)
+
+    def assemble(self) -> PETSc.Mat:
+        """B^T D B at the nodal fields' current state (call ``nodal.update()`` first), kept in
+        :attr:`product` and returned."""
+        B = self.B
+        B.zeroEntries()
+        dolfinx.fem.petsc.assemble_matrix(B, self.nodal.coupling_form, bcs=self.bcs)
+        B.assemble()
+        nodal = self.nodal
+        diagonal = nodal.modulus.x.petsc_vec.copy()
+        volume = nodal.volume.x.petsc_vec.array_r
+        diagonal.array[:] = np.divide(diagonal.array_r, volume, out=np.zeros_like(volume), where=volume > 0)
+        self.D.setDiagonal(diagonal)
+        self.D.assemble()
+        diagonal.destroy()
+        if self.product is None:
+            self.product = self.D.PtAP(B)
+        else:
+            self.D.PtAP(B, result=self.product)
+        return self.product
+
+    def add_to(self, K: PETSc.Mat, structure: PETSc.Mat.Structure = PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN,
+               ) -> None:
+        """K += B^T D B (the second term of (3)); ``structure`` DIFFERENT the first time K gets it."""
+        K.axpy(1.0, self.assemble(), structure)
+
+    def lift(self, b: PETSc.Vec, bcs: list[fem.DirichletBC]) -> None:
+        """b -= (B^T D B) g at the free rows for the prescribed values g of ``bcs``: the lifting
+        of (3)'s second term (:meth:`assemble` done; dolfinx's ``apply_lifting`` lifts the
+        cell-wise part)."""
+        g = dolfinx.la.create_petsc_vector(self.nodal.u.function_space.dofmap.index_map, 3)
+        g.set(0.0)
+        dolfinx.fem.petsc.set_bc(g, bcs)
+        full = dolfinx.fem.petsc.assemble_matrix(self.nodal.coupling_form)
+        full.assemble()
+        pressure, lifted = full.createVecLeft(), g.duplicate()
+        full.mult(g, pressure)
+        scaled = pressure.duplicate()
+        self.D.mult(pressure, scaled)
+        self.B.multTranspose(scaled, lifted)
+        b.axpy(-1.0, lifted)
+        for obj in (g, full, pressure, scaled, lifted):
+            obj.destroy()
+
+
+def small_strain_stiffness(V: fem.FunctionSpace, lmbda: typing.Any, chi: fem.Function | None,
+                           bcs: list[fem.DirichletBC]) -> VolumetricTangent | contextlib.nullcontext:
+    """The small-strain lambda B^T M_L^-1 B of the cells ``chi`` marks ((3) at u = 0; call
+    :meth:`VolumetricTangent.add_to` and :meth:`~VolumetricTangent.lift`), as a ``with``
+    context that frees it; without ``chi`` a context giving None."""
+    if chi is None:
+        return contextlib.nullcontext()
+    averaged = NodalPressure(fem.Function(V), chi, lmbda, None)
+    averaged.update()
+    return VolumetricTangent.create(averaged, bcs)
+
+
+def recommend(poisson: float | fem.Function, chi: fem.Function | None, comm: MPI.Comm) -> float:
+    """Warn (:func:`contactqvi.records.warn`, key ``volumetric_locking``: logged once and kept for
+    ``summary.json``) when a cell on plain P1 (chi = 0) has nu > :data:`LOCKING_POISSON`: linear
+    tetrahedra lock there (docs/nearly_incompressible.md). Returns that largest nu (collective)."""
+    if isinstance(poisson, fem.Function):
+        n_cells = poisson.function_space.mesh.topology.index_map(3).size_local
+        plain = np.ones(n_cells, dtype=bool) if chi is None else chi.x.array[:n_cells] < 0.5
+        largest = comm.allreduce(float(poisson.x.array[:n_cells][plain].max(initial=-1.0)), op=MPI.MAX)
+    else:
+        largest = float(poisson) if chi is None else -1.0
+    if largest > LOCKING_POISSON:
+        warn(comm, logger, "volumetric_locking", f"Poisson's ratio {largest:.4g} on linear elements with the "
+             "displacement formulation: they lock volumetrically (too stiff, a shrunken contact area, speckled "
+             "pressures); give the material formulation = \"nodal_pressure\"", poisson=largest)
+    return largest

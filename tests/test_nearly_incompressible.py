@@ -1,0 +1,195 @@
+"""The nodally averaged volume change for nearly incompressible bodies (issue 43, item 3;
+:mod:`contactqvi.nodal_pressure`, docs/nearly_incompressible.md).
+
+* Free uniaxial compression on tetrahedra (the closed form of docs/finite_strain.md, Sect. 6):
+  a homogeneous state has Jbar_a = J at every node, so the averaged formulation must give it
+  exactly, neo-Hookean (nu = 0.45, 0.499) and linear (lambda B^T M_L^-1 B with its lifting).
+* The tangent (3) against central differences of the residual (2) on a distorted mesh.
+* A body whose state is not homogeneous (a wavy foundation): the contact force on 1 and 2
+  ranks is the recorded one.
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+import scipy.optimize
+
+from dolfinx import fem
+
+from contactqvi.case import parse_case
+from contactqvi.contact import LoadStep, build_contact_problem, solve_load_path
+from contactqvi.contact.hyperelastic import create_hyperelastic_system
+from contactqvi.elasticity import elasticity_forms, lame_parameters
+from contactqvi.laws import Frictionless
+from contactqvi.materials import NeoHookean
+from contactqvi.meshes import create_contact_body
+from contactqvi.nodal_pressure import formulation_indicator
+from contactqvi.parameters import ParameterError
+from contactqvi.records import Recorder
+from contactqvi.runner import build_problem
+
+DATA = pathlib.Path(__file__).parent / "data"
+YOUNG = 10e6  # Pa
+#: The wavy foundation's contact force (N), nodal pressure, measured on 1 rank (2 ranks: 1e-14 apart).
+NODAL_FORCE = 52107.3715212761
+
+
+def _block(gap=lambda x, y: np.zeros_like(x)):
+    return create_contact_body(MPI.COMM_WORLD, 1, gap, length=1.0, width=1.0, height=1.0, cell_type="tetrahedron")
+
+
+def _compressed(poisson: float, material, compression: float, steps: int) -> list[dict]:
+    """The block on a frictionless plane, rollers on x = 0 and y = 0, its top moved down by
+    ``compression`` (m, of the height 1 m) in ``steps`` steps: per step u, the nodes and the
+    contact pressures."""
+    msh, tags = _block()
+    problem = build_contact_problem(msh, tags, YOUNG, poisson, {}, Frictionless(), clamped=(), contact="contact",
+                                    displacements={"dirichlet": {0: 0.0}, "front": {1: 0.0},
+                                                   "top": {2: -compression}}, material=material,
+                                    formulation="nodal_pressure")
+    rows = []
+
+    def record(index, step, u, result, state):
+        x = problem.V.tabulate_dof_coordinates()[: problem.V.dofmap.index_map.size_local]
+        rows.append({"load": step.load, "x": x, "u": state.displacement.x.array.reshape(-1, 3)[: len(x)].copy(),
+                     "pressure": result.normal_force / problem.contact_area, "result": result})
+
+    _solve(problem, [(k + 1) / steps for k in range(steps)], record)
+    return rows
+
+
+def _solve(problem, loads: list[float], on_step=None) -> list:
+    """The path of ``loads`` (load factors) from rest with exact Newton steps; its results. Frees the problem."""
+    with problem:
+        u = problem.A.createVecRight()
+        results = solve_load_path(problem, [LoadStep(load) for load in loads], u, {"pc": "lu"}, on_step=on_step,
+                                  from_rest=True)
+        u.destroy()
+    return results
+
+
+def _largest(values: np.ndarray) -> float:
+    return MPI.COMM_WORLD.allreduce(float(np.abs(values).max(initial=0.0)), op=MPI.MAX)
+
+
+@pytest.mark.parametrize("poisson, compression, steps", [pytest.param(0.45, 0.3, 5, id="0.45"), pytest.param(
+    0.499, 0.1, 2, id="0.499", marks=pytest.mark.parallel_twin("0.45", reason="another material constant"))])
+def test_uniaxial_compression_is_exact_with_nodal_pressure(poisson, compression, steps):
+    """Neo-Hookean, 30 % in five steps (nu = 0.499: 10 % in two; from rest the first Newton iterates
+    are damped hard there, with either formulation): u to 1e-8 of the top's motion, the pressure
+    -P33 to 1e-8."""
+    mu, lmbda = lame_parameters(YOUNG, poisson)
+    for row in _compressed(poisson, NeoHookean(), compression, steps):
+        assert row["result"].converged, row["result"].status
+        s = 1.0 - compression * row["load"]
+        a = scipy.optimize.brentq(lambda a: mu * (a * a - 1.0) + lmbda * np.log(a * a * s), 0.5, 2.0, xtol=1e-15)
+        P33 = mu * (s - 1.0 / s) + lmbda * np.log(a * a * s) / s
+        assert _largest(row["u"] - row["x"] * np.array([a - 1.0, a - 1.0, s - 1.0])) <= 1e-8 * (1.0 - s)
+        assert _largest(row["pressure"] + P33) <= 1e-8 * abs(P33), row["load"]
+
+
+def test_linear_uniaxial_compression_is_hookes_law():
+    """Linear elasticity, nu = 0.499: eps11 = eps22 = -nu eps33, the contact pressure E eps33 (the
+    lifted top displacement goes through lambda B^T M_L^-1 B: a wrong lifting breaks both)."""
+    poisson, strain = 0.499, 1e-3
+    (row,) = _compressed(poisson, None, strain, 1)
+    assert row["result"].converged
+    exact = row["x"] * np.array([poisson * strain, poisson * strain, -strain])
+    assert _largest(row["u"] - exact) <= 1e-10 * strain
+    assert _largest(row["pressure"] - YOUNG * strain) <= 1e-8 * YOUNG * strain
+
+
+def test_tangent_is_the_derivative_of_the_residual():
+    """(3) against central differences of (2) at a large, non-homogeneous displacement of a
+    distorted mesh: the difference falls as eps^2 (1e-7 at eps = 1e-5)."""
+    msh, tags = _block(lambda x, y: 0.1 * x * y)
+    x = msh.geometry.x
+    x[:] += 0.05 * np.sin(7.0 * x[:, [1, 2, 0]])
+    V = fem.functionspace(msh, ("Lagrange", 1, (3,)))
+    _, load = elasticity_forms(V, YOUNG, 0.45, tags, {})
+    with create_hyperelastic_system(V, NeoHookean(), YOUNG, 0.45, load, [], np.empty(0, np.int32), None,
+                                    nodal=formulation_indicator(msh, "nodal_pressure")) as system:
+        u = system.displacement
+        X = V.tabulate_dof_coordinates()
+        u.x.array[:] = (0.1 * np.sin(3.0 * X[:, [1, 2, 0]]) + 0.05 * np.cos(2.0 * X)).ravel()
+        u.x.scatter_forward()
+        K = system.assemble_tangent(system.global_stiffness())
+        direction, at = u.x.petsc_vec.copy(), u.x.petsc_vec.copy()
+        direction.array[:] = np.cos(5.0 * np.arange(direction.getOwnershipRange()[0], direction.getOwnershipRange()[1]))
+        product, difference = direction.duplicate(), direction.duplicate()
+        K.mult(direction, product)
+        eps = 1e-5
+        for sign in (1.0, -1.0):
+            u.x.petsc_vec.waxpy(sign * eps, direction, at)
+            u.x.scatter_forward()
+            difference.axpy(sign / (2.0 * eps), system.assemble_residual(0.0))
+        difference.axpy(-1.0, product)
+        assert difference.norm() <= 1e-7 * product.norm()
+        for vec in (direction, at, product, difference):
+            vec.destroy()
+
+
+def test_wavy_foundation_force_on_any_number_of_ranks():
+    """Linear, nu = 0.499, the block pressed 1 cm onto a wavy rigid foundation (not homogeneous):
+    the contact force is the serial one to 1e-9, and the plain P1 one is larger (locking)."""
+    forces = {}
+    for formulation in ("nodal_pressure", "displacement"):
+        msh, tags = _block(lambda x, y: 0.02 * (1.0 - np.cos(np.pi * x)) * (1.0 - np.cos(np.pi * y)))
+        problem = build_contact_problem(msh, tags, YOUNG, 0.499, {}, Frictionless(), clamped=(),
+                                        contact="contact", displacements={"dirichlet": {0: 0.0}, "front": {1: 0.0},
+                                                                          "top": {2: -0.01}},
+                                        formulation=formulation)
+        normal_force = _solve(problem, [1.0])[-1].normal_force
+        forces[formulation] = MPI.COMM_WORLD.allreduce(float(normal_force.sum()), op=MPI.SUM)
+    assert forces["nodal_pressure"] == pytest.approx(NODAL_FORCE, rel=1e-9)
+    assert forces["displacement"] > 1.05 * forces["nodal_pressure"]
+
+
+def test_plain_p1_above_049_is_warned():
+    """nu > 0.49 on plain P1 is a recorded warning; nu = 0.45 and the averaged cells are not."""
+    msh, _ = _block()
+    with Recorder() as recorder:
+        assert formulation_indicator(msh, "displacement", poisson=0.499) is None
+        formulation_indicator(msh, "displacement", poisson=0.45)
+        formulation_indicator(msh, "nodal_pressure", poisson=0.499)
+    assert [r["key"] for r in recorder.records] == ["volumetric_locking"]
+    assert recorder.records[0]["numbers"] == {"poisson": 0.499}
+
+
+@pytest.mark.one_rank(reason="a material's method, no mesh")
+def test_saint_venant_kirchhoff_has_no_volumetric_part():
+    from contactqvi.materials import SaintVenantKirchhoff
+
+    with pytest.raises(ParameterError, match="material.formulation"):
+        SaintVenantKirchhoff().volumetric_energy(1.0, 1.0)
+
+
+def _seal_case(formulation: str) -> dict:
+    """The new user's seal strip (tests/data/seal_half_h1.0.msh) as case-file data, one step."""
+    return {"mesh": {"file": str(DATA / "seal_half_h1.0.msh")},
+            "material": {"young": 5e6, "poisson": 0.499, "model": "neo_hookean", "formulation": formulation},
+            "boundary": {"displacement": {"symmetry_x": {"x": 0.0}, "symmetry_y": {"y": 0.0}, "back": {"y": 0.0},
+                                          "bottom": {"z": 0.0}}},
+            "contact": {"surface": "contact", "law": "coulomb", "friction": 0.4},
+            "obstacle": {"type": "plane", "point": [0.0, 0.0, 0.005], "normal": [0.0, 0.0, -1.0]},
+            "steps": [{"translation": [0.0, 0.0, -7.5e-5]}]}
+
+
+def test_a_case_file_selects_the_formulation():
+    """``[material] formulation``: the averaged body's A holds the wider stencil of B^T D B, the
+    plain one is warned about at nu = 0.499; an unknown name is a named error."""
+    nonzeros = {}
+    for formulation in ("nodal_pressure", "displacement"):
+        with Recorder() as recorder, build_problem(parse_case(_seal_case(formulation)), MPI.COMM_WORLD) as problem:
+            nonzeros[formulation] = problem.A.getInfo()["nz_used"]
+            assert (problem.body.nodal is None) == (formulation == "displacement")
+            assert [r["key"] for r in recorder.records] == ([] if problem.body.nodal else ["volumetric_locking"])
+    assert MPI.COMM_WORLD.allreduce(nonzeros["nodal_pressure"]) > 1.5 * MPI.COMM_WORLD.allreduce(
+        nonzeros["displacement"])
+    with pytest.raises(ParameterError, match="material.formulation"):
+        parse_case(_seal_case("mixed"))
