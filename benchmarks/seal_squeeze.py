@@ -7,11 +7,14 @@ deep) is squeezed 30 % by a rigid plate with Coulomb friction in 20 steps
 this process with default solver settings, ``max_cuts`` raised to ``--max-cuts`` where asked
 (a step that fails is halved up to that many times in a row, so the last converged part of a
 failed step brackets the end of the path to 0.075 mm / 2^max_cuts); the table gives the squeeze
-reached (of the strip's height, the converged parts of a failed step included), the run's status and failure, the Newton steps per converged load
-step and the time. A failed run is a row. docs/finite_strain.md, Sect. 11, reads the table.
+reached (of the strip's height, the converged parts of a failed step included), the run's status
+and failure, the Newton steps per converged load step and the time. A failed run is a row.
+docs/finite_strain.md, Sect. 11, reads the tables.
 
     .venv/bin/python benchmarks/seal_squeeze.py --poisson 0.3 0.4 0.45 0.49 --friction 0.2 0.3 0.4 0.5
     .venv/bin/python benchmarks/seal_squeeze.py --poisson 0.45 --friction 0.4 --max-cuts 14 --table seal_path_end
+    .venv/bin/python benchmarks/seal_squeeze.py --meshes h0.5 --poisson 0.45 0.49 --friction 0.3 0.4 \
+        --table seal_squeeze_h05
     .venv/bin/python benchmarks/seal_squeeze.py --poisson 0.45 0.49 --formulation nodal_pressure \
         --table seal_squeeze_nodal_pressure
 """
@@ -86,7 +89,8 @@ def main() -> int:
     parser.add_argument("--max-cuts", type=int, default=None, help="[solver] max_cuts (default: the solver's)")
     parser.add_argument("--formulation", default="displacement", help="[material] formulation of the strip")
     parser.add_argument("--work", default="/tmp/seal_squeeze", help="where the runs write their results")
-    parser.add_argument("--table", default="seal_squeeze", help="name of the table in benchmarks/results")
+    parser.add_argument("--table", default="seal_squeeze",
+                        help="name of the table in benchmarks/results (no dot: .json and .md are appended)")
     args = parser.parse_args()
     work = pathlib.Path(args.work)
     rows = [run(nu, mu, mesh, args.max_cuts, work, args.formulation)
