@@ -3,8 +3,9 @@
 ``python -m contactqvi run CASE.toml`` comes here when the case has a ``[dynamics]`` table.
 Each converged time step is
 
-* one time (s) of ``OUTPUT/body.bp``: ``displacement``, ``velocity`` and ``acceleration``
-  (the step's mean, Delta v / tau), global components;
+* one time (s) of ``OUTPUT/body.bp`` (:data:`BODY_FIELDS`): displacement, velocity and
+  acceleration (the step's mean, Delta v / tau), global components; a restart continues the
+  file after its checkpoint's step (:class:`~contactqvi.paraview.VTXDatasetWriter`);
 * one entry of ``OUTPUT/summary.json``: time, Newton and Krylov counts of the projection and
   of the step, the energy terms of :data:`~contactqvi.contact.dynamics.ENERGY_TERMS`, each
   body's mass-weighted mean velocity, displacement and acceleration, the step's mean contact
@@ -29,16 +30,18 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 import adios4dolfinx
-from dolfinx import fem, io
+from dolfinx import fem
 
 from contactqvi import tables
 from contactqvi.case import ContactCase, check_solver
+from contactqvi.contact.figures import draw_on_rank_0
 from contactqvi.contact.dynamics import ENERGY_TERMS, BodyMotion, DynamicState, StabilisedNewmark
 from contactqvi.contact.load_path import contact_resultants
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult
 from contactqvi.elasticity import cellwise
 from contactqvi.linalg import default_options
+from contactqvi.paraview import MeshPiece, VTXDatasetWriter
 from contactqvi.parameters import ParameterError
 from contactqvi.result import Status
 from contactqvi.runner import EXIT_CODES, PREFIX, build_problem
@@ -47,6 +50,8 @@ __all__ = ["read_dynamic_checkpoint", "run_dynamics"]
 
 logger = logging.getLogger(__name__)
 
+#: The fields of ``body.bp`` (global components), as ParaView lists them.
+BODY_FIELDS = ("displacement [m]", "velocity [m/s]", "acceleration [m/s^2]")
 _CHECKPOINT = "checkpoint"
 _MARKER = "dynamics.json"
 
@@ -92,10 +97,10 @@ def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: B
                summary: dict[str, typing.Any], out: pathlib.Path, count: int) -> int:
     """The time steps after ``state.done`` up to ``count``: solve, record, write; the exit code."""
     u = problem.A.createVecRight()
-    displacement = fem.Function(problem.V, name="displacement")
-    velocity = fem.Function(problem.V, name="velocity")
-    acceleration = fem.Function(problem.V, name="acceleration")
-    writer = _BodyWriter(out, [displacement, velocity, acceleration])
+    fields = {name: fem.Function(problem.V) for name in BODY_FIELDS}
+    displacement, velocity, acceleration = fields.values()
+    piece = MeshPiece(problem.V.mesh)
+    writer = VTXDatasetWriter(problem.comm, out / "body.bp", keep=state.done)
     try:
         while state.done < count:
             projection, result = integrator.step(state, u)
@@ -109,7 +114,7 @@ def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: B
             problem.physical_displacement(u, displacement)
             _global(problem, state.velocity, velocity)
             _global(problem, state.acceleration, acceleration)
-            writer.write(state.time)
+            writer.write(piece.dataset(fields), state.time)
             tables.write_summary(problem.comm, out / "summary.json", summary)
             write_dynamic_checkpoint(problem, out, state, summary)
     finally:
@@ -163,23 +168,6 @@ def _global(problem: ContactProblem, velocity: PETSc.Vec, out: fem.Function) -> 
     else:
         problem.to_global.mult(velocity, out.x.petsc_vec)
     out.x.scatter_forward()
-
-
-class _BodyWriter:
-    """``body.bp``: the ``fields`` (displacement, velocity, acceleration) at every converged time
-    (VTX, BP4), renamed into place when closed (a restart writes the steps after its checkpoint only)."""
-
-    def __init__(self, out: pathlib.Path, fields: list[fem.Function]):
-        comm = fields[0].function_space.mesh.comm
-        self._atomic = tables.atomic_path(comm, out / "body.bp")
-        self._writer = io.VTXWriter(comm, str(self._atomic.__enter__()), fields, engine="BP4")
-
-    def write(self, t: float) -> None:
-        self._writer.write(t)
-
-    def close(self) -> None:
-        self._writer.close()
-        self._atomic.__exit__(None, None, None)
 
 
 def write_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, state: DynamicState,
@@ -240,16 +228,8 @@ def read_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, case: Co
 
 def plot_energy(path: pathlib.Path, steps: list[dict[str, typing.Any]], comm: MPI.Comm) -> bool:
     """``energy.png``: kinetic, elastic, their sum, the loads' work, the friction dissipation, the
-    contact's work and the balance error over time, drawn on rank 0 (Agg). Returns whether it was written."""
-    ok = False
-    if comm.rank == 0:
-        try:
-            with tables.atomic_path(MPI.COMM_SELF, path) as tmp:
-                _draw_energy(tmp, steps)
-            ok = True
-        except Exception as exc:  # a figure must never end a run
-            logger.warning("%s is skipped: %s", path, exc)
-    return bool(comm.bcast(ok, root=0))
+    contact's work and the balance error over time, drawn on rank 0. Returns whether it was written."""
+    return draw_on_rank_0(comm, path, lambda tmp: _draw_energy(tmp, steps))
 
 
 def _draw_energy(path: pathlib.Path, steps: list[dict[str, typing.Any]]) -> None:

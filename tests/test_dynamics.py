@@ -16,6 +16,7 @@ import pathlib
 
 from mpi4py import MPI
 
+
 import pytest
 
 from contactqvi.case import (Body, Boundary, Contact, ContactCase, ContactPair, Displacement, Dynamics, Material,
@@ -26,6 +27,7 @@ from contactqvi.laws import Coulomb, Frictionless
 from contactqvi.parameters import ParameterError
 from contactqvi.runner import build_problem
 
+from output_files import read_vtx
 from petsc_audit import assert_frees_petsc_objects
 
 DATA = pathlib.Path(__file__).parent / "data"
@@ -85,7 +87,8 @@ def test_bars_meet_head_on(variant, mpi_tmp_path):
 
 def test_restart_mid_impact(mpi_tmp_path):
     """Stopped after step 10 of 20 (dt = (2L/c)/40: in the middle of the contact) and restarted:
-    the uninterrupted run's numbers."""
+    the uninterrupted run's numbers, and its ``body.bp`` continued (the first step and the last
+    equal to the uninterrupted file's)."""
     case = bars(DURATION / 40, DURATION / 2)
     whole, _ = run_dynamics(case, mpi_tmp_path / "whole", plot=False)
     _, code = run_dynamics(case, mpi_tmp_path / "cut", plot=False, stop_after=10)
@@ -98,6 +101,11 @@ def test_restart_mid_impact(mpi_tmp_path):
         for term in ("kinetic", "elastic", "contact_work"):
             assert b["energy"][term] == pytest.approx(a["energy"][term], rel=1e-12, abs=1e-12)
         assert b["body_velocity"] == a["body_velocity"]
+    if MPI.COMM_WORLD.rank == 0:
+        for step in (0, -1):
+            a, b = (read_vtx(path / "body.bp", step) for path in (mpi_tmp_path / "whole", mpi_tmp_path / "cut"))
+            for name in ("displacement [m]", "velocity [m/s]"):
+                assert b.point_data[name] == pytest.approx(a.point_data[name], rel=1e-12, abs=1e-15)
 
 
 @pytest.mark.ranks(2)

@@ -51,7 +51,8 @@ from contactqvi.contact.surface_views import number
 from contactqvi.paraview import Dataset, gather_pieces
 from contactqvi.tables import GATHER_MAX_NODES, atomic_path
 
-__all__ = ["describe_bodies", "describe_contact_states", "plot_contact_states", "plot_deformed_bodies", "plot_forces"]
+__all__ = ["describe_bodies", "describe_contact_states", "draw_on_rank_0", "plot_contact_states", "plot_deformed_bodies",
+           "plot_forces"]
 
 logger = logging.getLogger(__name__)
 
@@ -101,7 +102,7 @@ def plot_contact_states(path: str | os.PathLike, surface: ContactSurface, shown:
     build = _states_builder(surface, shown)
     if build is None:
         return False
-    return _draw_on_rank_0(surface.mesh.comm, path, lambda tmp: _render_states(tmp, build()))
+    return draw_on_rank_0(surface.mesh.comm, path, lambda tmp: _render_states(tmp, build()))
 
 
 def _touching_reference_gap(surface: ContactSurface) -> float:
@@ -161,18 +162,19 @@ def plot_deformed_bodies(path: str | os.PathLike, displacement: fem.Function, vo
     build = _bodies_builder(displacement, von_mises, surface, shown)
     if build is None:
         return False
-    return _draw_on_rank_0(displacement.function_space.mesh.comm, path, lambda tmp: _render_bodies(tmp, build()))
+    return draw_on_rank_0(displacement.function_space.mesh.comm, path, lambda tmp: _render_bodies(tmp, build()))
 
 
 def plot_forces(path: str | os.PathLike, steps: typing.Sequence[dict[str, typing.Any]], comm: MPI.Comm) -> bool:
     """PNG of the pairs' contact forces and the supports' reactions along the load path (the
     summary's ``steps``; :func:`~contactqvi.contact.force_history.plot_force_history`). Returns
     whether it was written. Collective."""
-    return _draw_on_rank_0(comm, path, lambda tmp: plot_force_history(tmp, steps))
+    return draw_on_rank_0(comm, path, lambda tmp: plot_force_history(tmp, steps))
 
 
-def _draw_on_rank_0(comm: MPI.Comm, path: str | os.PathLike, draw: typing.Callable[[pathlib.Path], None]) -> bool:
-    """Call ``draw`` with a temporary file on rank 0, moved to ``path`` when it succeeded."""
+def draw_on_rank_0(comm: MPI.Comm, path: str | os.PathLike, draw: typing.Callable[[pathlib.Path], None]) -> bool:
+    """Call ``draw`` with a temporary file on rank 0, moved to ``path`` when it succeeded; whether it
+    did, on every rank (a figure never ends a run)."""
     ok = False
     if comm.rank == 0:
         try:
