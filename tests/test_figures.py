@@ -283,7 +283,7 @@ def test_hertz_bodies_pictures(described):
     bodies, states = described("hertz_bodies")
     if MPI.COMM_WORLD.rank != 0:
         return
-    assert bodies.scale == 1.0 and bodies.scale_text.startswith("true scale (magnified, touching bodies")
+    assert bodies.scale == 1.0 and bodies.scale_text.startswith("true scale (bodies touch: magnified they would")
     assert bodies.title == "Deformed bodies, step 1 of 1: load factor 0.25"
     assert bodies.pressure.title.startswith("nominal contact pressure [")
     assert bodies.pressure.high <= bodies.pressure.largest

@@ -220,7 +220,7 @@ def displacement_scale(size: float, largest: float, reference_gap: float, finite
     touching = 1.0 if rotated else 1.0 + TOUCH_TOLERANCE * (zone or size) / max(reference_gap, 1e-300)
     scale = _nice_floor(min(wanted, touching))
     if scale < MIN_MAGNIFICATION:
-        return 1.0, "true scale (magnified, touching bodies would part or overlap)"
+        return 1.0, "true scale (bodies touch: magnified they would part or overlap)"
     return scale, f"displacement magnified x{scale:.0f} (touching bodies stay touching)"
 
 
