@@ -35,7 +35,8 @@ from contactqvi.contact.facets import (
     reference_coordinates,
 )
 from contactqvi.contact.interface import BodyPair
-from contactqvi.contact.mortar import mortar_coupling, segment_integrals
+from contactqvi.contact.mortar import mortar_coupling
+from contactqvi.contact.segments import segment_integrals
 from contactqvi.contact.problem import assemble_contact_problem
 from contactqvi.contact.scd_newton import SCDNewtonSolver
 from contactqvi.elasticity import body_materials

@@ -180,7 +180,7 @@ def test_clipping_a_polygon_that_round_off_made_degenerate():
     nearly coincident vertices on either side of a clipping edge is cut more than twice and
     grows beyond its slots (it raised an IndexError in the search of a rotated pair); the
     intersection keeps its area."""
-    from contactqvi.contact.mortar import clip_polygons
+    from contactqvi.contact.segments import clip_polygons
 
     polygon = np.zeros((1, 6, 2))
     polygon[0, :5] = [(0.0, 1.0), (1.0, -1e-17), (1.0 + 1e-9, 1e-17), (1.0 + 2e-9, -1e-17), (2.0, 1.0)]

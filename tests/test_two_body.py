@@ -23,7 +23,8 @@ from dolfinx import fem
 
 from contactqvi.case import load_case
 from contactqvi.contact.interface import BodyPair
-from contactqvi.contact.mortar import clip_polygons, mortar_coupling, segment_integrals
+from contactqvi.contact.mortar import mortar_coupling
+from contactqvi.contact.segments import clip_polygons, segment_integrals
 from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import assemble_contact_problem
 from contactqvi.contact.scd_newton import SCDNewtonSolver

@@ -26,14 +26,36 @@ import numpy as np
 
 from contactqvi.parameters import ParameterError
 
-__all__ = ["POLYGON_ORDER", "area_elements", "dual_coefficients", "nodal_integrals", "planar_jacobians",
-           "quadrilateral_shapes", "reference_coordinates", "triangle_rule"]
+__all__ = ["POLYGON_ORDER", "area_elements", "dual_coefficients", "facet_areas", "length", "magnitude", "nodal_integrals",
+           "planar_jacobians", "quadrilateral_shapes", "reference_coordinates", "triangle_rule", "unit_normals"]
 
 #: The vertices of a facet with n vertices in the order round its polygon.
 POLYGON_ORDER = {3: [0, 1, 2], 4: [0, 1, 3, 2]}
 #: Newton iterations of :func:`reference_coordinates` stop at this change of xi (reference units).
 NEWTON_TOL = 1e-14
 NEWTON_MAX_IT = 25
+
+
+def length(v: np.ndarray, axis: int = -1) -> np.ndarray:
+    """Euclidean length along ``axis``, sqrt(sum v_k^2): for real v the arithmetic of
+    ``np.linalg.norm``; for complex v (a complex step, :mod:`contactqvi.contact.linearisation`)
+    the analytic continuation, not the modulus."""
+    return np.sqrt(np.sum(v * v, axis=axis))
+
+
+def magnitude(a: np.ndarray) -> np.ndarray:
+    """|a| taken by the sign of the real part: ``np.abs`` for real a, analytic for a complex step."""
+    return np.where(a.real < 0.0, -a, a)
+
+
+def unit_normals(x: np.ndarray) -> np.ndarray:
+    """(P, 3) unit normals of facets (P, n, 3), not oriented: a triangle's (v1 - v0) x (v2 - v0),
+    a quadrilateral's mean plane, the cross product of its diagonals v0 v3 and v1 v2."""
+    if x.shape[1] == 3:
+        normal = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+    else:
+        normal = np.cross(x[:, 3] - x[:, 0], x[:, 2] - x[:, 1])
+    return normal / length(normal)[:, None]
 
 
 def triangle_rule(degree: int) -> tuple[np.ndarray, np.ndarray]:
@@ -60,13 +82,13 @@ def _tangents(x: np.ndarray, xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def area_elements(x: np.ndarray, xi: np.ndarray) -> np.ndarray:
     """(P, Q) area element |x_xi x x_eta| of quadrilaterals (P, 4, 3) at points xi (P, Q, 2)."""
     x_s, x_t = _tangents(x, xi)
-    return np.linalg.norm(np.cross(x_s, x_t), axis=-1)
+    return length(np.cross(x_s, x_t))
 
 
 def planar_jacobians(x2: np.ndarray, xi: np.ndarray) -> np.ndarray:
     """(P, Q) |det| of the bilinear maps of planar quadrilaterals (P, 4, 2) at points xi (P, Q, 2)."""
     x_s, x_t = _tangents(x2, xi)
-    return np.abs(x_s[..., 0] * x_t[..., 1] - x_s[..., 1] * x_t[..., 0])
+    return magnitude(x_s[..., 0] * x_t[..., 1] - x_s[..., 1] * x_t[..., 0])
 
 
 def reference_coordinates(x2: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -81,7 +103,12 @@ def reference_coordinates(x2: np.ndarray, points: np.ndarray) -> np.ndarray:
     """
     a, b, c = x2[:, None, 0], x2[:, None, 1] - x2[:, None, 0], x2[:, None, 2] - x2[:, None, 0]
     d = x2[:, None, 3] - x2[:, None, 2] - x2[:, None, 1] + x2[:, None, 0]
-    xi = np.full(points.shape, 0.5)
+    if np.iscomplexobj(x2) or np.iscomplexobj(points):
+        # a complex step: from the real solution one Newton step gives the derivative (the
+        # imaginary part) exactly, and the next step is below the tolerance
+        xi = reference_coordinates(x2.real, points.real).astype(complex)
+    else:
+        xi = np.full(points.shape, 0.5)
     target = points - a
     for _ in range(NEWTON_MAX_IT):
         s, t = xi[..., 0, None], xi[..., 1, None]
@@ -115,9 +142,17 @@ def _facet_mass(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def nodal_integrals(x: np.ndarray) -> np.ndarray:
     """(P, n) int phi_k of facets (P, n, 3): the lumped area of each vertex (area / 3 on a triangle)."""
     if x.shape[1] == 3:
-        area = 0.5 * np.linalg.norm(np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]), axis=1)
+        area = 0.5 * length(np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]))
         return np.repeat(area[:, None] / 3.0, 3, axis=1)
     return _facet_mass(x)[0]
+
+
+def facet_areas(x: np.ndarray) -> np.ndarray:
+    """(P,) areas of facets (P, n, 3): a triangle's half cross product, a quadrilateral's
+    sum of its lumped areas (its true area)."""
+    if x.shape[1] == 3:
+        return 0.5 * length(np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]))
+    return nodal_integrals(x).sum(axis=1)
 
 
 def dual_coefficients(x: np.ndarray) -> np.ndarray:

@@ -21,23 +21,6 @@ that have a master facet, as int psi_i sum_k phi_k; with full coverage this is
 int phi_i (the lumped area), and sum_j C_ij = 1 always, so rigid translations
 of both bodies never open or close the interface.
 
-Segment-to-segment integration (Puso-Laursen): each slave facet and each master
-facet facing it (triangles or quadrilaterals, in any combination) are projected onto
-the slave facet's plane (a quadrilateral's mean plane, normal to its diagonals'
-cross product), the master polygon is clipped by the slave polygon
-(Sutherland-Hodgman, convex clippers), the clipped polygon is split into a fan of
-triangles and integrated there. The shape functions at a point of the plane are the
-barycentric coordinates of a projected triangle, or the bilinear shape functions at
-the reference coordinates of a projected quadrilateral (the inverse of its bilinear
-map, Newton's method); a slave quadrilateral's integrals take its true area element
-(the ratio of it to the plane's at the point). What is exact on a flat interface:
-psi_i phi_j^m is quadratic on a pair of triangles (rule of degree 2) and a polynomial
-of degree <= 4 on a pair of parallelograms or of a parallelogram and a triangle
-(degree 4), so such interfaces are integrated exactly; on a quadrilateral that is no
-parallelogram the inverse bilinear map is no polynomial, and a rule of degree 20
-(:data:`QUADRILATERAL_DEGREE`) meets the integrals to about 1e-12 on strongly
-distorted facets (a warped facet's area element too).
-
 Parallel search: each rank owns the slave facets of its cells; it receives from
 every rank the master facets that lie within ``search_distance`` of the bounding
 box of its own slave facets (never a whole surface), pairs them by a k-d tree on
@@ -60,34 +43,14 @@ import scipy.spatial
 
 from dolfinx import fem
 
-from contactqvi.contact.facets import (
-    POLYGON_ORDER,
-    area_elements,
-    dual_coefficients,
-    nodal_integrals,
-    planar_jacobians,
-    quadrilateral_shapes,
-    reference_coordinates,
-    triangle_rule,
-)
+from contactqvi.contact.facets import facet_areas, nodal_integrals, unit_normals
+from contactqvi.contact.linearisation import CouplingDerivatives, coupling_derivatives
+from contactqvi.contact.owners import fetch_rows, owner_ranges, sum_to_owners
+from contactqvi.contact.segments import diameters, segment_integrals
 from contactqvi.parameters import require
 
-__all__ = ["MortarCoupling", "clip_polygons", "mortar_coupling", "segment_integrals", "surface_facets"]
+__all__ = ["MortarCoupling", "mortar_coupling", "surface_facets"]
 
-#: Degree-2 rule on a triangle (barycentric points, weights summing to 1): exact for
-#: psi_i phi_j^m on a flat pair of linear triangles.
-_POINTS = np.array([[2 / 3, 1 / 6, 1 / 6], [1 / 6, 2 / 3, 1 / 6], [1 / 6, 1 / 6, 2 / 3]])
-_WEIGHTS = np.full(3, 1.0 / 3.0)
-#: Degree of the rule on the triangles of a clipped polygon for a pair of parallelograms or of a
-#: parallelogram and a triangle: psi_i phi_j^m is a polynomial of degree 4 on a flat pair (exact).
-AFFINE_DEGREE = 4
-#: ... and for a pair with a quadrilateral that is no parallelogram (distorted or warped): the
-#: inverse bilinear map makes psi_i phi_j^m no polynomial, and the rule's error decays with its
-#: degree. A flat interface of quadrilaterals moved by up to 0.3 of their size reproduces linear
-#: fields to 8e-8 (degree 6), 9e-13 (12), 4e-16 (16); triangles cut into three quadrilaterals
-#: (meshes/hex_on_split_tets.geo, as slave) to 3e-7 (12), 6e-9 (16), 5e-11 (20, 79 points),
-#: 3e-14 (30), and the patch test on them as master to 3e-8, 6e-10, 4e-12 (tests/test_hex_mortar.py).
-QUADRILATERAL_DEGREE = 20
 #: Slave nodes whose mortar segments give D_ii below this fraction of their lumped
 #: area are not coupled (they lie at the rim of the master's shadow).
 MIN_COVERAGE = 0.5
@@ -111,9 +74,7 @@ class SurfaceFacets:
 
     @property
     def area(self) -> np.ndarray:
-        if self.x.shape[1] == 3:
-            return 0.5 * np.linalg.norm(np.cross(self.x[:, 1] - self.x[:, 0], self.x[:, 2] - self.x[:, 0]), axis=1)
-        return self.lumped.sum(axis=1)
+        return facet_areas(self.x)
 
     @property
     def lumped(self) -> np.ndarray:
@@ -121,8 +82,8 @@ class SurfaceFacets:
         return nodal_integrals(self.x)
 
 
-#: Facets of a cell of DOLFINx's cell types with mortar contact, and how many vertices each has.
-_CELL_FACETS = {"tetrahedron": (4, 3), "hexahedron": (6, 4)}
+#: Facets per cell of DOLFINx's cell types with mortar contact.
+_CELL_FACETS = {"tetrahedron": 4, "hexahedron": 6}
 
 
 def surface_facets(V: fem.FunctionSpace, facets: np.ndarray, coords: np.ndarray | None = None) -> SurfaceFacets:
@@ -134,7 +95,7 @@ def surface_facets(V: fem.FunctionSpace, facets: np.ndarray, coords: np.ndarray 
     cell_name = msh.topology.cell_name()
     require(cell_name in _CELL_FACETS, "mesh",
             f"mortar contact needs tetrahedral or hexahedral meshes, got {cell_name} cells")
-    per_cell, n = _CELL_FACETS[cell_name]
+    per_cell = _CELL_FACETS[cell_name]
     msh.topology.create_connectivity(tdim - 1, tdim)
     msh.topology.create_connectivity(tdim, tdim - 1)
     facets = np.asarray(facets, dtype=np.int32)
@@ -147,201 +108,10 @@ def surface_facets(V: fem.FunctionSpace, facets: np.ndarray, coords: np.ndarray 
     blk = np.take_along_axis(cell_blk, closure[local], axis=1)
     coords = V.tabulate_dof_coordinates() if coords is None else coords
     x = coords[blk]
-    if n == 3:
-        normal = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
-    else:  # the diagonals v0 v3 and v1 v2
-        normal = np.cross(x[:, 3] - x[:, 0], x[:, 2] - x[:, 1])
-    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    normal = unit_normals(x)
     outward = np.einsum("ij,ij->i", normal, x.mean(axis=1) - coords[cell_blk].mean(axis=1)) > 0.0
     normal[~outward] *= -1.0
     return SurfaceFacets(blk.astype(np.int32), x, normal)
-
-
-def clip_polygons(polygon: np.ndarray, count: np.ndarray, clip: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Sutherland-Hodgman: convex polygons clipped by convex counter-clockwise polygons, vectorised.
-
-    Args:
-        polygon: (P, K, 2) vertices, counter-clockwise, the first ``count`` valid; K must
-            leave room for one more vertex per edge of ``clip``.
-        count: (P,) vertex counts.
-        clip: (P, L, 2) counter-clockwise convex polygons (triangles, quadrilaterals), all
-            of L vertices.
-
-    Returns:
-        ``(polygon, count)``: the intersections, (P, K', 2) and (P,); count < 3 means empty.
-        K' > K only where round-off made a polygon degenerate (nearly coincident vertices on
-        either side of a clipping edge: a half-plane then cuts it more than twice; seen on
-        rotated surfaces, where coordinates carry 1e-17 noise).
-    """
-    P = polygon.shape[0]
-    rows = np.arange(P)
-    L = clip.shape[1]
-    for e in range(L):
-        K = polygon.shape[1]
-        a, b = clip[:, e], clip[:, (e + 1) % L]
-        edge = b - a
-
-        def side(p: np.ndarray) -> np.ndarray:
-            return edge[:, None, 0] * (p[..., 1] - a[:, None, 1]) - edge[:, None, 1] * (p[..., 0] - a[:, None, 0])
-
-        nxt_index = (np.arange(K)[None, :] + 1) % np.maximum(count, 1)[:, None]
-        nxt = polygon[rows[:, None], nxt_index]
-        s_cur, s_nxt = side(polygon), side(nxt)
-        valid = np.arange(K)[None, :] < count[:, None]
-        in_cur, in_nxt = s_cur >= 0.0, s_nxt >= 0.0
-        denom = np.where(s_cur - s_nxt == 0.0, 1.0, s_cur - s_nxt)
-        crossing = polygon + (s_cur / denom)[..., None] * (nxt - polygon)
-        # emitted per input vertex i: [crossing if the edge i -> i+1 crosses] then [nxt if nxt inside]
-        emit_cross = valid & (in_cur != in_nxt)
-        emit_next = valid & in_nxt
-        slots = np.cumsum(np.stack([emit_cross, emit_next], axis=2).reshape(P, 2 * K), axis=1) - 1
-        values = np.stack([crossing, nxt], axis=2).reshape(P, 2 * K, 2)
-        emitted = np.stack([emit_cross, emit_next], axis=2).reshape(P, 2 * K)
-        out = np.zeros((P, max(K, int(emitted.sum(axis=1).max(initial=0))), 2))
-        p_idx, k_idx = np.nonzero(emitted)
-        out[p_idx, slots[p_idx, k_idx]] = values[p_idx, k_idx]
-        polygon, count = out, emitted.sum(axis=1)
-    return polygon, count
-
-
-def _plane_coordinates(origin: np.ndarray, e1: np.ndarray, e2: np.ndarray, x: np.ndarray) -> np.ndarray:
-    d = x - origin[:, None, :]
-    return np.stack([np.einsum("pj,pkj->pk", e1, d), np.einsum("pj,pkj->pk", e2, d)], axis=2)
-
-
-def _barycentric(triangle: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """(P, Q, 3) barycentric coordinates of (P, Q, 2) points in (P, 3, 2) triangles."""
-    t = np.stack([triangle[:, 1] - triangle[:, 0], triangle[:, 2] - triangle[:, 0]], axis=2)  # (P, 2, 2)
-    lam = np.linalg.solve(t[:, None], (points - triangle[:, None, 0])[..., None])[..., 0]
-    return np.concatenate([1.0 - lam.sum(axis=2, keepdims=True), lam], axis=2)
-
-
-def _signed_area(triangle: np.ndarray) -> np.ndarray:
-    d1, d2 = triangle[:, 1] - triangle[:, 0], triangle[:, 2] - triangle[:, 0]
-    return 0.5 * (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
-
-
-def _separated(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(P,) whether the polygons ``b`` (P, K, 2) lie strictly outside an edge of the convex
-    counter-clockwise polygons ``a`` (P, L, 2): one half of a separating axis test."""
-    separated = np.zeros(len(a), dtype=bool)
-    L = a.shape[1]
-    for e in range(L):
-        p, edge = a[:, e], a[:, (e + 1) % L] - a[:, e]
-        side = edge[:, None, 0] * (b[..., 1] - p[:, None, 1]) - edge[:, None, 1] * (b[..., 0] - p[:, None, 0])
-        separated |= (side < 0.0).all(axis=1)
-    return separated
-
-
-def _counter_clockwise(x2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Facets projected to the plane (P, n, 2), as counter-clockwise polygons, and their signed areas."""
-    if x2.shape[1] == 3:
-        area = _signed_area(x2)
-        return np.where((area < 0.0)[:, None, None], x2[:, [0, 2, 1]], x2), area
-    polygon = x2[:, POLYGON_ORDER[x2.shape[1]]]
-    area = 0.5 * np.sum(polygon[..., 0] * np.roll(polygon[..., 1], -1, axis=1)
-                        - np.roll(polygon[..., 0], -1, axis=1) * polygon[..., 1], axis=1)
-    return np.where((area < 0.0)[:, None, None], polygon[:, ::-1], polygon), area
-
-
-def _projected_pairs(slave: np.ndarray, normal: np.ndarray, master: np.ndarray) -> tuple:
-    """Slave and master facets in coordinates of the slave facet's plane (through its vertex 0,
-    normal ``normal``), their counter-clockwise polygons, and the pairs that may overlap there."""
-    origin = slave[:, 0]
-    e1 = slave[:, 1] - origin
-    if slave.shape[1] == 4:  # the edge of a warped quadrilateral leaves its mean plane
-        e1 -= np.einsum("ij,ij->i", e1, normal)[:, None] * normal
-    e1 /= np.linalg.norm(e1, axis=1)[:, None]
-    e2 = np.cross(normal, e1)
-    s2 = _plane_coordinates(origin, e1, e2, slave)
-    m2 = _plane_coordinates(origin, e1, e2, master)
-    s_ccw, s_area = _counter_clockwise(s2)
-    m_ccw, m_area = _counter_clockwise(m2)
-    # a master facet seen edge-on has no shadow; most candidate pairs of a search are disjoint
-    # (separating axis test, a tenth of the clipping's cost)
-    shadow = np.abs(m_area) > 1e-12 * np.abs(s_area)
-    pairs = np.flatnonzero(shadow & ~_separated(s_ccw, m_ccw) & ~_separated(m_ccw, s_ccw))
-    return s2, m2, s_ccw, m_ccw, pairs
-
-
-def _shape_values(x2: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """(P, Q, n) shape functions of facets projected to the plane (P, n, 2) at points (P, Q, 2)."""
-    if x2.shape[1] == 3:
-        return _barycentric(x2, points)
-    return quadrilateral_shapes(reference_coordinates(x2, points))
-
-
-def _slave_values(slave: np.ndarray, s2: np.ndarray, dual: np.ndarray | None,
-                  points: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-    """(P, Q, n) dual basis psi of slave facets at points (P, Q, 2) of their plane, and the
-    ratio of the facet's area element to the plane's there (None: 1, a flat triangle)."""
-    if slave.shape[1] == 3:
-        return 4.0 * _barycentric(s2, points) - 1.0, None
-    xi = reference_coordinates(s2, points)
-    ratio = area_elements(slave, xi) / planar_jacobians(s2, xi)
-    return np.einsum("pik,pqk->pqi", dual, quadrilateral_shapes(xi)), ratio
-
-
-def _affine(x: np.ndarray) -> np.ndarray:
-    """(P,) whether facets (P, n, 3) have an affine map: triangles, and parallelograms to round-off."""
-    if x.shape[1] == 3:
-        return np.ones(len(x), dtype=bool)
-    return np.linalg.norm(x[:, 3] - x[:, 2] - x[:, 1] + x[:, 0], axis=1) <= 1e-12 * _diameters(x)
-
-
-def _rules(slave: np.ndarray, master: np.ndarray, degree: int | None) -> list[tuple[np.ndarray, tuple]]:
-    """The pairs (a mask) integrated with each rule (barycentric points, weights): ``degree``
-    if given; else degree 2 for two triangles and :data:`AFFINE_DEGREE` for other pairs of
-    affine facets (exact on a flat pair), :data:`QUADRILATERAL_DEGREE` for the rest."""
-    if degree is not None:
-        return [(np.ones(len(slave), dtype=bool), triangle_rule(degree))]
-    if slave.shape[1] == master.shape[1] == 3:
-        return [(np.ones(len(slave), dtype=bool), (_POINTS, _WEIGHTS))]
-    affine = _affine(slave) & _affine(master)
-    return [(affine, triangle_rule(AFFINE_DEGREE)), (~affine, triangle_rule(QUADRILATERAL_DEGREE))]
-
-
-def segment_integrals(slave: np.ndarray, normal: np.ndarray, master: np.ndarray,
-                      degree: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Mortar integrals of pairs of a slave and a master facet (triangles or quadrilaterals).
-
-    Args:
-        slave: (P, n, 3) slave vertices (n = 3 or 4, quadrilaterals in tensor-product
-            order); normal: (P, 3) unit normal of the slave facet (of its mean plane).
-        master: (P, m, 3) master vertices.
-        degree: of the rule on each triangle of the clipped polygons; None: exact where
-            the pair's facets are triangles or parallelograms (:func:`_rules`), else
-            :data:`QUADRILATERAL_DEGREE`.
-
-    Returns:
-        ``(D, M)``: (P, n) int psi_i and (P, n, m) int psi_i phi_j^m over the part of the
-        slave facet that the master facet, projected onto the slave facet's plane along
-        ``normal``, covers (zero where they do not overlap); quadrilaterals with their
-        true area element.
-    """
-    P, ns, nm = len(slave), slave.shape[1], master.shape[1]
-    s2, m2, s_ccw, m_ccw, pairs = _projected_pairs(slave, normal, master)
-    polygon = np.zeros((len(pairs), ns + nm, 2))  # clipping adds at most one vertex per clipping edge
-    polygon[:, :nm] = m_ccw[pairs]
-    polygon, count = clip_polygons(polygon, np.full(len(pairs), nm), s_ccw[pairs])
-    dual = dual_coefficients(slave[pairs]) if ns == 4 else None
-    D, M = np.zeros((P, ns)), np.zeros((P, ns, nm))
-    for group, rule in _rules(slave[pairs], master[pairs], degree):
-        for k in range(1, polygon.shape[1] - 1):  # fan (v0, v_k, v_k+1)
-            has = group & (count >= k + 2)
-            if not has.any():
-                continue
-            tri = np.stack([polygon[has, 0], polygon[has, k], polygon[has, k + 1]], axis=1)
-            area = np.abs(_signed_area(tri))
-            points = np.einsum("qi,pij->pqj", rule[0], tri)
-            psi, ratio = _slave_values(slave[pairs[has]], s2[pairs[has]], None if dual is None else dual[has], points)
-            phi_m = _shape_values(m2[pairs[has]], points)
-            weights = area[:, None] * rule[1][None, :]
-            if ratio is not None:
-                weights = weights * ratio
-            D[pairs[has]] += np.einsum("pq,pqi->pi", weights, psi)
-            M[pairs[has]] += np.einsum("pq,pqi,pqj->pij", weights, psi, phi_m)
-    return D, M
 
 
 @dataclasses.dataclass(frozen=True)
@@ -357,6 +127,8 @@ class MortarCoupling:
             (area-weighted averages of the slave facets' normals).
         separation: (m, 3) weighted separation of the reference positions
             x_i - sum_j C_ij x_j (m); the gap is its normal component.
+        derivatives: the derivatives of C and n with the searched positions
+            (:mod:`contactqvi.contact.linearisation`), if asked for; else None.
     """
 
     slave_blk: np.ndarray
@@ -366,11 +138,21 @@ class MortarCoupling:
     C_values: np.ndarray
     normal: np.ndarray
     separation: np.ndarray
+    derivatives: CouplingDerivatives | None = None
 
     @property
     def gap(self) -> np.ndarray:
         """(m,) weighted gap n_i . (x_i - sum_j C_ij x_j) of the reference positions (m)."""
         return np.einsum("ij,ij->i", self.normal, self.separation)
+
+    def restricted(self, keep: np.ndarray) -> MortarCoupling:
+        """The rows ``keep`` (a mask over the rows)."""
+        lengths = np.diff(self.C_indptr)
+        entries = np.repeat(keep, lengths)
+        indptr = np.concatenate([[0], np.cumsum(lengths[keep])]).astype(np.int64)
+        derivatives = None if self.derivatives is None else self.derivatives.restricted(keep)
+        return MortarCoupling(self.slave_blk[keep], self.weight[keep], indptr, self.C_master_glob[entries],
+                              self.C_values[entries], self.normal[keep], self.separation[keep], derivatives)
 
 
 def _exchange_master(comm: MPI.Comm, slave: SurfaceFacets, master: SurfaceFacets,
@@ -393,7 +175,7 @@ def _exchange_master(comm: MPI.Comm, slave: SurfaceFacets, master: SurfaceFacets
 
 def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facets: np.ndarray,
                     search_distance: float | None = None, excluded_blk: np.ndarray | None = None,
-                    displacement: np.ndarray | None = None) -> MortarCoupling:
+                    displacement: np.ndarray | None = None, linearised: bool = False) -> MortarCoupling:
     """C = D^{-1} M, nodal normals and weighted gaps of a slave and a master surface.
 
     Args:
@@ -405,6 +187,8 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
         excluded_blk: local node indices never coupled (e.g. clamped slave nodes).
         displacement: (local nodes, 3) displacement of the configuration searched
             (ghosts included); None: the reference configuration.
+        linearised: also the derivatives of the rows with respect to the searched positions
+            (:func:`~contactqvi.contact.linearisation.coupling_derivatives`).
 
     Collective. Slave nodes with less than :data:`MIN_COVERAGE` of their lumped area
     in the master's shadow are left out, and so are nodes whose weighted gap in the
@@ -430,25 +214,38 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
         coupled[excluded_blk[excluded_blk < index_map.size_local]] = False
     slave_blk = np.flatnonzero(coupled).astype(np.int32)
 
-    rows_loc = M[0] - index_map.local_range[0]
+    position, indptr, cols, values = _rows_of_C(M, index_map.local_range[0], coupled, slave_blk, weight)
+    n = normal[slave_blk] / np.linalg.norm(normal[slave_blk], axis=1)[:, None]
+    positions = x if displacement is None else np.hstack([x, current])  # reference, searched: fetched together
+    projected = np.zeros((len(slave_blk), positions.shape[1]))
+    np.add.at(projected, position, values[:, None] * fetch_rows(comm, index_map, positions, cols))
+    separation = positions[slave_blk] - projected
+    derivatives = None
+    if linearised:
+        slave_glob = index_map.local_to_global(slave.blk.ravel()).reshape(slave.blk.shape)
+        derivatives = coupling_derivatives(comm, index_map, slave_glob, slave.x, slave.normal, pairs_s,
+                                           mx[pairs_m], mglob[pairs_m], index_map.local_to_global(slave_blk),
+                                           weight[slave_blk], normal[slave_blk], projected[:, -3:])
+    coupling = MortarCoupling(slave_blk, weight[slave_blk], indptr, cols.astype(np.int64), values, n,
+                              separation[:, :3], derivatives)
+    # a node farther than the search distance (default: its own size) cannot touch in this step
+    reach = np.sqrt(2.0 * lumped_area[slave_blk]) if search_distance is None else search_distance
+    return coupling.restricted(np.einsum("ij,ij->i", n, separation[:, -3:]) <= reach)
+
+
+def _rows_of_C(M: tuple, start: int, coupled: np.ndarray, slave_blk: np.ndarray,
+               weight: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """CSR rows of C = D^{-1} M of the coupled slave nodes ``slave_blk`` from the owned entries
+    ``M`` (global rows, global columns, values; owned range from ``start``): each entry's row
+    position, indptr, master columns and values."""
+    rows_loc = M[0] - start
     keep = coupled[rows_loc]
     order = np.lexsort((M[1][keep], rows_loc[keep]))
     rows_loc, cols, values = rows_loc[keep][order], M[1][keep][order], M[2][keep][order]
     values = values / weight[rows_loc]
     position = np.searchsorted(slave_blk, rows_loc)
     indptr = np.concatenate([[0], np.cumsum(np.bincount(position, minlength=len(slave_blk)))]).astype(np.int64)
-
-    n = normal[slave_blk]
-    n /= np.linalg.norm(n, axis=1)[:, None]
-    positions = x if displacement is None else np.hstack([x, current])  # reference, searched: fetched together
-    projected = np.zeros((len(slave_blk), positions.shape[1]))
-    np.add.at(projected, position, values[:, None] * _master_coordinates(comm, index_map, positions, cols))
-    separation = positions[slave_blk] - projected
-    coupling = MortarCoupling(slave_blk, weight[slave_blk], indptr, cols.astype(np.int64), values, n,
-                              separation[:, :3])
-    # a node farther than the search distance (default: its own size) cannot touch in this step
-    reach = np.sqrt(2.0 * lumped_area[slave_blk]) if search_distance is None else search_distance
-    return _restricted(coupling, np.einsum("ij,ij->i", n, separation[:, -3:]) <= reach)
+    return position, indptr, cols, values
 
 
 #: Candidate pairs integrated at a time by :func:`_overlapping` (bounds its work arrays to about 100 MB)
@@ -492,42 +289,25 @@ def _owned_sums(comm: MPI.Comm, index_map, slave: SurfaceFacets, pairs_s: np.nda
     """
     slave_glob = index_map.local_to_global(slave.blk.ravel()).reshape(slave.blk.shape)
     ns, nm = slave_glob.shape[1], master_glob.shape[1]
-    owners = _owners(comm, index_map)
+    owners = owner_ranges(comm, index_map)
     rows = slave_glob[pairs_s].ravel()
-    D = _sum_to_owners(comm, owners, rows, np.zeros_like(rows), D_pair.ravel())
-    M = _sum_to_owners(comm, owners, np.repeat(slave_glob[pairs_s], nm, axis=1).ravel(),
+    D = sum_to_owners(comm, owners, rows, np.zeros_like(rows), D_pair.ravel())
+    M = sum_to_owners(comm, owners, np.repeat(slave_glob[pairs_s], nm, axis=1).ravel(),
                        np.tile(master_glob, (1, ns)).ravel(), M_pair.ravel())
     nodes = slave_glob.ravel()
-    area = _sum_to_owners(comm, owners, nodes, np.zeros_like(nodes), slave.lumped.ravel())
+    area = sum_to_owners(comm, owners, nodes, np.zeros_like(nodes), slave.lumped.ravel())
     normal_values = np.repeat(slave.area[:, None] * -slave.normal, ns, axis=0)
     start, n_owned = index_map.local_range[0], index_map.size_local
     weight, lumped_area, normal = np.zeros(n_owned), np.zeros(n_owned), np.zeros((n_owned, 3))
     weight[D[0] - start] = D[2]
     lumped_area[area[0] - start] = area[2]
-    for k in range(3):
-        summed = _sum_to_owners(comm, owners, nodes, np.zeros_like(nodes), normal_values[:, k])
-        normal[summed[0] - start, k] = summed[2]
+    summed = sum_to_owners(comm, owners, nodes, np.zeros_like(nodes), normal_values)
+    normal[summed[0] - start] = summed[2]
     return weight, lumped_area, normal, M
 
 
-def _restricted(coupling: MortarCoupling, keep: np.ndarray) -> MortarCoupling:
-    """The rows ``keep`` of ``coupling``."""
-    lengths = np.diff(coupling.C_indptr)
-    entries = np.repeat(keep, lengths)
-    indptr = np.concatenate([[0], np.cumsum(lengths[keep])]).astype(np.int64)
-    return MortarCoupling(coupling.slave_blk[keep], coupling.weight[keep], indptr, coupling.C_master_glob[entries],
-                          coupling.C_values[entries], coupling.normal[keep], coupling.separation[keep])
-
-
-def _diameters(x: np.ndarray) -> np.ndarray:
-    """(f,) the largest distance between two vertices of each facet (f, n, 3): its longest edge
-    (a triangle) or the longest of edges and diagonals (a quadrilateral)."""
-    a, b = np.triu_indices(x.shape[1], k=1)
-    return np.linalg.norm(x[:, a] - x[:, b], axis=2).max(axis=1, initial=0.0)
-
-
 def _max_edge(x: np.ndarray, comm: MPI.Comm) -> float:
-    return comm.allreduce(float(_diameters(x).max(initial=0.0)), op=MPI.MAX)
+    return comm.allreduce(float(diameters(x).max(initial=0.0)), op=MPI.MAX)
 
 
 def _candidate_pairs(slave_x: np.ndarray, slave_normal: np.ndarray, master_x: np.ndarray,
@@ -535,12 +315,12 @@ def _candidate_pairs(slave_x: np.ndarray, slave_normal: np.ndarray, master_x: np
     """Index pairs (slave, master) whose bounding boxes are within the search distance
     (``None``: each slave facet's own diameter, so graded meshes pair locally) and whose
     centroids lie closer along the slave facet's plane than the sum of their diameters
-    (:func:`_diameters`): every point of a facet lies within its diameter of its vertices'
+    (:func:`~contactqvi.contact.segments.diameters`): every point of a facet lies within its diameter of its vertices'
     mean, so other pairs cannot overlap in projection (two-body Hertz fine mesh,
     search distance 5 mm: 77 k of 266 k candidates kept, 13 k overlap)."""
     if len(slave_x) == 0 or len(master_x) == 0:
         return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
-    slave_edge, master_edge = _diameters(slave_x), _diameters(master_x)
+    slave_edge, master_edge = diameters(slave_x), diameters(master_x)
     pad = slave_edge if search_distance is None else np.full(len(slave_x), search_distance)
     slave_c, master_c = slave_x.mean(axis=1), master_x.mean(axis=1)
     pairs_s, pairs_m = _near_centroids(slave_c, slave_edge + pad, master_c, master_edge)
@@ -581,45 +361,3 @@ def _near_centroids(slave_c: np.ndarray, slave_r: np.ndarray, master_c: np.ndarr
             found_s.append(i[keep])
             found_m.append(j[keep])
     return np.concatenate(found_s), np.concatenate(found_m)
-
-
-def _owners(comm: MPI.Comm, index_map) -> np.ndarray:
-    """Start of each rank's range of global node indices, and the total, (size + 1,)."""
-    starts = comm.allgather(index_map.local_range[0])
-    return np.array([*starts, index_map.size_global], dtype=np.int64)
-
-
-def _sum_to_owners(comm: MPI.Comm, owners: np.ndarray, rows: np.ndarray, cols: np.ndarray,
-                   values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Send entries (row, col, value) to the owner of ``row`` and sum duplicates there.
-
-    Returns the owned entries ``(rows, cols, values)``, unique (row, col) pairs.
-    """
-    rows, cols = np.asarray(rows, dtype=np.int64), np.asarray(cols, dtype=np.int64)
-    rank = np.searchsorted(owners, rows, side="right") - 1
-    order = np.argsort(rank, kind="stable")
-    bounds = np.searchsorted(rank[order], np.arange(comm.size + 1))
-    send = [(rows[order[a:b]], cols[order[a:b]], values[order[a:b]]) for a, b in zip(bounds[:-1], bounds[1:])]
-    received = comm.alltoall(send)
-    rows = np.concatenate([part[0] for part in received])
-    cols = np.concatenate([part[1] for part in received])
-    values = np.concatenate([part[2] for part in received])
-    width = owners[-1] + 1  # global node indices are < width: one int64 key per (row, col)
-    keys, inverse = np.unique(rows * width + cols, return_inverse=True)
-    summed = np.bincount(inverse.ravel(), weights=values, minlength=len(keys))
-    return keys // width, keys % width, summed
-
-
-def _master_coordinates(comm: MPI.Comm, index_map, x: np.ndarray, glob: np.ndarray) -> np.ndarray:
-    """Rows of ``x`` (owned nodes first, any width) of the nodes with global indices ``glob``,
-    fetched from their owners."""
-    owners = _owners(comm, index_map)
-    rank = np.searchsorted(owners, glob, side="right") - 1
-    order = np.argsort(rank, kind="stable")
-    bounds = np.searchsorted(rank[order], np.arange(comm.size + 1))
-    requests = comm.alltoall([glob[order[a:b]] for a, b in zip(bounds[:-1], bounds[1:])])
-    start = index_map.local_range[0]
-    replies = comm.alltoall([x[r - start] for r in requests])
-    result = np.empty((len(glob), x.shape[1]))
-    result[order] = np.concatenate(replies) if replies else np.empty((0, x.shape[1]))
-    return result

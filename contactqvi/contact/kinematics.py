@@ -1,0 +1,117 @@
+"""The law's variables of a body pair in the current configuration and their derivatives (issue 45).
+
+docs/finite_strain.md, Sect. 12, (12.1): at a slave node i with the mortar coupling C of the
+current positions x, its nodal normal n_i and frame (t_1, t_2, n)_i of
+:func:`~contactqvi.obstacles.tangent_frames`,
+
+    v_i,n = n_i . s_i,   s_i = x_i - p_i,   p_i = sum_j C_ij x_j           (the weighted gap),
+    v_i,a = t_a,i . (p_i - p_i^prev),   p_i^prev = sum_j C_ij^prev x_j      (the slip, a = 1, 2),
+
+C^prev the coupling of the configuration the load step started from (the master material
+point slave node i projected onto then, at its current position): objective, since a rigid
+motion of both bodies changes neither C nor C^prev. Their derivatives with respect to x
+combine the nodes' own motion (C fixed) with the geometric parts (L.1)-(L.2) of
+:mod:`contactqvi.contact.linearisation`:
+
+    dv_n = n . (dx_i - sum_j C_ij dx_j + ds^geo) + dn . s,
+    dv_a = t_a . (sum_j (C_ij - C_ij^prev) dx_j - ds^geo) + dt_a . (p - p^prev),
+
+and the frame's, from dn through the construction of t_1 (:func:`frame_derivatives`).
+"""
+
+from __future__ import annotations
+
+from mpi4py import MPI
+
+import numpy as np
+
+from contactqvi.contact.mortar import MortarCoupling
+from contactqvi.contact.owners import fetch_rows
+from contactqvi.obstacles import tangent_frames
+
+__all__ = ["contact_variables", "frame_derivatives", "variable_derivatives"]
+
+
+def frame_derivatives(normal: np.ndarray, dn: np.ndarray) -> np.ndarray:
+    """(E, 3, 3) derivatives (rows dt_1, dt_2, dn) of the frames of unit normals ``normal`` (E, 3)
+    along their derivatives ``dn`` (E, 3), for :func:`~contactqvi.obstacles.tangent_frames`:
+    t_1 = (a - (a . n) n) / |a - (a . n) n| with the fixed axis a that function picks for n,
+    t_2 = n x t_1."""
+    frames = tangent_frames(normal)
+    t1 = frames[:, 0]
+    axis = np.zeros_like(normal)
+    near_e1 = np.abs(normal[:, 0]) > 0.9
+    axis[~near_e1, 0] = 1.0
+    axis[near_e1, 1] = 1.0
+    raw = axis - np.einsum("ij,ij->i", axis, normal)[:, None] * normal
+    draw = -np.einsum("ij,ij->i", axis, dn)[:, None] * normal - np.einsum("ij,ij->i", axis, normal)[:, None] * dn
+    dt1 = (draw - np.einsum("ij,ij->i", t1, draw)[:, None] * t1) / np.linalg.norm(raw, axis=1)[:, None]
+    dt2 = np.cross(dn, t1) + np.cross(normal, dt1)
+    return np.stack([dt1, dt2, dn], axis=1)
+
+
+def _projection(comm: MPI.Comm, index_map, coupling: MortarCoupling, current: np.ndarray) -> np.ndarray:
+    """(m, 3) sum_j C_ij x_j of the current positions ``current`` (local nodes), masters fetched."""
+    rows = np.repeat(np.arange(len(coupling.slave_blk)), np.diff(coupling.C_indptr))
+    masters = fetch_rows(comm, index_map, current[:index_map.size_local], coupling.C_master_glob)
+    projected = np.zeros((len(coupling.slave_blk), 3))
+    np.add.at(projected, rows, coupling.C_values[:, None] * masters)
+    return projected
+
+
+def contact_variables(comm: MPI.Comm, index_map, coupling: MortarCoupling, previous: MortarCoupling,
+                      current: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(12.1) of the coupling's rows at the current positions ``current`` (local nodes, 3).
+
+    ``previous`` has the rows of the same slave nodes (a coupling of the step's start restricted
+    to them). Returns ``(v, frames, s, slip)``: (m, 3) the variables (t_1, t_2, n components),
+    (m, 3, 3) the frames, (m, 3) s_i and (m, 3) p_i - p_i^prev. Collective."""
+    projected = _projection(comm, index_map, coupling, current)
+    slip = projected - _projection(comm, index_map, previous, current)
+    s = current[coupling.slave_blk] - projected
+    frames = tangent_frames(coupling.normal)
+    v = np.column_stack([np.einsum("ij,ij->i", frames[:, 0], slip), np.einsum("ij,ij->i", frames[:, 1], slip),
+                         np.einsum("ij,ij->i", frames[:, 2], s)])
+    return v, frames, s, slip
+
+
+def variable_derivatives(index_map, coupling: MortarCoupling, previous: MortarCoupling, s: np.ndarray,
+                         slip: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The derivatives of (12.1) with respect to the current positions, entries
+    ``(rows, dofs, values)``: (E,) coupling row, (E,) global coordinate index 3 J + c, (E, 3)
+    (t_1, t_2, n) components; duplicates to be added. ``s``, ``slip`` from :func:`contact_variables`;
+    ``coupling`` must carry its derivatives (``mortar_coupling(..., linearised=True)``)."""
+    d = coupling.derivatives
+    frames = tangent_frames(coupling.normal)
+    m = len(coupling.slave_blk)
+    # geometric parts: ds^geo and the frames' turn
+    dframes = frame_derivatives(coupling.normal[d.rows], d.normal)
+    geometric = np.column_stack([
+        -np.einsum("ij,ij->i", frames[d.rows, 0], d.separation) + np.einsum("ij,ij->i", dframes[:, 0], slip[d.rows]),
+        -np.einsum("ij,ij->i", frames[d.rows, 1], d.separation) + np.einsum("ij,ij->i", dframes[:, 1], slip[d.rows]),
+        np.einsum("ij,ij->i", frames[d.rows, 2], d.separation) + np.einsum("ij,ij->i", dframes[:, 2], s[d.rows])])
+    # the nodes' own motion: the slave node itself (normal), sum_j C_ij dx_j (normal, with -),
+    # sum_j (C_ij - C_ij^prev) dx_j (tangential)
+    own = index_map.local_to_global(coupling.slave_blk)
+    own_rows = np.repeat(np.arange(m), 3)
+    own_dofs = 3 * np.repeat(own, 3) + np.tile(np.arange(3), m)
+    own_values = np.zeros((3 * m, 3))
+    own_values[:, 2] = frames[:, 2].ravel()
+    rows_c, dofs_c, values_c = _weighted_motion(coupling, frames, sign_tangential=1.0)
+    rows_p, dofs_p, values_p = _weighted_motion(previous, frames, sign_tangential=-1.0, tangential_only=True)
+    return (np.concatenate([d.rows, own_rows, rows_c, rows_p]), np.concatenate([d.dofs, own_dofs, dofs_c, dofs_p]),
+            np.concatenate([geometric, own_values, values_c, values_p]))
+
+
+def _weighted_motion(coupling: MortarCoupling, frames: np.ndarray, sign_tangential: float,
+                     tangential_only: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Entries of sum_j C_ij dx_j in (t_1, t_2, n) components: +- t_a . (C_ij e_c) tangential,
+    -n . (C_ij e_c) normal (none with ``tangential_only``), for every C entry and c."""
+    lengths = np.diff(coupling.C_indptr)
+    row = np.repeat(np.arange(len(lengths)), lengths)
+    rows = np.repeat(row, 3)
+    dofs = 3 * np.repeat(coupling.C_master_glob, 3) + np.tile(np.arange(3), len(row))
+    components = frames[rows, :, np.tile(np.arange(3), len(row))]  # (E, 3): (t_1, t_2, n) . e_c
+    weights = np.repeat(coupling.C_values, 3)[:, None]
+    values = weights * components * np.array([sign_tangential, sign_tangential, 0.0 if tangential_only else -1.0])
+    return rows, dofs, values

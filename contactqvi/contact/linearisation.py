@@ -1,0 +1,272 @@
+"""Derivatives of the mortar geometry with respect to the current node positions (issue 45, item 2).
+
+At finite deformation the weighted separation, gap and slip of a slave node i are functions
+of the current positions x = X + u through everything the mortar coupling is built from
+(:mod:`contactqvi.contact.mortar`):
+
+    s_i(x) = x_i - sum_j C_ij(x) x_j,   C_ij = M_ij / D_i,   g~_i = n_i(x) . s_i(x),
+    n_i = a_i / |a_i|,   a_i = sum over the slave facets f at i of (-A_f N_f),
+
+A_f N_f a facet's area times its outward unit normal and D_i, M_ij the integrals over the
+mortar segments, the clipped polygons of :mod:`contactqvi.contact.segments`. A variation
+dx splits into the part the change of variables u = T w of
+:mod:`contactqvi.contact.problem` already holds (the nodes move, C stays: dx_i - sum_j
+C_ij dx_j) and the *geometric* part, the coupling and the normals moving with the facets:
+
+    ds_i^geo = -sum_j dC_ij x_j = -(sum_j dM_ij x_j - dD_i p_i) / D_i,  p_i = sum_j C_ij x_j,  (L.1)
+    dn_i = (I - n_i n_i^T) da_i / |a_i|,                                                     (L.2)
+    dg~_i = n_i . (dx_i - sum_j C_ij dx_j) + n_i . ds_i^geo + dn_i . s_i.                      (L.3)
+
+Popp, Gee and Wall (IJNME 79 (2009) 1354, Sect. 4; 3D: Popp, Gitterle, Gee, Wall, IJNME 83
+(2010) 1428) derive dD, dM and da by hand, through the clip polygon's vertices and the
+projections. Here they are taken by the complex step (Squire and Trapp, SIAM Rev. 40 (1998)
+110; Martins, Sturdza and Alonso, ACM TOMS 29 (2003) 245): the segment integration is
+analytic in the vertex coordinates away from its branch decisions, which it takes on real
+parts (:mod:`contactqvi.contact.segments`), so for a direction e
+
+    df(x) e = Im f(x + i h e) / h + O(h^2)
+
+with no difference of two values: exact to round-off for h = :data:`STEP`, on the branch
+(clipping pattern, orientation) of x. Each pair of facets depends on its 3 (n_s + n_m)
+coordinates; all their directions are evaluated at once, as pairs of a batch
+(:func:`complex_step`). On the owners of the slave nodes the pairs' derivatives are summed
+as the values are (:mod:`contactqvi.contact.owners`) and combined into (L.1)-(L.2).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import typing
+
+from mpi4py import MPI
+
+import numpy as np
+
+from contactqvi.contact.facets import facet_areas, unit_normals
+from contactqvi.contact.owners import fetch_rows, owner_ranges, sum_to_owners
+from contactqvi.contact.segments import segment_integrals
+
+__all__ = ["STEP", "CouplingDerivatives", "PairDerivatives", "complex_step", "coupling_derivatives", "segment_jacobians"]
+
+#: Imaginary step of the complex-step derivatives (in metres of coordinate): the truncation
+#: error is O(STEP^2) relative and nothing cancels, so any step far below round-off serves.
+STEP = 1e-30
+#: Facet pairs differentiated at a time (each one evaluated in all its directions, complex):
+#: bounds the work arrays as :data:`~contactqvi.contact.mortar` bounds its own.
+_CHUNK = 1 << 12
+_QUADRILATERAL_CHUNK = 1 << 7
+
+
+def complex_step(function: typing.Callable[[np.ndarray], tuple[np.ndarray, ...]],
+                 x: np.ndarray) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Values and Jacobians of a function of each row's coordinates, by the complex step.
+
+    Args:
+        function: maps coordinates (Q, n, d) (complex) to arrays with Q leading rows; it is
+            called once, with Q = P n d: row p's coordinates perturbed along each of its n d
+            directions in turn (row p k is row p with i STEP added to coordinate k).
+        x: (P, n, d) real coordinates.
+
+    Returns:
+        ``(values, jacobians)``: per output of ``function``, its value (P, ...) and its
+        derivatives (P, ..., n, d) with respect to the row's coordinates.
+    """
+    P, n, d = x.shape
+    K = n * d
+    z = x[:, None] + (1j * STEP) * np.eye(K).reshape(K, n, d)
+    values, jacobians = [], []
+    for out in function(z.reshape(P * K, n, d)):
+        out = out.reshape(P, K, *out.shape[1:])
+        values.append(out[:, 0].real.copy())
+        jacobians.append(np.moveaxis(out.imag / STEP, 1, -1).reshape(P, *out.shape[2:], n, d))
+    return values, jacobians
+
+
+def _orientation(x: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """(P,) +1 or -1: the sign that turns :func:`unit_normals` of facets x into ``normal``."""
+    return np.where(np.einsum("ij,ij->i", unit_normals(x), normal) < 0.0, -1.0, 1.0)
+
+
+def segment_jacobians(slave: np.ndarray, normal: np.ndarray,
+                      master: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`~contactqvi.contact.segments.segment_integrals` of facet pairs and their derivatives.
+
+    Args:
+        slave: (P, n_s, 3); normal: (P, 3) the slave facets' unit normals, either orientation
+            (the projection direction; it turns with the facet); master: (P, n_m, 3).
+
+    Returns:
+        ``(D, M, dD, dM)``: (P, n_s), (P, n_s, n_m), and their derivatives (P, n_s, N, 3),
+        (P, n_s, n_m, N, 3) with respect to the pair's N = n_s + n_m vertices, slave first.
+    """
+    ns = slave.shape[1]
+    K = 3 * (ns + master.shape[1])
+    sign = np.repeat(_orientation(slave, normal), K)[:, None]
+
+    def integrals(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return segment_integrals(z[:, :ns], sign * unit_normals(z[:, :ns]), z[:, ns:])
+
+    (D, M), (dD, dM) = complex_step(integrals, np.concatenate([slave, master], axis=1))
+    return D, M, dD, dM
+
+
+def _area_normal_jacobians(x: np.ndarray, outward: np.ndarray) -> np.ndarray:
+    """(f, 3, n, 3) derivatives of -A_f N_f (area times unit normal, into the body) of facets
+    (f, n, 3) with outward normals ``outward``, with respect to their vertices."""
+    K = 3 * x.shape[1]
+    sign = np.repeat(_orientation(x, outward), K)[:, None]
+
+    def area_normals(z: np.ndarray) -> tuple[np.ndarray]:
+        return (-sign * facet_areas(z)[:, None] * unit_normals(z),)
+
+    return complex_step(area_normals, x)[1][0]
+
+
+@dataclasses.dataclass(frozen=True)
+class PairDerivatives:
+    """dM of the facet pairs a rank integrated (its own slave facets), for the derivative of
+    the force the slave nodes pass to the master nodes (:meth:`CouplingDerivatives.transfer`).
+
+    Attributes:
+        slave_glob: (P, n_s), master_glob: (P, n_m) global node indices of the pairs' facets.
+        dM: (P, n_s, n_m, N, 3) derivatives of the pairs' M with respect to their N = n_s + n_m
+            vertices (slave first).
+    """
+
+    slave_glob: np.ndarray
+    master_glob: np.ndarray
+    dM: np.ndarray
+
+    @property
+    def dofs(self) -> np.ndarray:
+        """(P, N, 3) global indices 3 J + c of the pairs' vertex coordinates."""
+        nodes = np.concatenate([self.slave_glob, self.master_glob], axis=1)
+        return 3 * nodes[:, :, None] + np.arange(3)
+
+
+@dataclasses.dataclass(frozen=True)
+class CouplingDerivatives:
+    """Geometric derivatives (L.1)-(L.2) of the rows of a :class:`~contactqvi.contact.mortar.MortarCoupling`,
+    one entry per (row, coordinate it depends on), sorted by row.
+
+    Attributes:
+        rows: (E,) index of the coupling's row (its slave node).
+        dofs: (E,) global index 3 J + c of the coordinate c of global node J differentiated.
+        separation: (E, 3) ds_i^geo: the derivative of the weighted separation s_i with the
+            nodes' own motion left out (that part is e_i - C_ij e_j).
+        normal: (E, 3) dn_i of the nodal unit normal.
+        weight: (E,) dD_i.
+        pairs: the rank's pairs' dM (for :meth:`transfer`).
+    """
+
+    rows: np.ndarray
+    dofs: np.ndarray
+    separation: np.ndarray
+    normal: np.ndarray
+    weight: np.ndarray
+    pairs: PairDerivatives
+
+    def restricted(self, keep: np.ndarray) -> CouplingDerivatives:
+        """The entries of the rows ``keep`` (a mask over the coupling's rows), rows renumbered."""
+        entries = keep[self.rows]
+        renumbered = np.cumsum(keep) - 1
+        return CouplingDerivatives(renumbered[self.rows[entries]], self.dofs[entries], self.separation[entries],
+                                   self.normal[entries], self.weight[entries], self.pairs)
+
+    def transfer(self, comm: MPI.Comm, index_map, coupling: typing.Any,
+                 values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The derivative of the master nodes' share sum_i C_ij v_i of slave values v (held
+        fixed): the force a slave node passes to the master nodes under T^T (v_i = P_i r_i,
+        :mod:`contactqvi.contact.problem`). With C_ij = M_ij / D_i,
+
+            d(sum_i C_ij v_i) = sum_i dM_ij v_i / D_i - sum_i C_ij (v_i / D_i) dD_i,     (L.4)
+
+        the first term summed over the rank's pairs (v / D fetched from the rows' owners),
+        the second over its rows. Collective.
+
+        Args:
+            coupling: the :class:`~contactqvi.contact.mortar.MortarCoupling` these are of.
+            values: (m, 3) v_i of its rows.
+
+        Returns:
+            ``(rows, dofs, values)``: entries of the (global node j of the master, global
+            coordinate index 3 J + c) derivative, (E,), (E,), (E, 3), on the rank that made
+            them (sum them into a matrix, duplicates added).
+        """
+        scaled = values / coupling.weight[:, None]
+        # sum_i C_ij (v_i / D_i) dD_i over the owned rows: every (C entry, dD entry) of a row
+        lengths = np.diff(coupling.C_indptr)
+        per_row = np.bincount(self.rows, minlength=len(lengths))
+        starts = np.concatenate([[0], np.cumsum(per_row)])
+        c_entry = np.repeat(np.arange(len(coupling.C_values)), np.repeat(per_row, lengths))
+        row = np.repeat(np.repeat(np.arange(len(lengths)), lengths), np.repeat(per_row, lengths))
+        d_entry = starts[row] + _ranges(np.repeat(per_row, lengths))
+        node_values = -(coupling.C_values[c_entry] * self.weight[d_entry])[:, None] * scaled[row]
+        node_rows, node_dofs = coupling.C_master_glob[c_entry], self.dofs[d_entry]
+        # sum_i dM_ij v_i / D_i over the rank's pairs
+        owned = np.zeros((index_map.size_local, 3))
+        owned[coupling.slave_blk] = scaled
+        p = self.pairs
+        at_slaves = fetch_rows(comm, index_map, owned, p.slave_glob.ravel()).reshape(*p.slave_glob.shape, 3)
+        pair_values = np.einsum("pabvc,pak->pbvck", p.dM, at_slaves)  # (P, n_m, N, 3, 3)
+        shape = pair_values.shape[:-1]
+        pair_rows = np.broadcast_to(p.master_glob[:, :, None, None], shape).ravel()
+        pair_dofs = np.broadcast_to(p.dofs[:, None], shape).ravel()
+        return (np.concatenate([node_rows, pair_rows]), np.concatenate([node_dofs, pair_dofs]),
+                np.concatenate([node_values, pair_values.reshape(-1, 3)]))
+
+
+def _ranges(lengths: np.ndarray) -> np.ndarray:
+    """0, 1, ..., n - 1 for each n of ``lengths``, concatenated."""
+    ends = np.cumsum(lengths)
+    return np.arange(ends[-1] if len(ends) else 0) - np.repeat(ends - lengths, lengths)
+
+
+def coupling_derivatives(comm: MPI.Comm, index_map, slave_glob: np.ndarray, slave_x: np.ndarray,
+                         slave_normal: np.ndarray, pairs_s: np.ndarray, master_x: np.ndarray,
+                         master_glob: np.ndarray, coupled_glob: np.ndarray, weight: np.ndarray,
+                         normal_sum: np.ndarray, projected: np.ndarray) -> CouplingDerivatives:
+    """(L.1)-(L.2) of the coupled slave nodes a rank owns. Collective.
+
+    Args:
+        slave_glob, slave_x, slave_normal: the rank's slave facets: (f, n_s) global node
+            indices, (f, n_s, 3) current positions, (f, 3) outward unit normals.
+        pairs_s: (P,) slave facet of each overlapping pair; master_x (P, n_m, 3), master_glob
+            (P, n_m): its master facet.
+        coupled_glob: (m,) sorted global indices of the owned coupled slave nodes, the rows;
+            weight (m,) their D_i, normal_sum (m, 3) their a_i, projected (m, 3) their p_i.
+    """
+    ns, nm = slave_x.shape[1], master_x.shape[1]
+    chunk = _CHUNK if ns == nm == 3 else _QUADRILATERAL_CHUNK
+    rows, cols, values, pair_dM = [], [], [], [np.zeros((0, ns, nm, ns + nm, 3))]
+    for start in range(0, len(pairs_s), chunk):
+        s = pairs_s[start:start + chunk]
+        m_x, m_glob = master_x[start:start + chunk], master_glob[start:start + chunk]
+        _, _, dD, dM = segment_jacobians(slave_x[s], -slave_normal[s], m_x)
+        pair_dM.append(dM)
+        dMx = np.einsum("pabvc,pbk->pavck", dM, m_x)
+        nodes = np.concatenate([slave_glob[s], m_glob], axis=1)  # (P, N): the pair's vertices
+        rows.append(np.broadcast_to(slave_glob[s][:, :, None, None], dD.shape).ravel())
+        cols.append(np.broadcast_to((3 * nodes[:, None, :, None] + np.arange(3)), dD.shape).ravel())
+        values.append(np.concatenate([dD[..., None], dMx, np.zeros((*dD.shape, 3))], axis=-1).reshape(-1, 7))
+    # a_i: every slave facet at i, paired or not
+    da = np.moveaxis(_area_normal_jacobians(slave_x, slave_normal), 1, -1)  # (f, n_s, 3, 3)
+    shape = (len(slave_x), ns, ns, 3)
+    rows.append(np.broadcast_to(slave_glob[:, :, None, None], shape).ravel())
+    cols.append(np.broadcast_to(3 * slave_glob[:, None, :, None] + np.arange(3), shape).ravel())
+    values.append(np.concatenate([np.zeros((*shape, 4)), np.broadcast_to(da[:, None], (*shape, 3))],
+                                 axis=-1).reshape(-1, 7))
+    owned_rows, dofs, summed = sum_to_owners(comm, owner_ranges(comm, index_map), np.concatenate(rows),
+                                             np.concatenate(cols), np.concatenate(values),
+                                             width=3 * index_map.size_global)
+    position = np.searchsorted(coupled_glob, owned_rows)
+    coupled = position < len(coupled_glob)
+    coupled[coupled] = coupled_glob[position[coupled]] == owned_rows[coupled]
+    row, dofs, summed = position[coupled], dofs[coupled], summed[coupled]
+    separation = -(summed[:, 1:4] - summed[:, :1] * projected[row]) / weight[row, None]
+    size = np.linalg.norm(normal_sum, axis=1)
+    n = normal_sum / size[:, None]
+    da = summed[:, 4:]
+    normal = (da - np.einsum("ij,ij->i", n[row], da)[:, None] * n[row]) / size[row, None]
+    pairs = PairDerivatives(slave_glob[pairs_s], master_glob, np.concatenate(pair_dM))
+    return CouplingDerivatives(row, dofs, separation, normal, summed[:, 0], pairs)

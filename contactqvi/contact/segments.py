@@ -1,0 +1,251 @@
+"""Segment-to-segment integration of a slave and a master facet: the mortar integrals of one pair.
+
+Segment-to-segment integration (Puso-Laursen): each slave facet and each master
+facet facing it (triangles or quadrilaterals, in any combination) are projected onto
+the slave facet's plane (a quadrilateral's mean plane, normal to its diagonals'
+cross product), the master polygon is clipped by the slave polygon
+(Sutherland-Hodgman, convex clippers), the clipped polygon is split into a fan of
+triangles and integrated there. The shape functions at a point of the plane are the
+barycentric coordinates of a projected triangle, or the bilinear shape functions at
+the reference coordinates of a projected quadrilateral (the inverse of its bilinear
+map, Newton's method); a slave quadrilateral's integrals take its true area element
+(the ratio of it to the plane's at the point). What is exact on a flat interface:
+psi_i phi_j^m is quadratic on a pair of triangles (rule of degree 2) and a polynomial
+of degree <= 4 on a pair of parallelograms or of a parallelogram and a triangle
+(degree 4), so such interfaces are integrated exactly; on a quadrilateral that is no
+parallelogram the inverse bilinear map is no polynomial, and a rule of degree 20
+(:data:`QUADRILATERAL_DEGREE`) meets the integrals to about 1e-12 on strongly
+distorted facets (a warped facet's area element too).
+
+Every function here is analytic in the vertex coordinates away from its branch decisions
+(which vertices a clipping edge keeps, a polygon's orientation, the rule a pair takes),
+and those are taken on the real parts: evaluated at complex coordinates x + i h e it gives
+the directional derivative along e as the imaginary part over h
+(:mod:`contactqvi.contact.linearisation`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from contactqvi.contact.facets import (
+    POLYGON_ORDER,
+    area_elements,
+    dual_coefficients,
+    length,
+    magnitude,
+    planar_jacobians,
+    quadrilateral_shapes,
+    reference_coordinates,
+    triangle_rule,
+)
+
+__all__ = ["AFFINE_DEGREE", "QUADRILATERAL_DEGREE", "clip_polygons", "diameters", "segment_integrals"]
+
+#: Degree-2 rule on a triangle (barycentric points, weights summing to 1): exact for
+#: psi_i phi_j^m on a flat pair of linear triangles.
+_POINTS = np.array([[2 / 3, 1 / 6, 1 / 6], [1 / 6, 2 / 3, 1 / 6], [1 / 6, 1 / 6, 2 / 3]])
+_WEIGHTS = np.full(3, 1.0 / 3.0)
+#: Degree of the rule on the triangles of a clipped polygon for a pair of parallelograms or of a
+#: parallelogram and a triangle: psi_i phi_j^m is a polynomial of degree 4 on a flat pair (exact).
+AFFINE_DEGREE = 4
+#: ... and for a pair with a quadrilateral that is no parallelogram (distorted or warped): the
+#: inverse bilinear map makes psi_i phi_j^m no polynomial, and the rule's error decays with its
+#: degree. A flat interface of quadrilaterals moved by up to 0.3 of their size reproduces linear
+#: fields to 8e-8 (degree 6), 9e-13 (12), 4e-16 (16); triangles cut into three quadrilaterals
+#: (meshes/hex_on_split_tets.geo, as slave) to 3e-7 (12), 6e-9 (16), 5e-11 (20, 79 points),
+#: 3e-14 (30), and the patch test on them as master to 3e-8, 6e-10, 4e-12 (tests/test_hex_mortar.py).
+QUADRILATERAL_DEGREE = 20
+
+def clip_polygons(polygon: np.ndarray, count: np.ndarray, clip: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Sutherland-Hodgman: convex polygons clipped by convex counter-clockwise polygons, vectorised.
+
+    Args:
+        polygon: (P, K, 2) vertices, counter-clockwise, the first ``count`` valid; K must
+            leave room for one more vertex per edge of ``clip``.
+        count: (P,) vertex counts.
+        clip: (P, L, 2) counter-clockwise convex polygons (triangles, quadrilaterals), all
+            of L vertices.
+
+    Returns:
+        ``(polygon, count)``: the intersections, (P, K', 2) and (P,); count < 3 means empty.
+        K' > K only where round-off made a polygon degenerate (nearly coincident vertices on
+        either side of a clipping edge: a half-plane then cuts it more than twice; seen on
+        rotated surfaces, where coordinates carry 1e-17 noise).
+    """
+    P = polygon.shape[0]
+    rows = np.arange(P)
+    L = clip.shape[1]
+    for e in range(L):
+        K = polygon.shape[1]
+        a, b = clip[:, e], clip[:, (e + 1) % L]
+        edge = b - a
+
+        def side(p: np.ndarray) -> np.ndarray:
+            return edge[:, None, 0] * (p[..., 1] - a[:, None, 1]) - edge[:, None, 1] * (p[..., 0] - a[:, None, 0])
+
+        nxt_index = (np.arange(K)[None, :] + 1) % np.maximum(count, 1)[:, None]
+        nxt = polygon[rows[:, None], nxt_index]
+        s_cur, s_nxt = side(polygon), side(nxt)
+        valid = np.arange(K)[None, :] < count[:, None]
+        in_cur, in_nxt = s_cur.real >= 0.0, s_nxt.real >= 0.0
+        denom = np.where(s_cur - s_nxt == 0.0, 1.0, s_cur - s_nxt)
+        crossing = polygon + (s_cur / denom)[..., None] * (nxt - polygon)
+        # emitted per input vertex i: [crossing if the edge i -> i+1 crosses] then [nxt if nxt inside]
+        emit_cross = valid & (in_cur != in_nxt)
+        emit_next = valid & in_nxt
+        slots = np.cumsum(np.stack([emit_cross, emit_next], axis=2).reshape(P, 2 * K), axis=1) - 1
+        values = np.stack([crossing, nxt], axis=2).reshape(P, 2 * K, 2)
+        emitted = np.stack([emit_cross, emit_next], axis=2).reshape(P, 2 * K)
+        out = np.zeros((P, max(K, int(emitted.sum(axis=1).max(initial=0))), 2), dtype=polygon.dtype)
+        p_idx, k_idx = np.nonzero(emitted)
+        out[p_idx, slots[p_idx, k_idx]] = values[p_idx, k_idx]
+        polygon, count = out, emitted.sum(axis=1)
+    return polygon, count
+
+
+def _plane_coordinates(origin: np.ndarray, e1: np.ndarray, e2: np.ndarray, x: np.ndarray) -> np.ndarray:
+    d = x - origin[:, None, :]
+    return np.stack([np.einsum("pj,pkj->pk", e1, d), np.einsum("pj,pkj->pk", e2, d)], axis=2)
+
+
+def _barycentric(triangle: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(P, Q, 3) barycentric coordinates of (P, Q, 2) points in (P, 3, 2) triangles."""
+    t = np.stack([triangle[:, 1] - triangle[:, 0], triangle[:, 2] - triangle[:, 0]], axis=2)  # (P, 2, 2)
+    lam = np.linalg.solve(t[:, None], (points - triangle[:, None, 0])[..., None])[..., 0]
+    return np.concatenate([1.0 - lam.sum(axis=2, keepdims=True), lam], axis=2)
+
+
+def _signed_area(triangle: np.ndarray) -> np.ndarray:
+    d1, d2 = triangle[:, 1] - triangle[:, 0], triangle[:, 2] - triangle[:, 0]
+    return 0.5 * (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
+
+
+def _separated(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(P,) whether the polygons ``b`` (P, K, 2) lie strictly outside an edge of the convex
+    counter-clockwise polygons ``a`` (P, L, 2): one half of a separating axis test."""
+    separated = np.zeros(len(a), dtype=bool)
+    L = a.shape[1]
+    for e in range(L):
+        p, edge = a[:, e], a[:, (e + 1) % L] - a[:, e]
+        side = edge[:, None, 0] * (b[..., 1] - p[:, None, 1]) - edge[:, None, 1] * (b[..., 0] - p[:, None, 0])
+        separated |= (side.real < 0.0).all(axis=1)
+    return separated
+
+
+def _counter_clockwise(x2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Facets projected to the plane (P, n, 2), as counter-clockwise polygons, and their signed areas."""
+    if x2.shape[1] == 3:
+        area = _signed_area(x2)
+        return np.where((area.real < 0.0)[:, None, None], x2[:, [0, 2, 1]], x2), area
+    polygon = x2[:, POLYGON_ORDER[x2.shape[1]]]
+    area = 0.5 * np.sum(polygon[..., 0] * np.roll(polygon[..., 1], -1, axis=1)
+                        - np.roll(polygon[..., 0], -1, axis=1) * polygon[..., 1], axis=1)
+    return np.where((area.real < 0.0)[:, None, None], polygon[:, ::-1], polygon), area
+
+
+def _projected_pairs(slave: np.ndarray, normal: np.ndarray, master: np.ndarray) -> tuple:
+    """Slave and master facets in coordinates of the slave facet's plane (through its vertex 0,
+    normal ``normal``), their counter-clockwise polygons, and the pairs that may overlap there."""
+    origin = slave[:, 0]
+    e1 = slave[:, 1] - origin
+    if slave.shape[1] == 4:  # the edge of a warped quadrilateral leaves its mean plane
+        e1 -= np.einsum("ij,ij->i", e1, normal)[:, None] * normal
+    e1 /= length(e1)[:, None]
+    e2 = np.cross(normal, e1)
+    s2 = _plane_coordinates(origin, e1, e2, slave)
+    m2 = _plane_coordinates(origin, e1, e2, master)
+    s_ccw, s_area = _counter_clockwise(s2)
+    m_ccw, m_area = _counter_clockwise(m2)
+    # a master facet seen edge-on has no shadow; most candidate pairs of a search are disjoint
+    # (separating axis test, a tenth of the clipping's cost)
+    shadow = np.abs(m_area.real) > 1e-12 * np.abs(s_area.real)
+    pairs = np.flatnonzero(shadow & ~_separated(s_ccw, m_ccw) & ~_separated(m_ccw, s_ccw))
+    return s2, m2, s_ccw, m_ccw, pairs
+
+
+def _shape_values(x2: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(P, Q, n) shape functions of facets projected to the plane (P, n, 2) at points (P, Q, 2)."""
+    if x2.shape[1] == 3:
+        return _barycentric(x2, points)
+    return quadrilateral_shapes(reference_coordinates(x2, points))
+
+
+def _slave_values(slave: np.ndarray, s2: np.ndarray, dual: np.ndarray | None,
+                  points: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """(P, Q, n) dual basis psi of slave facets at points (P, Q, 2) of their plane, and the
+    ratio of the facet's area element to the plane's there (None: 1, a flat triangle)."""
+    if slave.shape[1] == 3:
+        return 4.0 * _barycentric(s2, points) - 1.0, None
+    xi = reference_coordinates(s2, points)
+    ratio = area_elements(slave, xi) / planar_jacobians(s2, xi)
+    return np.einsum("pik,pqk->pqi", dual, quadrilateral_shapes(xi)), ratio
+
+
+def _affine(x: np.ndarray) -> np.ndarray:
+    """(P,) whether facets (P, n, 3) have an affine map: triangles, and parallelograms to round-off."""
+    if x.shape[1] == 3:
+        return np.ones(len(x), dtype=bool)
+    return np.linalg.norm(x.real[:, 3] - x.real[:, 2] - x.real[:, 1] + x.real[:, 0], axis=1) <= 1e-12 * diameters(x.real)
+
+
+def _rules(slave: np.ndarray, master: np.ndarray, degree: int | None) -> list[tuple[np.ndarray, tuple]]:
+    """The pairs (a mask) integrated with each rule (barycentric points, weights): ``degree``
+    if given; else degree 2 for two triangles and :data:`AFFINE_DEGREE` for other pairs of
+    affine facets (exact on a flat pair), :data:`QUADRILATERAL_DEGREE` for the rest."""
+    if degree is not None:
+        return [(np.ones(len(slave), dtype=bool), triangle_rule(degree))]
+    if slave.shape[1] == master.shape[1] == 3:
+        return [(np.ones(len(slave), dtype=bool), (_POINTS, _WEIGHTS))]
+    affine = _affine(slave) & _affine(master)
+    return [(affine, triangle_rule(AFFINE_DEGREE)), (~affine, triangle_rule(QUADRILATERAL_DEGREE))]
+
+
+def segment_integrals(slave: np.ndarray, normal: np.ndarray, master: np.ndarray,
+                      degree: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Mortar integrals of pairs of a slave and a master facet (triangles or quadrilaterals).
+
+    Args:
+        slave: (P, n, 3) slave vertices (n = 3 or 4, quadrilaterals in tensor-product
+            order); normal: (P, 3) unit normal of the slave facet (of its mean plane).
+        master: (P, m, 3) master vertices.
+        degree: of the rule on each triangle of the clipped polygons; None: exact where
+            the pair's facets are triangles or parallelograms (:func:`_rules`), else
+            :data:`QUADRILATERAL_DEGREE`.
+
+    Returns:
+        ``(D, M)``: (P, n) int psi_i and (P, n, m) int psi_i phi_j^m over the part of the
+        slave facet that the master facet, projected onto the slave facet's plane along
+        ``normal``, covers (zero where they do not overlap); quadrilaterals with their
+        true area element.
+    """
+    P, ns, nm = len(slave), slave.shape[1], master.shape[1]
+    s2, m2, s_ccw, m_ccw, pairs = _projected_pairs(slave, normal, master)
+    polygon = np.zeros((len(pairs), ns + nm, 2), dtype=m_ccw.dtype)  # clipping adds at most one vertex per clipping edge
+    polygon[:, :nm] = m_ccw[pairs]
+    polygon, count = clip_polygons(polygon, np.full(len(pairs), nm), s_ccw[pairs])
+    dual = dual_coefficients(slave[pairs]) if ns == 4 else None
+    D, M = np.zeros((P, ns), dtype=polygon.dtype), np.zeros((P, ns, nm), dtype=polygon.dtype)
+    for group, rule in _rules(slave[pairs], master[pairs], degree):
+        for k in range(1, polygon.shape[1] - 1):  # fan (v0, v_k, v_k+1)
+            has = group & (count >= k + 2)
+            if not has.any():
+                continue
+            tri = np.stack([polygon[has, 0], polygon[has, k], polygon[has, k + 1]], axis=1)
+            area = magnitude(_signed_area(tri))
+            points = np.einsum("qi,pij->pqj", rule[0], tri)
+            psi, ratio = _slave_values(slave[pairs[has]], s2[pairs[has]], None if dual is None else dual[has], points)
+            phi_m = _shape_values(m2[pairs[has]], points)
+            weights = area[:, None] * rule[1][None, :]
+            if ratio is not None:
+                weights = weights * ratio
+            D[pairs[has]] += np.einsum("pq,pqi->pi", weights, psi)
+            M[pairs[has]] += np.einsum("pq,pqi,pqj->pij", weights, psi, phi_m)
+    return D, M
+
+
+def diameters(x: np.ndarray) -> np.ndarray:
+    """(f,) the largest distance between two vertices of each facet (f, n, 3): its longest edge
+    (a triangle) or the longest of edges and diagonals (a quadrilateral)."""
+    a, b = np.triu_indices(x.shape[1], k=1)
+    return np.linalg.norm(x[:, a] - x[:, b], axis=2).max(axis=1, initial=0.0)
