@@ -5,14 +5,14 @@ P = mu (F - F^-T) + lambda ln J F^-T, parametrised by Young's modulus and Poisso
 of its linearisation. A block on rollers (its bottom and two symmetry planes), the other
 lateral faces free, compressed along z: F = diag(a, a, s) (docs/finite_strain.md):
 
-* Sect. 6, one block: zero lateral stress (6.1) mu (a^2 - 1) + lambda ln(a^2 s) = 0 and the
-  axial nominal stress (6.2) P33 = mu (s - 1/s) + lambda ln(a^2 s) / s = mu (s - a^2 / s);
+* Sect. 6, one block: zero lateral stress (12.1) mu (a^2 - 1) + lambda ln(a^2 s) = 0 and the
+  axial nominal stress (12.2) P33 = mu (s - 1/s) + lambda ln(a^2 s) / s = mu (s - a^2 / s);
 * Sect. 12, blocks stacked along z with frictionless interfaces (issue 45): each block in
   uniaxial stress with the same axial nominal stress (12.3), the axial stretches adding up to
   the total shortening (12.4); the blocks expand alike (12.5) only for Poisson's ratios
   chosen for one shortening (:func:`matching_poisson`).
 
-(6.1) is solved for s explicitly, s = a^-2 exp(-mu (a^2 - 1) / lambda), so every root below
+(12.1) is solved for s explicitly, s = a^-2 exp(-mu (a^2 - 1) / lambda), so every root below
 is a one-dimensional bracketed root (Brent) of explicit monotone functions.
 """
 
@@ -30,18 +30,18 @@ __all__ = ["StackedCompression", "matching_poisson", "stacked_compression", "uni
 
 #: A block's material: (Young's modulus (Pa), Poisson's ratio).
 Elastic = tuple[float, float]
-#: Relative tolerance of the roots: round-off of the stretches.
+#: Tolerance of the roots in the stretches (of order 1; times mu for a stress): round-off.
 _XTOL = 1e-15
 
 
 def _axial_stretch(a: float, young: float, poisson: float) -> float:
-    """s of lateral stretch ``a`` under zero lateral stress: (6.1) solved for s."""
+    """s of lateral stretch ``a`` under zero lateral stress: (12.1) solved for s."""
     mu, lmbda = lame_parameters(young, poisson)
     return np.exp(-mu * (a * a - 1.0) / lmbda) / (a * a)
 
 
 def _stress_of_lateral(a: float, young: float, poisson: float) -> float:
-    """P33 (Pa) at lateral stretch ``a`` under zero lateral stress: (6.2) with (6.1),
+    """P33 (Pa) at lateral stretch ``a`` under zero lateral stress: (12.2) with (12.1),
     mu (s - a^2 / s), decreasing in a."""
     mu, _ = lame_parameters(young, poisson)
     s = _axial_stretch(a, young, poisson)
@@ -49,9 +49,9 @@ def _stress_of_lateral(a: float, young: float, poisson: float) -> float:
 
 
 def uniaxial_stress(s: float, young: float, poisson: float) -> tuple[float, float]:
-    """Lateral stretch a (6.1) and axial nominal stress P33 (Pa, (6.2)) of uniaxial stress at axial stretch s."""
+    """Lateral stretch a (12.1) and axial nominal stress P33 (Pa, (12.2)) of uniaxial stress at axial stretch s."""
     mu, lmbda = lame_parameters(young, poisson)
-    low, high = sorted((1.0, 1.0 / np.sqrt(s)))  # (6.1) changes sign between a = 1 and a = s^-1/2
+    low, high = sorted((1.0, 1.0 / np.sqrt(s)))  # (12.1) changes sign between a = 1 and a = s^-1/2
     a = scipy.optimize.brentq(lambda a: mu * (a * a - 1.0) + lmbda * np.log(a * a * s), low, high, xtol=_XTOL)
     return a, mu * (s - 1.0 / s) + lmbda * np.log(a * a * s) / s
 
