@@ -168,7 +168,7 @@ def against_reference(rows: list[dict]) -> None:
     reference = {(r["friction"], r["step"]): np.asarray(r["force"]) for r in rows
                  if r["search"] == "reference" and "force" in r}
     for r in rows:
-        ref = reference.get((r["friction"], r["step"]))
+        ref = reference.get((r["friction"], r.get("step")))
         if ref is not None and "force" in r:
             r["force_difference"] = float(np.linalg.norm(np.asarray(r["force"]) - ref) / np.linalg.norm(ref))
 
@@ -179,7 +179,7 @@ def homogeneous_markdown(rows: list[dict]) -> str:
              "| force error | closed form's lateral mismatch / travel | run s |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append(f"| {r['case']} | {r['search']} | {r['step']} | {r['status']} | {cell(r, 'newton')} "
+        lines.append(f"| {r['case']} | {r['search']} | {cell(r, 'step')} | {r['status']} | {cell(r, 'newton')} "
                      f"| {cell(r, 'attempts')} "
                      f"| {cell(r, 'searches')} | {cell(r, 'u_error', '.2e')} | {cell(r, 'tangential', '.2e')} "
                      f"| {cell(r, 'force_error', '.2e')} | {cell(r, 'mismatch', '.2e')} "
@@ -193,7 +193,7 @@ def bulging_markdown(rows: list[dict]) -> str:
              "| \\|F - F_ref\\| / \\|F_ref\\| | run s |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         fz = f"{r['force'][2]:.6e}" if "force" in r else "\u2013"
-        lines.append(f"| {r['friction']:g} | {r['search']} | {r['step']} | {r['status']} | {cell(r, 'newton')} "
+        lines.append(f"| {r['friction']:g} | {r['search']} | {cell(r, 'step')} | {r['status']} | {cell(r, 'newton')} "
                      f"| {cell(r, 'attempts')} "
                      f"| {cell(r, 'searches')} | {fz} | {cell(r, 'tangential', '.2e')} "
                      f"| {cell(r, 'force_difference', '.2e')} | {cell(r, 'seconds', '.0f')} |")
