@@ -47,13 +47,13 @@ import typing
 from mpi4py import MPI
 
 import numpy as np
-from rows import cell, failed_row, merge_rows, order
 
 from contactqvi.case import ContactCase, parse_case
 from contactqvi.paraview import read_vtx
 from contactqvi.problems.uniaxial import stacked_compression
 from contactqvi.runner import run_case
 from contactqvi.tables import write_table
+from rows import cell, failed_row, merge_rows, order
 
 HERE = pathlib.Path(__file__).resolve().parent
 DATA = HERE / "data" / "homogeneous_compression"

@@ -7,7 +7,8 @@ holds every cell once, so volumes and integrals are those of a serial run. A
 point on the boundary between two pieces is in both; the copy in the piece of a
 rank that does not own it is flagged in ``vtkGhostType`` (1, a duplicate point),
 as DOLFINx's own writer flags ghost points. A rank that owns no cell writes no
-block.
+block. :func:`read_vtx` reads one step back on one rank, its blocks appended as
+ParaView appends them (benchmarks and tests compare fields with it).
 
 DOLFINx 0.9's ``VTXWriter`` writes the ghost cells of each rank as well (at lev 4
 of the paper's body with shared-facet ghosts on 2 ranks: 1152 cells instead of

@@ -1,4 +1,5 @@
-"""Readers of the output files, for tests: VTX (ours or DOLFINx's, :func:`contactqvi.paraview.read_vtx`) and XDMF point data."""
+"""Readers of the output files, for tests: VTX (ours or DOLFINx's, :func:`contactqvi.paraview.read_vtx`) and
+XDMF point data."""
 
 from __future__ import annotations
 
