@@ -7,7 +7,8 @@ holds every cell once, so volumes and integrals are those of a serial run. A
 point on the boundary between two pieces is in both; the copy in the piece of a
 rank that does not own it is flagged in ``vtkGhostType`` (1, a duplicate point),
 as DOLFINx's own writer flags ghost points. A rank that owns no cell writes no
-block.
+block. :func:`read_vtx` reads one step back on one rank, its blocks appended as
+ParaView appends them (benchmarks and tests compare fields with it).
 
 DOLFINx 0.9's ``VTXWriter`` writes the ghost cells of each rank as well (at lev 4
 of the paper's body with shared-facet ghosts on 2 ranks: 1152 cells instead of
@@ -24,6 +25,7 @@ from __future__ import annotations
 import dataclasses
 import os
 import pathlib
+import re
 import shutil
 import typing
 from xml.sax.saxutils import quoteattr
@@ -43,6 +45,7 @@ __all__ = [
     "MeshPiece",
     "VTXDatasetWriter",
     "gather_pieces",
+    "read_vtx",
     "write_vtx",
     "write_vtx_dataset",
     "write_xdmf",
@@ -72,6 +75,14 @@ class Dataset:
     point_data: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
     cell_data: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
     duplicate: np.ndarray | None = None
+
+    def cell_data_at_points(self, name: str) -> np.ndarray:
+        """The cell field ``name`` at each point, from one cell that uses it: for a field that is
+        the same in every cell around a point (a body's index)."""
+        values = self.cell_data[name]
+        at_points = np.empty((len(self.points), *values.shape[1:]), dtype=values.dtype)
+        at_points[self.cells.ravel()] = np.repeat(values, self.cells.shape[1], axis=0)
+        return at_points
 
 
 def _is_nodal(V: fem.FunctionSpace) -> bool:
@@ -206,6 +217,44 @@ def _vtx_schema(point_names: typing.Iterable[str], cell_names: typing.Iterable[s
         "      <CellData>\n" + arrays(cell_names) + "      </CellData>\n"
         "    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n"
     )
+
+
+def read_vtx(path: str | os.PathLike, step: int = 0) -> Dataset:
+    """Read one step (negative: from the end) of a VTX directory into one :class:`Dataset`, its blocks appended.
+
+    The blocks (one per writing rank) are appended as ParaView's VTX reader
+    appends them: point indices of a block's cells offset by the points of the
+    blocks before it; ``vtkGhostType`` becomes ``duplicate``. Not collective.
+    """
+    import adios2
+
+    with adios2.FileReader(str(path)) as reader:
+        step = step % reader.num_steps()
+        schema = reader.read_attribute_string("vtk.xml")
+        schema = schema if isinstance(schema, str) else schema[0]
+        sections = {}
+        for kind in ("PointData", "CellData"):
+            section = re.search(f"<{kind}>(.*?)</{kind}>", schema, re.S)
+            sections[kind] = re.findall(r'<DataArray Name="([^"]*)"\s*/>', section[1] if section else "")
+
+        def blocks(name: str) -> list[np.ndarray]:
+            n_blocks = len(reader.all_blocks_info(name)[step])
+            return [reader.read(name, block_id=b, step_selection=[step, 1]) for b in range(n_blocks)]
+
+        geometry = [g.reshape(-1, 3) for g in blocks("geometry")]
+        offsets = np.cumsum([0] + [len(g) for g in geometry[:-1]])
+        connectivity = [c.reshape(-1, c.reshape(-1)[0] + 1)[:, 1:] + offset
+                        for c, offset in zip(blocks("connectivity"), offsets)]
+        types = int(np.atleast_1d(reader.read("types", step_selection=[step, 1]))[0])
+        dataset = Dataset(points=np.concatenate(geometry), cells=np.concatenate(connectivity), cell_type=types)
+        for name in sections["PointData"]:
+            if name == "vtkGhostType":
+                dataset.duplicate = np.concatenate(blocks(name)) != 0
+            elif name != "vtkOriginalPointIds":
+                dataset.point_data[name] = np.concatenate(blocks(name))
+        for name in sections["CellData"]:
+            dataset.cell_data[name] = np.concatenate(blocks(name))
+    return dataset
 
 
 def _adios(comm: MPI.Comm):

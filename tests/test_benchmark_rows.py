@@ -94,3 +94,28 @@ def test_weak_scaling_shows_a_failed_run_with_its_status_and_time():
     text = weak_scaling.markdown({"machine": {"cores": 2}, "rows": [failed]})
     assert "| 1 | 6 | failed: exit 137 after 1234 s |" in text
     assert weak_scaling.projection([failed]) == {}
+
+
+def test_homogeneous_compression_counts_and_tables():
+    """``benchmarks/homogeneous_compression.py``: the attempts and searches of a cut step from its history
+    (a mode searched each step searches before every solve, ``once`` before the first step only, and a
+    mode that records ``searches`` is taken at its word); a run with a mode the case reader does not know
+    (a new search mode before it exists) is a failed row of both tables, which still compare the others
+    with the reference."""
+    import homogeneous_compression as hc
+
+    history = [{"k": 0, "substep": 0}, *({"k": k, "substep": 1, "search": 0} for k in range(3)),
+               {"k": 0, "substep": 1, "search": 1}, {"k": 0, "substep": 2, "search": 0}]
+    step = {"step": 2, "history": history}
+    assert hc.attempts(step) == 3
+    assert (hc.searches(step, "until_settled"), hc.searches(step, "once"), hc.searches({**step, "step": 1}, "once"),
+            hc.searches({**step, "searches": 7}, "current")) == (4, 0, 1, 7)
+    failed = rows.failed_row("failed: ParameterError: contacts[0].search", 0.1, search="current", friction=0.3,
+                             case="bulging")
+    assert "| 30 % | current | \u2013 | failed: ParameterError" in hc.homogeneous_markdown([{**failed, "case": "30 %"}])
+    measured = [failed, *({"friction": 0.3, "search": mode, "step": 1, "status": "converged_rtol", "newton": 6,
+                           "force": [0.0, 0.0, fz]} for mode, fz in (("reference", 2.0), ("once", 2.2)))]
+    hc.against_reference(measured)
+    assert measured[2]["force_difference"] == pytest.approx(0.1) and "force_difference" not in measured[0]
+    assert "| 0.3 | once | 1 | converged_rtol | 6 | \u2013 | \u2013 | 2.200000e+00 | \u2013 | 1.00e-01 |" in \
+        hc.bulging_markdown(measured)

@@ -30,6 +30,7 @@ from contactqvi.elasticity import lame_parameters
 from contactqvi.laws import Frictionless
 from contactqvi.materials import NeoHookean, SaintVenantKirchhoff
 from contactqvi.meshes import create_contact_body
+from contactqvi.problems.uniaxial import uniaxial_stress
 
 YOUNG, POISSON = 10e6, 0.3  # Pa, a compressible rubber-like solid
 COMPRESSION = 0.3  # of the height 1 m
@@ -39,8 +40,7 @@ MU, LMBDA = lame_parameters(YOUNG, POISSON)
 
 def neo_hookean(s: float) -> tuple[float, float]:
     """Lateral stretch a and axial nominal stress P33 (Pa) of uniaxial stress at axial stretch s."""
-    a = scipy.optimize.brentq(lambda a: MU * (a * a - 1.0) + LMBDA * np.log(a * a * s), 0.5, 2.0, xtol=1e-15)
-    return a, MU * (s - 1.0 / s) + LMBDA * np.log(a * a * s) / s
+    return uniaxial_stress(s, YOUNG, POISSON)
 
 
 def saint_venant_kirchhoff(s: float) -> tuple[float, float]:

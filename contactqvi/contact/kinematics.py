@@ -1,6 +1,6 @@
 """The law's variables of a body pair in the current configuration and their derivatives (issue 45).
 
-docs/finite_strain.md, Sect. 12, (12.1): at a slave node i with the mortar coupling C of the
+docs/finite_strain.md, Sect. 13, (13.1): at a slave node i with the mortar coupling C of the
 current positions x, its nodal normal n_i and frame (t_1, t_2, n)_i of
 :func:`~contactqvi.obstacles.tangent_frames`,
 
@@ -61,7 +61,7 @@ def _projection(comm: MPI.Comm, index_map, coupling: MortarCoupling, current: np
 
 def contact_variables(comm: MPI.Comm, index_map, coupling: MortarCoupling, previous: MortarCoupling,
                       current: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(12.1) of the coupling's rows at the current positions ``current`` (local nodes, 3).
+    """(13.1) of the coupling's rows at the current positions ``current`` (local nodes, 3).
 
     ``previous`` has the rows of the same slave nodes (a coupling of the step's start restricted
     to them). Returns ``(v, frames, s, slip)``: (m, 3) the variables (t_1, t_2, n components),
@@ -77,7 +77,7 @@ def contact_variables(comm: MPI.Comm, index_map, coupling: MortarCoupling, previ
 
 def variable_derivatives(index_map, coupling: MortarCoupling, previous: MortarCoupling, s: np.ndarray,
                          slip: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The derivatives of (12.1) with respect to the current positions, entries
+    """The derivatives of (13.1) with respect to the current positions, entries
     ``(rows, dofs, values)``: (E,) coupling row, (E,) global coordinate index 3 J + c, (E, 3)
     (t_1, t_2, n) components; duplicates to be added. ``s``, ``slip`` from :func:`contact_variables`;
     ``coupling`` must carry its derivatives (``mortar_coupling(..., linearised=True)``)."""
