@@ -6,7 +6,9 @@ dD and dM of the segment integrals; the sphere pressed into the block of
 ``meshes/hertz_bodies_coarse.geo`` (tetrahedra) and ``hertz_bodies_hex_coarse.geo``
 (hexahedra), both distorted by a smooth displacement field, check the nodal quantities
 (L.1)-(L.3): the weighted separation, the nodal normal and the weighted gap of every coupled
-slave node, for coordinates of slave and master nodes. Central differences of step h have
+slave node, the law's variables (13.1) (gap and objective slip in the node's frame), the
+frames' turn of the slave forces and the master nodes' shares (L.4), for coordinates of slave
+and master nodes. Central differences of step h have
 an error of O(h^2) and of round-off / h; with h = 1e-6 of the facets' size both are near
 1e-10 of the derivative, and the bound is the issue's 1e-6.
 """
@@ -22,12 +24,13 @@ import pytest
 
 from dolfinx import fem
 
-from contactqvi.contact.kinematics import contact_variables, variable_derivatives
+from contactqvi.contact.kinematics import contact_variables, frame_turn, variable_derivatives
 from contactqvi.contact.linearisation import segment_jacobians
 from contactqvi.contact.mortar import MortarCoupling, mortar_coupling
 from contactqvi.contact.owners import fetch_rows, owner_ranges, sum_to_owners
 from contactqvi.contact.segments import segment_integrals
 from contactqvi.meshes import boundary_facets, read_gmsh, split_by_body
+from contactqvi.obstacles import tangent_frames
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 #: The issue's bound on the relative difference between a derivative and its central difference.
@@ -129,13 +132,14 @@ def test_nodal_geometry_derivatives(mesh):
     rng = np.random.default_rng(3)
     dofs = comm.bcast(rng.choice(candidates, size=min(12, len(candidates)), replace=False) if comm.rank == 0 else None)
     h = 1e-6 * size / 10
-    errors = np.zeros(5)
-    scales = np.zeros(5)
+    errors = np.zeros(6)
+    scales = np.zeros(6)
     owners = owner_ranges(comm, index_map)
     weights = np.cos(x[base.slave_blk])  # any slave values v_i held fixed
     transfer = derivatives.transfer(comm, index_map, base, weights)
     _, _, s_base, slip_base = contact_variables(comm, index_map, base, start, x + u)
     variables = variable_derivatives(index_map, base, start, s_base, slip_base)
+    turn = frame_turn(base, weights)
     for dof in dofs:
         node, component = divmod(int(dof), 3)
         local = _local_index(index_map, node)
@@ -149,9 +153,10 @@ def test_nodal_geometry_derivatives(mesh):
             assert np.array_equal(c.slave_blk, base.slave_blk)
             s = _current_separation(V, c, x + v)
             results.append((s, c.normal, np.einsum("ij,ij->i", c.normal, s),
-                            contact_variables(comm, index_map, c, start, x + v)[0]))
+                            contact_variables(comm, index_map, c, start, x + v)[0],
+                            np.einsum("iaj,ij->ia", tangent_frames(c.normal), weights)))
             results[-1] += (_master_shares(V, c, weights),)
-        fd = [(a - b) / (2 * h) for a, b in zip(results[0][:4], results[1][:4])]
+        fd = [(a - b) / (2 * h) for a, b in zip(results[0][:5], results[1][:5])]
         # predicted: the nodes' own motion (e_i - C_iJ e_c) plus the geometric part
         s_base = _current_separation(V, base, x + u)
         explicit = np.zeros((len(rows_glob), 3))
@@ -168,18 +173,21 @@ def test_nodal_geometry_derivatives(mesh):
         at = variables[1] == dof
         dv = np.zeros((len(rows_glob), 3))
         np.add.at(dv, variables[0][at], variables[2][at])
-        for k, (predicted, difference) in enumerate(zip((ds, geometric_n, dgap, dv), fd)):
+        at = turn[1] == dof
+        dturn = np.zeros((len(rows_glob), 3))
+        np.add.at(dturn, turn[0][at], turn[2][at])
+        for k, (predicted, difference) in enumerate(zip((ds, geometric_n, dgap, dv, dturn), fd)):
             errors[k] = max(errors[k], np.abs(predicted - difference).max(initial=0.0))
             scales[k] = max(scales[k], np.abs(predicted).max(initial=0.0))
         # (L.4): the master nodes' shares sum_i C_ij v_i, summed on the masters' owners
-        shares = [results[0][4], results[1][4]]
+        shares = [results[0][5], results[1][5]]
         at = transfer[1] == dof
         got = sum_to_owners(comm, owners, transfer[0][at], np.zeros(at.sum()), transfer[2][at])
         masters = np.union1d(np.union1d(shares[0][0], shares[1][0]), got[0])
         difference = (_on(masters, *shares[0]) - _on(masters, *shares[1])) / (2 * h)
         predicted = _on(masters, got[0], got[2])
-        errors[4] = max(errors[4], np.abs(predicted - difference).max(initial=0.0))
-        scales[4] = max(scales[4], np.abs(predicted).max(initial=0.0))
+        errors[5] = max(errors[5], np.abs(predicted - difference).max(initial=0.0))
+        scales[5] = max(scales[5], np.abs(predicted).max(initial=0.0))
     comm.Allreduce(MPI.IN_PLACE, errors, op=MPI.MAX)
     comm.Allreduce(MPI.IN_PLACE, scales, op=MPI.MAX)
     assert (scales > 0.0).all(), scales

@@ -16,7 +16,9 @@ combine the nodes' own motion (C fixed) with the geometric parts (L.1)-(L.2) of
     dv_n = n . (dx_i - sum_j C_ij dx_j + ds^geo) + dn . s,
     dv_a = t_a . (sum_j (C_ij - C_ij^prev) dx_j - ds^geo) + dt_a . (p - p^prev),
 
-and the frame's, from dn through the construction of t_1 (:func:`frame_derivatives`).
+and the frame's, from dn through the construction of t_1 (:func:`frame_derivatives`). The
+same turn of the frames changes the slave rows R_i^T r_i of the forces (12.2) at fixed r
+(:func:`frame_turn`).
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from contactqvi.contact.mortar import MortarCoupling
 from contactqvi.contact.owners import fetch_rows
 from contactqvi.obstacles import tangent_frames
 
-__all__ = ["contact_variables", "frame_derivatives", "variable_derivatives"]
+__all__ = ["contact_variables", "frame_derivatives", "frame_turn", "variable_derivatives"]
 
 
 def frame_derivatives(normal: np.ndarray, dn: np.ndarray) -> np.ndarray:
@@ -115,3 +117,13 @@ def _weighted_motion(coupling: MortarCoupling, frames: np.ndarray, sign_tangenti
     weights = np.repeat(coupling.C_values, 3)[:, None]
     values = weights * components * np.array([sign_tangential, sign_tangential, 0.0 if tangential_only else -1.0])
     return rows, dofs, values
+
+
+def frame_turn(coupling: MortarCoupling, forces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The derivative of R_i^T r_i (the (t_1, t_2, n) components of slave forces ``forces``
+    (m, 3) held fixed) with respect to the current positions, through the frames' turn:
+    entries ``(rows, dofs, values)`` as :func:`variable_derivatives`' (the slave rows of the
+    term Gamma of docs/finite_strain.md, Sect. 13)."""
+    d = coupling.derivatives
+    dframes = frame_derivatives(coupling.normal[d.rows], d.normal)
+    return d.rows, d.dofs, np.einsum("eaj,ej->ea", dframes, forces[d.rows])
