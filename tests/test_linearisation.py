@@ -24,7 +24,7 @@ import pytest
 
 from dolfinx import fem
 
-from contactqvi.contact.kinematics import contact_variables, frame_turn, variable_derivatives
+from contactqvi.contact.kinematics import contact_variables, frame_turn, master_shares, variable_derivatives
 from contactqvi.contact.linearisation import segment_jacobians
 from contactqvi.contact.mortar import MortarCoupling, mortar_coupling
 from contactqvi.contact.owners import fetch_rows, owner_ranges, sum_to_owners
@@ -136,7 +136,7 @@ def test_nodal_geometry_derivatives(mesh):
     scales = np.zeros(6)
     owners = owner_ranges(comm, index_map)
     weights = np.cos(x[base.slave_blk])  # any slave values v_i held fixed
-    transfer = derivatives.transfer(comm, index_map, base, weights)
+    transfer = master_shares(comm, index_map, base, weights)
     _, _, s_base, slip_base = contact_variables(comm, index_map, base, start, x + u)
     variables = variable_derivatives(index_map, base, start, s_base, slip_base)
     turn = frame_turn(base, weights)

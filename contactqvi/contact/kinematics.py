@@ -18,7 +18,8 @@ combine the nodes' own motion (C fixed) with the geometric parts (L.1)-(L.2) of
 
 and the frame's, from dn through the construction of t_1 (:func:`frame_derivatives`). The
 same turn of the frames changes the slave rows R_i^T r_i of the forces (12.2) at fixed r
-(:func:`frame_turn`).
+(:func:`frame_turn`), and the change of C moves the master rows sum_i C_ij P_i r_i
+(:func:`master_shares`).
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from contactqvi.contact.mortar import MortarCoupling
 from contactqvi.contact.owners import fetch_rows
 from contactqvi.obstacles import tangent_frames
 
-__all__ = ["contact_variables", "frame_derivatives", "frame_turn", "variable_derivatives"]
+__all__ = ["contact_variables", "frame_derivatives", "frame_turn", "master_shares", "variable_derivatives"]
 
 
 def frame_derivatives(normal: np.ndarray, dn: np.ndarray) -> np.ndarray:
@@ -127,3 +128,53 @@ def frame_turn(coupling: MortarCoupling, forces: np.ndarray) -> tuple[np.ndarray
     d = coupling.derivatives
     dframes = frame_derivatives(coupling.normal[d.rows], d.normal)
     return d.rows, d.dofs, np.einsum("eaj,ej->ea", dframes, forces[d.rows])
+
+
+def master_shares(comm: MPI.Comm, index_map, coupling: MortarCoupling,
+                  values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The derivative of the master nodes' share sum_i C_ij v_i of slave values v (held
+    fixed): the force a slave node passes to the master nodes under T^T (v_i = P_i r_i,
+    :mod:`contactqvi.contact.problem`). With C_ij = M_ij / D_i,
+
+        d(sum_i C_ij v_i) = sum_i dM_ij v_i / D_i - sum_i C_ij (v_i / D_i) dD_i,     (L.4)
+
+    the first term summed over the rank's pairs (v / D fetched from the rows' owners),
+    the second over its rows. Collective; ``coupling`` must carry its derivatives.
+
+    Args:
+        coupling: the :class:`~contactqvi.contact.mortar.MortarCoupling` these are of.
+        values: (m, 3) v_i of its rows.
+
+    Returns:
+        ``(rows, dofs, values)``: entries of the (global node j of the master, global
+        coordinate index 3 J + c) derivative, (E,), (E,), (E, 3), on the rank that made
+        them (sum them into a matrix, duplicates added).
+    """
+    d = coupling.derivatives
+    scaled = values / coupling.weight[:, None]
+    # sum_i C_ij (v_i / D_i) dD_i over the owned rows: every (C entry, dD entry) of a row
+    lengths = np.diff(coupling.C_indptr)
+    per_row = np.bincount(d.rows, minlength=len(lengths))
+    starts = np.concatenate([[0], np.cumsum(per_row)])
+    c_entry = np.repeat(np.arange(len(coupling.C_values)), np.repeat(per_row, lengths))
+    row = np.repeat(np.repeat(np.arange(len(lengths)), lengths), np.repeat(per_row, lengths))
+    d_entry = starts[row] + _ranges(np.repeat(per_row, lengths))
+    node_values = -(coupling.C_values[c_entry] * d.weight[d_entry])[:, None] * scaled[row]
+    node_rows, node_dofs = coupling.C_master_glob[c_entry], d.dofs[d_entry]
+    # sum_i dM_ij v_i / D_i over the rank's pairs
+    owned = np.zeros((index_map.size_local, 3))
+    owned[coupling.slave_blk] = scaled
+    p = d.pairs
+    at_slaves = fetch_rows(comm, index_map, owned, p.slave_glob.ravel()).reshape(*p.slave_glob.shape, 3)
+    pair_values = np.einsum("pabvc,pak->pbvck", p.dM, at_slaves)  # (P, n_m, N, 3, 3)
+    shape = pair_values.shape[:-1]
+    pair_rows = np.broadcast_to(p.master_glob[:, :, None, None], shape).ravel()
+    pair_dofs = np.broadcast_to(p.dofs[:, None], shape).ravel()
+    return (np.concatenate([node_rows, pair_rows]), np.concatenate([node_dofs, pair_dofs]),
+            np.concatenate([node_values, pair_values.reshape(-1, 3)]))
+
+
+def _ranges(lengths: np.ndarray) -> np.ndarray:
+    """0, 1, ..., n - 1 for each n of ``lengths``, concatenated."""
+    ends = np.cumsum(lengths)
+    return np.arange(ends[-1] if len(ends) else 0) - np.repeat(ends - lengths, lengths)

@@ -43,7 +43,7 @@ from mpi4py import MPI
 import numpy as np
 
 from contactqvi.contact.facets import facet_areas, unit_normals
-from contactqvi.contact.owners import fetch_rows, owner_ranges, sum_to_owners
+from contactqvi.contact.owners import owner_ranges, sum_to_owners
 from contactqvi.contact.segments import segment_integrals
 
 __all__ = ["STEP", "CouplingDerivatives", "PairDerivatives", "complex_step", "coupling_derivatives", "segment_jacobians"]
@@ -125,7 +125,7 @@ def _area_normal_jacobians(x: np.ndarray, outward: np.ndarray) -> np.ndarray:
 @dataclasses.dataclass(frozen=True)
 class PairDerivatives:
     """dM of the facet pairs a rank integrated (its own slave facets), for the derivative of
-    the force the slave nodes pass to the master nodes (:meth:`CouplingDerivatives.transfer`).
+    the force the slave nodes pass to the master nodes (:func:`~contactqvi.contact.kinematics.master_shares`).
 
     Attributes:
         slave_glob: (P, n_s), master_glob: (P, n_m) global node indices of the pairs' facets.
@@ -156,7 +156,7 @@ class CouplingDerivatives:
             nodes' own motion left out (that part is e_i - C_ij e_j).
         normal: (E, 3) dn_i of the nodal unit normal.
         weight: (E,) dD_i.
-        pairs: the rank's pairs' dM (for :meth:`transfer`).
+        pairs: the rank's pairs' dM (for :func:`~contactqvi.contact.kinematics.master_shares`).
     """
 
     rows: np.ndarray
@@ -172,54 +172,6 @@ class CouplingDerivatives:
         renumbered = np.cumsum(keep) - 1
         return CouplingDerivatives(renumbered[self.rows[entries]], self.dofs[entries], self.separation[entries],
                                    self.normal[entries], self.weight[entries], self.pairs)
-
-    def transfer(self, comm: MPI.Comm, index_map, coupling: typing.Any,
-                 values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The derivative of the master nodes' share sum_i C_ij v_i of slave values v (held
-        fixed): the force a slave node passes to the master nodes under T^T (v_i = P_i r_i,
-        :mod:`contactqvi.contact.problem`). With C_ij = M_ij / D_i,
-
-            d(sum_i C_ij v_i) = sum_i dM_ij v_i / D_i - sum_i C_ij (v_i / D_i) dD_i,     (L.4)
-
-        the first term summed over the rank's pairs (v / D fetched from the rows' owners),
-        the second over its rows. Collective.
-
-        Args:
-            coupling: the :class:`~contactqvi.contact.mortar.MortarCoupling` these are of.
-            values: (m, 3) v_i of its rows.
-
-        Returns:
-            ``(rows, dofs, values)``: entries of the (global node j of the master, global
-            coordinate index 3 J + c) derivative, (E,), (E,), (E, 3), on the rank that made
-            them (sum them into a matrix, duplicates added).
-        """
-        scaled = values / coupling.weight[:, None]
-        # sum_i C_ij (v_i / D_i) dD_i over the owned rows: every (C entry, dD entry) of a row
-        lengths = np.diff(coupling.C_indptr)
-        per_row = np.bincount(self.rows, minlength=len(lengths))
-        starts = np.concatenate([[0], np.cumsum(per_row)])
-        c_entry = np.repeat(np.arange(len(coupling.C_values)), np.repeat(per_row, lengths))
-        row = np.repeat(np.repeat(np.arange(len(lengths)), lengths), np.repeat(per_row, lengths))
-        d_entry = starts[row] + _ranges(np.repeat(per_row, lengths))
-        node_values = -(coupling.C_values[c_entry] * self.weight[d_entry])[:, None] * scaled[row]
-        node_rows, node_dofs = coupling.C_master_glob[c_entry], self.dofs[d_entry]
-        # sum_i dM_ij v_i / D_i over the rank's pairs
-        owned = np.zeros((index_map.size_local, 3))
-        owned[coupling.slave_blk] = scaled
-        p = self.pairs
-        at_slaves = fetch_rows(comm, index_map, owned, p.slave_glob.ravel()).reshape(*p.slave_glob.shape, 3)
-        pair_values = np.einsum("pabvc,pak->pbvck", p.dM, at_slaves)  # (P, n_m, N, 3, 3)
-        shape = pair_values.shape[:-1]
-        pair_rows = np.broadcast_to(p.master_glob[:, :, None, None], shape).ravel()
-        pair_dofs = np.broadcast_to(p.dofs[:, None], shape).ravel()
-        return (np.concatenate([node_rows, pair_rows]), np.concatenate([node_dofs, pair_dofs]),
-                np.concatenate([node_values, pair_values.reshape(-1, 3)]))
-
-
-def _ranges(lengths: np.ndarray) -> np.ndarray:
-    """0, 1, ..., n - 1 for each n of ``lengths``, concatenated."""
-    ends = np.cumsum(lengths)
-    return np.arange(ends[-1] if len(ends) else 0) - np.repeat(ends - lengths, lengths)
 
 
 def coupling_derivatives(comm: MPI.Comm, index_map, slave_glob: np.ndarray, slave_x: np.ndarray,
