@@ -61,8 +61,6 @@ import numpy as np
 
 from dolfinx import fem
 
-from contactqvi.contact.kinematics import contact_variables
-from contactqvi.contact.mortar import MortarCoupling
 from contactqvi.contact.newton_step_solver import NewtonStepSolver
 from contactqvi.contact.nodal import State
 from contactqvi.contact.path_state import PathState
@@ -342,7 +340,6 @@ def _settle(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSt
         return solver, result
     solves, change, status, target = [result], math.inf, result.status, result.target
     index, before = state.done, state.displacement
-    start = [interface.coupling for interface in problem.interfaces]  # searched at the step's start
     reached = problem.physical_displacement(u, fem.Function(problem.V))  # the configuration searched in
     work = reached.x.petsc_vec.duplicate()
     relaxation = 1.0
@@ -359,7 +356,7 @@ def _settle(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSt
                      step=index + 1, searches=path["max_searches"], change=change, increment=increment)
                 status = Status.DIVERGED_MAX_IT
                 break
-            solver = _search_reached(problem, step, u, state, reached, solver, start)
+            solver = _search_reached(problem, step, u, state, reached, solver)
             result = solver.solve(u, atol=target, stop=stop)
             solves.append(result)
             status = result.status
@@ -381,51 +378,20 @@ def _settle(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSt
 
 
 def _search_reached(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState, reached: fem.Function,
-                    solver: SCDNewtonSolver, start: list[MortarCoupling | None]) -> SCDNewtonSolver:
+                    solver: SCDNewtonSolver) -> SCDNewtonSolver:
     """Search ``step`` again in x + ``reached``, set it with the slip from the step before
-    (``state``, whose u~ in the new variables goes to ``state.variables``; at the slave nodes of
-    body pairs the objective slip of :func:`_objective_reference`, ``start`` the pairs' couplings
-    searched at the step's start), put ``reached`` into ``u`` (new variables) and return a new
-    solver for it, which takes over ``solver``'s multigrid levels (``solver`` is destroyed)."""
+    (``state``, whose u~ in the new variables goes to ``state.variables``), put ``reached``
+    into ``u`` (new variables) and return a new solver for it, which takes over ``solver``'s
+    multigrid levels (``solver`` is destroyed)."""
     parameters, prefix, step_solver = solver.parameters, solver.prefix, _released(solver)
     _search_in(problem, reached, step_solver)
     _set_previous(problem, state)
     problem.solver_variables(state.displacement, state.variables)
-    _objective_reference(problem, start, reached, state.variables)
     problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation, state.rotation,
                      step.fit_fraction)
     problem.solver_variables(reached, u)
     u.axpy(1.0, problem.shift)
     return SCDNewtonSolver(problem, parameters, prefix=prefix, step_solver=step_solver)
-
-
-def _objective_reference(problem: ContactProblem, start: list[MortarCoupling | None], reached: fem.Function,
-                         variables: PETSc.Vec) -> None:
-    """The slip reference of the body pairs' slave nodes for a search in the configuration
-    ``reached``: the tangential components of ``variables`` (u~ of the step before in the new
-    variables) replaced by w_t(reached) - v_t, v_t the objective slip (13.1) of
-    docs/finite_strain.md, Sect. 13, t_a . (p_i - p_i^start) at ``reached``, so that the law's
-    tangential variable w_t - (reference) is v_t there (and linearised about it).
-
-    The relative displacement since the step before, (I - C)(u~ - u~_before), which it replaces,
-    is not objective: a rigid rotation Q of both bodies adds (Q - I)(x_i - sum_j C_ij x_j) to it
-    wherever the deformed interface is not flat between non-matching nodes, while C and C^start
-    (and so v) do not change. At the step's first search (``reached`` is the step before's
-    configuration, C = C^start) both are zero. Collective."""
-    comm, index_map = problem.comm, problem.V.dofmap.index_map
-    current = problem.V.tabulate_dof_coordinates() + reached.x.array.reshape(-1, 3)
-    searched = problem.solver_variables(reached, variables.duplicate())
-    for interface, before in zip(problem.interfaces, start):
-        if interface.coupling is None or before is None:  # obstacle pairs: the same on every rank
-            continue
-        common = np.intersect1d(interface.coupling.slave_blk, before.slave_blk)
-        now = interface.coupling.restricted(np.isin(interface.coupling.slave_blk, common))
-        then = before.restricted(np.isin(before.slave_blk, common))
-        slip = contact_variables(comm, index_map, now, then, current)[3]
-        tangents = problem.frames[np.searchsorted(problem.contact_blk, common), :2]
-        variables.array.reshape(-1, 3)[common, :2] = (searched.array.reshape(-1, 3)[common, :2]
-                                                      - np.einsum("nij,nj->ni", tangents, slip))
-    searched.destroy()
 
 
 def _merged(solves: list[SCDNewtonResult], status: Status,
