@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import pathlib
+import re
 import sys
 
 import pytest
@@ -143,3 +144,21 @@ def test_restart_shows_a_run_without_summary_as_failed_rows(tmp_path):
             in text)
     assert (f"| m08 | 1 | 2 | \u2013 | \u2013 | failed: exit 2 (uninterrupted run) | \u2013 | \u2013 | \u2013 | 1e-9 "
             f"| \u2013 | failed after {found[1]['seconds']:.0f} | abc |") in text
+
+
+def test_weak_scaling_tables_only_rewrites_the_stored_tables(tmp_path, monkeypatch, capsys):
+    """``benchmarks/weak_scaling.py --tables-only`` rewrites the markdown from the stored JSON
+    (the same as the stored one); where there is no JSON it says so and exits, instead of a
+    KeyError on the empty table."""
+    import weak_scaling
+
+    stored = ROOT / "benchmarks" / "results"
+    (tmp_path / "weak_scaling.json").write_text((stored / "weak_scaling.json").read_text())
+    monkeypatch.setattr(sys, "argv", ["weak_scaling.py", "--tables-only", "--output", str(tmp_path)])
+    weak_scaling.main()
+    assert (tmp_path / "weak_scaling.md").read_text() == (stored / "weak_scaling.md").read_text()
+    empty = tmp_path / "none"
+    monkeypatch.setattr(sys, "argv", ["weak_scaling.py", "--tables-only", "--output", str(empty)])
+    with pytest.raises(SystemExit, match=re.escape(f"error: --tables-only: no rows in {empty / 'weak_scaling.json'}")):
+        weak_scaling.main()
+    assert not empty.exists()
