@@ -18,6 +18,9 @@ as max |u - u_ref| / max |u_ref|. Bounds (issue 24): the same counts and 1e-12 o
 ranks, 1e-9 on the others.
 
 Writes ``restart.json`` and ``restart.md`` (rows of cases not run are kept). Run with ``nice`` on a shared machine.
+A run that fails (exits non-zero, ends before the step it is to be killed in, or writes no
+``summary.json``) is a failed row (:func:`rows.failed_row`) with its status and the time used,
+and the other cases go on.
 """
 
 from __future__ import annotations
@@ -41,6 +44,7 @@ from dolfinx import fem
 from contactqvi import tables
 
 from benchlib import merge_rows
+from rows import failed_row
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 MPIENV = {"OMPI_MCA_rmaps_base_oversubscribe": "1", "PRTE_MCA_rmaps_default_mapping_policy": ":oversubscribe",
@@ -82,13 +86,24 @@ def command(case: pathlib.Path, out: pathlib.Path, ranks: int, *options: str) ->
             "--no-plot", *options]
 
 
-def run(argv: list[str]) -> float:
-    """Run to the end; its wall seconds."""
+class RunFailed(RuntimeError):
+    """A run that did not give what the comparison reads: ``status`` says why, ``seconds`` the wall time it used."""
+
+    def __init__(self, status: str, seconds: float):
+        super().__init__(status)
+        self.status, self.seconds = status, seconds
+
+
+def run(argv: list[str], out: pathlib.Path) -> float:
+    """Run to the end, writing ``out/summary.json``; its wall seconds (:class:`RunFailed` if it
+    exits non-zero or writes no summary, its stderr's end printed)."""
     start = time.perf_counter()
     done = subprocess.run(argv, capture_output=True, text=True, env=os.environ | MPIENV)
-    if done.returncode != 0:
-        raise RuntimeError(f"{' '.join(argv)} failed ({done.returncode}):\n{done.stderr[-3000:]}")
-    return time.perf_counter() - start
+    seconds = time.perf_counter() - start
+    if done.returncode != 0 or not (out / "summary.json").is_file():
+        print(f"{' '.join(argv)} failed ({done.returncode}):\n{done.stderr[-3000:]}", file=sys.stderr, flush=True)
+        raise RunFailed(f"failed: exit {done.returncode}" + ("" if done.returncode else ", no summary.json"), seconds)
+    return seconds
 
 
 def kill_in_step(case: pathlib.Path, out: pathlib.Path, ranks: int, step: int, seconds: float) -> float:
@@ -100,13 +115,13 @@ def kill_in_step(case: pathlib.Path, out: pathlib.Path, ranks: int, step: int, s
     marker = out / "checkpoint" / "checkpoint.json"
     while not (marker.exists() and json.loads(marker.read_text())["step"] >= step - 1):
         if process.poll() is not None:
-            raise RuntimeError(f"{case.name} ended before step {step}")
+            raise RunFailed(f"failed: exit {process.returncode} before step {step}", time.perf_counter() - start)
         time.sleep(0.1)
     time.sleep(seconds)
     subprocess.run(["pkill", "-KILL", "-f", str(out)])  # the ranks and mpirun: their command lines name it
     process.wait()
     if json.loads(marker.read_text())["step"] != step - 1:
-        raise RuntimeError(f"{case.name}: killed after step {step} was complete; lower the delay")
+        raise RunFailed(f"failed: killed after step {step} was complete (lower the delay)", time.perf_counter() - start)
     return time.perf_counter() - start
 
 
@@ -127,8 +142,13 @@ def last_displacement(out: pathlib.Path) -> np.ndarray:
 
 
 def compare(case: str, path: pathlib.Path, work: pathlib.Path, args: argparse.Namespace, commit: str | None) -> list[dict]:
+    """The rows of ``case``, one per restart; a failed run is a failed row (both, if the uninterrupted run failed)."""
     reference = work / f"{path.stem}_whole"
-    wall = run(command(path, reference, args.ranks))
+    try:
+        wall = run(command(path, reference, args.ranks), reference)
+    except RunFailed as exc:
+        return [failed_row(f"{exc.status} (uninterrupted run)", exc.seconds, case=case, ranks=args.ranks,
+                           restart_ranks=ranks, commit=commit) for ranks in (args.ranks, args.other_ranks)]
     steps = json.loads((reference / "summary.json").read_text())["steps"]
     middle = len(steps) // 2 + 1
     delay = 0.5 * sum(steps[middle - 1]["timings"].values())  # half of that step's solve
@@ -136,8 +156,15 @@ def compare(case: str, path: pathlib.Path, work: pathlib.Path, args: argparse.Na
     rows = []
     for ranks in (args.ranks, args.other_ranks):
         out = work / f"{path.stem}_restart_{ranks}"
-        killed = kill_in_step(path, out, args.ranks, middle, delay)
-        restarted = run(command(path, out, ranks, "--restart"))
+        start = time.perf_counter()
+        try:
+            killed = kill_in_step(path, out, args.ranks, middle, delay)
+            restarted = run(command(path, out, ranks, "--restart"), out)
+        except RunFailed as exc:
+            rows.append(failed_row(exc.status, time.perf_counter() - start, case=case, ranks=args.ranks,
+                                   restart_ranks=ranks, steps=len(steps), killed_in_step=middle, commit=commit))
+            print(rows[-1], flush=True)
+            continue
         ours = counts(out)
         u = last_displacement(out)
         rows.append({
@@ -155,10 +182,11 @@ def compare(case: str, path: pathlib.Path, work: pathlib.Path, args: argparse.Na
 def markdown(rows: list[dict], commit: str | None) -> str:
     header = ["case", "ranks", "restarted on", "steps", "killed in step", "status", "counts equal", "dNewton",
               "rel. diff", "bound", "wall whole s", "wall killed + restart s", "commit"]
-    body = [[r["case"], r["ranks"], r["restart_ranks"], r["steps"], r["killed_in_step"], r["status"],
-             "yes" if r["counts_equal"] else "no", r["d_newton"], f"{r['rel_diff']:.3g}",
-             "1e-12" if r["restart_ranks"] == r["ranks"] else "1e-9", r["wall_whole"],
-             f"{r['wall_killed']} + {r['wall_restart']}", r.get("commit")] for r in rows]
+    body = [[r["case"], r["ranks"], r["restart_ranks"], r.get("steps"), r.get("killed_in_step"), r["status"],
+             {True: "yes", False: "no"}.get(r.get("counts_equal")), r.get("d_newton"), r.get("rel_diff"),
+             "1e-12" if r["restart_ranks"] == r["ranks"] else "1e-9", r.get("wall_whole"),
+             f"{r['wall_killed']} + {r['wall_restart']}" if "wall_killed" in r else f"failed after {r['seconds']:.0f}",
+             r.get("commit")] for r in rows]  # a failed row (rows.failed_row) has no measured fields
     return (f"## Kill and restart (issue 24), last run at {commit}\n\n{__doc__.split(chr(10) + chr(10), 1)[1].split('Writes')[0]}"
             + tables.markdown_table(header, body) + "\n\nWall times on a 2-core machine shared with other jobs.\n")
 

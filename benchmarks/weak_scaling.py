@@ -334,11 +334,11 @@ def projection(rows: list[dict]) -> dict[str, typing.Any]:
 def markdown(data: dict) -> str:
     from contactqvi.tables import markdown_table
 
-    rows = data["rows"]
+    rows, cores = data["rows"], data.get("machine", {}).get("cores", "?")
     text = ["## Weak scaling of the Coulomb solve: messages, reductions, memory per Newton step (issue 24)\n\n",
             f"The demo's solve (`demos/coulomb3d.py`, {rows[0]['case'] if rows else ''}, default solver: GAMG, tol 0.1, "
             "from u0 = 0) at about the same free dofs per rank (benchmarks/weak_scaling.py), on this machine's "
-            f"{data['machine']['cores']} cores: 4 and 8 ranks are oversubscribed, so their wall times say nothing "
+            f"{cores} cores: 4 and 8 ranks are oversubscribed, so their wall times say nothing "
             "about scaling; counts, volumes, flops and memory do. dofs/rank: n / ranks and its ratio to the 1-rank "
             "run (the levels grow by about 2.7x). Per Newton step, in the log stage around the Newton solve (set-ups, "
             "Galerkin updates, Krylov solves, line search; not mesh, assembly or output), from PETSc's per-rank "
@@ -427,16 +427,19 @@ def main() -> None:
         return
     assert args.ranks[0] == 1, "--ranks must start with 1 (the reference)"
     out = pathlib.Path(args.output)
-    out.mkdir(parents=True, exist_ok=True)
     if args.tables_only:
         from mpi4py import MPI
 
         from contactqvi.tables import write_table
 
-        data = read_table(out / "weak_scaling.json")
-        data["projection"] = projection(data.get("rows", []))
+        data = read_table(out / "weak_scaling.json")  # {} if there is none, or it cannot be read
+        if not data.get("rows"):
+            raise SystemExit(f"error: --tables-only: no rows in {out / 'weak_scaling.json'} to rewrite the tables "
+                             "from (give --output the directory of an earlier run's weak_scaling.json)")
+        data["projection"] = projection(data["rows"])
         write_table(MPI.COMM_SELF, out / "weak_scaling", data, markdown(data))
         return
+    out.mkdir(parents=True, exist_ok=True)
     levels = weak_levels(args.lev, args.ranks)
     target = free_dofs(args.lev)
     work = pathlib.Path(tempfile.mkdtemp(prefix="contactqvi-weak-"))

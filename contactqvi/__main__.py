@@ -62,10 +62,10 @@ def run(argv: list[str]) -> int:
         _, code = run(case, args.output, MPI.COMM_WORLD, plot=not args.no_plot, restart=args.restart,
                       stop_after=args.stop_after)
     except ParameterError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        cli.print_error(exc)
         return EXIT_CODES["bad input"]
     except OutputError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        cli.print_error(exc)
         return EXIT_CODES["output failed"]
     return code
 

@@ -471,6 +471,16 @@ class ContactCase:
         with several bodies)."""
         return list(dict.fromkeys(name for _, name in _group_uses(self)))
 
+    @property
+    def pair_keys(self) -> list[tuple[str, str | None]]:
+        """Each contact pair's key in the case file and its obstacle's (None for a body pair), in
+        the order of the problem's interfaces: ``("contact", "obstacle")`` for [contact] and
+        [obstacle], ``("contacts[i]", "contacts[i].obstacle")`` for [[contacts]]."""
+        if self.contact is not None:
+            return [("contact", "obstacle")]
+        return [(f"contacts[{i}]", f"contacts[{i}].obstacle" if pair.obstacle is not None else None)
+                for i, pair in enumerate(self.contacts)]
+
     def to_dict(self) -> dict[str, typing.Any]:
         """The case as the tables of a case file (JSON-ready: lists, strings; unset keys left out)."""
         return _plain(self)

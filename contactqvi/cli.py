@@ -15,7 +15,7 @@ import typing
 from mpi4py import MPI
 from petsc4py import PETSc
 
-__all__ = ["abort_on_error", "make_parser", "parse_args", "pass_to_petsc", "setup_logging"]
+__all__ = ["abort_on_error", "make_parser", "parse_args", "pass_to_petsc", "print_error", "setup_logging"]
 
 
 def make_parser(description: str, default_output: str, petsc_example: str | None = None) -> argparse.ArgumentParser:
@@ -71,6 +71,16 @@ def setup_logging(level: str = "INFO") -> None:
         stream=sys.stdout,
         force=True,
     )
+
+
+def print_error(error: Exception | str, comm: MPI.Comm | None = None) -> None:
+    """``error: <error>`` on standard error, once for the job: on rank 0 only.
+
+    For errors raised on every rank alike (bad input, failed output), after which every
+    rank returns its exit code; under ``mpirun -n N`` the line would otherwise print N times.
+    """
+    if (MPI.COMM_WORLD if comm is None else comm).rank == 0:
+        print(f"error: {error}", file=sys.stderr)
 
 
 def abort_on_error(function: typing.Callable[[], int], comm: MPI.Comm | None = None) -> int:

@@ -186,7 +186,7 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
     with warnings, default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, _stop_signals() as stop:
         logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks",
                     problem.n_contact, problem.n_free, len(case.steps), comm.size)
-        check_reach(problem, case.steps, _largest_prescribed(case))
+        check_reach(problem, case.steps, _largest_prescribed(case), case.pair_keys)
         recorder = _StepRecorder(case, problem, output, checkpoint, stop, warnings)
         state = PathState.at_rest(problem) if checkpoint is None else checkpoint.resume(problem)
         first, u = state.done, problem.A.createVecRight()

@@ -84,7 +84,7 @@ def main(argv: list[str] | None = None) -> int:
             young=args.young, poisson=args.poisson, law=args.contact_law, parameters=args.solver_parameters,
         )
     except ParameterError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        cli.print_error(exc, comm)
         return 2
     out = tables.prepare_output_dir(comm, args.output)
     problem, u, result = solutions[-1].problem, solutions[-1].u, solutions[-1].result

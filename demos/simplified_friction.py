@@ -29,7 +29,7 @@ import sys
 from mpi4py import MPI
 
 from contactqvi import tables
-from contactqvi.cli import abort_on_error, make_parser, parse_args
+from contactqvi.cli import abort_on_error, make_parser, parse_args, print_error
 from contactqvi.friction import GRID_PARAMETERS, create_problem, methods
 from contactqvi.friction.output import plot_surface, write_solution
 from contactqvi.parameters import Parameter, ParameterError, Parameters
@@ -74,8 +74,7 @@ def main(argv: list[str] | None = None) -> int:
         example = stadler.stadler_example(**example_parameters)
         problem = create_problem(comm, example, **grid)
     except ParameterError as exc:
-        if comm.rank == 0:
-            print(f"error: {exc}", file=sys.stderr)
+        print_error(exc, comm)
         return 2
     out = tables.prepare_output_dir(comm, output)
     problem_parameters = {**example_parameters, **grid}

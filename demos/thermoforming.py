@@ -96,7 +96,7 @@ def main(argv: list[str] | None = None) -> int:
         prm, output = parse(argv)
         setup, result = run(prm, prm["build"]["method"])
     except ParameterError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        cli.print_error(exc)
         return 2
     comm = MPI.COMM_WORLD
     test, h = prm["problem"]["test"], prm["demo"]["h"]

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import pathlib
+import re
 import sys
 
 import pytest
@@ -119,3 +120,45 @@ def test_homogeneous_compression_counts_and_tables():
     assert measured[2]["force_difference"] == pytest.approx(0.1) and "force_difference" not in measured[0]
     assert "| 0.3 | once | 1 | converged_rtol | 6 | \u2013 | \u2013 | 2.200000e+00 | \u2013 | 1.00e-01 |" in \
         hc.bulging_markdown(measured)
+
+
+@pytest.mark.serial  # launches mpirun
+def test_restart_shows_a_run_without_summary_as_failed_rows(tmp_path):
+    """``benchmarks/restart.py``: the uninterrupted run of a case that stops at its input check
+    (exit 2, no summary.json) is a failed row for each restart, and the table shows it beside a
+    measured row, instead of the script stopping on the missing summary."""
+    import argparse
+
+    import restart
+
+    case = ROOT / "tests" / "data" / "mistakes" / "m08_normal_flipped.toml"
+    found = restart.compare("m08", case, tmp_path, argparse.Namespace(ranks=1, other_ranks=2), "abc")
+    assert [(r["case"], r["ranks"], r["restart_ranks"], r["status"], rows.failed(r)) for r in found] == [
+        ("m08", 1, 1, "failed: exit 2 (uninterrupted run)", True),
+        ("m08", 1, 2, "failed: exit 2 (uninterrupted run)", True)]
+    measured = {"case": "d3_L2 lev 8", "ranks": 2, "restart_ranks": 1, "steps": 4, "killed_in_step": 3,
+                "counts_equal": True, "d_newton": 0, "rel_diff": 2e-13, "wall_whole": 60.5, "wall_killed": 40.1,
+                "wall_restart": 30.2, "status": "converged_rtol", "commit": "abc"}
+    text = restart.markdown([measured, *found], "abc")
+    assert ("| d3_L2 lev 8 | 2 | 1 | 4 | 3 | converged_rtol | yes | 0 | 2e-13 | 1e-9 | 60.5 | 40.1 + 30.2 | abc |"
+            in text)
+    assert (f"| m08 | 1 | 2 | \u2013 | \u2013 | failed: exit 2 (uninterrupted run) | \u2013 | \u2013 | \u2013 | 1e-9 "
+            f"| \u2013 | failed after {found[1]['seconds']:.0f} | abc |") in text
+
+
+def test_weak_scaling_tables_only_rewrites_the_stored_tables(tmp_path, monkeypatch, capsys):
+    """``benchmarks/weak_scaling.py --tables-only`` rewrites the markdown from the stored JSON
+    (the same as the stored one); where there is no JSON it says so and exits, instead of a
+    KeyError on the empty table."""
+    import weak_scaling
+
+    stored = ROOT / "benchmarks" / "results"
+    (tmp_path / "weak_scaling.json").write_text((stored / "weak_scaling.json").read_text())
+    monkeypatch.setattr(sys, "argv", ["weak_scaling.py", "--tables-only", "--output", str(tmp_path)])
+    weak_scaling.main()
+    assert (tmp_path / "weak_scaling.md").read_text() == (stored / "weak_scaling.md").read_text()
+    empty = tmp_path / "none"
+    monkeypatch.setattr(sys, "argv", ["weak_scaling.py", "--tables-only", "--output", str(empty)])
+    with pytest.raises(SystemExit, match=re.escape(f"error: --tables-only: no rows in {empty / 'weak_scaling.json'}")):
+        weak_scaling.main()
+    assert not empty.exists()

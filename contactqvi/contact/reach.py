@@ -49,24 +49,35 @@ class _Approach:
     step: int
 
 
-def check_reach(problem: ContactProblem, steps: typing.Sequence[LoadStep], prescribed: float = 0.0) -> None:
+def check_reach(problem: ContactProblem, steps: typing.Sequence[LoadStep], prescribed: float = 0.0,
+                keys: typing.Sequence[tuple[str, str | None]] | None = None) -> None:
     """Raise unless every contact pair of ``problem`` can touch along ``steps``, whose prescribed
     displacements are at most ``prescribed`` (m, their largest length at load factor 1). Collective.
 
+    Args:
+        keys: each interface's key in the case file and its obstacle's
+            (:attr:`~contactqvi.case.ContactCase.pair_keys`: ``("contacts[0]", "contacts[0].obstacle")``),
+            which the error names; None: the pairs' names (``top/obstacle``) and ``obstacle``.
+
     Raises:
-        ParameterError: named by the pair (``top/obstacle``): its smallest gap and the step
-            of it, the obstacle's travel, the bodies' travel and the likely cause (an obstacle
-            facing away from the body, a contact group on the wrong face).
+        ParameterError: named by the pair's key (``contact``, ``contacts[0]``): the pair
+            (``top/obstacle``), its smallest gap and the step of it, the obstacle's travel, the
+            bodies' travel and the likely cause (an obstacle facing away from the body, a
+            contact group on the wrong face).
     """
     base = body_travel(problem, steps, prescribed) if steps else None
     if base is None:
         return
+    assert keys is None or len(keys) == len(problem.interfaces), "a key for each interface"
     approaches = [_approach(problem, steps, k) for k in range(len(problem.interfaces))]
     pushes = [max(0.0, -a.gap) for a in approaches]
     for k, (interface, approach) in enumerate(zip(problem.interfaces, approaches)):
         travel = base + sum(push for j, push in enumerate(pushes) if j != k)
         if math.isfinite(approach.gap) and approach.gap > REACH_MARGIN * travel:
-            raise ParameterError(interface.pair.name, _never_text(problem, steps, interface, approach, travel))
+            key, obstacle = keys[k] if keys is not None else (interface.pair.name, "obstacle")
+            pair = f" {interface.pair.name}" if keys is not None else ""  # else the error's name
+            raise ParameterError(key, f"the pair{pair} can never touch: "
+                                 + _never_text(problem, steps, interface, approach, travel, obstacle))
 
 
 def body_travel(problem: ContactProblem, steps: typing.Sequence[LoadStep], prescribed: float = 0.0) -> float | None:
@@ -121,21 +132,22 @@ def _approach(problem: ContactProblem, steps: typing.Sequence[LoadStep], k: int)
 
 
 def _never_text(problem: ContactProblem, steps: typing.Sequence[LoadStep], interface: Interface,
-                approach: _Approach, travel: float) -> str:
-    """The error text of a pair that can never touch: gap, travels, likely cause."""
+                approach: _Approach, travel: float, obstacle_key: str | None) -> str:
+    """Why a pair can never touch: gap, travels, likely cause (naming ``obstacle_key.normal``)."""
     obstacle = interface.obstacle is not None
     moved = max(float(np.linalg.norm(step.translation)) for step in steps)
     turned = max(abs(step.rotation.angle) if step.rotation is not None else 0.0 for step in steps)
     travels = f"; the obstacle travels up to {moved:.4g} m" if obstacle else ""
     travels += f" and turns up to {turned:g} degrees" if obstacle and turned else ""
-    return (f"the pair can never touch: no node of {interface.slave_surface!r} comes nearer than {approach.gap:.4g} m "
+    return (f"no node of {interface.slave_surface!r} comes nearer than {approach.gap:.4g} m "
             f"to {'the obstacle' if obstacle else 'the master surface'} in the {len(steps)} load steps (the smallest "
             f"gap, at step {approach.step + 1}{travels}), and nothing moves the bodies more than {travel:.4g} m "
             "(prescribed displacements, moved groups, the other pairs; no force acts). "
-            f"Likely cause: {_cause(problem, steps[approach.step], interface, approach.gap)}")
+            f"Likely cause: {_cause(problem, steps[approach.step], interface, approach.gap, obstacle_key)}")
 
 
-def _cause(problem: ContactProblem, step: LoadStep, interface: Interface, gap: float) -> str:
+def _cause(problem: ContactProblem, step: LoadStep, interface: Interface, gap: float,
+           obstacle_key: str | None) -> str:
     """Why a pair's slave nodes stay ``gap`` away at ``step``: an obstacle facing away from the
     slave body (part of it lies behind the obstacle's surface), nodes off the contact group nearer
     to the obstacle than it (a wrong group), or an obstacle placed away from the body."""
@@ -148,7 +160,7 @@ def _cause(problem: ContactProblem, step: LoadStep, interface: Interface, gap: f
     if problem.node_body is not None:  # the slave's body only
         slave_body = np.zeros(comm.allreduce(int(problem.node_body.max(initial=-1)) + 1, op=MPI.MAX), dtype=bool)
         slave_body[problem.node_body[interface.blk]] = True
-        slave_body = comm.allreduce(slave_body, op=MPI.LOR)
+        comm.Allreduce(MPI.IN_PLACE, slave_body, op=MPI.LOR)  # (allreduce of the pickled array: a bool)
         x = x[slave_body[problem.node_body[:n_owned]]]
     distance = placed(interface.obstacle, step.translation, step.rotation).distance(x)[0]
     behind = comm.allreduce(int(np.count_nonzero(distance < -1e-12 * max(gap, 1e-300))), op=MPI.SUM)
@@ -157,7 +169,7 @@ def _cause(problem: ContactProblem, step: LoadStep, interface: Interface, gap: f
     if behind:
         return (f"the obstacle faces away from the body: {behind} of its {total} nodes lie behind the obstacle's "
                 f"surface (signed distance down to {deepest:.4g} m, at {step_position(step)}); a plane's normal "
-                "must point into the body's side (flip obstacle.normal)")
+                f"must point into the body's side (flip {obstacle_key}.normal)")
     if deepest < gap:
         return (f"a wrong contact group: nodes of the body off {interface.slave_surface!r} come within "
                 f"{deepest:.4g} m of the obstacle, nearer than the group; name the face that meets it")
