@@ -21,6 +21,10 @@ that have a master facet, as int psi_i sum_k phi_k; with full coverage this is
 int phi_i (the lumped area), and sum_j C_ij = 1 always, so rigid translations
 of both bodies never open or close the interface.
 
+The integrals of one pair of facets (segment-to-segment, Puso-Laursen) are those of
+:mod:`contactqvi.contact.segments`; with ``linearised`` their derivatives with respect to
+the searched positions come along (:mod:`contactqvi.contact.linearisation`).
+
 Parallel search: each rank owns the slave facets of its cells; it receives from
 every rank the master facets that lie within ``search_distance`` of the bounding
 box of its own slave facets (never a whole surface), pairs them by a k-d tree on
