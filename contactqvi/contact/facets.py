@@ -33,6 +33,11 @@ __all__ = ["POLYGON_ORDER", "area_elements", "dual_coefficients", "facet_areas",
 POLYGON_ORDER = {3: [0, 1, 2], 4: [0, 1, 3, 2]}
 #: Newton iterations of :func:`reference_coordinates` stop at this change of xi (reference units).
 NEWTON_TOL = 1e-14
+#: ... or where the steps stop falling below this (at least halving no more): the map of a
+#: thin quadrilateral (a master facet seen nearly edge-on from the slave's plane, whose
+#: Jacobian is 3e-4 of its squared size) is ill-conditioned, and round-off holds its steps
+#: near 1e-14 (measured: 1.2e-14 after the 10th and every later step).
+ROUND_OFF_TOL = 1e-10
 NEWTON_MAX_IT = 25
 
 
@@ -95,7 +100,8 @@ def reference_coordinates(x2: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Reference coordinates (P, Q, 2) of points (P, Q, 2) of the plane in the bilinear maps
     of planar quadrilaterals (P, 4, 2): Newton's method, all points at once, started from
     the centre (the first step is exact on a parallelogram; on the distorted facets of
-    meshes/hertz_bodies_hex_coarse.geo 6 iterations, 7 from the vertex v0).
+    meshes/hertz_bodies_hex_coarse.geo 6 iterations, 7 from the vertex v0), until the
+    steps are below :data:`NEWTON_TOL` or stall at round-off (:data:`ROUND_OFF_TOL`).
 
     Raises:
         ParameterError: (``mesh``) Newton's method did not converge (a degenerate or
@@ -110,6 +116,7 @@ def reference_coordinates(x2: np.ndarray, points: np.ndarray) -> np.ndarray:
     else:
         xi = np.full(points.shape, 0.5)
     target = points - a
+    previous = np.inf
     for _ in range(NEWTON_MAX_IT):
         s, t = xi[..., 0, None], xi[..., 1, None]
         x_s, x_t = b + d * t, c + d * s
@@ -118,8 +125,10 @@ def reference_coordinates(x2: np.ndarray, points: np.ndarray) -> np.ndarray:
         step = np.stack([x_t[..., 1] * residual[..., 0] - x_t[..., 0] * residual[..., 1],
                          x_s[..., 0] * residual[..., 1] - x_s[..., 1] * residual[..., 0]], axis=-1) / det[..., None]
         xi -= step
-        if np.abs(step).max(initial=0.0) <= NEWTON_TOL:
+        largest = np.abs(step).max(initial=0.0)
+        if largest <= NEWTON_TOL or (largest <= ROUND_OFF_TOL and largest >= 0.5 * previous):
             return xi
+        previous = largest
     raise ParameterError("mesh", "the inverse of a contact facet's bilinear map did not converge in "
                          f"{NEWTON_MAX_IT} Newton iterations: a degenerate or non-convex quadrilateral")
 
