@@ -193,7 +193,19 @@ def _case_file(**dynamics) -> dict:
      "no mass next to one with mass (bodies[0]"),
     (lambda d: d["bodies"][0]["material"].update(density=-1.0), "bodies[0].material.density", "> 0"),
     (lambda d: d["contacts"][0].update(search="every_step"), "contacts[0].search", "once"),
-    (lambda d: d.update(steps=[{"load": 0.5}]), "steps", "not used with [dynamics]"),
+    (lambda d: d.update(steps=[{"load": 0.5}]), "steps[0].time", "required with [dynamics]"),
+    (lambda d: d.update(steps=[{"time": 2e-5}, {"time": 2e-5}]), "steps[1].time", "increase"),
+    (lambda d: d.update(steps=[{"time": 1e-5, "rotation": {"angle": 1.0}}]), "steps[0].rotation",
+     "rotates the groups"),
+    (lambda d: d["contacts"][0].update(interference=1e-6) or d.update(steps=[{"time": 1e-5, "fit": 0.5}]),
+     "steps[0].fit", "not used with [dynamics]"),
+    (lambda d: d.update(steps=[{"time": 0.0, "translation": [0, 0, 1e-3]}]), "steps[0].translation",
+     "start where meshed"),
+    (lambda d: d["bodies"][0]["boundary"]["displacement"].update(sides_y={"y": 1e-4}),
+     "bodies[0].boundary.displacement.sides_y", "needs [[steps]] with times"),
+    (lambda d: d["bodies"][0]["boundary"]["displacement"].update(sides_y={"y": 1e-4}) or d.update(
+        steps=[{"time": 0.0, "load": 1.0}]), "steps[0].load", "must be 0 at time 0"),
+    (lambda d: d.pop("dynamics") and d.update(steps=[{"time": 1e-5}]), "steps[0].time", "add [dynamics]"),
     (lambda d: d["dynamics"].update(velocity=[1, 0, 0]), "dynamics.velocity", "did you mean 'initial_velocity'"),
 ])
 def test_named_errors(change, key, words):
