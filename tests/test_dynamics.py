@@ -11,6 +11,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import pathlib
 
@@ -154,6 +155,81 @@ def test_block_slides_to_a_stop(mpi_tmp_path):
     kinetic = RHO * 0.2 * 0.1 * 0.1 * V0**2 / 2
     assert last["energy"]["friction_dissipation"] == pytest.approx(kinetic, rel=0.01)
     assert abs(last["energy"]["balance_error"]) < 1e-6 * kinetic
+
+
+def resting_block(law, body_force: tuple, steps: tuple[Step, ...], dt: float, end: float) -> ContactCase:
+    """The block of tests/data/dynamic_block.geo at rest on the plane z = 0 under ``body_force``
+    (N/m^3), the loads and the plane's translation following the time points ``steps``; LU."""
+    return ContactCase(mesh=MeshSource(file=DATA / "dynamic_block.geo"), material=Material(E, NU, density=RHO),
+                       boundary=Boundary(body_force=body_force), contact=Contact("bottom", law),
+                       obstacle=ObstacleShape("plane", point=(0, 0, 0), normal=(0, 0, 1)), steps=steps,
+                       dynamics=Dynamics(dt, end), solver={"pc": "lu"})
+
+
+def test_block_on_a_conveyor(mpi_tmp_path):
+    """The plane moves at V = 0.5 m/s from t = 0 under a block at rest (mu = 0.3, gravity): friction
+    accelerates it at mu g until it moves with the plane at t_s = V / (mu g); the plane's work is
+    m V^2, half of it dissipated (the kinetic energy 1/2 m V^2 the other half). An obstacle motion as
+    a function of time: the time points (0, 0 m) and (0.4 s, 0.2 m), dt = t_s / 10. Measured: the
+    velocity to 1.6e-6 (the normal force vibrates about m g: gravity acts from t = 0), the
+    energies to 1.6e-6, the balance to 2e-8 m V^2."""
+    mu, g, speed = 0.3, 9.81, 0.5
+    slip_time, end = speed / (mu * g), 0.4
+    steps = (Step(load=1.0, time=0.0), Step(load=1.0, translation=(speed * end, 0.0, 0.0), time=end))
+    summary, code = run_dynamics(resting_block(Coulomb(mu), (0.0, 0.0, -RHO * g), steps, slip_time / 10, 0.25),
+                                 mpi_tmp_path, plot=False)
+    assert code == 0
+    for step in summary["steps"]:
+        expected = min(mu * g * step["time"], speed)
+        assert step["body_velocity"]["body"][0] == pytest.approx(expected, rel=1e-5)
+    mass = RHO * 0.2 * 0.1 * 0.1
+    energy = summary["steps"][-1]["energy"]
+    assert energy["friction_dissipation"] == pytest.approx(mass * speed**2 / 2, rel=1e-5)
+    assert energy["contact_work"] == pytest.approx(mass * speed**2, rel=1e-5)  # the plane's work
+    assert energy["kinetic"] == pytest.approx(mass * speed**2 / 2, rel=1e-5)
+    assert max(abs(s["energy"]["balance_error"]) for s in summary["steps"]) < 1e-7 * mass * speed**2
+
+
+def test_time_step_halved(mpi_tmp_path):
+    """The conveyor with at most 10 Newton steps per solve: step 11, where the block starts to stick
+    (14 Newton steps with dt = t_s / 10), fails. Without halvings the run stops there (exit 1, the
+    status and its cause in summary.json); with them the step is solved in two halves (a recorded
+    warning, the parts in the step's entry) and the run ends as the closed form says."""
+    mu, g, speed = 0.3, 9.81, 0.5
+    slip_time = speed / (mu * g)
+    steps = (Step(load=1.0, time=0.0), Step(load=1.0, translation=(0.2, 0.0, 0.0), time=0.4))
+    case = resting_block(Coulomb(mu), (0.0, 0.0, -RHO * g), steps, slip_time / 10, 0.25)
+    failed, code = run_dynamics(dataclasses.replace(case, solver={"pc": "lu", "max_iterations": 10, "max_cuts": 0}),
+                                mpi_tmp_path / "failed", plot=False)
+    assert code == 1 and failed["status"] == "diverged_max_it"
+    last = failed["steps"][-1]
+    assert last["step"] == 11 and not last["converged"] and last["failure"].startswith("out of Newton steps")
+    summary, code = run_dynamics(dataclasses.replace(case, solver={"pc": "lu", "max_iterations": 10}),
+                                 mpi_tmp_path / "halved", plot=False)
+    assert code == 0 and [w["key"] for w in summary["warnings"]] == ["step_cut"]
+    parts = summary["steps"][10]["parts"]
+    assert [p["status"] for p in parts] == ["diverged_max_it", "converged_atol", "converged_atol"]
+    assert [p["dt"] / case.dynamics.dt for p in parts] == pytest.approx([1.0, 0.5, 0.5], rel=1e-12)
+    assert summary["steps"][10]["time"] == pytest.approx(11 * case.dynamics.dt, rel=1e-15)
+    assert summary["steps"][-1]["body_velocity"]["body"][0] == pytest.approx(speed, rel=1e-5)
+
+
+def test_load_ramp(mpi_tmp_path):
+    """A frictionless block under the body force (F, 0, -rho g) ramped from 0 at t = 0 to 1 at T
+    and held: its mean velocity is (F / rho) t^2 / (2 T) up to T, then grows by F / rho per second
+    (the trapezoidal rule integrates a linear acceleration exactly: to round-off); the loads' work
+    is the kinetic and elastic energy gained (the balance closes to round-off)."""
+    g, push, ramp = 9.81, 2.0, 0.01
+    steps = (Step(load=1.0, time=ramp),)
+    summary, code = run_dynamics(resting_block(Frictionless(), (RHO * push, 0.0, -RHO * g), steps, ramp / 8,
+                                               2 * ramp), mpi_tmp_path, plot=False)
+    assert code == 0
+    for step in summary["steps"]:
+        t = step["time"]
+        expected = push * t**2 / (2 * ramp) if t <= ramp else push * (t - ramp / 2)
+        assert step["body_velocity"]["body"][0] == pytest.approx(expected, rel=1e-9)
+        assert abs(step["energy"]["balance_error"]) < 1e-9 * step["energy"]["external_work"]
+    assert summary["steps"][-1]["energy"]["support_work"] == 0.0
 
 
 def test_the_integrator_frees_its_petsc_objects(mpi_tmp_path):
