@@ -31,7 +31,7 @@ from contactqvi.runner import build_problem
 from output_files import read_vtx
 from petsc_audit import assert_frees_petsc_objects
 
-DATA = pathlib.Path(__file__).parent / "data"
+MESHES = pathlib.Path(__file__).resolve().parent.parent / "meshes"
 E, NU, RHO, V0, L = 210e9, 0.3, 7800.0, 1.0, 1.0
 #: the wave speed of a bar with lateral rollers (uniaxial strain): the constrained modulus
 C = math.sqrt(E * (1 - NU) / ((1 + NU) * (1 - 2 * NU)) / RHO)
@@ -39,11 +39,11 @@ DURATION = 2 * L / C
 
 
 def bars(dt: float, end: float, rollers: bool = True) -> ContactCase:
-    """The two bars of tests/data/dynamic_bars.geo (h = 0.1 m) meeting at +-V0, frictionless, LU;
+    """The two bars of meshes/dynamic_bars.geo (h = 0.1 m) meeting at +-V0, frictionless, LU;
     with ``rollers`` on their lateral faces (uniaxial strain), else free (held by nothing but mass)."""
     material = Material(E, NU, density=RHO)
     sides = Boundary(displacement={"sides_y": Displacement(y=0.0), "sides_z": Displacement(z=0.0)} if rollers else {})
-    return ContactCase(mesh=MeshSource(file=DATA / "dynamic_bars.geo"),
+    return ContactCase(mesh=MeshSource(file=MESHES / "dynamic_bars.geo"),
                        bodies=(Body("left", material, sides, (V0, 0.0, 0.0)),
                                Body("right", material, sides, (-V0, 0.0, 0.0))),
                        contacts=(ContactPair("right.interface", "left.interface", law=Frictionless(), search="once"),),
@@ -131,10 +131,10 @@ def test_restart_on_another_number_of_ranks(mpi_tmp_path):
 
 
 def block(mu: float, g: float, solver: dict) -> ContactCase:
-    """The block of tests/data/dynamic_block.geo sliding at V0 on the plane z = 0, friction mu,
+    """The block of meshes/dynamic_block.geo sliding at V0 on the plane z = 0, friction mu,
     gravity g; dt = a twentieth of its stopping time, to 1.1 times it."""
     stop = V0 / (mu * g)
-    return ContactCase(mesh=MeshSource(file=DATA / "dynamic_block.geo"), material=Material(E, NU, density=RHO),
+    return ContactCase(mesh=MeshSource(file=MESHES / "dynamic_block.geo"), material=Material(E, NU, density=RHO),
                        boundary=Boundary(body_force=(0.0, 0.0, -RHO * g)), contact=Contact("bottom", Coulomb(mu)),
                        obstacle=ObstacleShape("plane", point=(0, 0, 0), normal=(0, 0, 1)),
                        dynamics=Dynamics(stop / 20, 1.1 * stop, initial_velocity=(V0, 0.0, 0.0)), solver=solver)
@@ -158,9 +158,9 @@ def test_block_slides_to_a_stop(mpi_tmp_path):
 
 
 def resting_block(law, body_force: tuple, steps: tuple[Step, ...], dt: float, end: float) -> ContactCase:
-    """The block of tests/data/dynamic_block.geo at rest on the plane z = 0 under ``body_force``
+    """The block of meshes/dynamic_block.geo at rest on the plane z = 0 under ``body_force``
     (N/m^3), the loads and the plane's translation following the time points ``steps``; LU."""
-    return ContactCase(mesh=MeshSource(file=DATA / "dynamic_block.geo"), material=Material(E, NU, density=RHO),
+    return ContactCase(mesh=MeshSource(file=MESHES / "dynamic_block.geo"), material=Material(E, NU, density=RHO),
                        boundary=Boundary(body_force=body_force), contact=Contact("bottom", law),
                        obstacle=ObstacleShape("plane", point=(0, 0, 0), normal=(0, 0, 1)), steps=steps,
                        dynamics=Dynamics(dt, end), solver={"pc": "lu"})
@@ -250,7 +250,7 @@ def test_the_integrator_frees_its_petsc_objects(mpi_tmp_path):
 
 
 def _case_file(**dynamics) -> dict:
-    return {"mesh": {"file": str(DATA / "dynamic_bars.geo")}, "dynamics": {"dt": 1e-5, "end": 1e-4, **dynamics},
+    return {"mesh": {"file": str(MESHES / "dynamic_bars.geo")}, "dynamics": {"dt": 1e-5, "end": 1e-4, **dynamics},
             "bodies": [{"name": "left", "material": {"young": E, "poisson": NU, "density": RHO},
                         "boundary": {"displacement": {"sides_y": {"y": 0.0}}}},
                        {"name": "right", "material": {"young": E, "poisson": NU, "density": RHO}}],
