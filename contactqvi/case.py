@@ -85,8 +85,9 @@ slave surface with a master surface (``"body.group"``) or with a rigid obstacle
     #                                   # slope = [0, 0, 2e-3]}, delta(x) = value + slope . (x - at)
 
 Time (implicit dynamics, docs/dynamics.md): a ``[dynamics]`` table makes the case a
-time integration instead of a quasi-static load path; every body needs its density, the
-loads are constant in time (no ``[[steps]]``)::
+time integration instead of a quasi-static load path; every body needs its density, and
+the ``[[steps]]``, if any, are time points (the load factor and translation linear in time
+between them, :func:`~contactqvi.load_steps.at_time`; none: constant loads)::
 
     [dynamics]
     scheme = "newmark"                  # contact-stabilised Newmark, beta = 1/4, gamma = 1/2
@@ -95,6 +96,10 @@ loads are constant in time (no ``[[steps]]``)::
     initial_velocity = [0.0, 0.0, -1.0] # m/s; with [[bodies]]: each body's own key
     [material]
     density = 7800.0                    # kg/m^3 (each body's material with [[bodies]])
+    [[steps]]
+    time = 5e-4                         # s; from load 0 at t = 0 to load 1 at 0.5 ms, then held
+    load = 1.0
+    translation = [0.0, 0.0, -1e-4]     # the obstacles and moved groups, m
 
 Contact laws (:data:`contactqvi.laws.LAWS`; ``law`` may be left out for ``coulomb``),
 with the keys each takes beside ``law`` (checked by the law's class, errors named by
@@ -924,9 +929,9 @@ def _check_consistency(case: ContactCase) -> None:
 
 def _check_dynamics(case: ContactCase) -> Dynamics:
     """``[dynamics]`` checked against the case: a known scheme, dt > 0, end >= dt, a density
-    for every body (none for some and one for others is named as such), loads constant in
-    time (no ``[[steps]]``, no moved groups, zero prescribed values), linear elasticity,
-    contact searched once (docs/dynamics.md, what is not done yet)."""
+    for every body (none for some and one for others is named as such), the time points of
+    ``[[steps]]`` (:func:`_check_time_points`), a hyperelastic body in the displacement
+    formulation, contact searched once (docs/dynamics.md, what is not done yet)."""
     dynamics = case.dynamics
     _instance(dynamics, Dynamics, "dynamics")
     require_choice("dynamics.scheme", dynamics.scheme, DYNAMICS_SCHEMES)
@@ -943,8 +948,9 @@ def _check_dynamics(case: ContactCase) -> Dynamics:
     _check_masses(bodies, prefix)
     for body, path in zip(bodies, prefix):
         where = f"{path}." if path else ""
-        require(body.material.model is None, f"{where}material.model", "[dynamics] is linear elasticity for now, "
-                f"got {body.material.model!r}")
+        require(body.material.model is None or body.material.formulation == "displacement",
+                f"{where}material.formulation", "[dynamics] takes a hyperelastic body in the displacement "
+                f"formulation, got {body.material.formulation!r}")
     _check_time_points(case, bodies, prefix)
     searches = [case.contact.search] if case.contact is not None else [p.search for p in case.contacts]
     for i, search in enumerate(searches):

@@ -29,6 +29,7 @@ from contactqvi.parameters import ParameterError
 from contactqvi.runner import build_problem
 
 from output_files import read_vtx
+from program_runs import on_rank_0
 from petsc_audit import assert_frees_petsc_objects
 
 MESHES = pathlib.Path(__file__).resolve().parent.parent / "meshes"
@@ -130,6 +131,42 @@ def test_restart_on_another_number_of_ranks(mpi_tmp_path):
     alone.Free()
 
 
+def _conveyor(dt_fraction: float = 10) -> ContactCase:
+    """The block at rest on a plane moving at 0.5 m/s (mu = 0.3, gravity; :func:`test_block_on_a_conveyor`)."""
+    mu, g, speed = 0.3, 9.81, 0.5
+    steps = (Step(load=1.0, time=0.0), Step(load=1.0, translation=(0.2, 0.0, 0.0), time=0.4))
+    return resting_block(Coulomb(mu), (0.0, 0.0, -RHO * g), steps, speed / (mu * g) / dt_fraction, 0.25)
+
+
+@pytest.mark.ranks(2, 3, 4)
+@pytest.mark.parametrize("name", ["bars", "conveyor"])
+def test_history_on_any_number_of_ranks(name, mpi_tmp_path):
+    """The whole history on all ranks and on rank 0 alone (LU Newton-step solves): every step's
+    Newton counts equal, its energies and each body's velocity to 1e-9 of their scale (the
+    bars' impact through a mortar pair; the conveyor's friction and moving plane). Runs under
+    ``make test`` on 2 ranks and in ``make test-ranks`` on 3 and 4."""
+    world = MPI.COMM_WORLD
+    case = bars(DURATION / 40, DURATION) if name == "bars" else _conveyor()
+    many, code = run_dynamics(case, mpi_tmp_path / "many", world, plot=False)
+    assert code == 0
+    on_rank_0(world, lambda: _same_history(run_dynamics(case, mpi_tmp_path / "one", MPI.COMM_SELF, plot=False),
+                                           many))
+
+
+def _same_history(run: tuple[dict, int], many: dict) -> None:
+    """The run on one rank against ``many``'s summary (:func:`test_history_on_any_number_of_ranks`)."""
+    one, code = run
+    assert code == 0 and len(one["steps"]) == len(many["steps"])
+    scale = max(s["energy"]["kinetic"] + s["energy"]["elastic"] for s in one["steps"])
+    speed = max(abs(v) for s in one["steps"] for velocity in s["body_velocity"].values() for v in velocity)
+    for a, b in zip(one["steps"], many["steps"]):
+        assert (a["iterations"], a["predictor"]["iterations"]) == (b["iterations"], b["predictor"]["iterations"])
+        for term in ("kinetic", "elastic", "contact_work", "friction_dissipation", "external_work"):
+            assert b["energy"][term] == pytest.approx(a["energy"][term], rel=1e-9, abs=1e-9 * scale)
+        for body, velocity in a["body_velocity"].items():
+            assert b["body_velocity"][body] == pytest.approx(velocity, rel=1e-9, abs=1e-9 * speed)
+
+
 def block(mu: float, g: float, solver: dict) -> ContactCase:
     """The block of meshes/dynamic_block.geo sliding at V0 on the plane z = 0, friction mu,
     gravity g; dt = a twentieth of its stopping time, to 1.1 times it."""
@@ -174,10 +211,7 @@ def test_block_on_a_conveyor(mpi_tmp_path):
     velocity to 1.6e-6 (the normal force vibrates about m g: gravity acts from t = 0), the
     energies to 1.6e-6, the balance to 2e-8 m V^2."""
     mu, g, speed = 0.3, 9.81, 0.5
-    slip_time, end = speed / (mu * g), 0.4
-    steps = (Step(load=1.0, time=0.0), Step(load=1.0, translation=(speed * end, 0.0, 0.0), time=end))
-    summary, code = run_dynamics(resting_block(Coulomb(mu), (0.0, 0.0, -RHO * g), steps, slip_time / 10, 0.25),
-                                 mpi_tmp_path, plot=False)
+    summary, code = run_dynamics(_conveyor(), mpi_tmp_path, plot=False)
     assert code == 0
     for step in summary["steps"]:
         expected = min(mu * g * step["time"], speed)
@@ -195,10 +229,7 @@ def test_time_step_halved(mpi_tmp_path):
     (14 Newton steps with dt = t_s / 10), fails. Without halvings the run stops there (exit 1, the
     status and its cause in summary.json); with them the step is solved in two halves (a recorded
     warning, the parts in the step's entry) and the run ends as the closed form says."""
-    mu, g, speed = 0.3, 9.81, 0.5
-    slip_time = speed / (mu * g)
-    steps = (Step(load=1.0, time=0.0), Step(load=1.0, translation=(0.2, 0.0, 0.0), time=0.4))
-    case = resting_block(Coulomb(mu), (0.0, 0.0, -RHO * g), steps, slip_time / 10, 0.25)
+    case, speed = _conveyor(), 0.5
     failed, code = run_dynamics(dataclasses.replace(case, solver={"pc": "lu", "max_iterations": 10, "max_cuts": 0}),
                                 mpi_tmp_path / "failed", plot=False)
     assert code == 1 and failed["status"] == "diverged_max_it"

@@ -40,8 +40,10 @@ import ufl
 import dolfinx.fem.petsc
 from dolfinx import fem
 
+from contactqvi.contact.hyperelastic import HyperelasticSystem
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult, SCDNewtonSolver
+from contactqvi.elasticity import lame_parameters
 from contactqvi.laws import Frictionless
 from contactqvi.lifetime import PETScOwner, VectorSet
 from contactqvi.linalg import default_options
@@ -49,7 +51,8 @@ from contactqvi.load_steps import LoadStep, at_time
 from contactqvi.parameters import require
 from contactqvi.postprocess import internal_force_form, load_form
 
-__all__ = ["BETA", "ENERGY_TERMS", "BodyMotion", "DynamicState", "PhysicalEnergy", "StabilisedNewmark", "mass_matrix"]
+__all__ = ["BETA", "ENERGY_TERMS", "BodyMotion", "DynamicState", "InertialSystem", "PhysicalEnergy", "StabilisedNewmark",
+           "global_mass_matrix", "mass_matrix"]
 
 logger = logging.getLogger(__name__)
 
@@ -60,9 +63,9 @@ ENERGY_TERMS = ("kinetic", "elastic", "external_work", "support_work", "friction
                 "balance_error")
 
 
-def mass_matrix(problem: ContactProblem, density: float | fem.Function) -> PETSc.Mat:
-    """M = T^T M_K T in the solver's variables, M_K = (rho u, v) the consistent mass matrix
-    with zero rows and columns at the prescribed dofs (so that A + c M keeps A's identity rows)."""
+def global_mass_matrix(problem: ContactProblem, density: float | fem.Function) -> PETSc.Mat:
+    """M_K = (rho u, v), the consistent mass matrix in global components, with zero rows and
+    columns at the prescribed dofs (so that A + c M keeps A's identity rows)."""
     V = problem.V
     u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
     M_K = dolfinx.fem.petsc.assemble_matrix(fem.form(density * ufl.inner(u, v) * ufl.dx))
@@ -70,13 +73,56 @@ def mass_matrix(problem: ContactProblem, density: float | fem.Function) -> PETSc
     n_owned = 3 * V.dofmap.index_map.size_local
     owned = problem.dirichlet_dofs_loc[problem.dirichlet_dofs_loc < n_owned]
     M_K.zeroRowsColumns((owned + 3 * V.dofmap.index_map.local_range[0]).astype(PETSc.IntType), diag=0.0)
+    return M_K
+
+
+def mass_matrix(problem: ContactProblem, M_K: PETSc.Mat) -> PETSc.Mat:
+    """M = T^T M_K T in the solver's variables of :func:`global_mass_matrix` (a new matrix; M_K
+    itself without a change of variables)."""
     T = problem.to_global
     if T is None:
-        return M_K
+        return M_K.duplicate(copy=True)
     with default_options("", {"mat_product_clear": True}):
-        M = M_K.PtAP(T)
-    M_K.destroy()
-    return M
+        return M_K.PtAP(T)
+
+
+@dataclasses.dataclass
+class InertialSystem(HyperelasticSystem):
+    """f of the step (3.3) for a hyperelastic body (docs/dynamics.md, Sect. 3.1): in global
+    components, with r_K(u) = int P(F) : grad v dX - lambda_{n+1} l(v) of
+    :class:`~contactqvi.contact.hyperelastic.HyperelasticSystem` (zero on the prescribed rows),
+
+        r(u) = r_K(u) + c M_K u + b,   b = -c M_K u_bar + r_K(u_n)   (lambda_n in r_K(u_n)),
+        dr/du = K_T(u) + c M_K,        c = 1 / (beta tau^2),
+
+    the linear step's (1/(beta tau^2)) M (w - w_bar) + K w - F_{n+1} - (F_n - K w_n) with the
+    internal force P(F) in place of K w. The problem maps r and dr/du to its variables
+    (:meth:`~contactqvi.contact.problem.ContactProblem.residual`, ``tangent``) as for a static
+    step; :class:`StabilisedNewmark` sets ``coefficient`` and ``inertia`` per step.
+
+    Attributes:
+        mass: M_K (global components, zero rows and columns at the prescribed dofs; not owned).
+        coefficient: c = 1 / (beta tau^2) of the current time step.
+        inertia: b (global components, ghosted; not owned).
+        work: a vector for M_K u (not owned).
+    """
+
+    mass: PETSc.Mat | None = None
+    coefficient: float = 0.0
+    inertia: PETSc.Vec | None = None
+    work: PETSc.Vec | None = None
+
+    def assemble_residual(self, load_factor: float) -> PETSc.Vec:
+        r = super().assemble_residual(load_factor)
+        self.mass.mult(self.displacement.x.petsc_vec, self.work)
+        r.axpy(self.coefficient, self.work)
+        r.axpy(1.0, self.inertia)
+        return r
+
+    def assemble_tangent(self, out: PETSc.Mat) -> PETSc.Mat:
+        super().assemble_tangent(out)
+        out.axpy(self.coefficient, self.mass, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        return out
 
 
 @dataclasses.dataclass
@@ -143,41 +189,64 @@ class PhysicalEnergy(PETScOwner):
     """
 
     def __init__(self, problem: ContactProblem):
-        V = problem.V
+        V, body = problem.V, problem.body
         v = ufl.TestFunction(V)
         self.field = fem.Function(V)
-        internal, self._update = internal_force_form(self.field, v, problem.body)
+        internal, self._update = internal_force_form(self.field, v, body)
         self._internal = fem.form(internal)
+        self._stored = None
+        if body.material is not None:  # psi(F) of a hyperelastic body (the linear one: 1/2 u . K u)
+            mu, lmbda = lame_parameters(body.young, body.poisson)
+            F = ufl.Identity(3) + ufl.grad(self.field)
+            self._stored = fem.form(body.material.strain_energy(F, mu, lmbda) * body.material.dx())
         self.internal_force = dolfinx.fem.petsc.create_vector(self._internal)
-        self.load = dolfinx.fem.petsc.assemble_vector(fem.form(load_form(V.mesh, v, problem.body, 1.0)))
+        self.load = dolfinx.fem.petsc.assemble_vector(fem.form(load_form(V.mesh, v, body, 1.0)))
         self.load.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         n_owned = 3 * V.dofmap.index_map.size_local
         self.prescribed = problem.dirichlet_dofs_loc[problem.dirichlet_dofs_loc < n_owned]
-        self._increment = self.load.duplicate()
+        self._increment, self._before = self.load.duplicate(), self.load.duplicate()
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [self.internal_force, self.load, self._increment]
+        return [self.internal_force, self.load, self._increment, self._before]
 
     def step(self, before: PETSc.Vec, after: PETSc.Vec, loads: tuple[float, float]) -> dict[str, float]:
         """The increments of ``elastic``, ``external_work`` and ``support_work`` from the physical
-        displacement ``before`` to ``after`` (owned dofs) at the load factors ``loads``. Collective."""
-        self.field.x.petsc_vec.waxpy(1.0, before, after)
+        displacement ``before`` to ``after`` (owned dofs) at the load factors ``loads``: (4.2) of
+        docs/dynamics.md; for a hyperelastic body Delta E_el = Psi(u_{n+1}) - Psi(u_n), Psi = int
+        psi(F) dX, and K (u_n + u_{n+1}) the sum of the internal forces at u_n and u_{n+1}. Collective."""
+        increment, comm = self._increment, self.load.comm.tompi4py()
+        increment.waxpy(-1.0, before, after)
+        if self._stored is None:
+            self._internal_force_at(before, after)  # K (u_n + u_{n+1})
+            elastic = 0.5 * increment.dot(self.internal_force)
+        else:
+            stored_before = self._internal_force_at(before)
+            self.internal_force.copy(self._before)
+            elastic = self._internal_force_at(after) - stored_before
+            self.internal_force.axpy(1.0, self._before)
+        factor = loads[0] + loads[1]
+        self.internal_force.axpy(-factor, self.load)  # K (u_n + u_{n+1}) - (l_n + l_{n+1}) f
+        p = self.prescribed
+        support = 0.5 * float(np.dot(increment.array[p], self.internal_force.array[p]))
+        return {"elastic": elastic, "external_work": 0.5 * factor * increment.dot(self.load),
+                "support_work": comm.allreduce(support, op=MPI.SUM)}
+
+    def _internal_force_at(self, x: PETSc.Vec, y: PETSc.Vec | None = None) -> float:
+        """The internal force at the displacement x (+ y) into :attr:`internal_force`; returns
+        Psi there for a hyperelastic body (else 0). Collective."""
+        field = self.field.x.petsc_vec
+        x.copy(field)
+        if y is not None:
+            field.axpy(1.0, y)
         self.field.x.scatter_forward()
         self._update()
         with self.internal_force.localForm() as local:
             local.set(0.0)
         dolfinx.fem.petsc.assemble_vector(self.internal_force, self._internal)
         self.internal_force.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        increment = self._increment
-        increment.waxpy(-1.0, before, after)
-        factor = loads[0] + loads[1]
-        self.internal_force.axpy(-factor, self.load)  # K (u_n + u_{n+1}) - (l_n + l_{n+1}) f
-        p = self.prescribed
-        support = 0.5 * float(np.dot(increment.array[p], self.internal_force.array[p]))
-        comm = self.load.comm.tompi4py()
-        return {"elastic": 0.5 * (increment.dot(self.internal_force) + factor * increment.dot(self.load)),
-                "external_work": 0.5 * factor * increment.dot(self.load),
-                "support_work": comm.allreduce(support, op=MPI.SUM)}
+        if self._stored is None:
+            return 0.0
+        return self.field.function_space.mesh.comm.allreduce(fem.assemble_scalar(self._stored), op=MPI.SUM)
 
 
 class StabilisedNewmark(PETScOwner):
@@ -185,8 +254,10 @@ class StabilisedNewmark(PETScOwner):
 
     Turns ``problem.A`` into A_eff = K + M / (beta tau^2) in place (K is kept as a copy for
     the step's load) and owns the two SCD solvers: the M-projection of the predictor and the
-    implicit step. The problem's contact is searched once (the mass and T of the reference
-    configuration). ``parameters`` and ``prefix`` are the SCD solver's; the projection's
+    implicit step. A hyperelastic body's f and Jacobian, which the solver assembles at every
+    Newton step into A, get the inertia from an :class:`InertialSystem` that takes the place of
+    ``problem.hyperelastic`` while the integrator lives (put back by :meth:`destroy`). The
+    problem's contact is searched once (the mass and T of the reference configuration). ``parameters`` and ``prefix`` are the SCD solver's; the projection's
     Krylov solver reads its options under ``prefix + "predictor_"``. The loads, prescribed
     displacements and the obstacles' and moved groups' translation follow the time points
     ``path`` (:func:`~contactqvi.load_steps.at_time`; the default: constant loads).
@@ -199,14 +270,26 @@ class StabilisedNewmark(PETScOwner):
     def __init__(self, problem: ContactProblem, density: float | fem.Function, dt: float,
                  parameters: dict | None = None, prefix: str = "dynamics_",
                  path: typing.Sequence[LoadStep] = (LoadStep(),)):
-        require(problem.hyperelastic is None and not problem.searched_each_step, "dynamics",
-                "the contact-stabilised Newmark step takes a linear elastic problem searched once (docs/dynamics.md)")
+        require(not problem.searched_each_step, "dynamics",
+                "the contact-stabilised Newmark step takes a problem searched once (docs/dynamics.md)")
+        require(problem.hyperelastic is None or problem.body.nodal is None, "material.formulation",
+                "[dynamics] takes a hyperelastic body in the displacement formulation")
         require(dt > 0.0, "dynamics.dt", f"the time step must be > 0 (s), got {dt!r}")
         self.problem, self.tau, self.path = problem, float(dt), tuple(path)
         self._parameters, self._prefix = parameters, prefix
-        self.mass = mass_matrix(problem, density)
-        self.stiffness = problem.A.duplicate(copy=True)
-        problem.A.axpy(1.0 / (BETA * self.tau**2), self.mass, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        self.global_mass = global_mass_matrix(problem, density)
+        self.mass = mass_matrix(problem, self.global_mass)
+        self.static = problem.hyperelastic
+        if self.static is None:
+            self.stiffness = problem.A.duplicate(copy=True)
+            problem.A.axpy(1.0 / (BETA * self.tau**2), self.mass, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        else:
+            self.stiffness = None
+            inertia = self.static.internal.duplicate()
+            problem.hyperelastic = InertialSystem(
+                **{f.name: getattr(self.static, f.name) for f in dataclasses.fields(self.static)},
+                mass=self.global_mass, coefficient=1.0 / (BETA * self.tau**2), inertia=inertia,
+                work=inertia.duplicate())
         self.projection_matrix = self.mass.duplicate(copy=True)
         diagonal = self.mass.getDiagonal()
         self.prescribed = _zero_rows(diagonal)
@@ -222,10 +305,18 @@ class StabilisedNewmark(PETScOwner):
         self._work = _Work.create(problem.A)
 
     def petsc_objects(self) -> list[typing.Any]:
-        """The solvers, M, K, the projection's matrix and load, the energies' vectors, the work
-        vectors (not the problem's)."""
-        return [self.predictor_solver, self.solver, self.mass, self.stiffness, self.projection_matrix,
-                self.projection.load, self.energy, self._work]
+        """The solvers, M, M_K, K, the projection's matrix and load, the energies' vectors, the work
+        vectors and a hyperelastic step's inertia vectors (not the problem's)."""
+        system = self.problem.hyperelastic
+        inertial = [system.inertia, system.work] if isinstance(system, InertialSystem) else []
+        return [self.predictor_solver, self.solver, self.mass, self.global_mass, self.stiffness,
+                self.projection_matrix, self.projection.load, self.energy, self._work, *inertial]
+
+    def destroy(self) -> None:
+        """Free the PETSc objects (collective) and give the problem back its static hyperelastic system."""
+        super().destroy()
+        if self.static is not None:
+            self.problem.hyperelastic = self.static
 
     def initial_state(self, velocity: PETSc.Vec | None = None) -> DynamicState:
         """The state at time 0: at rest in the reference configuration with the initial velocity
@@ -263,7 +354,10 @@ class StabilisedNewmark(PETScOwner):
         if not projection.converged:
             return projection, projection
         projected.waxpy(-1.0, problem.shift, u)
-        self._add_inertia(state, projected)
+        if self.static is None:
+            self._add_inertia(state, projected)
+        else:
+            self._set_inertia(state, u, before.load)
         result = self.solver.solve(u, stop=stop)
         if result.converged:
             self._record(state, u, result, (before.load, after.load))
@@ -275,8 +369,11 @@ class StabilisedNewmark(PETScOwner):
         require(tau > 0.0, "dynamics.dt", f"the time step must be > 0 (s), got {tau!r}")
         if abs(tau - self.tau) <= 1e-12 * self.tau:
             return
-        self.problem.A.axpy(1.0 / (BETA * tau**2) - 1.0 / (BETA * self.tau**2), self.mass,
-                            PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        if self.static is None:
+            self.problem.A.axpy(1.0 / (BETA * tau**2) - 1.0 / (BETA * self.tau**2), self.mass,
+                                PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        else:
+            self.problem.hyperelastic.coefficient = 1.0 / (BETA * tau**2)
         self.tau = float(tau)
         self.solver.destroy()
         self.solver = SCDNewtonSolver(self.problem, self._parameters, prefix=self._prefix)
@@ -291,6 +388,17 @@ class StabilisedNewmark(PETScOwner):
         work.aypx(-1.0, self._work.previous_load)
         work.array[self.prescribed] = 0.0
         problem.load.axpy(1.0, work)
+
+    def _set_inertia(self, state: DynamicState, u: PETSc.Vec, load: float) -> None:
+        """The hyperelastic step's b = -c M_K u_bar + r_K(u_n) at the load factor ``load`` of t_n
+        (:class:`InertialSystem`; u_bar the physical displacement of the projected ``u``)."""
+        system, problem = self.problem.hyperelastic, self.problem
+        problem.physical_displacement(u, system.displacement)
+        self.global_mass.mult(system.displacement.x.petsc_vec, system.inertia)
+        system.inertia.scale(-system.coefficient)
+        state.physical.copy(system.displacement.x.petsc_vec)
+        system.displacement.x.scatter_forward()
+        system.inertia.axpy(1.0, HyperelasticSystem.assemble_residual(system, load))
 
     def _record(self, state: DynamicState, u: PETSc.Vec, result: SCDNewtonResult, loads: tuple[float, float]) -> None:
         """Advance ``state`` over the step just solved: w_{n+1} = u - d, u_{n+1}, v_{n+1} (3.4), the
