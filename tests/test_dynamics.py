@@ -340,7 +340,7 @@ def _case_file(**dynamics) -> dict:
      "no mass next to one with mass (bodies[0]"),
     (lambda d: d["bodies"][0]["material"].update(density=-1.0), "bodies[0].material.density", "> 0"),
     (lambda d: d["contacts"][0].update(search="every_step"), "contacts[0].search", "once"),
-    (lambda d: d["bodies"][0]["material"].update(model="neo_hookean", formulation="nodal_pressure"),
+    (lambda d: [b["material"].update(model="neo_hookean", formulation="nodal_pressure") for b in d["bodies"]],
      "bodies[0].material.formulation", "displacement formulation"),
     (lambda d: d.update(steps=[{"load": 0.5}]), "steps[0].time", "required with [dynamics]"),
     (lambda d: d.update(steps=[{"time": 2e-5}, {"time": 2e-5}]), "steps[1].time", "increase"),
