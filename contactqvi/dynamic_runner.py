@@ -157,19 +157,19 @@ def _advance(problem: ContactProblem, integrator: StabilisedNewmark, state: Dyna
         remaining = target - state.time
         tau = remaining * 0.5**cuts
         projection, result = integrator.step(state, u, tau)
-        failed = result if projection.converged else projection
-        parts.append({"time": state.time if failed.converged else state.time + tau, "dt": tau,
-                      "status": str(failed.status)})
-        if failed.converged:
+        last = result if projection.converged else projection
+        parts.append({"time": state.time if last.converged else state.time + tau, "dt": tau,
+                      "status": str(last.status)})
+        if last.converged:
             if cuts == 0:
                 state.time = target  # the parts add up to dt to round-off; the step ends at t_n + dt
                 return parts, projection, result
             cuts -= 1
             continue
-        if failed.status == Status.INTERRUPTED or cuts >= max_cuts:
+        if last.status == Status.INTERRUPTED or cuts >= max_cuts:
             return parts, projection, result
         cuts += 1
-        warn(problem.comm, logger, "step_cut", f"time step {state.done + 1}: {failed.status} with dt = {tau:.6g} "
+        warn(problem.comm, logger, "step_cut", f"time step {state.done + 1}: {last.status} with dt = {tau:.6g} "
              f"s at t = {state.time:.9g} s; halved to {remaining * 0.5**cuts:.6g} s", step=state.done + 1,
              time=state.time, dt=remaining * 0.5**cuts)
 

@@ -18,7 +18,7 @@ t_{n+1}), a step from (w_n, v_n) is
 A step that fails may be retried with a shorter tau (:meth:`StabilisedNewmark.step` takes
 any tau; A_eff and the step's solver follow it).
 
-Steps 2 and 3 are the GE 0 in A u - l + Q(u) of seed 000 (6.3) in the shifted variables
+Steps 2 and 3 are the GE 0 in f(u) + Q(u) of seed 000 (6.3) in the shifted variables
 u = w + d of :meth:`~contactqvi.contact.problem.ContactProblem.set_step` (slip measured
 from w_n: u_t is the slip increment over the step, slip rate times tau), solved by
 :class:`~contactqvi.contact.scd_newton.SCDNewtonSolver` unchanged. All that a step reads
@@ -250,14 +250,15 @@ class PhysicalEnergy(PETScOwner):
 
 
 class StabilisedNewmark(PETScOwner):
-    """The contact-stabilised Newmark method (module docstring) on a linear ``problem``.
+    """The contact-stabilised Newmark method (module docstring) on a linear or hyperelastic ``problem``.
 
-    Turns ``problem.A`` into A_eff = K + M / (beta tau^2) in place (K is kept as a copy for
-    the step's load) and owns the two SCD solvers: the M-projection of the predictor and the
-    implicit step. A hyperelastic body's f and Jacobian, which the solver assembles at every
-    Newton step into A, get the inertia from an :class:`InertialSystem` that takes the place of
-    ``problem.hyperelastic`` while the integrator lives (put back by :meth:`destroy`). The
-    problem's contact is searched once (the mass and T of the reference configuration). ``parameters`` and ``prefix`` are the SCD solver's; the projection's
+    For a linear body turns ``problem.A`` into A_eff = K + M / (beta tau^2) in place (K is kept
+    as a copy for the step's load); a hyperelastic body's f and Jacobian, which the solver
+    assembles at every Newton step into A, get the inertia from an :class:`InertialSystem` that
+    takes the place of ``problem.hyperelastic`` while the integrator lives (put back by
+    :meth:`destroy`). Owns the two SCD solvers: the M-projection of the predictor and the
+    implicit step. The problem's contact is searched once (the mass and T of the reference
+    configuration). ``parameters`` and ``prefix`` are the SCD solver's; the projection's
     Krylov solver reads its options under ``prefix + "predictor_"``. The loads, prescribed
     displacements and the obstacles' and moved groups' translation follow the time points
     ``path`` (:func:`~contactqvi.load_steps.at_time`; the default: constant loads).
