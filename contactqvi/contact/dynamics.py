@@ -300,8 +300,7 @@ class StabilisedNewmark(PETScOwner):
         diagonal.destroy()
         self.projection = dataclasses.replace(problem, A=self.projection_matrix, load=problem.load.duplicate(),
                                               law=Frictionless().lumped(problem.contact_area), hyperelastic=None)
-        self.predictor_solver = SCDNewtonSolver(self.projection, _projection_parameters(parameters),
-                                                prefix=prefix + "predictor_")
+        self.predictor_solver = SCDNewtonSolver(self.projection, parameters, prefix=prefix + "predictor_")
         self.solver = SCDNewtonSolver(problem, parameters, prefix=prefix)
         self.energy = PhysicalEnergy(problem)
         self._work = _Work.create(problem.A)
@@ -471,18 +470,6 @@ class BodyMotion(PETScOwner):
         self.mass.mult(velocity, self._work)
         return {name: [z.dot(self._work) / m if m > 0.0 else 0.0 for z, m in zip(zs, self.masses[name])]
                 for name, zs in self.translations.items()}
-
-
-def _projection_parameters(parameters: dict | None) -> dict:
-    """The projection's (3.2) SCD parameters: the step's, with the Newton-step solver ``paper``
-    (GMRES + block-Jacobi ILU(0)) in place of the default multigrid: its matrix is the mass
-    matrix (plus the contact rows), whose condition number does not grow with the mesh
-    (quasi-uniform) and which ILU(0) preconditions well, while a GAMG set-up per projection
-    cost a third of a time step (benchmarks/results/dynamics_cost.md). A ``pc`` the caller
-    gives is kept."""
-    given = dict(parameters or {})
-    given.setdefault("pc", "paper")
-    return given
 
 
 def _zero_rows(diagonal: PETSc.Vec) -> np.ndarray:
