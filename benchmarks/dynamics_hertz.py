@@ -40,26 +40,9 @@ T_C = 2.87 * (MASS**2 / (R * E_STAR**2 * V0)) ** 0.2
 DELTA = (15 * MASS * V0**2 / (16 * E_STAR * math.sqrt(R))) ** 0.4
 F_MAX = 4.0 / 3.0 * E_STAR * math.sqrt(R) * DELTA**1.5
 
-GEO = """SetFactory("OpenCASCADE");
-Sphere(1) = {{0, 0, 0, {R}}};
-Box(2) = {{0, 0, -{R}, {R}, {R}, 2 * {R}}};
-BooleanIntersection{{ Volume{{1}}; Delete; }}{{ Volume{{2}}; Delete; }}
-eps = 1e-6;
-Physical Volume("ball") = {{Volume{{:}}}};
-sx[] = Surface In BoundingBox{{-eps, -eps, -{R} - eps, eps, {R} + eps, {R} + eps}};
-sy[] = Surface In BoundingBox{{-eps, -eps, -{R} - eps, {R} + eps, eps, {R} + eps}};
-surface[] = Surface In BoundingBox{{-eps, -eps, -{R} - eps, {R} + eps, {R} + eps, {R} + eps}};
-surface[] -= sx[];
-surface[] -= sy[];
-Physical Surface("symmetry_x") = sx[];
-Physical Surface("symmetry_y") = sy[];
-Physical Surface("surface") = surface[];
-Point(100) = {{0, 0, -{R}}};
-Field[1] = Distance; Field[1].PointsList = {{100}};
-Field[2] = Threshold; Field[2].InField = 1; Field[2].SizeMin = {h}; Field[2].SizeMax = {far};
-Field[2].DistMin = {near}; Field[2].DistMax = {near} + 8 * {far};
-Background Field = 2;
-Mesh.MeshSizeExtendFromBoundary = 0; Mesh.MeshSizeFromPoints = 0; Mesh.MeshSizeFromCurvature = 0;
+#: A mesh of meshes/drop_ball.geo with the contact size h and the far size (m).
+GEO = """R = {R}; h = {h}; far = {far}; near = {near};
+Include "{ball}";
 """
 
 
@@ -78,7 +61,8 @@ def run(h: float, far: float, k: int, directory: pathlib.Path) -> list:
     """One mesh and time step: the row of the table."""
     mesh = directory / f"ball_{h:g}.geo"
     if MPI.COMM_WORLD.rank == 0:
-        mesh.write_text(GEO.format(R=R, h=h, far=far, near=3 * math.sqrt(R * DELTA)))
+        mesh.write_text(GEO.format(R=R, h=h, far=far, near=3 * math.sqrt(R * DELTA),
+                                   ball=ROOT / "meshes" / "drop_ball.geo"))
     MPI.COMM_WORLD.Barrier()
     case = ContactCase(mesh=MeshSource(file=mesh), material=Material(E, NU, density=RHO),
                        boundary=Boundary(displacement={"symmetry_x": Displacement(x=0.0),

@@ -85,8 +85,9 @@ slave surface with a master surface (``"body.group"``) or with a rigid obstacle
     #                                   # slope = [0, 0, 2e-3]}, delta(x) = value + slope . (x - at)
 
 Time (implicit dynamics, docs/dynamics.md): a ``[dynamics]`` table makes the case a
-time integration instead of a quasi-static load path; every body needs its density, the
-loads are constant in time (no ``[[steps]]``)::
+time integration instead of a quasi-static load path; every body needs its density, and
+the ``[[steps]]``, if any, are time points (the load factor and translation linear in time
+between them, :func:`~contactqvi.load_steps.at_time`; none: constant loads)::
 
     [dynamics]
     scheme = "newmark"                  # contact-stabilised Newmark, beta = 1/4, gamma = 1/2
@@ -95,6 +96,10 @@ loads are constant in time (no ``[[steps]]``)::
     initial_velocity = [0.0, 0.0, -1.0] # m/s; with [[bodies]]: each body's own key
     [material]
     density = 7800.0                    # kg/m^3 (each body's material with [[bodies]])
+    [[steps]]
+    time = 5e-4                         # s; from load 0 at t = 0 to load 1 at 0.5 ms, then held
+    load = 1.0
+    translation = [0.0, 0.0, -1e-4]     # the obstacles and moved groups, m
 
 Contact laws (:data:`contactqvi.laws.LAWS`; ``law`` may be left out for ``coulomb``),
 with the keys each takes beside ``law`` (checked by the law's class, errors named by
@@ -464,6 +469,10 @@ class ContactCase:
         _check_fits(self)
         if self.dynamics is not None:
             object.__setattr__(self, "dynamics", _check_dynamics(self))
+        else:
+            timed = next((i for i, step in enumerate(self.steps) if step.time is not None), None)
+            require(timed is None, f"steps[{timed}].time", "a time point belongs to a time integration: add "
+                    "[dynamics] (a quasi-static path's steps have no time)")
 
     @property
     def groups(self) -> list[str]:
@@ -856,8 +865,9 @@ def _check_steps(steps: typing.Sequence[Step]) -> tuple[Step, ...]:
         load = require_number(f"steps[{i}].load", step.load)
         require(load >= 0.0, f"steps[{i}].load", f"must be >= 0, got {load!r}")
         rotation = None if step.rotation is None else check_rotation(step.rotation, f"steps[{i}].rotation")
+        time = None if step.time is None else require_number(f"steps[{i}].time", step.time)
         checked.append(Step(load, _vector(step.translation, f"steps[{i}].translation"), rotation,
-                            check_fit(step.fit, f"steps[{i}].fit")))
+                            check_fit(step.fit, f"steps[{i}].fit"), time))
     return tuple(checked) or (Step(),)
 
 
@@ -929,9 +939,9 @@ def _check_consistency(case: ContactCase) -> None:
 
 def _check_dynamics(case: ContactCase) -> Dynamics:
     """``[dynamics]`` checked against the case: a known scheme, dt > 0, end >= dt, a density
-    for every body (none for some and one for others is named as such), loads constant in
-    time (no ``[[steps]]``, no moved groups, zero prescribed values), linear elasticity,
-    contact searched once (docs/dynamics.md, what is not done yet)."""
+    for every body (none for some and one for others is named as such), the time points of
+    ``[[steps]]`` (:func:`_check_time_points`), a hyperelastic body in the displacement
+    formulation, contact searched once (docs/dynamics.md, what is not done yet)."""
     dynamics = case.dynamics
     _instance(dynamics, Dynamics, "dynamics")
     require_choice("dynamics.scheme", dynamics.scheme, DYNAMICS_SCHEMES)
@@ -948,20 +958,45 @@ def _check_dynamics(case: ContactCase) -> Dynamics:
     _check_masses(bodies, prefix)
     for body, path in zip(bodies, prefix):
         where = f"{path}." if path else ""
-        require(body.material.model is None, f"{where}material.model", "[dynamics] is linear elasticity for now, "
-                f"got {body.material.model!r}")
-        require(not body.boundary.moved, f"{where}boundary.moved", "[dynamics] takes loads constant in time: no "
-                "moved groups yet")
-        for name, given in body.boundary.displacement.items():
-            require(all(v == 0.0 for v in given.components().values()), f"{where}boundary.displacement.{name}",
-                    "[dynamics] takes zero prescribed components (rollers, clamps) for now")
-    require(len(case.steps) == 1 and case.steps[0] == Step(), "steps",
-            "not used with [dynamics]: the loads are constant in time, the steps are dt up to end")
+        require(body.material.model is None or body.material.formulation == "displacement",
+                f"{where}material.formulation", "[dynamics] takes a hyperelastic body in the displacement "
+                f"formulation, got {body.material.formulation!r}")
+    _check_time_points(case, bodies, prefix)
     searches = [case.contact.search] if case.contact is not None else [p.search for p in case.contacts]
     for i, search in enumerate(searches):
         key = "contact.search" if case.contact is not None else f"contacts[{i}].search"
         require(search in (None, "once"), key, f"[dynamics] searches the contact once for now, got {search!r}")
     return Dynamics(dt, end, dynamics.scheme, velocity)
+
+
+def _check_time_points(case: ContactCase, bodies: typing.Sequence[Body], paths: typing.Sequence[str]) -> None:
+    """The ``[[steps]]`` of a time integration are time points (docs/dynamics.md, Sect. 1): each
+    with its ``time``, increasing, no rotation (the contact is searched once) and no ``fit``; the
+    body starts at rest where meshed, so at t = 0 nothing is translated and a prescribed
+    displacement is zero (load factor 0 there, or no nonzero prescribed component). Without
+    steps the loads are constant (load factor 1 from t = 0)."""
+    steps = case.steps
+    prescribed = next((f"{path + '.' if path else ''}boundary.displacement.{name}"
+                       for body, path in zip(bodies, paths) for name, given in body.boundary.displacement.items()
+                       if any(v != 0.0 for v in given.components().values())), None)
+    if steps == (Step(),):
+        require(prescribed is None, prescribed, "a nonzero prescribed displacement needs [[steps]] with times: the "
+                "body starts at rest where meshed (load factor 0 at t = 0)")
+        return
+    before = -math.inf
+    for i, step in enumerate(steps):
+        require(step.time is not None, f"steps[{i}].time", "required with [dynamics]: each step is a time point "
+                "(s); the loads are linear in time between them")
+        require(step.time >= 0.0 and step.time > before, f"steps[{i}].time", f"must be >= 0 and increase from "
+                f"step to step, got {step.time!r} after {before!r}")
+        require(step.rotation is None, f"steps[{i}].rotation", "[dynamics] searches the contact once: no rotations")
+        require(step.fit is None, f"steps[{i}].fit", "not used with [dynamics] (interferences are resolved at t = 0)")
+        before = step.time
+    if steps[0].time == 0.0:
+        require(steps[0].translation == (0.0, 0.0, 0.0), "steps[0].translation", "the obstacles and moved groups "
+                "start where meshed: the translation at time 0 must be zero")
+        require(prescribed is None or steps[0].load == 0.0, "steps[0].load", f"must be 0 at time 0: {prescribed} "
+                "is nonzero and the body starts at rest where meshed")
 
 
 def _check_masses(bodies: typing.Sequence[Body], paths: typing.Sequence[str]) -> None:

@@ -11,10 +11,17 @@ Each converged time step is
   body's mass-weighted mean velocity, displacement and acceleration, the step's mean contact
   force;
 * a checkpoint (``OUTPUT/checkpoint/``): the :class:`~contactqvi.contact.dynamics.DynamicState`
-  whole (displacement, velocity and acceleration in the solver's variables, time, energies),
-  read back bitwise on the same number of ranks.
+  whole (displacement, velocity and acceleration in the solver's variables, the physical
+  displacement, time, energies), read back bitwise on the same number of ranks.
 
 ``OUTPUT/energy.png`` draws the energies over time.
+
+A time step that does not converge is halved and retried from the last converged state, up
+to ``[solver] max_cuts`` halvings in a row (:data:`SOLVER_PARAMETERS`), growing back after
+each part that converges, as a quasi-static load step is cut
+(:mod:`~contactqvi.contact.load_path`); the step's entry lists its parts (``parts``), each
+halving is a recorded warning (``step_cut``), and a step whose halvings ran out ends the run
+with its status and cause (``failure``) in the summary and exit code 1.
 """
 
 from __future__ import annotations
@@ -34,6 +41,7 @@ from dolfinx import fem
 
 from contactqvi import tables
 from contactqvi.case import ContactCase, check_solver
+from contactqvi.contact.diagnosis import failure_cause
 from contactqvi.contact.figures import draw_on_rank_0
 from contactqvi.contact.dynamics import ENERGY_TERMS, BodyMotion, DynamicState, StabilisedNewmark
 from contactqvi.contact.load_path import contact_resultants
@@ -42,16 +50,21 @@ from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult
 from contactqvi.elasticity import cellwise
 from contactqvi.linalg import default_options
 from contactqvi.paraview import MeshPiece, VTXDatasetWriter
-from contactqvi.parameters import ParameterError
+from contactqvi.parameters import Parameter, ParameterError, Parameters
+from contactqvi.records import Recorder, warn
 from contactqvi.result import Status
 from contactqvi.runner import EXIT_CODES, PREFIX, build_problem
 
-__all__ = ["read_dynamic_checkpoint", "run_dynamics"]
+__all__ = ["SOLVER_PARAMETERS", "read_dynamic_checkpoint", "run_dynamics"]
 
 logger = logging.getLogger(__name__)
 
 #: The fields of ``body.bp`` (global components), as ParaView lists them.
 BODY_FIELDS = ("displacement [m]", "velocity [m/s]", "acceleration [m/s^2]")
+#: ``[solver]`` of a case with ``[dynamics]``: the SCD solver's parameters and the halvings of a failed time step.
+SOLVER_PARAMETERS = Parameters({**PARAMETERS, "max_cuts": Parameter(
+    4, "a time step that does not converge is halved and retried from the last converged state, at most this many "
+    "halvings in a row (the step grows back after each part that converges)", type=int, minimum=0)})
 _CHECKPOINT = "checkpoint"
 _MARKER = "dynamics.json"
 
@@ -65,13 +78,15 @@ def run_dynamics(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm =
     none); ``stop_after`` = k stops after time step k (status ``interrupted``). Returns the
     summary and the exit code (:data:`~contactqvi.runner.EXIT_CODES`).
     """
-    parameters = check_solver(case, PARAMETERS)
+    parameters = check_solver(case, SOLVER_PARAMETERS)
+    max_cuts = parameters.pop("max_cuts", SOLVER_PARAMETERS["max_cuts"].default)
     dynamics = case.dynamics
     count = dynamics.steps if stop_after is None else min(stop_after, dynamics.steps)
     out = tables.prepare_output_dir(comm, output)
-    with default_options(PREFIX, case.petsc), build_problem(case, comm) as problem:
-        with StabilisedNewmark(problem, _density(case, problem), dynamics.dt, parameters, PREFIX) as integrator, \
-                BodyMotion(problem, integrator.mass) as motion:
+    warnings = Recorder()
+    with warnings, default_options(PREFIX, case.petsc), build_problem(case, comm) as problem:
+        with StabilisedNewmark(problem, _density(case, problem), dynamics.dt, parameters, PREFIX,
+                               case.steps) as integrator, BodyMotion(problem, integrator.mass) as motion:
             velocity = _initial_velocity(case, problem)
             state = integrator.initial_state(velocity)
             velocity.destroy()
@@ -81,9 +96,11 @@ def run_dynamics(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm =
             if restart:
                 summary = read_dynamic_checkpoint(problem, out, case, state, summary)
             try:
-                code = _integrate(problem, integrator, motion, state, summary, out, count)
+                code = _integrate(problem, integrator, motion, state, summary, out, (count, dynamics.dt, max_cuts))
             finally:
                 state.destroy()
+    if warnings.records:
+        summary.setdefault("warnings", []).extend(warnings.records)
     if code == EXIT_CODES["converged"] and count < dynamics.steps:
         summary["status"] = str(Status.INTERRUPTED)
         code = EXIT_CODES["interrupted"]
@@ -94,8 +111,10 @@ def run_dynamics(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm =
 
 
 def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: BodyMotion, state: DynamicState,
-               summary: dict[str, typing.Any], out: pathlib.Path, count: int) -> int:
-    """The time steps after ``state.done`` up to ``count``: solve, record, write; the exit code."""
+               summary: dict[str, typing.Any], out: pathlib.Path, steps: tuple[int, float, int]) -> int:
+    """The time steps after ``state.done`` up to ``count`` of ``steps`` = (count, dt, max_cuts):
+    solve (halving a step that fails, :func:`_advance`), record, write; the exit code."""
+    count, dt, max_cuts = steps
     u = problem.A.createVecRight()
     fields = {name: fem.Function(problem.V) for name in BODY_FIELDS}
     displacement, velocity, acceleration = fields.values()
@@ -103,15 +122,19 @@ def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: B
     writer = VTXDatasetWriter(problem.comm, out / "body.bp", keep=state.done)
     try:
         while state.done < count:
-            projection, result = integrator.step(state, u)
-            converged = projection.converged and result.converged
+            parts, projection, result = _advance(problem, integrator, state, u, dt, max_cuts)
             summary["status"] = str(result.status if projection.converged else projection.status)
-            if not converged:
-                summary["steps"].append({"step": state.done + 1, "converged": False, "status": summary["status"]})
+            if not (projection.converged and result.converged):
+                failed = result if projection.converged else projection
+                summary["steps"].append({"step": state.done + 1, "converged": False, "status": summary["status"],
+                                         "failure": failure_cause(problem, failed), "parts": parts})
                 tables.write_summary(problem.comm, out / "summary.json", summary)
                 return EXIT_CODES["not converged"]
-            summary["steps"].append(_entry(problem, state, projection, result, motion))
-            problem.physical_displacement(u, displacement)
+            state.done += 1
+            summary["steps"].append(_entry(problem, state, projection, result, motion)
+                                    | ({"parts": parts} if len(parts) > 1 else {}))
+            state.physical.copy(displacement.x.petsc_vec)
+            displacement.x.scatter_forward()
             _global(problem, state.velocity, velocity)
             _global(problem, state.acceleration, acceleration)
             writer.write(piece.dataset(fields), state.time)
@@ -121,6 +144,34 @@ def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: B
         writer.close()
         u.destroy()
     return EXIT_CODES["converged"]
+
+
+def _advance(problem: ContactProblem, integrator: StabilisedNewmark, state: DynamicState, u: PETSc.Vec, dt: float,
+             max_cuts: int) -> tuple[list[dict[str, typing.Any]], SCDNewtonResult, SCDNewtonResult]:
+    """Advance ``state`` by the time step ``dt`` to t = ``state.time`` + dt, in parts where it fails:
+    after k halvings in a row the part is 2^-k of what remains of the step, one halving fewer
+    after each part that converges (module docstring). Returns the parts (time reached, length,
+    status) and the last part's two results."""
+    target, cuts, parts = state.time + dt, 0, []
+    while True:
+        remaining = target - state.time
+        tau = remaining * 0.5**cuts
+        projection, result = integrator.step(state, u, tau)
+        last = result if projection.converged else projection
+        parts.append({"time": state.time if last.converged else state.time + tau, "dt": tau,
+                      "status": str(last.status)})
+        if last.converged:
+            if cuts == 0:
+                state.time = target  # the parts add up to dt to round-off; the step ends at t_n + dt
+                return parts, projection, result
+            cuts -= 1
+            continue
+        if last.status == Status.INTERRUPTED or cuts >= max_cuts:
+            return parts, projection, result
+        cuts += 1
+        warn(problem.comm, logger, "step_cut", f"time step {state.done + 1}: {last.status} with dt = {tau:.6g} "
+             f"s at t = {state.time:.9g} s; halved to {remaining * 0.5**cuts:.6g} s", step=state.done + 1,
+             time=state.time, dt=remaining * 0.5**cuts)
 
 
 def _entry(problem: ContactProblem, state: DynamicState, projection: SCDNewtonResult, result: SCDNewtonResult,
@@ -172,8 +223,8 @@ def _global(problem: ContactProblem, velocity: PETSc.Vec, out: fem.Function) -> 
 
 def write_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, state: DynamicState,
                              summary: dict[str, typing.Any]) -> None:
-    """Checkpoint ``state``: w_n, v_n and the last acceleration in the solver's variables
-    (adios4dolfinx, against the mesh's input order) and a marker with the step, time, energies and
+    """Checkpoint ``state``: w_n, v_n and the last acceleration in the solver's variables and the
+    physical u_n (adios4dolfinx, against the mesh's input order) and a marker with the step, time, energies and
     the summary, written last. Collective."""
     comm, directory = problem.comm, out / _CHECKPOINT
     tables.prepare_output_dir(comm, directory)
@@ -194,13 +245,19 @@ def write_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, state: 
 
 
 def _state_functions(V: fem.FunctionSpace, state: DynamicState, fill: bool) -> list[fem.Function]:
-    """Functions on ``V`` for the state's displacement, velocity and acceleration, holding them if ``fill``."""
-    fields = [fem.Function(V, name=name) for name in ("solver_variables", "solver_velocity", "solver_acceleration")]
+    """Functions on ``V`` for the vectors of :func:`_state_vectors`, holding them if ``fill``."""
+    names = ("solver_variables", "physical_displacement", "solver_velocity", "solver_acceleration")
+    fields = [fem.Function(V, name=name) for name in names]
     if fill:
-        for field, vector in zip(fields, (state.displacement, state.velocity, state.acceleration)):
+        for field, vector in zip(fields, _state_vectors(state)):
             field.x.array[: vector.getLocalSize()] = vector.array
             field.x.scatter_forward()
     return fields
+
+
+def _state_vectors(state: DynamicState) -> tuple[PETSc.Vec, ...]:
+    """The vectors of ``state`` a checkpoint holds, in the order of :func:`_state_functions`."""
+    return state.displacement, state.physical, state.velocity, state.acceleration
 
 
 def read_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, case: ContactCase, state: DynamicState,
@@ -216,7 +273,7 @@ def read_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, case: Co
         raise ParameterError("--restart", f"the checkpoint in {marker.parent} was written for another case; use a "
                              "new --output directory")
     fields = _state_functions(problem.V, state, fill=False)
-    for field, vector in zip(fields, (state.displacement, state.velocity, state.acceleration)):
+    for field, vector in zip(fields, _state_vectors(state)):
         adios4dolfinx.read_function(marker.parent / data["file"], field, engine="BP4", time=float(data["step"]),
                                     name=field.name)
         vector.array[:] = field.x.array[: vector.getLocalSize()]

@@ -1,4 +1,5 @@
-"""Load steps of a quasi-static path: problem data shared by case files and the load-path solver.
+"""Load steps of a quasi-static path, and the time points of a dynamic one: problem data shared by
+case files, the load-path solver and the time integration.
 
 A step moves the groups ``boundary.moved`` and the rigid obstacles together rigidly: by a
 translation t and, optionally, a rotation Q about a centre c, both total from the initial
@@ -10,6 +11,11 @@ which is linear in t and in the nine entries of Q - I (docs/finite_strain.md, "P
 rotations"); an obstacle's points and directions go along (:func:`placed`). The centre is a
 point fixed in space for the whole path: every step that rotates names the same one
 (:func:`check_steps`).
+
+With ``[dynamics]`` each step is a time point (its ``time``, s): the load factor and the
+translation are linear in time between the points, from load factor 0 and no translation at
+t = 0 (unless a point is at t = 0), and constant after the last (:func:`at_time`,
+docs/dynamics.md Sect. 1).
 """
 
 from __future__ import annotations
@@ -23,7 +29,7 @@ import numpy as np
 from contactqvi.obstacles import Obstacle
 from contactqvi.parameters import require, require_positive
 
-__all__ = ["SEARCHES", "LoadStep", "Rotation", "check_fit", "check_rotation", "check_steps", "finite_vector",
+__all__ = ["SEARCHES", "LoadStep", "Rotation", "at_time", "check_fit", "check_rotation", "check_steps", "finite_vector",
            "interpolated", "placed", "rigid_increment", "rotates"]
 
 #: When a pair of meshed bodies is searched along the load path: before every load step
@@ -71,17 +77,35 @@ class LoadStep:
         fit: the fraction in [0, 1] of the contact pairs' declared interferences resolved at
             this step: the gap is g + (1 - fit) δ(x) (docs/press_fit.md, "A fit over several
             steps"); None: 1, the whole fit (not scaled by ``load``).
+        time: the time (s) at which the step's values hold, with ``[dynamics]`` only
+            (:func:`at_time`); None on a quasi-static path.
     """
 
     load: float = 1.0
     translation: tuple[float, float, float] = (0.0, 0.0, 0.0)
     rotation: Rotation | None = None
     fit: float | None = None
+    time: float | None = None
 
     @property
     def fit_fraction(self) -> float:
         """``fit``, 1 when not given."""
         return 1.0 if self.fit is None else self.fit
+
+
+def at_time(steps: typing.Sequence[LoadStep], time: float) -> LoadStep:
+    """The load factor and translation at ``time`` (s) of the time points ``steps`` (their ``time``
+    increasing): linear between the points, through load factor 0 and no translation at t = 0
+    unless the first point is at 0, constant after the last point. Steps without times (the
+    default path of one step) hold from t = 0: constant loads."""
+    if steps[0].time is None:
+        return dataclasses.replace(steps[0], time=time)
+    times = np.array([step.time for step in steps], dtype=float)
+    values = np.array([[step.load, *step.translation] for step in steps], dtype=float)
+    if times[0] > 0.0:
+        times, values = np.concatenate([[0.0], times]), np.vstack([np.zeros(4), values])
+    load, *translation = (float(np.interp(time, times, column)) for column in values.T)
+    return LoadStep(load, tuple(translation), time=float(time))
 
 
 def finite_vector(value: typing.Any, name: str) -> tuple[float, float, float]:

@@ -20,6 +20,7 @@ residual left at free dofs by the solver.
 from __future__ import annotations
 
 import dataclasses
+import typing
 
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -36,7 +37,8 @@ from contactqvi.meshes import boundary_facets, tag_of
 from contactqvi.nodal_pressure import averaged_stress, internal_work
 from contactqvi.parameters import require
 
-__all__ = ["ElasticBody", "StressFields", "applied_force", "reaction_forces", "stress_fields", "von_mises"]
+__all__ = ["ElasticBody", "StressFields", "applied_force", "internal_force_form", "load_form", "reaction_forces",
+           "stress_fields", "von_mises"]
 
 Vector3 = tuple[float, float, float]
 
@@ -140,7 +142,7 @@ def stress_fields(u: fem.Function, young: float, poisson: float) -> tuple[fem.Fu
     return StressFields(u, young, poisson).update()
 
 
-def _load_form(msh: dmesh.Mesh, v: ufl.core.expr.Expr, body: ElasticBody, load_factor: float,
+def load_form(msh: dmesh.Mesh, v: ufl.core.expr.Expr, body: ElasticBody, load_factor: float,
                u: fem.Function | None = None) -> ufl.Form:
     """l(v) = lambda ((f, v) + sum of (t, v) over the traction boundaries - the pressures'
     load), the pressures on the surface deformed by ``u`` for a hyperelastic body
@@ -218,20 +220,28 @@ def reaction_forces(
 def _nodal_residual(u: fem.Function, body: ElasticBody, load_factor: float) -> np.ndarray:
     """r = a(u, .) - l(.) assembled without boundary conditions at the owned nodes (owned nodes, 3; N)."""
     V = u.function_space
-    mu, lmbda = lame_parameters(body.young, body.poisson)
     v = ufl.TestFunction(V)
-    if body.nodal is not None:
-        internal, averaged = internal_work(u, v, body.material, mu, lmbda, body.nodal)
-        averaged.update()
-    elif body.material is None:
-        internal = ufl.inner(stress(u, mu, lmbda), strain(v)) * ufl.dx
-    else:
-        internal = ufl.inner(body.material.first_piola(u, mu, lmbda), ufl.grad(v)) * body.material.dx()
-    residual_form = internal - _load_form(V.mesh, v, body, load_factor, u)
+    internal, update = internal_force_form(u, v, body)
+    update()
+    residual_form = internal - load_form(V.mesh, v, body, load_factor, u)
     residual = fem.assemble_vector(fem.form(residual_form))
     residual.scatter_reverse(la.InsertMode.add)
     n_owned = V.dofmap.index_map.size_local
     return residual.array[: 3 * n_owned].reshape(n_owned, 3).copy()
+
+
+def internal_force_form(u: fem.Function, v: ufl.core.expr.Expr, body: ElasticBody
+                        ) -> tuple[ufl.Form, typing.Callable[[], None]]:
+    """The internal virtual work a(u, v) of ``body`` (small strain, hyperelastic, or with the
+    nodal pressure of :mod:`contactqvi.nodal_pressure`) and what to call before each assembly
+    (the nodal pressure's update; nothing otherwise)."""
+    mu, lmbda = lame_parameters(body.young, body.poisson)
+    if body.nodal is not None:
+        internal, averaged = internal_work(u, v, body.material, mu, lmbda, body.nodal)
+        return internal, averaged.update
+    if body.material is None:
+        return ufl.inner(stress(u, mu, lmbda), strain(v)) * ufl.dx, lambda: None
+    return ufl.inner(body.material.first_piola(u, mu, lmbda), ufl.grad(v)) * body.material.dx(), lambda: None
 
 
 def _support_nodes(V: fem.FunctionSpace, body: ElasticBody) -> np.ndarray:
@@ -290,6 +300,6 @@ def applied_force(msh: dmesh.Mesh, body: ElasticBody, load_factor: float = 1.0,
     total = np.zeros(3)
     for i in range(3):
         direction = fem.Constant(msh, np.eye(3)[i].astype(PETSc.ScalarType))
-        value = fem.assemble_scalar(fem.form(_load_form(msh, direction, body, load_factor, u)))
+        value = fem.assemble_scalar(fem.form(load_form(msh, direction, body, load_factor, u)))
         total[i] = msh.comm.allreduce(value, op=MPI.SUM)
     return total

@@ -1,4 +1,5 @@
-"""``python -m contactqvi run`` in a subprocess, serially or under ``mpirun``, as a user runs it."""
+"""``python -m contactqvi run`` in a subprocess, serially or under ``mpirun``, as a user runs it;
+a run on rank 0 alone beside a parallel one (:func:`on_rank_0`)."""
 
 from __future__ import annotations
 
@@ -8,8 +9,12 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
+import typing
 
-__all__ = ["MPIENV", "run_program"]
+from mpi4py import MPI
+
+__all__ = ["MPIENV", "on_rank_0", "run_program"]
 
 #: OpenMPI 5 as root, more ranks than cores, no TCP pairing warning.
 MPIENV = {"OMPI_MCA_rmaps_base_oversubscribe": "1", "PRTE_MCA_rmaps_default_mapping_policy": ":oversubscribe",
@@ -28,3 +33,12 @@ def run_program(case: pathlib.Path, output: pathlib.Path, ranks: int = 1,
                               env=os.environ | MPIENV | {"TMPDIR": session})
     finally:
         shutil.rmtree(session, ignore_errors=True)
+
+
+def on_rank_0(comm: MPI.Comm, work: typing.Callable[[], None]) -> None:
+    """Run ``work`` on rank 0 alone; the other ranks wait without spinning (oversubscribed cores)."""
+    if comm.rank == 0:
+        work()
+    request = comm.Ibarrier()
+    while not request.Test():
+        time.sleep(0.01)

@@ -1,7 +1,8 @@
 """The shipped cases as ``make test`` runs them, each once per test session.
 
 Every case file of ``cases/`` runs through :func:`contactqvi.case.load_case` and
-:func:`contactqvi.runner.run_case` as shipped, or as its variant where it names a larger
+:func:`contactqvi.runner.run_case` (a case with ``[dynamics]``:
+:func:`contactqvi.dynamic_runner.run_dynamics`) as shipped, or as its variant where it names a larger
 mesh or a long path (:data:`COARSE`). The runs are shared by the tests of several modules
 (the fixture ``shipped_runs`` of conftest.py): tests/test_shipped_cases.py checks every
 case, others read one case's output files. Tests of one case share an xdist group
@@ -20,6 +21,7 @@ from mpi4py import MPI
 import pytest
 
 from contactqvi.case import ContactCase, PaperBody, load_case
+from contactqvi.dynamic_runner import run_dynamics
 from contactqvi.runner import run_case
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
@@ -77,7 +79,9 @@ class ShippedRuns(dict):
     def __missing__(self, name: str) -> dict[str, typing.Any]:
         output = self.base / name
         try:
-            summary, code = run_case(shipped_case(name), output, self.comm, plot=False)
+            case = shipped_case(name)
+            run = run_case if case.dynamics is None else run_dynamics
+            summary, code = run(case, output, self.comm, plot=case.dynamics is not None)
             self[name] = {"summary": summary, "code": code, "output": output}
         except Exception as exc:  # reported by that case's tests; the others still run
             self[name] = {"error": f"{type(exc).__name__}: {exc}"}

@@ -18,8 +18,6 @@ from __future__ import annotations
 
 import json
 import pathlib
-import time
-import typing
 
 from mpi4py import MPI
 
@@ -32,6 +30,7 @@ from contactqvi.contact.postprocess import write_contact_results
 from contactqvi.problems import coulomb as data
 from contactqvi.runner import run_case
 from output_files import read_vtx
+from program_runs import on_rank_0
 
 #: COMM_WORLD against one rank, where ranks without contact facets occur (make test-ranks); on one
 #: rank both would be the same run.
@@ -39,15 +38,6 @@ pytestmark = pytest.mark.ranks(3, 4)
 
 CASES = pathlib.Path(__file__).resolve().parent.parent / "cases"
 RTOL = 1e-9
-
-
-def _on_rank_0(comm: MPI.Comm, work: typing.Callable[[], None]) -> None:
-    """Run ``work`` on rank 0 alone; the other ranks wait without spinning (oversubscribed cores)."""
-    if comm.rank == 0:
-        work()
-    request = comm.Ibarrier()
-    while not request.Test():
-        time.sleep(0.01)
 
 
 def _compare(serial: pathlib.Path, parallel: pathlib.Path, files: list[str]) -> tuple[dict, dict]:
@@ -100,7 +90,7 @@ def test_demo_on_any_number_of_ranks(lev, mpi_tmp_path, load_demo):
         (mpi_tmp_path / "one" / "summary.json").write_text(json.dumps(summary))
         level.destroy()
 
-    _on_rank_0(comm, serial)
+    on_rank_0(comm, serial)
     if comm.rank == 0:
         files = ["body.bp", "contact_surface.bp", "solution.npz", "contact_states.png", "bodies.png"]
         one, many = _compare(mpi_tmp_path / "one", mpi_tmp_path / "many", files)
@@ -119,7 +109,7 @@ def test_hertz_case_on_any_number_of_ranks(mpi_tmp_path):
     case = parse_case(raw, CASES)
     summary, code = run_case(case, mpi_tmp_path / "many", comm, plot=False)
     assert code == 0 and summary["mpi_size"] == comm.size
-    _on_rank_0(comm, lambda: run_case(case, mpi_tmp_path / "one", MPI.COMM_SELF, plot=False))
+    on_rank_0(comm, lambda: run_case(case, mpi_tmp_path / "one", MPI.COMM_SELF, plot=False))
     if comm.rank == 0:
         one, many = _compare(mpi_tmp_path / "one", mpi_tmp_path / "many", ["body.bp", "contact_surface.bp",
                                                                             "solution.npz", "checkpoint",

@@ -3,17 +3,22 @@
 Newmark's average acceleration rule (beta = 1/4, gamma = 1/2) with the contact-stabilised
 predictor of Deuflhard, Krause and Ertel (2008); derivation and energy identity in
 docs/dynamics.md. With tau the time step, M the mass and K the stiffness in the solver's
-variables w (M = T^T M_K T, K = T^T A_K T of :mod:`contactqvi.contact.problem`), F the
-load and K the admissible set (the contact conditions), a step from (w_n, v_n) is
+variables w (M = T^T M_K T, K = T^T A_K T of :mod:`contactqvi.contact.problem`), F(t) the
+load at time t (load factor and translation of the case's time points,
+:func:`~contactqvi.load_steps.at_time`) and K the admissible set (the contact conditions at
+t_{n+1}), a step from (w_n, v_n) is
 
 1. predictor   w_pred = w_n + tau v_n,
 2. projection  w_bar = argmin_{w in K} 1/2 ||w - w_pred||_M^2, i.e. the GE
                0 in M (w - w_pred) + Q_0(w) (frictionless Q) -- a contact problem with A = M,
-3. step        0 in (4/tau^2) M (w - w_bar) + K w - F - (F - K w_n) + Q(w)      (docs/dynamics.md (3.3))
+3. step        0 in (4/tau^2) M (w - w_bar) + K w - F_{n+1} - (F_n - K w_n) + Q(w)   (docs/dynamics.md (3.3))
                -- a contact problem with A_eff = K + (4/tau^2) M and a shifted load,
 4. velocity    v_{n+1} = v_n + (2/tau) (w_{n+1} - w_bar).
 
-Steps 2 and 3 are the GE 0 in A u - l + Q(u) of seed 000 (6.3) in the shifted variables
+A step that fails may be retried with a shorter tau (:meth:`StabilisedNewmark.step` takes
+any tau; A_eff and the step's solver follow it).
+
+Steps 2 and 3 are the GE 0 in f(u) + Q(u) of seed 000 (6.3) in the shifted variables
 u = w + d of :meth:`~contactqvi.contact.problem.ContactProblem.set_step` (slip measured
 from w_n: u_t is the slip increment over the step, slip rate times tau), solved by
 :class:`~contactqvi.contact.scd_newton.SCDNewtonSolver` unchanged. All that a step reads
@@ -35,26 +40,32 @@ import ufl
 import dolfinx.fem.petsc
 from dolfinx import fem
 
+from contactqvi.contact.hyperelastic import HyperelasticSystem
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult, SCDNewtonSolver
+from contactqvi.elasticity import lame_parameters
 from contactqvi.laws import Frictionless
 from contactqvi.lifetime import PETScOwner, VectorSet
 from contactqvi.linalg import default_options
+from contactqvi.load_steps import LoadStep, at_time
 from contactqvi.parameters import require
+from contactqvi.postprocess import internal_force_form, load_form
 
-__all__ = ["BETA", "ENERGY_TERMS", "BodyMotion", "DynamicState", "StabilisedNewmark", "mass_matrix"]
+__all__ = ["BETA", "ENERGY_TERMS", "BodyMotion", "DynamicState", "InertialSystem", "PhysicalEnergy", "StabilisedNewmark",
+           "global_mass_matrix", "mass_matrix"]
 
 logger = logging.getLogger(__name__)
 
 #: Newmark's beta of the average acceleration rule (its gamma is 1/2).
 BETA = 0.25
 #: The energy terms of a step (J), as in ``summary.json`` (docs/dynamics.md, Sect. 4).
-ENERGY_TERMS = ("kinetic", "elastic", "external_work", "friction_dissipation", "contact_work", "balance_error")
+ENERGY_TERMS = ("kinetic", "elastic", "external_work", "support_work", "friction_dissipation", "contact_work",
+                "balance_error")
 
 
-def mass_matrix(problem: ContactProblem, density: float | fem.Function) -> PETSc.Mat:
-    """M = T^T M_K T in the solver's variables, M_K = (rho u, v) the consistent mass matrix
-    with zero rows and columns at the prescribed dofs (so that A + c M keeps A's identity rows)."""
+def global_mass_matrix(problem: ContactProblem, density: float | fem.Function) -> PETSc.Mat:
+    """M_K = (rho u, v), the consistent mass matrix in global components, with zero rows and
+    columns at the prescribed dofs (so that A + c M keeps A's identity rows)."""
     V = problem.V
     u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
     M_K = dolfinx.fem.petsc.assemble_matrix(fem.form(density * ufl.inner(u, v) * ufl.dx))
@@ -62,13 +73,56 @@ def mass_matrix(problem: ContactProblem, density: float | fem.Function) -> PETSc
     n_owned = 3 * V.dofmap.index_map.size_local
     owned = problem.dirichlet_dofs_loc[problem.dirichlet_dofs_loc < n_owned]
     M_K.zeroRowsColumns((owned + 3 * V.dofmap.index_map.local_range[0]).astype(PETSc.IntType), diag=0.0)
+    return M_K
+
+
+def mass_matrix(problem: ContactProblem, M_K: PETSc.Mat) -> PETSc.Mat:
+    """M = T^T M_K T in the solver's variables of :func:`global_mass_matrix` (a new matrix; M_K
+    itself without a change of variables)."""
     T = problem.to_global
     if T is None:
-        return M_K
+        return M_K.duplicate(copy=True)
     with default_options("", {"mat_product_clear": True}):
-        M = M_K.PtAP(T)
-    M_K.destroy()
-    return M
+        return M_K.PtAP(T)
+
+
+@dataclasses.dataclass
+class InertialSystem(HyperelasticSystem):
+    """f of the step (3.3) for a hyperelastic body (docs/dynamics.md, Sect. 3.1): in global
+    components, with r_K(u) = int P(F) : grad v dX - lambda_{n+1} l(v) of
+    :class:`~contactqvi.contact.hyperelastic.HyperelasticSystem` (zero on the prescribed rows),
+
+        r(u) = r_K(u) + c M_K u + b,   b = -c M_K u_bar + r_K(u_n)   (lambda_n in r_K(u_n)),
+        dr/du = K_T(u) + c M_K,        c = 1 / (beta tau^2),
+
+    the linear step's (1/(beta tau^2)) M (w - w_bar) + K w - F_{n+1} - (F_n - K w_n) with the
+    internal force P(F) in place of K w. The problem maps r and dr/du to its variables
+    (:meth:`~contactqvi.contact.problem.ContactProblem.residual`, ``tangent``) as for a static
+    step; :class:`StabilisedNewmark` sets ``coefficient`` and ``inertia`` per step.
+
+    Attributes:
+        mass: M_K (global components, zero rows and columns at the prescribed dofs; not owned).
+        coefficient: c = 1 / (beta tau^2) of the current time step.
+        inertia: b (global components, ghosted; not owned).
+        work: a vector for M_K u (not owned).
+    """
+
+    mass: PETSc.Mat | None = None
+    coefficient: float = 0.0
+    inertia: PETSc.Vec | None = None
+    work: PETSc.Vec | None = None
+
+    def assemble_residual(self, load_factor: float) -> PETSc.Vec:
+        r = super().assemble_residual(load_factor)
+        self.mass.mult(self.displacement.x.petsc_vec, self.work)
+        r.axpy(self.coefficient, self.work)
+        r.axpy(1.0, self.inertia)
+        return r
+
+    def assemble_tangent(self, out: PETSc.Mat) -> PETSc.Mat:
+        super().assemble_tangent(out)
+        out.axpy(self.coefficient, self.mass, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        return out
 
 
 @dataclasses.dataclass
@@ -79,6 +133,8 @@ class DynamicState(PETScOwner):
         done: number of converged time steps.
         time: t_done (s).
         displacement: w_n in the solver's variables (without the shift).
+        physical: u_n, the physical displacement in global components (owned dofs of the
+            displacement space; the energies' variable).
         velocity: v_n in the solver's variables (m/s).
         acceleration: (v_n - v_{n-1}) / tau, the last step's mean acceleration (m/s^2; the
             trapezoidal rule's acceleration at t_{n - 1/2}), zero at time 0; output only, no step reads it.
@@ -90,20 +146,22 @@ class DynamicState(PETScOwner):
     done: int
     time: float
     displacement: PETSc.Vec
+    physical: PETSc.Vec
     velocity: PETSc.Vec
     acceleration: PETSc.Vec
     energy: dict[str, float]
     initial_energy: float
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [self.displacement, self.velocity, self.acceleration]
+        return [self.displacement, self.physical, self.velocity, self.acceleration]
 
 
 @dataclasses.dataclass
 class _Work(VectorSet):
     """The vectors of one time step (solver variables), reused by every step: ``scratch`` for
     products, the predictor w_pred (3.1) (then delta = w_bar - w_pred), the projected w_bar (3.2),
-    the next displacement w_{n+1}, its increment Delta w and the velocity change (3.4)."""
+    the next displacement w_{n+1}, its increment Delta w, the velocity change (3.4) and the
+    load F_n of the step's start."""
 
     scratch: PETSc.Vec
     predicted: PETSc.Vec
@@ -111,30 +169,128 @@ class _Work(VectorSet):
     next_displacement: PETSc.Vec
     increment: PETSc.Vec
     velocity_change: PETSc.Vec
+    previous_load: PETSc.Vec
+
+
+class PhysicalEnergy(PETScOwner):
+    """The elastic energy and the works of the loads and of the supports in the physical
+    displacement u (global components; docs/dynamics.md (4.2)), from the internal force K u
+    assembled without boundary conditions (:func:`~contactqvi.postprocess.internal_force_form`)
+    and the loads f at load factor 1 (tractions, pressures, body force; unlifted), so that
+    prescribed motions do work and the elastic energy is the body's whatever its supports.
+    Over a step from u_n to u_{n+1}, with Delta u = u_{n+1} - u_n and the load factors l_n, l_{n+1}:
+
+        Delta E_el = 1/2 Delta u . K (u_n + u_{n+1})                    (exact: K symmetric, constant)
+        W_ext     += 1/2 (l_n + l_{n+1}) Delta u . f
+        W_support += 1/2 Delta u_p . (K (u_n + u_{n+1}) - (l_n + l_{n+1}) f)_p   (prescribed dofs p)
+
+    Attributes:
+        field: a displacement Function, the form's argument (set it, then :meth:`internal`).
+    """
+
+    def __init__(self, problem: ContactProblem):
+        V, body = problem.V, problem.body
+        v = ufl.TestFunction(V)
+        self.field = fem.Function(V)
+        internal, self._update = internal_force_form(self.field, v, body)
+        self._internal = fem.form(internal)
+        self._stored = None
+        if body.material is not None:  # psi(F) of a hyperelastic body (the linear one: 1/2 u . K u)
+            mu, lmbda = lame_parameters(body.young, body.poisson)
+            F = ufl.Identity(3) + ufl.grad(self.field)
+            self._stored = fem.form(body.material.strain_energy(F, mu, lmbda) * body.material.dx())
+        self.internal_force = dolfinx.fem.petsc.create_vector(self._internal)
+        self.load = dolfinx.fem.petsc.assemble_vector(fem.form(load_form(V.mesh, v, body, 1.0)))
+        self.load.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        n_owned = 3 * V.dofmap.index_map.size_local
+        self.prescribed = problem.dirichlet_dofs_loc[problem.dirichlet_dofs_loc < n_owned]
+        self._increment, self._before = self.load.duplicate(), self.load.duplicate()
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [self.internal_force, self.load, self._increment, self._before]
+
+    def step(self, before: PETSc.Vec, after: PETSc.Vec, loads: tuple[float, float]) -> dict[str, float]:
+        """The increments of ``elastic``, ``external_work`` and ``support_work`` from the physical
+        displacement ``before`` to ``after`` (owned dofs) at the load factors ``loads``: (4.2) of
+        docs/dynamics.md; for a hyperelastic body Delta E_el = Psi(u_{n+1}) - Psi(u_n), Psi = int
+        psi(F) dX, and K (u_n + u_{n+1}) the sum of the internal forces at u_n and u_{n+1}. Collective."""
+        increment, comm = self._increment, self.load.comm.tompi4py()
+        increment.waxpy(-1.0, before, after)
+        if self._stored is None:
+            self._internal_force_at(before, after)  # K (u_n + u_{n+1})
+            elastic = 0.5 * increment.dot(self.internal_force)
+        else:
+            stored_before = self._internal_force_at(before)
+            self.internal_force.copy(self._before)
+            elastic = self._internal_force_at(after) - stored_before
+            self.internal_force.axpy(1.0, self._before)
+        factor = loads[0] + loads[1]
+        self.internal_force.axpy(-factor, self.load)  # K (u_n + u_{n+1}) - (l_n + l_{n+1}) f
+        p = self.prescribed
+        support = 0.5 * float(np.dot(increment.array[p], self.internal_force.array[p]))
+        return {"elastic": elastic, "external_work": 0.5 * factor * increment.dot(self.load),
+                "support_work": comm.allreduce(support, op=MPI.SUM)}
+
+    def _internal_force_at(self, x: PETSc.Vec, y: PETSc.Vec | None = None) -> float:
+        """The internal force at the displacement x (+ y) into :attr:`internal_force`; returns
+        Psi there for a hyperelastic body (else 0). Collective."""
+        field = self.field.x.petsc_vec
+        x.copy(field)
+        if y is not None:
+            field.axpy(1.0, y)
+        self.field.x.scatter_forward()
+        self._update()
+        with self.internal_force.localForm() as local:
+            local.set(0.0)
+        dolfinx.fem.petsc.assemble_vector(self.internal_force, self._internal)
+        self.internal_force.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        if self._stored is None:
+            return 0.0
+        return self.field.function_space.mesh.comm.allreduce(fem.assemble_scalar(self._stored), op=MPI.SUM)
 
 
 class StabilisedNewmark(PETScOwner):
-    """The contact-stabilised Newmark method (module docstring) on a linear ``problem``.
+    """The contact-stabilised Newmark method (module docstring) on a linear or hyperelastic ``problem``.
 
-    Turns ``problem.A`` into A_eff = K + M / (beta tau^2) in place (K is kept as a copy for
-    the energies) and owns the two SCD solvers: the M-projection of the predictor and the
+    For a linear body turns ``problem.A`` into A_eff = K + M / (beta tau^2) in place (K is kept
+    as a copy for the step's load); a hyperelastic body's f and Jacobian, which the solver
+    assembles at every Newton step into A, get the inertia from an :class:`InertialSystem` that
+    takes the place of ``problem.hyperelastic`` while the integrator lives (put back by
+    :meth:`destroy`). Owns the two SCD solvers: the M-projection of the predictor and the
     implicit step. The problem's contact is searched once (the mass and T of the reference
     configuration). ``parameters`` and ``prefix`` are the SCD solver's; the projection's
-    Krylov solver reads its options under ``prefix + "predictor_"``.
+    Krylov solver reads its options under ``prefix + "predictor_"``. The loads, prescribed
+    displacements and the obstacles' and moved groups' translation follow the time points
+    ``path`` (:func:`~contactqvi.load_steps.at_time`; the default: constant loads).
 
     Attributes:
         prescribed: owned local indices of the prescribed dofs in the solver's variables.
+        tau: the time step A_eff and the step's solver are made for (s).
     """
 
     def __init__(self, problem: ContactProblem, density: float | fem.Function, dt: float,
-                 parameters: dict | None = None, prefix: str = "dynamics_"):
-        require(problem.hyperelastic is None and not problem.searched_each_step, "dynamics",
-                "the contact-stabilised Newmark step takes a linear elastic problem searched once (docs/dynamics.md)")
+                 parameters: dict | None = None, prefix: str = "dynamics_",
+                 path: typing.Sequence[LoadStep] = (LoadStep(),)):
+        require(not problem.searched_each_step, "dynamics",
+                "the contact-stabilised Newmark step takes a problem searched once (docs/dynamics.md)")
+        require(problem.hyperelastic is None or problem.body.nodal is None, "material.formulation",
+                "[dynamics] takes a hyperelastic body in the displacement formulation")
         require(dt > 0.0, "dynamics.dt", f"the time step must be > 0 (s), got {dt!r}")
-        self.problem, self.dt = problem, float(dt)
-        self.mass = mass_matrix(problem, density)
-        self.stiffness = problem.A.duplicate(copy=True)
-        problem.A.axpy(1.0 / (BETA * self.dt**2), self.mass, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        self.problem, self.tau, self.path = problem, float(dt), tuple(path)
+        self._parameters, self._prefix = parameters, prefix
+        self.global_mass = global_mass_matrix(problem, density)
+        self.mass = mass_matrix(problem, self.global_mass)
+        self.static = problem.hyperelastic
+        if self.static is None:
+            self.stiffness = problem.A.duplicate(copy=True)
+            problem.A.axpy(1.0 / (BETA * self.tau**2), self.mass, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        else:
+            self.stiffness = None
+            inertia = self.static.internal.duplicate()
+            problem.hyperelastic = InertialSystem(
+                **{f.name: getattr(self.static, f.name) for f in dataclasses.fields(self.static)},
+                mass=self.global_mass, coefficient=1.0 / (BETA * self.tau**2), inertia=inertia,
+                work=inertia.duplicate())
         self.projection_matrix = self.mass.duplicate(copy=True)
         diagonal = self.mass.getDiagonal()
         self.prescribed = _zero_rows(diagonal)
@@ -146,34 +302,51 @@ class StabilisedNewmark(PETScOwner):
                                               law=Frictionless().lumped(problem.contact_area), hyperelastic=None)
         self.predictor_solver = SCDNewtonSolver(self.projection, parameters, prefix=prefix + "predictor_")
         self.solver = SCDNewtonSolver(problem, parameters, prefix=prefix)
+        self.energy = PhysicalEnergy(problem)
         self._work = _Work.create(problem.A)
 
     def petsc_objects(self) -> list[typing.Any]:
-        """The solvers, M, K, the projection's matrix and load, the work vectors (not the problem's)."""
-        return [self.predictor_solver, self.solver, self.mass, self.stiffness, self.projection_matrix,
-                self.projection.load, self._work]
+        """The solvers, M, M_K, K, the projection's matrix and load, the energies' vectors, the work
+        vectors and a hyperelastic step's inertia vectors (not the problem's)."""
+        system = self.problem.hyperelastic
+        inertial = [system.inertia, system.work] if isinstance(system, InertialSystem) else []
+        return [self.predictor_solver, self.solver, self.mass, self.global_mass, self.stiffness,
+                self.projection_matrix, self.projection.load, self.energy, self._work, *inertial]
+
+    def destroy(self) -> None:
+        """Free the PETSc objects (collective) and give the problem back its static hyperelastic system."""
+        super().destroy()
+        if self.static is not None:
+            self.problem.hyperelastic = self.static
 
     def initial_state(self, velocity: PETSc.Vec | None = None) -> DynamicState:
         """The state at time 0: at rest in the reference configuration with the initial velocity
         ``velocity`` (solver variables; None: zero), zero at the prescribed dofs."""
         w, v, a = (self.problem.A.createVecRight() for _ in range(3))
-        for vector in (w, v, a):
+        physical = self.energy.load.copy()
+        for vector in (w, v, a, physical):
             vector.set(0.0)
         if velocity is not None:
             velocity.copy(v)
             v.array[self.prescribed] = 0.0
         energy = {name: 0.0 for name in ENERGY_TERMS}
         energy["kinetic"] = 0.5 * _energy_norm(self.mass, v, self._work.scratch)
-        return DynamicState(0, 0.0, w, v, a, energy, energy["kinetic"])
+        return DynamicState(0, 0.0, w, physical, v, a, energy, energy["kinetic"])
 
-    def step(self, state: DynamicState, u: PETSc.Vec, stop: typing.Callable[[], bool] | None = None
-             ) -> tuple[SCDNewtonResult, SCDNewtonResult]:
-        """One time step from ``state``: the projected predictor (3.1)-(3.2) and the step (3.3) of
-        docs/dynamics.md, each solved by SCD Newton; ``u`` holds the step's solution (shifted). The
-        state is advanced (:meth:`_record`) only when both converged. Returns both results."""
-        problem, tau = self.problem, self.dt
+    def step(self, state: DynamicState, u: PETSc.Vec, tau: float | None = None,
+             stop: typing.Callable[[], bool] | None = None) -> tuple[SCDNewtonResult, SCDNewtonResult]:
+        """One time step of length ``tau`` (None: the last one's) from ``state``: the projected
+        predictor (3.1)-(3.2) and the step (3.3) of docs/dynamics.md, each solved by SCD Newton,
+        the loads and obstacles at t_{n+1} = ``state.time`` + tau; ``u`` holds the step's solution
+        (shifted). The state is advanced (:meth:`_record`; its time, not ``done``) only when both
+        converged. Returns both results."""
+        self._use_time_step(self.tau if tau is None else tau)
+        problem, tau = self.problem, self.tau
         predicted, projected = self._work.predicted, self._work.projected
-        problem.set_step(1.0, previous=state.displacement)  # d: gaps, slip measured from w_n
+        before, after = at_time(self.path, state.time), at_time(self.path, state.time + tau)
+        _lifted_load(problem, before, self._work.previous_load)
+        problem.set_step(after.load, after.translation, previous=state.displacement,
+                         previous_translation=before.translation)  # d: gaps at t_{n+1}, slip measured from w_n
         predicted.waxpy(tau, state.velocity, state.displacement)
         self.projection_matrix.mult(predicted, self.projection.load)
         self.projection_matrix.multAdd(problem.shift, self.projection.load, self.projection.load)
@@ -182,27 +355,56 @@ class StabilisedNewmark(PETScOwner):
         if not projection.converged:
             return projection, projection
         projected.waxpy(-1.0, problem.shift, u)
-        self._add_inertia(state, projected)
+        if self.static is None:
+            self._add_inertia(state, projected)
+        else:
+            self._set_inertia(state, u, before.load)
         result = self.solver.solve(u, stop=stop)
         if result.converged:
-            self._record(state, u, result)
+            self._record(state, u, result, (before.load, after.load))
         return projection, result
 
+    def _use_time_step(self, tau: float) -> None:
+        """Make A_eff = K + M / (beta tau^2) and the step's solver (its gamma and preconditioner
+        are A_eff's) for ``tau``, unless they are made for it (to round-off)."""
+        require(tau > 0.0, "dynamics.dt", f"the time step must be > 0 (s), got {tau!r}")
+        if abs(tau - self.tau) <= 1e-12 * self.tau:
+            return
+        if self.static is None:
+            self.problem.A.axpy(1.0 / (BETA * tau**2) - 1.0 / (BETA * self.tau**2), self.mass,
+                                PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        else:
+            self.problem.hyperelastic.coefficient = 1.0 / (BETA * tau**2)
+        self.tau = float(tau)
+        self.solver.destroy()
+        self.solver = SCDNewtonSolver(self.problem, self._parameters, prefix=self._prefix)
+
     def _add_inertia(self, state: DynamicState, projected: PETSc.Vec) -> None:
-        """The step's load of (3.3): l = F + A_eff d (set_step) + M w_bar / (beta tau^2) + (F - K w_n),
+        """The step's load of (3.3): l = F_{n+1} + A_eff d (set_step) + M w_bar / (beta tau^2) + (F_n - K w_n),
         the last term zero at the prescribed rows."""
         problem, work = self.problem, self._work.scratch
         self.mass.mult(projected, work)
-        problem.load.axpy(1.0 / (BETA * self.dt**2), work)
+        problem.load.axpy(1.0 / (BETA * self.tau**2), work)
         self.stiffness.mult(state.displacement, work)
-        work.aypx(-1.0, problem.applied)
+        work.aypx(-1.0, self._work.previous_load)
         work.array[self.prescribed] = 0.0
         problem.load.axpy(1.0, work)
 
-    def _record(self, state: DynamicState, u: PETSc.Vec, result: SCDNewtonResult) -> None:
-        """Advance ``state`` over the step just solved: w_{n+1} = u - d, v_{n+1} (3.4), the step's
-        mean acceleration and the energy terms (4.1) of docs/dynamics.md."""
-        problem, tau, work = self.problem, self.dt, self._work
+    def _set_inertia(self, state: DynamicState, u: PETSc.Vec, load: float) -> None:
+        """The hyperelastic step's b = -c M_K u_bar + r_K(u_n) at the load factor ``load`` of t_n
+        (:class:`InertialSystem`; u_bar the physical displacement of the projected ``u``)."""
+        system, problem = self.problem.hyperelastic, self.problem
+        problem.physical_displacement(u, system.displacement)
+        self.global_mass.mult(system.displacement.x.petsc_vec, system.inertia)
+        system.inertia.scale(-system.coefficient)
+        state.physical.copy(system.displacement.x.petsc_vec)
+        system.displacement.x.scatter_forward()
+        system.inertia.axpy(1.0, HyperelasticSystem.assemble_residual(system, load))
+
+    def _record(self, state: DynamicState, u: PETSc.Vec, result: SCDNewtonResult, loads: tuple[float, float]) -> None:
+        """Advance ``state`` over the step just solved: w_{n+1} = u - d, u_{n+1}, v_{n+1} (3.4), the
+        step's mean acceleration, the time and the energy terms (4.1)-(4.2) of docs/dynamics.md."""
+        problem, tau, work = self.problem, self.tau, self._work
         w_next, increment, velocity_change = work.next_displacement, work.increment, work.velocity_change
         w_next.waxpy(-1.0, problem.shift, u)
         increment.waxpy(-1.0, state.displacement, w_next)
@@ -215,17 +417,20 @@ class StabilisedNewmark(PETScOwner):
         velocity_change.copy(state.acceleration)
         state.acceleration.scale(1.0 / tau)
         w_next.copy(state.displacement)
-        normal, friction = _contact_work(problem, result, increment)
+        physical = problem.physical_displacement(u, self.energy.field).x.petsc_vec.copy()
+        changes = self.energy.step(state.physical, physical, loads)
+        physical.copy(state.physical)
+        physical.destroy()
+        normal, tangential, friction = _contact_work(problem, result, increment, u)
         energy = state.energy
-        energy["external_work"] += increment.dot(problem.applied)
+        for name, change in changes.items():
+            energy[name] += change
         energy["friction_dissipation"] -= friction
-        energy["contact_work"] += normal + projection_work
+        energy["contact_work"] += normal + tangential + projection_work
         energy["kinetic"] = 0.5 * _energy_norm(self.mass, state.velocity, work.scratch)
-        energy["elastic"] = 0.5 * _energy_norm(self.stiffness, state.displacement, work.scratch)
         stored = energy["kinetic"] + energy["elastic"] - state.initial_energy
-        energy["balance_error"] = (stored - energy["external_work"] - energy["contact_work"]
+        energy["balance_error"] = (stored - energy["external_work"] - energy["support_work"] - energy["contact_work"]
                                    + energy["friction_dissipation"])
-        state.done += 1
         state.time += tau
 
 
@@ -281,11 +486,26 @@ def _energy_norm(A: PETSc.Mat, x: PETSc.Vec, work: PETSc.Vec) -> float:
     return x.dot(work)
 
 
-def _contact_work(problem: ContactProblem, result: SCDNewtonResult, increment: PETSc.Vec) -> tuple[float, float]:
-    """The work of the step's contact forces over the increment Delta w (docs/dynamics.md (4.1)):
-    1/2 lambda . Delta w_n (normal) and 1/2 R_t . Delta w_t (friction, <= 0), summed over the
-    contact nodes (nodal frames; the relative displacement at a body pair's slave nodes). Collective."""
+def _contact_work(problem: ContactProblem, result: SCDNewtonResult, increment: PETSc.Vec,
+                  u: PETSc.Vec) -> tuple[float, float, float]:
+    """The work of the step's contact forces (docs/dynamics.md (4.1)), summed over the contact
+    nodes (nodal frames; the relative displacement at a body pair's slave nodes): on the body,
+    1/2 lambda_n . Delta w_n (normal) and 1/2 R_t . Delta w_t (tangential), and the friction's,
+    1/2 R_t . u_t (<= 0) over the slip increment u_t relative to the obstacle (the shifted
+    solution's tangential part; Delta w_t where the obstacle does not move). Collective."""
     nodal = increment.array.reshape(-1, 3)[problem.contact_blk]
-    normal = 0.5 * float(np.dot(result.normal_force, nodal[:, 2]))
-    friction = 0.5 * float(np.sum(result.friction_force * nodal[:, :2]))
-    return problem.comm.allreduce(normal, op=MPI.SUM), problem.comm.allreduce(friction, op=MPI.SUM)
+    slip = u.array.reshape(-1, 3)[problem.contact_blk, :2]
+    works = np.array([0.5 * np.dot(result.normal_force, nodal[:, 2]), 0.5 * np.sum(result.friction_force * nodal[:, :2]),
+                      0.5 * np.sum(result.friction_force * slip)])
+    normal, tangential, friction = problem.comm.allreduce(works, op=MPI.SUM)
+    return float(normal), float(tangential - friction), float(friction)
+
+
+def _lifted_load(problem: ContactProblem, step: LoadStep, out: PETSc.Vec) -> None:
+    """F(t) in the solver's variables at the load factor and translation of ``step``: lambda l~ +
+    sum_c t_c l~_c (the lifted loads of :meth:`~contactqvi.contact.problem.ContactProblem.set_step`
+    without the shift), into ``out``."""
+    problem.applied.copy(out)
+    out.scale(step.load)
+    for t, b in zip(step.translation, problem.translated):
+        out.axpy(t, b)
