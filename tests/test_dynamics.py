@@ -102,7 +102,11 @@ def test_restart_mid_impact(mpi_tmp_path):
     for a, b in zip(whole["steps"][10:], resumed["steps"][10:]):
         for term in ("kinetic", "elastic", "contact_work"):
             assert b["energy"][term] == pytest.approx(a["energy"][term], rel=1e-12, abs=1e-12)
-        assert b["body_velocity"] == a["body_velocity"]
+        # the 1e-12: on 2 ranks of a loaded machine a component differed by up to 9e-13 m/s
+        # (of 1 m/s) between two runs of the same history, bit for bit equal on a calm one
+        assert b["body_velocity"].keys() == a["body_velocity"].keys()
+        for name, expected in a["body_velocity"].items():
+            assert b["body_velocity"][name] == pytest.approx(expected, rel=1e-12, abs=1e-12)
     if MPI.COMM_WORLD.rank == 0:
         for step in (0, -1):
             a, b = (read_vtx(path / "body.bp", step) for path in (mpi_tmp_path / "whole", mpi_tmp_path / "cut"))
