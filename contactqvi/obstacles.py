@@ -26,7 +26,7 @@ import numpy as np
 
 from contactqvi.parameters import require
 
-__all__ = ["Cylinder", "Obstacle", "Plane", "Sphere", "tangent_frames"]
+__all__ = ["Cylinder", "Obstacle", "Plane", "Sphere", "frame_axes", "tangent_frames"]
 
 Vector = typing.Sequence[float] | np.ndarray
 
@@ -51,6 +51,16 @@ def _rotated_point(matrix: np.ndarray, centre: Vector, point: np.ndarray) -> np.
     return np.asarray(matrix, dtype=float) @ (point - centre) + centre
 
 
+def frame_axes(normals: np.ndarray) -> np.ndarray:
+    """(m, 3) the fixed axis of :func:`tangent_frames` for each unit normal (m, 3): e1, or e2
+    where the normal is within 25 degrees of e1."""
+    axis = np.zeros_like(normals)
+    near_e1 = np.abs(normals[:, 0]) > 0.9
+    axis[~near_e1, 0] = 1.0
+    axis[near_e1, 1] = 1.0
+    return axis
+
+
 def tangent_frames(normals: np.ndarray) -> np.ndarray:
     """Right-handed orthonormal frames (rows t1, t2, n) for unit normals ``normals`` (m, 3).
 
@@ -58,10 +68,7 @@ def tangent_frames(normals: np.ndarray) -> np.ndarray:
     e1), t2 = n x t1; for n = e3 this gives (e1, e2, e3) exactly.
     """
     normals = np.asarray(normals, dtype=float).reshape(-1, 3)
-    axis = np.zeros_like(normals)
-    near_e1 = np.abs(normals[:, 0]) > 0.9
-    axis[~near_e1, 0] = 1.0
-    axis[near_e1, 1] = 1.0
+    axis = frame_axes(normals)
     t1 = axis - np.einsum("ij,ij->i", axis, normals)[:, None] * normals
     t1 /= np.linalg.norm(t1, axis=1)[:, None]
     t2 = np.cross(normals, t1)

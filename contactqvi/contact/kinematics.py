@@ -30,7 +30,7 @@ import numpy as np
 
 from contactqvi.contact.mortar import MortarCoupling
 from contactqvi.contact.owners import fetch_rows
-from contactqvi.obstacles import tangent_frames
+from contactqvi.obstacles import frame_axes, tangent_frames
 
 __all__ = ["contact_variables", "frame_derivatives", "frame_turn", "master_shares", "variable_derivatives"]
 
@@ -42,10 +42,7 @@ def frame_derivatives(normal: np.ndarray, dn: np.ndarray) -> np.ndarray:
     t_2 = n x t_1."""
     frames = tangent_frames(normal)
     t1 = frames[:, 0]
-    axis = np.zeros_like(normal)
-    near_e1 = np.abs(normal[:, 0]) > 0.9
-    axis[~near_e1, 0] = 1.0
-    axis[near_e1, 1] = 1.0
+    axis = frame_axes(normal)
     raw = axis - np.einsum("ij,ij->i", axis, normal)[:, None] * normal
     draw = -np.einsum("ij,ij->i", axis, dn)[:, None] * normal - np.einsum("ij,ij->i", axis, normal)[:, None] * dn
     dt1 = (draw - np.einsum("ij,ij->i", t1, draw)[:, None] * t1) / np.linalg.norm(raw, axis=1)[:, None]
