@@ -53,7 +53,7 @@ from contactqvi.paraview import MeshPiece, VTXDatasetWriter
 from contactqvi.parameters import Parameter, ParameterError, Parameters
 from contactqvi.records import Recorder, warn
 from contactqvi.result import Status
-from contactqvi.runner import EXIT_CODES, PREFIX, build_problem
+from contactqvi.runner import EXIT_CODES, PREFIX, build_problem, stop_signals
 
 __all__ = ["SOLVER_PARAMETERS", "read_dynamic_checkpoint", "run_dynamics"]
 
@@ -75,8 +75,11 @@ def run_dynamics(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm =
     """Integrate ``case`` (with ``[dynamics]``) over its time steps and write the results to ``output``.
 
     ``restart`` continues after the last checkpoint in ``output`` (from time 0 when there is
-    none); ``stop_after`` = k stops after time step k (status ``interrupted``). Returns the
-    summary and the exit code (:data:`~contactqvi.runner.EXIT_CODES`).
+    none); ``stop_after`` = k stops after time step k (status ``interrupted``). SIGTERM and
+    SIGINT (a batch system's time limit, Ctrl-C) stop the run at the next Newton step as a
+    quasi-static run stops (:func:`~contactqvi.runner.stop_signals`): the time step under way is
+    dropped, the summary says ``interrupted`` and the checkpoint of the last time step stays for
+    ``restart``. Returns the summary and the exit code (:data:`~contactqvi.runner.EXIT_CODES`).
     """
     parameters = check_solver(case, SOLVER_PARAMETERS)
     max_cuts = parameters.pop("max_cuts", SOLVER_PARAMETERS["max_cuts"].default)
@@ -84,7 +87,7 @@ def run_dynamics(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm =
     count = dynamics.steps if stop_after is None else min(stop_after, dynamics.steps)
     out = tables.prepare_output_dir(comm, output)
     warnings = Recorder()
-    with warnings, default_options(PREFIX, case.petsc), build_problem(case, comm) as problem:
+    with warnings, default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, stop_signals() as signal:
         with StabilisedNewmark(problem, _density(case, problem), dynamics.dt, parameters, PREFIX,
                                case.steps) as integrator, BodyMotion(problem, integrator.mass) as motion:
             velocity = _initial_velocity(case, problem)
@@ -95,8 +98,12 @@ def run_dynamics(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm =
                        "(Deuflhard, Krause, Ertel 2008), beta = 1/4, gamma = 1/2", "steps": []}
             if restart:
                 summary = read_dynamic_checkpoint(problem, out, case, state, summary)
+            def stop() -> bool:  # collective: a signal on any rank
+                return comm.allreduce(signal.is_set(), op=MPI.LOR)
+
             try:
-                code = _integrate(problem, integrator, motion, state, summary, out, (count, dynamics.dt, max_cuts))
+                code = _integrate(problem, integrator, motion, state, summary, out, (count, dynamics.dt, max_cuts),
+                                  stop)
             finally:
                 state.destroy()
     if warnings.records:
@@ -111,9 +118,11 @@ def run_dynamics(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm =
 
 
 def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: BodyMotion, state: DynamicState,
-               summary: dict[str, typing.Any], out: pathlib.Path, steps: tuple[int, float, int]) -> int:
+               summary: dict[str, typing.Any], out: pathlib.Path, steps: tuple[int, float, int],
+               stop: typing.Callable[[], bool]) -> int:
     """The time steps after ``state.done`` up to ``count`` of ``steps`` = (count, dt, max_cuts):
-    solve (halving a step that fails, :func:`_advance`), record, write; the exit code."""
+    solve (halving a step that fails, :func:`_advance`), record, write; the exit code. A step
+    that ``stop()`` interrupts is not recorded (status ``interrupted``)."""
     count, dt, max_cuts = steps
     u = problem.A.createVecRight()
     fields = {name: fem.Function(problem.V) for name in BODY_FIELDS}
@@ -122,8 +131,12 @@ def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: B
     writer = VTXDatasetWriter(problem.comm, out / "body.bp", keep=state.done)
     try:
         while state.done < count:
-            parts, projection, result = _advance(problem, integrator, state, u, dt, max_cuts)
+            parts, projection, result = _advance(problem, integrator, state, u, (dt, max_cuts), stop)
             summary["status"] = str(result.status if projection.converged else projection.status)
+            if Status.INTERRUPTED in (projection.status, result.status):
+                summary["status"] = str(Status.INTERRUPTED)
+                tables.write_summary(problem.comm, out / "summary.json", summary)
+                return EXIT_CODES["interrupted"]
             if not (projection.converged and result.converged):
                 failed = result if projection.converged else projection
                 summary["steps"].append({"step": state.done + 1, "converged": False, "status": summary["status"],
@@ -146,17 +159,20 @@ def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: B
     return EXIT_CODES["converged"]
 
 
-def _advance(problem: ContactProblem, integrator: StabilisedNewmark, state: DynamicState, u: PETSc.Vec, dt: float,
-             max_cuts: int) -> tuple[list[dict[str, typing.Any]], SCDNewtonResult, SCDNewtonResult]:
-    """Advance ``state`` by the time step ``dt`` to t = ``state.time`` + dt, in parts where it fails:
-    after k halvings in a row the part is 2^-k of what remains of the step, one halving fewer
-    after each part that converges (module docstring). Returns the parts (time reached, length,
-    status) and the last part's two results."""
+def _advance(problem: ContactProblem, integrator: StabilisedNewmark, state: DynamicState, u: PETSc.Vec,
+             step: tuple[float, int], stop: typing.Callable[[], bool]) -> tuple[list[dict[str, typing.Any]],
+                                                                            SCDNewtonResult, SCDNewtonResult]:
+    """Advance ``state`` by the time step dt of ``step`` = (dt, max_cuts) to t = ``state.time`` + dt,
+    in parts where it fails: after k halvings in a row the part is 2^-k of what remains of the
+    step, one halving fewer after each part that converges (module docstring); ``stop()`` is asked
+    before each Newton step. Returns the parts (time reached, length, status) and the last part's
+    two results."""
+    dt, max_cuts = step
     target, cuts, parts = state.time + dt, 0, []
     while True:
         remaining = target - state.time
         tau = remaining * 0.5**cuts
-        projection, result = integrator.step(state, u, tau)
+        projection, result = integrator.step(state, u, tau, stop)
         last = result if projection.converged else projection
         parts.append({"time": state.time if last.converged else state.time + tau, "dt": tau,
                       "status": str(last.status)})

@@ -53,7 +53,7 @@ from contactqvi.problems.coulomb import gap_function
 from contactqvi.records import Recorder, warn
 from contactqvi.result import Status
 
-__all__ = ["EXIT_CODES", "PREFIX", "OutputError", "build_problem", "read_mesh", "run_case"]
+__all__ = ["EXIT_CODES", "PREFIX", "OutputError", "build_problem", "read_mesh", "run_case", "stop_signals"]
 
 logger = logging.getLogger(__name__)
 
@@ -183,7 +183,7 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
         logger.info("the checkpoint in %s holds every step asked for: nothing to solve", output)
         status = Status[checkpoint.summary["status"].upper()]
         return checkpoint.summary, EXIT_CODES["converged" if status.converged else "not converged"]
-    with warnings, default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, _stop_signals() as stop:
+    with warnings, default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, stop_signals() as stop:
         logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks",
                     problem.n_contact, problem.n_free, len(case.steps), comm.size)
         check_reach(problem, case.steps, _largest_prescribed(case), case.pair_keys)
@@ -335,7 +335,7 @@ def _check_output(comm: MPI.Comm, output: str | pathlib.Path) -> None:
 
 
 @contextlib.contextmanager
-def _stop_signals() -> typing.Iterator[threading.Event]:
+def stop_signals() -> typing.Iterator[threading.Event]:
     """An event that SIGTERM and SIGINT set, instead of ending the process, while the block runs.
 
     Only the main thread can handle signals; elsewhere the event is never set.

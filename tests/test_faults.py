@@ -76,6 +76,35 @@ def test_signal_stops_within_the_step_with_status_interrupted(tmp_path, number):
     _assert_checkpoint_readable(out / "checkpoint", json.loads(marker.read_text()))
 
 
+@pytest.mark.serial
+def test_signal_stops_a_dynamic_run_which_a_restart_continues(tmp_path):
+    """SIGTERM during a time step of the shipped drop test (26 steps): exit code 3 within 10 s,
+    the time steps solved in summary.json, ``status = "interrupted"``; ``--restart`` continues
+    after the last checkpoint to the end (exit 0, every step converged)."""
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "contactqvi", "run", str(ROOT / "cases" / "drop_test.toml"), "--output", str(out),
+               "--no-plot"]
+    run = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    marker = out / "checkpoint" / "dynamics.json"
+    deadline = time.monotonic() + 300.0
+    while not marker.exists():
+        assert run.poll() is None and time.monotonic() < deadline, run.stderr.read() if run.poll() is not None else ""
+        time.sleep(0.05)
+    os.kill(run.pid, signal.SIGTERM)
+    signalled = time.monotonic()
+    code = run.wait(timeout=60)
+    assert code == EXIT_CODES["interrupted"], run.stderr.read()
+    assert time.monotonic() - signalled < 10.0
+    result = json.loads((out / "summary.json").read_text())
+    assert result["status"] == "interrupted" and any(w["key"] == "signal" for w in result["warnings"])
+    solved = len(result["steps"])
+    assert 1 <= solved < 26 and all(step["converged"] for step in result["steps"])
+    resumed = subprocess.run([*command, "--restart"], capture_output=True, text=True, timeout=600)
+    assert resumed.returncode == 0, resumed.stderr
+    result = json.loads((out / "summary.json").read_text())
+    assert len(result["steps"]) == 26 and all(step["converged"] for step in result["steps"])
+
+
 def _checkpoint_displacement(directory: pathlib.Path, marker: dict) -> tuple[np.ndarray, np.ndarray]:
     """Node coordinates and displacement of the checkpoint, read onto its own mesh (no case file)."""
     import adios4dolfinx
