@@ -18,6 +18,16 @@ from petsc4py import PETSc
 __all__ = ["abort_on_error", "make_parser", "parse_args", "pass_to_petsc", "print_error", "setup_logging"]
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser whose errors (an unknown option, a value outside the choices) print
+    on rank 0 only, as :func:`print_error` does; every rank exits with argparse's code 2."""
+
+    def error(self, message: str) -> typing.NoReturn:
+        if MPI.COMM_WORLD.rank == 0:
+            self.print_usage(sys.stderr)
+        self.exit(2, f"{self.prog}: error: {message}\n" if MPI.COMM_WORLD.rank == 0 else None)
+
+
 def make_parser(description: str, default_output: str, petsc_example: str | None = None) -> argparse.ArgumentParser:
     """Argument parser with the options every demo has.
 
@@ -25,7 +35,7 @@ def make_parser(description: str, default_output: str, petsc_example: str | None
     ``--help`` (e.g. ``-coulomb_ksp_monitor``).
     """
     example = f" (e.g. {petsc_example}; -log_view prints PETSc's profile at exit)" if petsc_example else ""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         description=description,
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
         epilog=f"Unknown options starting with '-' are passed to PETSc{example}.",
