@@ -27,10 +27,8 @@ with its status and cause (``failure``) in the summary and exit code 1.
 from __future__ import annotations
 
 import dataclasses
-import json
 import logging
 import pathlib
-import shutil
 import typing
 
 from mpi4py import MPI
@@ -41,6 +39,7 @@ from dolfinx import fem
 
 from contactqvi import tables
 from contactqvi.case import ContactCase, check_solver
+from contactqvi.contact.checkpoint import DIRECTORY, ENGINE, read_marker, write_step_file
 from contactqvi.contact.diagnosis import failure_cause
 from contactqvi.contact.figures import draw_on_rank_0
 from contactqvi.contact.dynamics import ENERGY_TERMS, BodyMotion, DynamicState, StabilisedNewmark
@@ -50,7 +49,7 @@ from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult
 from contactqvi.elasticity import cellwise
 from contactqvi.linalg import default_options
 from contactqvi.paraview import MeshPiece, VTXDatasetWriter
-from contactqvi.parameters import Parameter, ParameterError, Parameters
+from contactqvi.parameters import Parameter, Parameters
 from contactqvi.records import Recorder, warn
 from contactqvi.result import Status
 from contactqvi.runner import EXIT_CODES, PREFIX, build_problem, stop_signals
@@ -65,7 +64,6 @@ BODY_FIELDS = ("displacement [m]", "velocity [m/s]", "acceleration [m/s^2]")
 SOLVER_PARAMETERS = Parameters({**PARAMETERS, "max_cuts": Parameter(
     4, "a time step that does not converge is halved and retried from the last converged state, at most this many "
     "halvings in a row (the step grows back after each part that converges)", type=int, minimum=0)})
-_CHECKPOINT = "checkpoint"
 _MARKER = "dynamics.json"
 
 
@@ -240,24 +238,14 @@ def _global(problem: ContactProblem, velocity: PETSc.Vec, out: fem.Function) -> 
 def write_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, state: DynamicState,
                              summary: dict[str, typing.Any]) -> None:
     """Checkpoint ``state``: w_n, v_n and the last acceleration in the solver's variables and the
-    physical u_n (adios4dolfinx, against the mesh's input order) and a marker with the step, time, energies and
-    the summary, written last. Collective."""
-    comm, directory = problem.comm, out / _CHECKPOINT
-    tables.prepare_output_dir(comm, directory)
+    physical u_n (against the mesh's input order) and a marker with the step, time, energies and
+    the summary, written last (:func:`~contactqvi.contact.checkpoint.write_step_file`). Collective."""
+    comm = problem.comm
+    tables.prepare_output_dir(comm, out / DIRECTORY)
     name = f"time_{state.done:06d}.bp"
-    fields = _state_functions(problem.V, state, fill=True)
-    with tables.atomic_path(comm, directory / name) as tmp:
-        for field in fields:
-            adios4dolfinx.write_function_on_input_mesh(tmp, field, engine="BP4", time=float(state.done),
-                                                       name=field.name)
-    tables.write_summary(comm, directory / _MARKER, {"step": state.done, "time": state.time, "file": name,
-                                                     "energy": state.energy, "initial_energy": state.initial_energy,
-                                                     "summary": summary})
-    if comm.rank == 0:
-        for old in directory.glob("time_*.bp"):
-            if old.name != name:
-                shutil.rmtree(old, ignore_errors=True)
-    comm.Barrier()
+    write_step_file(comm, out, name, _state_functions(problem.V, state, fill=True), state.done, _MARKER,
+                    {"step": state.done, "time": state.time, "file": name, "energy": state.energy,
+                     "initial_energy": state.initial_energy, "summary": summary})
 
 
 def _state_functions(V: fem.FunctionSpace, state: DynamicState, fill: bool) -> list[fem.Function]:
@@ -280,17 +268,14 @@ def read_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, case: Co
                             summary: dict[str, typing.Any]) -> dict[str, typing.Any]:
     """Fill ``state`` from the last checkpoint in ``out`` and return its summary (``summary``
     unchanged when there is none). Any number of ranks. Collective."""
-    comm, marker = problem.comm, out / _CHECKPOINT / _MARKER
-    data = comm.bcast(json.loads(marker.read_text()) if comm.rank == 0 and marker.exists() else None, root=0)
+    comm = problem.comm
+    data = read_marker(comm, out, _MARKER, case.to_dict())
     if data is None:
         logger.warning("no checkpoint in %s: the run starts at time 0", out)
         return summary
-    if data["summary"].get("case") != tables.to_builtin(case.to_dict()):
-        raise ParameterError("--restart", f"the checkpoint in {marker.parent} was written for another case; use a "
-                             "new --output directory")
     fields = _state_functions(problem.V, state, fill=False)
     for field, vector in zip(fields, _state_vectors(state)):
-        adios4dolfinx.read_function(marker.parent / data["file"], field, engine="BP4", time=float(data["step"]),
+        adios4dolfinx.read_function(out / DIRECTORY / data["file"], field, engine=ENGINE, time=float(data["step"]),
                                     name=field.name)
         vector.array[:] = field.x.array[: vector.getLocalSize()]
     state.done, state.time = int(data["step"]), float(data["time"])

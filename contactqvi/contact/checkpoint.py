@@ -51,12 +51,14 @@ from contactqvi.load_steps import Rotation
 from contactqvi.parameters import ParameterError
 from contactqvi.tables import atomic_path, prepare_output_dir, to_builtin, write_summary
 
-__all__ = ["DIRECTORY", "Checkpoint", "CheckpointWriter", "read_checkpoint", "remove_checkpoints"]
+__all__ = ["DIRECTORY", "ENGINE", "Checkpoint", "CheckpointWriter", "read_checkpoint", "read_marker", "remove_checkpoints",
+           "write_step_file"]
 
 #: Subdirectory of the output directory holding the checkpoints.
 DIRECTORY = "checkpoint"
 _MARKER = "checkpoint.json"
-_ENGINE = "BP4"
+#: ADIOS2 engine of the checkpoint files.
+ENGINE = "BP4"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -92,7 +94,7 @@ class Checkpoint:
         S, node_of_dof = _state_space(V)
         states, variables = fem.Function(S, name="contact_state"), fem.Function(V, name="solver_variables")
         for f in (states, variables, state.displacement):
-            adios4dolfinx.read_function(self.path, f, engine=_ENGINE, time=float(self.step), name=f.name)
+            adios4dolfinx.read_function(self.path, f, engine=ENGINE, time=float(self.step), name=f.name)
         state.node_states[node_of_dof] = np.rint(states.x.array)
         n_owned = state.variables.getLocalSize()
         state.variables.array[:] = variables.x.array[:n_owned]
@@ -116,22 +118,56 @@ def remove_checkpoints(comm: MPI.Comm, output: str | os.PathLike) -> None:
     comm.Barrier()
 
 
+def read_marker(comm: MPI.Comm, output: str | os.PathLike, marker: str,
+                case: dict[str, typing.Any]) -> dict[str, typing.Any] | None:
+    """The marker file ``marker`` of the checkpoints in ``output`` (read on rank 0, broadcast),
+    or None when there is none.
+
+    Raises :class:`ParameterError` (``--restart``) when it was written for another case (its
+    summary's ``case`` differs from ``case``, the case file's dictionary). Collective.
+    """
+    path = pathlib.Path(output) / DIRECTORY / marker
+    data = comm.bcast(json.loads(path.read_text()) if comm.rank == 0 and path.exists() else None, root=0)
+    if data is None:
+        return None
+    written = data["summary"].get("case", {})
+    if written != to_builtin(case):
+        changed = sorted(k for k in set(case) | set(written) if to_builtin(case.get(k)) != written.get(k))
+        raise ParameterError("--restart", f"the checkpoint in {path.parent} was written for another case "
+                             f"(different: {', '.join(changed) or 'the case'}); use a new --output directory")
+    return data
+
+
+def write_step_file(comm: MPI.Comm, output: str | os.PathLike, name: str, functions: typing.Sequence[fem.Function],
+                    step: int, marker: str, data: dict[str, typing.Any]) -> None:
+    """Write ``functions`` (against the mesh's input order) into the step file ``name``
+    (``<prefix>_<step>.bp``), then the marker ``marker`` holding ``data``, then remove the
+    older step files of the same prefix: a step file counts once the marker names it
+    (module docstring). Collective."""
+    directory = pathlib.Path(output) / DIRECTORY
+    with atomic_path(comm, directory / name) as tmp:
+        for f in functions:  # appended to a new file
+            adios4dolfinx.write_function_on_input_mesh(tmp, f, engine=ENGINE, time=float(step), name=f.name)
+    write_summary(comm, directory / marker, data)
+    if comm.rank == 0:  # the marker has moved on: older step files are garbage
+        prefix = name.split("_")[0]
+        for old in directory.glob(f"{prefix}_*.bp"):
+            if old.name != name:
+                shutil.rmtree(old, ignore_errors=True)
+    comm.Barrier()
+
+
 def read_checkpoint(comm: MPI.Comm, output: str | os.PathLike, case: dict[str, typing.Any]) -> Checkpoint | None:
     """The last complete checkpoint in ``output``, or None when there is none.
 
     Raises :class:`ParameterError` (``--restart``) when it was written for another case
-    (its ``case`` entry differs from ``case``, the case file's dictionary). Collective.
+    (:func:`read_marker`). Collective.
     """
-    marker = pathlib.Path(output) / DIRECTORY / _MARKER
-    data = comm.bcast(json.loads(marker.read_text()) if comm.rank == 0 and marker.exists() else None, root=0)
+    data = read_marker(comm, output, _MARKER, case)
     if data is None:
         return None
+    marker = pathlib.Path(output) / DIRECTORY / _MARKER
     summary = data["summary"]
-    if summary.get("case") != to_builtin(case):
-        changed = sorted(k for k in set(case) | set(summary.get("case", {}))
-                         if to_builtin(case.get(k)) != summary.get("case", {}).get(k))
-        raise ParameterError("--restart", f"the checkpoint in {marker.parent} was written for another case "
-                             f"(different: {', '.join(changed) or 'the case'}); use a new --output directory")
     if "solved" not in data:
         raise ParameterError("--restart", f"the checkpoint in {marker.parent} was written by an older contactqvi "
                              "without the obstacles' position; use a new --output directory")
@@ -164,7 +200,7 @@ class CheckpointWriter:
         mesh_file = self.directory / "mesh.bp"
         if not self.comm.bcast(mesh_file.exists() if self.comm.rank == 0 else None, root=0):
             with atomic_path(self.comm, mesh_file) as tmp:
-                adios4dolfinx.write_mesh_input_order(tmp, V.mesh, engine=_ENGINE)
+                adios4dolfinx.write_mesh_input_order(tmp, V.mesh, engine=ENGINE)
 
     def write(self, state: PathState, summary: dict[str, typing.Any]) -> None:
         """Checkpoint the load path's ``state`` after its last converged step; ``summary`` the run's."""
@@ -174,22 +210,13 @@ class CheckpointWriter:
         self._states.x.array[:] = state.node_states[self._node_of_dof]
         self._states.x.scatter_forward()
         name = f"step_{state.done:04d}.bp"
-        with atomic_path(self.comm, self.directory / name) as tmp:
-            for f in (state.displacement, self._variables, self._states):  # appended to a new file
-                adios4dolfinx.write_function_on_input_mesh(tmp, f, engine=_ENGINE, time=float(state.done),
-                                                           name=f.name)
-        write_summary(self.comm, self.directory / _MARKER,
-                      {"step": state.done, "solved": state.solved, "file": name, "load": state.load,
-                       "translation": [float(t) for t in state.translation], "target": state.target,
-                       "rotation": None if state.rotation is None else dataclasses.asdict(state.rotation),
-                       "fit": state.fit,
-                       "summary": summary})
+        write_step_file(self.comm, self.directory.parent, name, (state.displacement, self._variables, self._states),
+                        state.done, _MARKER,
+                        {"step": state.done, "solved": state.solved, "file": name, "load": state.load,
+                         "translation": [float(t) for t in state.translation], "target": state.target,
+                         "rotation": None if state.rotation is None else dataclasses.asdict(state.rotation),
+                         "fit": state.fit, "summary": summary})
         self.step = state.done
-        if self.comm.rank == 0:  # the marker has moved on: older step files are garbage
-            for old in self.directory.glob("step_*.bp"):
-                if old.name != name:
-                    shutil.rmtree(old, ignore_errors=True)
-        self.comm.Barrier()
 
 
 def _state_space(V: fem.FunctionSpace) -> tuple[fem.FunctionSpace, np.ndarray]:
