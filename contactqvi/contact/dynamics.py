@@ -185,7 +185,7 @@ class PhysicalEnergy(PETScOwner):
         W_support += 1/2 Delta u_p . (K (u_n + u_{n+1}) - (l_n + l_{n+1}) f)_p   (prescribed dofs p)
 
     Attributes:
-        field: a displacement Function, the form's argument (set it, then :meth:`internal`).
+        field: a displacement Function, the forms' argument (:meth:`step` sets it).
     """
 
     def __init__(self, problem: ContactProblem):
