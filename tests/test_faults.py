@@ -102,6 +102,7 @@ def test_signal_stops_a_dynamic_run_which_a_restart_continues(tmp_path):
     resumed = subprocess.run([*command, "--restart"], capture_output=True, text=True, timeout=600)
     assert resumed.returncode == 0, resumed.stderr
     result = json.loads((out / "summary.json").read_text())
+    assert result["restarts"] == [{"after_step": solved, "mpi_size": 1}]  # continued where the signal stopped it
     assert len(result["steps"]) == 26 and all(step["converged"] for step in result["steps"])
 
 

@@ -50,7 +50,7 @@ def sum_to_owners(comm: MPI.Comm, owners: np.ndarray, rows: np.ndarray, cols: np
         summed = np.bincount(inverse, weights=values, minlength=len(keys))
     else:
         summed = np.column_stack([np.bincount(inverse, weights=values[:, k], minlength=len(keys))
-                                  for k in range(values.shape[1])]).reshape(len(keys), values.shape[1])
+                                  for k in range(values.shape[1])])
     return keys // width, keys % width, summed
 
 
