@@ -35,9 +35,10 @@ __all__ = ["SEARCHES", "LoadStep", "Rotation", "at_time", "check_fit", "check_ro
 #: When a pair of meshed bodies is searched along the load path: before every load step
 #: after the first, in the configuration the step before ended in; as that, and again
 #: after each step in the configuration it reached, the step solved again until that
-#: configuration settles; or once, in the reference configuration
-#: (:class:`~contactqvi.contact.interface.BodyPair`).
-SEARCHES = ("every_step", "until_settled", "once")
+#: configuration settles; inside the Newton iteration, the geometry a function of the
+#: iterate (``newton``, body pairs of hyperelastic bodies); or once, in the reference
+#: configuration (:class:`~contactqvi.contact.interface.BodyPair`).
+SEARCHES = ("every_step", "until_settled", "newton", "once")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -55,6 +55,9 @@ class Status(enum.IntEnum):
     #: the residual is not defined at the iterate (PETSc's SNES_DIVERGED_FUNCTION_DOMAIN):
     #: an inverted element (det F <= 0) of a hyperelastic body
     DIVERGED_FUNCTION_DOMAIN = -10
+    #: stopped for a new contact search: the iterate's projections left the facets of the last
+    #: one (``search = "newton"``); the load path searches and solves on
+    SEARCH_AGAIN = -11
 
     @property
     def converged(self) -> bool:

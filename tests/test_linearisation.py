@@ -24,7 +24,8 @@ import pytest
 
 from dolfinx import fem
 
-from contactqvi.contact.kinematics import contact_variables, frame_turn, master_shares, variable_derivatives
+from contactqvi.contact.kinematics import (contact_variables, frame_turn, master_shares, pair_frame_derivatives,
+                                          pair_frames, variable_derivatives)
 from contactqvi.contact.linearisation import segment_jacobians
 from contactqvi.contact.mortar import MortarCoupling, mortar_coupling
 from contactqvi.contact.owners import owner_ranges, sum_to_owners
@@ -127,9 +128,12 @@ def test_nodal_geometry_derivatives(mesh):
     owners = owner_ranges(comm, index_map)
     weights = np.cos(x[base.slave_blk])  # any slave values v_i held fixed
     transfer = master_shares(comm, index_map, base, weights)
-    _, _, s_base, slip_base = contact_variables(comm, index_map, base, start, x + u)
-    variables = variable_derivatives(index_map, base, start, s_base, slip_base)
-    turn = frame_turn(base, weights)
+    free = np.zeros((len(base.slave_blk), 3), dtype=bool)  # no roller on this interface
+    frames = pair_frames(base.normal, free)[1]
+    dframes = pair_frame_derivatives(base, free)
+    _, s_base, slip_base = contact_variables(comm, index_map, base, start, x + u, frames)
+    variables = variable_derivatives(index_map, base, start, s_base, slip_base, frames, dframes)
+    turn = frame_turn(base, dframes, weights)
     for dof in dofs:
         node, component = divmod(int(dof), 3)
         local = index_map.global_to_local(np.array([node], dtype=np.int64))[0]  # -1: not on this rank
@@ -141,7 +145,7 @@ def test_nodal_geometry_derivatives(mesh):
             c = coupling_at(v)
             c = c.restricted(np.isin(c.slave_blk, common))
             assert np.array_equal(c.slave_blk, base.slave_blk)
-            variables_at, _, s, _ = contact_variables(comm, index_map, c, start, x + v)
+            variables_at, s, _ = contact_variables(comm, index_map, c, start, x + v, pair_frames(c.normal, free)[1])
             results.append((s, c.normal, np.einsum("ij,ij->i", c.normal, s), variables_at,
                             np.einsum("iaj,ij->ia", tangent_frames(c.normal), weights), _master_shares(V, c, weights)))
         fd = [(a - b) / (2 * h) for a, b in zip(results[0][:5], results[1][:5])]

@@ -11,12 +11,13 @@ After every converged load step the runner writes, into ``OUTPUT/checkpoint/``
   ``solver_variables`` (u - d, the SCD solver's unknowns: nodal frames at the contact
   nodes, the mortar relative displacement at slave nodes of body pairs) and
   ``contact_state`` (the :class:`~contactqvi.contact.nodal.State` of each contact
-  node, -1 elsewhere);
+  node, -1 elsewhere) and ``increment`` (the last solve's change of ``displacement``, m);
 * ``checkpoint.json``, written last and atomically: the step, its file, the step's load
   factor, translation (the obstacles' position the next step's slip is measured
   from), rotation of the obstacles and moved groups (``{axis, angle, centre}`` or null)
-  and fraction of the declared interferences resolved (``fit``), the first step's stopping
-  target and the summary so far.
+  and fraction of the declared interferences resolved (``fit``), the last solve's change of
+  load factor and translation (``stride``), the first step's stopping target and the
+  summary so far.
 
 A checkpoint exists only once ``checkpoint.json`` names it: a step file being written
 when the run died is never read, and the one before is removed only after the marker
@@ -85,6 +86,7 @@ class Checkpoint:
     summary: dict[str, typing.Any]
     rotation: Rotation | None = None
     fit: float = 1.0
+    stride: tuple[float, ...] = (0.0,) * 4
 
     def resume(self, problem: ContactProblem) -> PathState:
         """The load path's state after :attr:`step`, read into ``problem``'s space (collective;
@@ -93,14 +95,14 @@ class Checkpoint:
         V = problem.V
         S, node_of_dof = _state_space(V)
         states, variables = fem.Function(S, name="contact_state"), fem.Function(V, name="solver_variables")
-        for f in (states, variables, state.displacement):
+        for f in (states, variables, state.displacement, state.increment):
             adios4dolfinx.read_function(self.path, f, engine=ENGINE, time=float(self.step), name=f.name)
         state.node_states[node_of_dof] = np.rint(states.x.array)
         n_owned = state.variables.getLocalSize()
         state.variables.array[:] = variables.x.array[:n_owned]
         state.done, state.solved = self.step, self.solved
         state.load, state.translation, state.rotation = self.load, np.array(self.translation), self.rotation
-        state.fit = self.fit
+        state.fit, state.stride = self.fit, np.array(self.stride)
         state.target = self.target
         missing = problem.comm.allreduce(int(np.count_nonzero(state.node_states[problem.contact_blk] < 0)),
                                          op=MPI.SUM)
@@ -168,15 +170,15 @@ def read_checkpoint(comm: MPI.Comm, output: str | os.PathLike, case: dict[str, t
         return None
     marker = pathlib.Path(output) / DIRECTORY / _MARKER
     summary = data["summary"]
-    if "solved" not in data:
+    if "stride" not in data:
         raise ParameterError("--restart", f"the checkpoint in {marker.parent} was written by an older contactqvi "
-                             "without the obstacles' position; use a new --output directory")
-    rotation = data.get("rotation")  # absent: written before rotations, or none
+                             "without the last step's increment; use a new --output directory")
+    rotation = data["rotation"]
     rotation = None if rotation is None else Rotation(tuple(rotation["axis"]), float(rotation["angle"]),
                                                       tuple(rotation["centre"]))
     return Checkpoint(int(data["step"]), int(data["solved"]), marker.parent / data["file"], float(data["load"]),
                       tuple(float(t) for t in data["translation"]), float(data["target"]), summary, rotation,
-                      float(data.get("fit", 1.0)))  # absent: written before fits over several steps
+                      float(data["fit"]), tuple(float(t) for t in data["stride"]))
 
 
 class CheckpointWriter:
@@ -210,12 +212,12 @@ class CheckpointWriter:
         self._states.x.array[:] = state.node_states[self._node_of_dof]
         self._states.x.scatter_forward()
         name = f"step_{state.done:04d}.bp"
-        write_step_file(self.comm, self.directory.parent, name, (state.displacement, self._variables, self._states),
-                        state.done, _MARKER,
+        write_step_file(self.comm, self.directory.parent, name,
+                        (state.displacement, state.increment, self._variables, self._states), state.done, _MARKER,
                         {"step": state.done, "solved": state.solved, "file": name, "load": state.load,
                          "translation": [float(t) for t in state.translation], "target": state.target,
                          "rotation": None if state.rotation is None else dataclasses.asdict(state.rotation),
-                         "fit": state.fit, "summary": summary})
+                         "fit": state.fit, "stride": state.stride.tolist(), "summary": summary})
         self.step = state.done
 
 

@@ -31,7 +31,8 @@ import ufl
 from dolfinx import fem, la
 from dolfinx import mesh as dmesh
 
-from contactqvi.contact.mortar import MortarCoupling, mortar_coupling
+from contactqvi.contact.kinematics import pair_frames
+from contactqvi.contact.mortar import MortarCoupling, coupling_on_layout, mortar_coupling
 from contactqvi.interference import Interference, as_interference
 from contactqvi.laws import ContactLaw, Frictionless
 from contactqvi.load_steps import SEARCHES, Rotation, placed, rigid_increment
@@ -40,7 +41,8 @@ from contactqvi.obstacles import Obstacle, tangent_frames
 from contactqvi.parameters import require
 from contactqvi.records import warn
 
-__all__ = ["MESHED_INTERFERENCE", "BodyPair", "Interface", "MeshedFit", "ObstaclePair", "build_interfaces", "search_again"]
+__all__ = ["MESHED_INTERFERENCE", "BodyPair", "Interface", "MeshedFit", "ObstaclePair", "build_interfaces", "followed",
+           "search_again"]
 
 logger = logging.getLogger(__name__)
 
@@ -86,7 +88,10 @@ class BodyPair:
             contact follows the bodies (:func:`search_again`); ``"until_settled"``: as
             ``"every_step"``, and each step is solved again after a search in the
             configuration it reached, until that configuration settles (no lag of one
-            step: :func:`~contactqvi.contact.load_path.solve_load_path`); ``"once"``: only
+            step: :func:`~contactqvi.contact.load_path.solve_load_path`); ``"newton"``: the
+            contact geometry (D, M, normals, frames, gaps and the objective slip) a function of
+            the displacement inside the Newton iteration, linearised in its steps
+            (:mod:`contactqvi.contact.current_geometry`; hyperelastic bodies); ``"once"``: only
             in the reference configuration (small sliding over the whole load path).
         interference: the declared overlap of the two surfaces as meshed (m, >= 0; a press or
             shrink fit), a number or an :class:`~contactqvi.interference.Interference` linear in
@@ -148,7 +153,12 @@ class Interface:
     @property
     def searched_each_step(self) -> bool:
         """Whether the pair is searched again before every load step (its ``search``)."""
-        return self.pair.search in ("every_step", "until_settled")
+        return self.pair.search in ("every_step", "until_settled", "newton")
+
+    @property
+    def follows(self) -> bool:
+        """Whether the geometry follows the Newton iterate (``search = "newton"``)."""
+        return self.pair.search == "newton"
 
     @property
     def settles(self) -> bool:
@@ -232,7 +242,8 @@ def build_interfaces(
 
 def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: typing.Sequence[Interface],
                  constrained: np.ndarray, displacement: fem.Function, translation: np.ndarray,
-                 finite_strain: bool = False, rotation: Rotation | None = None) -> list[Interface]:
+                 finite_strain: bool = False, rotation: Rotation | None = None,
+                 linearised: bool = True) -> list[Interface]:
     """The interfaces with the pairs searched each step found again in the configuration
     x + ``displacement``, the obstacles rotated by ``rotation`` (None: not) and translated by
     ``translation`` (m; :func:`~contactqvi.load_steps.placed`; the others as they are;
@@ -241,7 +252,8 @@ def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: t
     Its slave nodes, mortar rows, normals and areas are those of that configuration (an
     obstacle's nodal areas: the deformed ones with ``finite_strain``, the reference ones of
     small-strain theory otherwise); a pair may find fewer nodes or none (the bodies moved
-    apart), and a small overlap left by the last step's discrete conditions is no error.
+    apart), and a small overlap left by the last step's discrete conditions is no error. The
+    couplings of pairs searched ``"newton"`` carry their derivatives if ``linearised``.
     """
     x = displacement.x.array.reshape(-1, 3)
 
@@ -249,10 +261,28 @@ def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: t
         if isinstance(interface.pair, ObstaclePair):
             return _obstacle_interface(V, facet_tags, interface.pair, constrained, x,
                                        displacement if finite_strain else None, translation, rotation)
-        return dataclasses.replace(_body_interface(V, facet_tags, interface.pair, constrained, x),
+        return dataclasses.replace(_body_interface(V, facet_tags, interface.pair, constrained, x,
+                                                   linearised=interface.follows and linearised),
                                    meshed_fit=interface.meshed_fit)
 
     return [again(i) if i.searched_each_step else i for i in interfaces]
+
+
+def followed(V: fem.FunctionSpace, interfaces: typing.Sequence[Interface], constrained: np.ndarray,
+             displacement: fem.Function) -> list[Interface]:
+    """The interfaces with the pairs searched ``"newton"`` integrated again at x + ``displacement``
+    on the facet pairs and slave nodes of their last search
+    (:func:`~contactqvi.contact.mortar.coupling_on_layout`), with their derivatives; the others
+    as they are (collective)."""
+    x = displacement.x.array.reshape(-1, 3)
+
+    def again(interface: Interface) -> Interface:
+        coupling = coupling_on_layout(V, interface.coupling.layout, x, linearised=True)
+        normal, frames = pair_frames(coupling.normal, constrained[coupling.slave_blk])
+        return dataclasses.replace(interface, frames=frames, area=coupling.weight, coupling=coupling,
+                                   initial_gap=np.einsum("ij,ij->i", normal, coupling.separation))
+
+    return [again(i) if i.follows else i for i in interfaces]
 
 
 def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: ObstaclePair,
@@ -266,6 +296,8 @@ def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: 
     to the obstacle of each step. The nodal areas are those of the surface deformed by
     ``deformed`` if given, else of the reference one."""
     require(pair.search in SEARCHES, f"{pair.name}: search", f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
+    require(pair.search != "newton", f"{pair.name}: search", "'newton' (the geometry inside the Newton iteration) "
+            "is for pairs of meshed bodies; an obstacle pair takes 'every_step' or 'until_settled'")
     n_owned = V.dofmap.index_map.size_local
     excluded_blk = np.flatnonzero(constrained.all(axis=1))
     blk = fem.locate_dofs_topological(V, V.mesh.topology.dim - 1, boundary_facets(facet_tags, pair.surface))
@@ -295,14 +327,17 @@ FACETING = 0.02
 
 
 def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: BodyPair,
-                    constrained: np.ndarray, displacement: np.ndarray | None = None) -> Interface:
+                    constrained: np.ndarray, displacement: np.ndarray | None = None,
+                    linearised: bool = False) -> Interface:
     """A body pair's interface searched in the reference configuration (checked: it finds
-    nodes, and they do not overlap) or in x + ``displacement`` (local nodes, 3)."""
+    nodes, and they do not overlap) or in x + ``displacement`` (local nodes, 3); its coupling
+    with its derivatives if ``linearised``."""
     slave, master = boundary_facets(facet_tags, pair.slave), boundary_facets(facet_tags, pair.master)
     distance = pair.search_distance
     require(distance is None or distance > 0.0, f"{pair.name}: search_distance", f"must be > 0, got {distance!r}")
     require(pair.search in SEARCHES, f"{pair.name}: search", f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
-    coupling = mortar_coupling(V, slave, master, distance, np.flatnonzero(constrained.all(axis=1)), displacement)
+    coupling = mortar_coupling(V, slave, master, distance, np.flatnonzero(constrained.all(axis=1)), displacement,
+                               linearised)
     comm = V.mesh.comm
     if displacement is None:
         found = comm.allreduce(len(coupling.slave_blk), op=MPI.SUM)
@@ -310,15 +345,13 @@ def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: Body
         require(found > 0, f"{pair.name}", f"no node of {pair.slave!r} has a facet of {pair.master!r} within "
                 f"{reach} facing it: the surfaces are nowhere near each other (raise search_distance?)")
     # on a symmetry plane through the interface (prescribed components) the normal lies in the plane
-    normal = coupling.normal * ~constrained[coupling.slave_blk]
-    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    normal, frames = pair_frames(coupling.normal, constrained[coupling.slave_blk])
     gap = np.einsum("ij,ij->i", normal, coupling.separation)
     fit = None
     if displacement is None:
         fit = _check_interference(comm, V, gap, pair, coupling.weight,
                                   V.tabulate_dof_coordinates()[coupling.slave_blk])
-    return Interface(pair, coupling.slave_blk, tangent_frames(normal), coupling.weight, coupling, gap,
-                     meshed_fit=fit)
+    return Interface(pair, coupling.slave_blk, frames, coupling.weight, coupling, gap, meshed_fit=fit)
 
 
 #: A declared interference is reported (a warning) when the surfaces as meshed overlap by more

@@ -26,20 +26,47 @@ from __future__ import annotations
 
 from mpi4py import MPI
 
+import dataclasses
+
 import numpy as np
 
 from contactqvi.contact.mortar import MortarCoupling
 from contactqvi.contact.owners import fetch_rows
 from contactqvi.obstacles import frame_axes, tangent_frames
 
-__all__ = ["contact_variables", "frame_derivatives", "frame_turn", "master_shares", "variable_derivatives"]
+__all__ = ["aligned_previous", "contact_variables", "frame_derivatives", "frame_turn", "master_shares", "pair_frame_derivatives",
+           "pair_frames", "roller_aligned", "variable_derivatives"]
 
 
-def frame_derivatives(normal: np.ndarray, dn: np.ndarray) -> np.ndarray:
+def roller_aligned(frames: np.ndarray, constrained: np.ndarray) -> np.ndarray:
+    """``frames`` (m, 3, 3) with t_1 along the first prescribed global axis and t_2 = n x t_1 at
+    the nodes with a prescribed component (``constrained``, (m, 3) bool; a roller on a symmetry
+    plane through the contact, whose axis lies in the tangent plane): a prescribed component is
+    then a frame component (:mod:`contactqvi.contact.problem`)."""
+    partly = np.flatnonzero(constrained.any(axis=1))
+    frames = frames.copy()
+    axis = np.eye(3)[np.argmax(constrained[partly], axis=1)]
+    frames[partly, 0] = axis
+    frames[partly, 1] = np.cross(frames[partly, 2], axis)
+    return frames
+
+
+def pair_frames(normal: np.ndarray, constrained: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The unit normals of a body pair's slave nodes and their frames: the nodal normals
+    ``normal`` (m, 3) with the components prescribed at the node (``constrained``, (m, 3)) taken
+    out (on a symmetry plane the normal lies in the plane), and the frames of
+    :func:`~contactqvi.obstacles.tangent_frames` aligned with the rollers (:func:`roller_aligned`)."""
+    projected = normal * ~constrained
+    projected /= np.linalg.norm(projected, axis=1)[:, None]
+    return projected, roller_aligned(tangent_frames(projected), constrained)
+
+
+def frame_derivatives(normal: np.ndarray, dn: np.ndarray, constrained: np.ndarray | None = None) -> np.ndarray:
     """(E, 3, 3) derivatives (rows dt_1, dt_2, dn) of the frames of unit normals ``normal`` (E, 3)
     along their derivatives ``dn`` (E, 3), for :func:`~contactqvi.obstacles.tangent_frames`:
     t_1 = (a - (a . n) n) / |a - (a . n) n| with the fixed axis a that function picks for n,
-    t_2 = n x t_1."""
+    t_2 = n x t_1; where a component is prescribed (``constrained``, (E, 3)) t_1 is that axis
+    and t_2 = n x t_1 (:func:`roller_aligned`)."""
     frames = tangent_frames(normal)
     t1 = frames[:, 0]
     axis = frame_axes(normal)
@@ -47,7 +74,45 @@ def frame_derivatives(normal: np.ndarray, dn: np.ndarray) -> np.ndarray:
     draw = -np.einsum("ij,ij->i", axis, dn)[:, None] * normal - np.einsum("ij,ij->i", axis, normal)[:, None] * dn
     dt1 = (draw - np.einsum("ij,ij->i", t1, draw)[:, None] * t1) / np.linalg.norm(raw, axis=1)[:, None]
     dt2 = np.cross(dn, t1) + np.cross(normal, dt1)
+    if constrained is not None:
+        partly = constrained.any(axis=1)
+        roller = np.eye(3)[np.argmax(constrained[partly], axis=1)]
+        dt1[partly] = 0.0
+        dt2[partly] = np.cross(dn[partly], roller)
     return np.stack([dt1, dt2, dn], axis=1)
+
+
+def pair_frame_derivatives(coupling: MortarCoupling, constrained: np.ndarray) -> np.ndarray:
+    """(E, 3, 3) derivatives of the frames of :func:`pair_frames` (``constrained``: (m, 3) of the
+    coupling's rows) for the entries of ``coupling.derivatives``. With m the normal taken out of
+    the prescribed components, n' = m n / |m n| and dn' = (I - n' n'^T) m dn / |m n|."""
+    d = coupling.derivatives
+    free = ~constrained[d.rows]
+    kept = coupling.normal[d.rows] * free
+    size = np.linalg.norm(kept, axis=1)[:, None]
+    normal = kept / size
+    dn = d.normal * free
+    dn = (dn - np.einsum("ij,ij->i", normal, dn)[:, None] * normal) / size
+    return frame_derivatives(normal, dn, constrained[d.rows])
+
+
+def aligned_previous(previous: MortarCoupling, coupling: MortarCoupling) -> MortarCoupling:
+    """The rows of ``previous`` (a coupling of the step's start) for the slave nodes of
+    ``coupling``, in its order; a node ``previous`` does not couple takes its row of
+    ``coupling`` (its slip is measured from where it is now)."""
+    found = np.isin(coupling.slave_blk, previous.slave_blk)
+    kept = previous.restricted(np.isin(previous.slave_blk, coupling.slave_blk))
+    new = coupling.restricted(~found)
+    lengths = np.zeros(len(coupling.slave_blk), dtype=np.int64)
+    lengths[found] = np.diff(kept.C_indptr)
+    lengths[~found] = np.diff(new.C_indptr)
+    entries_of = np.repeat(found, lengths)
+    masters = np.empty(lengths.sum(), dtype=np.int64)
+    values = np.empty(lengths.sum())
+    masters[entries_of], values[entries_of] = kept.C_master_glob, kept.C_values
+    masters[~entries_of], values[~entries_of] = new.C_master_glob, new.C_values
+    return dataclasses.replace(coupling, C_indptr=np.concatenate([[0], np.cumsum(lengths)]), C_master_glob=masters,
+                               C_values=values, derivatives=None, layout=None)
 
 
 def _projection(comm: MPI.Comm, index_map, coupling: MortarCoupling, current: np.ndarray) -> np.ndarray:
@@ -60,32 +125,32 @@ def _projection(comm: MPI.Comm, index_map, coupling: MortarCoupling, current: np
 
 
 def contact_variables(comm: MPI.Comm, index_map, coupling: MortarCoupling, previous: MortarCoupling,
-                      current: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(13.1) of the coupling's rows at the current positions ``current`` (local nodes, 3).
+                      current: np.ndarray, frames: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(13.1) of the coupling's rows at the current positions ``current`` (local nodes, 3) in
+    their ``frames`` (m, 3, 3; :func:`pair_frames`).
 
-    ``previous`` has the rows of the same slave nodes (a coupling of the step's start restricted
-    to them). Returns ``(v, frames, s, slip)``: (m, 3) the variables (t_1, t_2, n components),
-    (m, 3, 3) the frames, (m, 3) s_i and (m, 3) p_i - p_i^prev. Collective."""
+    ``previous`` has the rows of the same slave nodes (:func:`aligned_previous`). Returns
+    ``(v, s, slip)``: (m, 3) the variables (t_1, t_2, n components), (m, 3) s_i and (m, 3)
+    p_i - p_i^prev. Collective."""
     projected = _projection(comm, index_map, coupling, current)
     slip = projected - _projection(comm, index_map, previous, current)
     s = current[coupling.slave_blk] - projected
-    frames = tangent_frames(coupling.normal)
     v = np.column_stack([np.einsum("ij,ij->i", frames[:, 0], slip), np.einsum("ij,ij->i", frames[:, 1], slip),
                          np.einsum("ij,ij->i", frames[:, 2], s)])
-    return v, frames, s, slip
+    return v, s, slip
 
 
 def variable_derivatives(index_map, coupling: MortarCoupling, previous: MortarCoupling, s: np.ndarray,
-                         slip: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                         slip: np.ndarray, frames: np.ndarray,
+                         dframes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The derivatives of (13.1) with respect to the current positions, entries
     ``(rows, dofs, values)``: (E,) coupling row, (E,) global coordinate index 3 J + c, (E, 3)
-    (t_1, t_2, n) components; duplicates to be added. ``s``, ``slip`` from :func:`contact_variables`;
+    (t_1, t_2, n) components; duplicates to be added. ``s``, ``slip`` from :func:`contact_variables`,
+    ``frames`` and ``dframes`` from :func:`pair_frames` and :func:`pair_frame_derivatives`;
     ``coupling`` must carry its derivatives (``mortar_coupling(..., linearised=True)``)."""
     d = coupling.derivatives
-    frames = tangent_frames(coupling.normal)
     m = len(coupling.slave_blk)
     # geometric parts: ds^geo and the frames' turn
-    dframes = frame_derivatives(coupling.normal[d.rows], d.normal)
     geometric = np.column_stack([
         -np.einsum("ij,ij->i", frames[d.rows, 0], d.separation) + np.einsum("ij,ij->i", dframes[:, 0], slip[d.rows]),
         -np.einsum("ij,ij->i", frames[d.rows, 1], d.separation) + np.einsum("ij,ij->i", dframes[:, 1], slip[d.rows]),
@@ -117,13 +182,14 @@ def _weighted_motion(coupling: MortarCoupling, frames: np.ndarray, sign_tangenti
     return rows, dofs, values
 
 
-def frame_turn(coupling: MortarCoupling, forces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def frame_turn(coupling: MortarCoupling, dframes: np.ndarray,
+               forces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The derivative of R_i^T r_i (the (t_1, t_2, n) components of slave forces ``forces``
-    (m, 3) held fixed) with respect to the current positions, through the frames' turn:
-    entries ``(rows, dofs, values)`` as :func:`variable_derivatives`' (the slave rows of the
-    term Gamma of docs/finite_strain.md, Sect. 13)."""
+    (m, 3) held fixed) with respect to the current positions, through the frames' turn
+    ``dframes`` (:func:`pair_frame_derivatives`): entries ``(rows, dofs, values)`` as
+    :func:`variable_derivatives`' (the slave rows of the term Gamma of docs/finite_strain.md,
+    Sect. 13)."""
     d = coupling.derivatives
-    dframes = frame_derivatives(coupling.normal[d.rows], d.normal)
     return d.rows, d.dofs, np.einsum("eaj,ej->ea", dframes, forces[d.rows])
 
 

@@ -44,13 +44,18 @@ import numpy as np
 
 from contactqvi.contact.facets import facet_areas, unit_normals
 from contactqvi.contact.owners import owner_ranges, sum_to_owners
-from contactqvi.contact.segments import segment_integrals
+from contactqvi.contact.segments import diameters, segment_integrals
 
-__all__ = ["STEP", "CouplingDerivatives", "PairDerivatives", "complex_step", "coupling_derivatives", "segment_jacobians"]
+__all__ = ["KINK", "KINK_OFFSET", "STEP", "CouplingDerivatives", "PairDerivatives", "complex_step", "coupling_derivatives", "segment_jacobians"]
 
 #: Imaginary step of the complex-step derivatives (in metres of coordinate): the truncation
 #: error is O(STEP^2) relative and nothing cancels, so any step far below round-off serves.
 STEP = 1e-30
+#: A pair whose complex-step dD or dM exceed this times its slave facet's diameter (they are of
+#: the order of it: D is an area) is at a kink (:func:`segment_jacobians`).
+KINK = 10.0
+#: ... and is differentiated with its master facet moved by this fraction of that diameter.
+KINK_OFFSET = 1e-6
 #: Facet pairs differentiated at a time (each one evaluated in all its directions, complex):
 #: bounds the work arrays as :data:`~contactqvi.contact.mortar` bounds its own.
 _CHUNK = 1 << 12
@@ -99,15 +104,35 @@ def segment_jacobians(slave: np.ndarray, normal: np.ndarray,
         ``(D, M, dD, dM)``: (P, n_s), (P, n_s, n_m), and their derivatives (P, n_s, N, 3),
         (P, n_s, n_m, N, 3) with respect to the pair's N = n_s + n_m vertices, slave first.
     """
+    orientation = _orientation(slave, normal)
+    (D, M), (dD, dM) = _integral_jacobians(slave, master, orientation)
+    # At a kink of D and M (facets that coincide: conforming parts of two meshes, whose clipped
+    # polygons have vertices on two edges at once) the clipping's crossings are 0/0 forms and
+    # the complex step is no derivative; there the one-sided derivative of the master facet
+    # moved by KINK_OFFSET of its size (a fixed pattern) serves, an element of the generalized
+    # derivative of the semismooth Newton step (docs/finite_strain.md, Sect. 14).
+    size = diameters(slave)
+    kinked = ~(np.isfinite(dD).all(axis=(1, 2, 3)) & np.isfinite(dM).all(axis=(1, 2, 3, 4)))
+    kinked |= np.abs(dD).reshape(len(dD), -1).max(axis=1, initial=0.0) > KINK * size
+    kinked |= np.abs(dM).reshape(len(dM), -1).max(axis=1, initial=0.0) > KINK * size
+    if kinked.any():
+        pattern = np.sin(np.arange(master.shape[1] * 3) + 1.0).reshape(1, -1, 3)
+        moved = master[kinked] + KINK_OFFSET * size[kinked, None, None] * pattern
+        _, (dD[kinked], dM[kinked]) = _integral_jacobians(slave[kinked], moved, orientation[kinked])
+    return D, M, dD, dM
+
+
+def _integral_jacobians(slave: np.ndarray, master: np.ndarray,
+                        orientation: np.ndarray) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """:func:`complex_step` of the segment integrals of facet pairs, the projection direction the
+    slave facets' :func:`unit_normals` times ``orientation`` (P,)."""
     ns = slave.shape[1]
-    K = 3 * (ns + master.shape[1])
-    sign = np.repeat(_orientation(slave, normal), K)[:, None]
+    sign = np.repeat(orientation, 3 * (ns + master.shape[1]))[:, None]
 
     def integrals(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return segment_integrals(z[:, :ns], sign * unit_normals(z[:, :ns]), z[:, ns:])
 
-    (D, M), (dD, dM) = complex_step(integrals, np.concatenate([slave, master], axis=1))
-    return D, M, dD, dM
+    return complex_step(integrals, np.concatenate([slave, master], axis=1))
 
 
 def _area_normal_jacobians(x: np.ndarray, outward: np.ndarray) -> np.ndarray:

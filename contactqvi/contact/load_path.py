@@ -211,6 +211,9 @@ class _StepSolver(PETScOwner):
         if self.solver is None:
             self.solver = SCDNewtonSolver(problem, self.parameters, prefix=self.prefix, step_solver=self.carried)
             self.carried = None
+        if problem.follows_geometry:
+            self.solver, result = _follow(problem, step, u, state, self.solver, self.stop, self.path)
+            return result
         result = self.solver.solve(u, atol=state.target, stop=self.stop)
         self.solver, result = _settle(problem, step, u, state, self.solver, result, self.stop, self.path)
         return result
@@ -291,6 +294,8 @@ def _start(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSta
     updates the levels of ``step_solver`` (if any) for the new A."""
     logger.info("step %d: %s", state.done + 1, step_position(step))
     if state.solved == 0:
+        if problem.follows_geometry:  # the geometry and the slip's reference of the start (a retry's too)
+            _search_in(problem, state.displacement, step_solver)
         problem.set_step(step.load, step.translation, rotation=step.rotation, fit=step.fit_fraction)
         if from_rest:
             problem.shift.copy(u)  # u~ = 0
@@ -307,9 +312,12 @@ def _set_previous(problem: ContactProblem, state: PathState) -> None:
     problem.set_step(state.load, state.translation, rotation=state.rotation, fit=state.fit)
 
 
-def _search_in(problem: ContactProblem, configuration: fem.Function, step_solver: NewtonStepSolver | None) -> None:
-    """Search the problem again in x + ``configuration`` and update ``step_solver``'s levels (if any)."""
-    change = problem.search(configuration, change=step_solver is not None)
+def _search_in(problem: ContactProblem, configuration: fem.Function, step_solver: NewtonStepSolver | None,
+               start: bool = True) -> None:
+    """Search the problem again in x + ``configuration`` and update ``step_solver``'s levels (if
+    any); ``start``: the search starts a load step (the slip's reference of pairs searched
+    ``"newton"``, :meth:`~contactqvi.contact.problem.ContactProblem.search`)."""
+    change = problem.search(configuration, change=step_solver is not None, start=start)
     if change is not None:
         step_solver.update_operator(change, grown=True)
         change.destroy()
@@ -377,14 +385,45 @@ def _settle(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSt
     return solver, _merged(solves, status)
 
 
+def _follow(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState, solver: SCDNewtonSolver,
+            stop: typing.Callable[[], bool] | None, path: dict[str, typing.Any]) -> tuple[SCDNewtonSolver, SCDNewtonResult]:
+    """Solve ``step`` with pairs searched ``"newton"``: the geometry follows the iterate on the facet
+    pairs of the last search, and where an iterate's projections leave them (or a converged
+    solution's) the pairs are searched again there and the step is solved on from it (the slip
+    still from the step's start), at most ``max_searches`` times. Returns the last solve's solver
+    (``solver`` is destroyed otherwise) and the step's result, all its solves merged
+    (:func:`_merged`)."""
+    reached = fem.Function(problem.V)
+
+    def moved(iterate: PETSc.Vec) -> bool:
+        problem.physical_displacement(iterate, reached)
+        return problem.layout_changed(reached)
+
+    result = solver.solve(u, atol=state.target, stop=stop, search=moved)
+    solves, target = [result], result.target
+    while result.status == Status.SEARCH_AGAIN or (result.converged and moved(u)):
+        if len(solves) > path["max_searches"]:
+            warn(problem.comm, logger, "not_settled", f"step {state.done + 1}: the facets the slave nodes project "
+                 f"onto still changed after {path['max_searches']} searches", step=state.done + 1,
+                 searches=path["max_searches"])
+            return solver, _merged(solves, Status.DIVERGED_MAX_IT)
+        logger.info("step %d, search %d: the projections left the facets of the last search", state.done + 1,
+                    len(solves))
+        problem.physical_displacement(u, reached)
+        solver = _search_reached(problem, step, u, state, reached, solver, start=False)
+        result = solver.solve(u, atol=target, stop=stop, search=moved)
+        solves.append(result)
+    return solver, _merged(solves, result.status)
+
+
 def _search_reached(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState, reached: fem.Function,
-                    solver: SCDNewtonSolver) -> SCDNewtonSolver:
+                    solver: SCDNewtonSolver, start: bool = True) -> SCDNewtonSolver:
     """Search ``step`` again in x + ``reached``, set it with the slip from the step before
     (``state``, whose u~ in the new variables goes to ``state.variables``), put ``reached``
     into ``u`` (new variables) and return a new solver for it, which takes over ``solver``'s
-    multigrid levels (``solver`` is destroyed)."""
+    multigrid levels (``solver`` is destroyed); ``start`` as for :func:`_search_in`."""
     parameters, prefix, step_solver = solver.parameters, solver.prefix, _released(solver)
-    _search_in(problem, reached, step_solver)
+    _search_in(problem, reached, step_solver, start)
     _set_previous(problem, state)
     problem.solver_variables(state.displacement, state.variables)
     problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation, state.rotation,
@@ -412,9 +451,21 @@ def _merged(solves: list[SCDNewtonResult], status: Status,
 
 def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState) -> None:
     """Set ``step`` after ``state``'s step, the slip measured from it; ``u`` gets the predictor:
-    u~ of that step, its touching nodes moved along with their master surface (no slip increment)."""
+    u~ of that step, its touching nodes moved along with their master surface (no slip increment).
+    With pairs searched ``"newton"`` the predictor is that step's displacement extrapolated
+    (:meth:`~contactqvi.contact.path_state.PathState.extrapolation`), the geometry taken there:
+    a step that moves a boundary by more than an element's height (a compression) otherwise
+    starts from elements the prescribed values alone turn inside out, and is cut."""
     problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation, state.rotation,
                      step.fit_fraction)
+    if problem.follows_geometry:
+        predicted = fem.Function(problem.V)
+        factor = state.extrapolation(step.load, step.translation)
+        predicted.x.array[:] = state.displacement.x.array + factor * state.increment.x.array
+        problem.follow(predicted)
+        problem.solver_variables(predicted, u)
+        u.axpy(1.0, problem.shift)
+        return
     u.waxpy(1.0, problem.shift, state.variables)
     touching = np.isin(state.contact_states(problem), TOUCHING)
     u.array.reshape(-1, 3)[problem.contact_blk[touching], :2] = 0.0

@@ -53,8 +53,11 @@ from contactqvi.contact.owners import fetch_rows, owner_ranges, sum_to_owners
 from contactqvi.contact.segments import diameters, segment_integrals
 from contactqvi.parameters import require
 
-__all__ = ["MortarCoupling", "mortar_coupling", "surface_facets"]
+__all__ = ["MortarCoupling", "MortarLayout", "coupling_on_layout", "mortar_coupling", "surface_facets"]
 
+#: A facet pair a search finds that overlaps by no more than this fraction of its slave facet's
+#: area is no reason to search again (:meth:`MortarLayout.covers`).
+NEGLIGIBLE_OVERLAP = 1e-9
 #: Slave nodes whose mortar segments give D_ii below this fraction of their lumped
 #: area are not coupled (they lie at the rim of the master's shadow).
 MIN_COVERAGE = 0.5
@@ -119,6 +122,39 @@ def surface_facets(V: fem.FunctionSpace, facets: np.ndarray, coords: np.ndarray 
 
 
 @dataclasses.dataclass(frozen=True)
+class MortarLayout:
+    """What a search found, to be integrated again at other positions (:func:`coupling_on_layout`):
+    the facet pairs whose projections overlapped and the slave nodes coupled then.
+
+    Attributes:
+        slave_facets: local facet indices of the slave surface (as given to :func:`mortar_coupling`).
+        pairs_s: (P,) index of each pair's slave facet among the rank's owned ones.
+        master_glob: (P, n_m) global node indices of each pair's master facet.
+        overlap: (P,) each pair's mortar segment area over its slave facet's area, at the search.
+        rows: (m,) owned local node indices of the coupled slave nodes, sorted.
+    """
+
+    slave_facets: np.ndarray
+    pairs_s: np.ndarray
+    master_glob: np.ndarray
+    overlap: np.ndarray
+    rows: np.ndarray
+
+    def covers(self, found: MortarLayout, comm: MPI.Comm) -> bool:
+        """Whether this layout has the coupled nodes of ``found`` (a search of the same surfaces)
+        and every facet pair of it that overlaps by more than :data:`NEGLIGIBLE_OVERLAP` of its
+        slave facet (pairs that touch along an edge or a corner only come and go with round-off
+        where facet edges of both surfaces coincide). Collective."""
+        def keys(layout: MortarLayout, pairs: np.ndarray) -> np.ndarray:
+            return np.column_stack([layout.pairs_s[pairs], np.sort(layout.master_glob[pairs], axis=1)])
+
+        mine = {tuple(k) for k in keys(self, np.arange(len(self.pairs_s)))}
+        needed = keys(found, np.flatnonzero(found.overlap > NEGLIGIBLE_OVERLAP))
+        local = np.array_equal(self.rows, found.rows) and all(tuple(k) in mine for k in needed)
+        return comm.allreduce(local, op=MPI.LAND)
+
+
+@dataclasses.dataclass(frozen=True)
 class MortarCoupling:
     """The mortar rows of the owned slave nodes of one contact pair.
 
@@ -133,6 +169,7 @@ class MortarCoupling:
             x_i - sum_j C_ij x_j (m); the gap is its normal component.
         derivatives: the derivatives of C and n with the searched positions
             (:mod:`contactqvi.contact.linearisation`), if asked for; else None.
+        layout: the search's facet pairs and these rows (:class:`MortarLayout`).
     """
 
     slave_blk: np.ndarray
@@ -143,6 +180,7 @@ class MortarCoupling:
     normal: np.ndarray
     separation: np.ndarray
     derivatives: CouplingDerivatives | None = None
+    layout: MortarLayout | None = None
 
     @property
     def gap(self) -> np.ndarray:
@@ -155,8 +193,9 @@ class MortarCoupling:
         entries = np.repeat(keep, lengths)
         indptr = np.concatenate([[0], np.cumsum(lengths[keep])]).astype(np.int64)
         derivatives = None if self.derivatives is None else self.derivatives.restricted(keep)
+        layout = None if self.layout is None else dataclasses.replace(self.layout, rows=self.slave_blk[keep])
         return MortarCoupling(self.slave_blk[keep], self.weight[keep], indptr, self.C_master_glob[entries],
-                              self.C_values[entries], self.normal[keep], self.separation[keep], derivatives)
+                              self.C_values[entries], self.normal[keep], self.separation[keep], derivatives, layout)
 
 
 def _exchange_master(comm: MPI.Comm, slave: SurfaceFacets, master: SurfaceFacets,
@@ -211,30 +250,69 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
     pairs_s, pairs_m = _candidate_pairs(slave.x, slave.normal, mx, search_distance)
     facing = np.einsum("ij,ij->i", slave.normal[pairs_s], mnormal[pairs_m]) < 0.0
     pairs_s, pairs_m, D_pair, M_pair = _overlapping(slave, mx, pairs_s[facing], pairs_m[facing])
+    layout = MortarLayout(np.asarray(slave_facets), pairs_s, mglob[pairs_m],
+                          D_pair.sum(axis=1) / slave.area[pairs_s], np.empty(0, dtype=np.int32))
+    coupling, lumped_area, gap = _integrated(V, layout, slave, mx[pairs_m], current, None, excluded_blk,
+                                             (D_pair, M_pair), linearised)
+    # a node farther than the search distance (default: its own size) cannot touch in this step
+    reach = np.sqrt(2.0 * lumped_area[coupling.slave_blk]) if search_distance is None else search_distance
+    return coupling.restricted(gap <= reach)
 
-    weight, lumped_area, normal, M = _owned_sums(comm, index_map, slave, pairs_s, mglob[pairs_m], D_pair, M_pair)
-    coupled = (lumped_area > 0.0) & (weight >= MIN_COVERAGE * lumped_area)
-    if excluded_blk is not None:
-        coupled[excluded_blk[excluded_blk < index_map.size_local]] = False
+
+def coupling_on_layout(V: fem.FunctionSpace, layout: MortarLayout, displacement: np.ndarray,
+                       linearised: bool = False) -> MortarCoupling:
+    """The coupling of the rows and facet pairs of ``layout`` (an earlier search) at the positions
+    x + ``displacement`` (local nodes, 3): D, M, C and the normals integrated again, with the same
+    rows and the same pattern of C (entries of pairs that no longer overlap are zero). A row
+    that no pair covers any more has D_ii = 0 and C of NaN. Collective."""
+    comm, index_map = V.mesh.comm, V.dofmap.index_map
+    current = V.tabulate_dof_coordinates() + displacement
+    slave = surface_facets(V, layout.slave_facets, current)
+    nm = layout.master_glob.shape[1]
+    master_x = fetch_rows(comm, index_map, current[:index_map.size_local],
+                          layout.master_glob.ravel()).reshape(-1, nm, 3)
+    return _integrated(V, layout, slave, master_x, current, layout.rows, None, None, linearised)[0]
+
+
+def _integrated(V: fem.FunctionSpace, layout: MortarLayout, slave: SurfaceFacets, master_x: np.ndarray,
+                current: np.ndarray, rows: np.ndarray | None, excluded_blk: np.ndarray | None,
+                integrals: tuple[np.ndarray, np.ndarray] | None,
+                linearised: bool) -> tuple[MortarCoupling, np.ndarray, np.ndarray]:
+    """The coupling of the owned slave nodes ``rows`` by the facet pairs of ``layout`` (their
+    master facets at ``master_x``, their :func:`segment_integrals` ``integrals`` if known), the
+    lumped slave areas of the owned nodes and the rows' weighted gaps at the positions
+    ``current``. ``rows`` None: the nodes the pairs cover for at least :data:`MIN_COVERAGE` of
+    their lumped area, less ``excluded_blk``."""
+    comm, index_map, x = V.mesh.comm, V.dofmap.index_map, V.tabulate_dof_coordinates()
+    pairs_s = layout.pairs_s
+    if integrals is None:
+        integrals = _pair_integrals(slave, master_x, pairs_s)
+    weight, lumped_area, normal, M = _owned_sums(comm, index_map, slave, pairs_s, layout.master_glob, *integrals)
+    coupled = np.zeros(index_map.size_local, dtype=bool)
+    if rows is None:
+        coupled = (lumped_area > 0.0) & (weight >= MIN_COVERAGE * lumped_area)
+        if excluded_blk is not None:
+            coupled[excluded_blk[excluded_blk < index_map.size_local]] = False
+    else:
+        coupled[rows] = True
     slave_blk = np.flatnonzero(coupled).astype(np.int32)
 
     position, indptr, cols, values = _rows_of_C(M, index_map.local_range[0], coupled, slave_blk, weight)
     n = normal[slave_blk] / np.linalg.norm(normal[slave_blk], axis=1)[:, None]
-    positions = x if displacement is None else np.hstack([x, current])  # reference, searched: fetched together
-    projected = np.zeros((len(slave_blk), positions.shape[1]))
+    positions = np.hstack([x, current])  # reference and current positions, fetched together
+    projected = np.zeros((len(slave_blk), 6))
     np.add.at(projected, position, values[:, None] * fetch_rows(comm, index_map, positions, cols))
     separation = positions[slave_blk] - projected
     derivatives = None
     if linearised:
         slave_glob = index_map.local_to_global(slave.blk.ravel()).reshape(slave.blk.shape)
-        derivatives = coupling_derivatives(comm, index_map, slave_glob, slave.x, slave.normal, pairs_s,
-                                           mx[pairs_m], mglob[pairs_m], index_map.local_to_global(slave_blk),
-                                           weight[slave_blk], normal[slave_blk], projected[:, -3:])
+        derivatives = coupling_derivatives(comm, index_map, slave_glob, slave.x, slave.normal, pairs_s, master_x,
+                                           layout.master_glob, index_map.local_to_global(slave_blk),
+                                           weight[slave_blk], normal[slave_blk], projected[:, 3:])
+    layout = dataclasses.replace(layout, rows=slave_blk)
     coupling = MortarCoupling(slave_blk, weight[slave_blk], indptr, cols.astype(np.int64), values, n,
-                              separation[:, :3], derivatives)
-    # a node farther than the search distance (default: its own size) cannot touch in this step
-    reach = np.sqrt(2.0 * lumped_area[slave_blk]) if search_distance is None else search_distance
-    return coupling.restricted(np.einsum("ij,ij->i", n, separation[:, -3:]) <= reach)
+                              separation[:, :3], derivatives, layout)
+    return coupling, lumped_area, np.einsum("ij,ij->i", n, separation[:, 3:])
 
 
 def _rows_of_C(M: tuple, start: int, coupled: np.ndarray, slave_blk: np.ndarray,
@@ -267,20 +345,29 @@ def _overlapping(slave: SurfaceFacets, master_x: np.ndarray, pairs_s: np.ndarray
     (two-body Hertz medium mesh, search distance 5 mm: 20 000 of the 26 448 entries of
     C were zeros), and their zero entries made A = T^T A_K T twice as large as its
     nonzeros (4.1 M entries, 2.0 M nonzero): dense mortar rows of zeros that GAMG
-    aggregated across and every product carried. Integrated in chunks, the work
-    arrays stay bounded (all at once they took 390 MB on the fine mesh).
+    aggregated across and every product carried.
     """
-    kept = []
-    chunk = _CHUNK if slave.x.shape[1] == master_x.shape[1] == 3 else _QUADRILATERAL_CHUNK
+    D, M = _pair_integrals(slave, master_x[pairs_m], pairs_s)
+    overlap = np.any(M != 0.0, axis=(1, 2))
+    return pairs_s[overlap], pairs_m[overlap], D[overlap], M[overlap]
+
+
+def _chunk(slave: SurfaceFacets, master_x: np.ndarray) -> int:
+    """Pairs integrated at a time (:data:`_CHUNK`, :data:`_QUADRILATERAL_CHUNK`)."""
+    return _CHUNK if slave.x.shape[1] == master_x.shape[1] == 3 else _QUADRILATERAL_CHUNK
+
+
+def _pair_integrals(slave: SurfaceFacets, master_x: np.ndarray, pairs_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`segment_integrals` (D, M) of the pairs of slave facets ``pairs_s`` with the master
+    facets ``master_x`` (P, n_m, 3), in chunks, so the work arrays stay bounded (all at once
+    they took 390 MB on the two-body Hertz fine mesh)."""
+    ns, nm = slave.x.shape[1], master_x.shape[1]
+    parts = [(np.empty((0, ns)), np.empty((0, ns, nm)))]
+    chunk = _chunk(slave, master_x)
     for start in range(0, len(pairs_s), chunk):
-        s, m = pairs_s[start:start + chunk], pairs_m[start:start + chunk]
-        D, M = segment_integrals(slave.x[s], -slave.normal[s], master_x[m])
-        overlap = np.any(M != 0.0, axis=(1, 2))
-        kept.append((s[overlap], m[overlap], D[overlap], M[overlap]))
-    if not kept:
-        ns, nm = slave.x.shape[1], master_x.shape[1]
-        return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64), np.empty((0, ns)), np.empty((0, ns, nm))
-    return tuple(np.concatenate(parts) for parts in zip(*kept))
+        s = pairs_s[start:start + chunk]
+        parts.append(segment_integrals(slave.x[s], -slave.normal[s], master_x[start:start + chunk]))
+    return tuple(np.concatenate(part) for part in zip(*parts))
 
 
 def _owned_sums(comm: MPI.Comm, index_map, slave: SurfaceFacets, pairs_s: np.ndarray, master_glob: np.ndarray,

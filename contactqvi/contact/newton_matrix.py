@@ -64,13 +64,23 @@ class NewtonMatrix(PETScOwner):
         self._fixed_diagonal = _contact_blocks(A, self._contact_blk)
         self._DA = self._D_minus_I.matMult(self._rows_of_A)
         self._product = A.createVecLeft()  # A x on the rows of ``rows``
+        self._geometric: tuple[PETSc.Mat, PETSc.Mat] | None = None
         self._holds_J = False
         for M in (self.rows, self.change):  # every row is set by its owner
             M.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)
 
     def petsc_objects(self) -> list[typing.Any]:
         return [self._product, self._DA, self._fixed_diagonal, self._U, self._D_minus_I, self.change, self.rows,
-                self._rows_of_A]
+                self._rows_of_A, *(self._geometric or ())]
+
+    def set_geometric(self, forces: PETSc.Mat, variables: PETSc.Mat) -> None:
+        """The geometric rows of a geometry that follows the iterate (taken over; the previous
+        ones are freed): J = D (A + ``forces``) + U ``variables`` instead of D A + U, ``forces``
+        Gamma T and ``variables`` (dv/du~) T of :mod:`contactqvi.contact.current_geometry`, their
+        patterns within A's."""
+        for M in self._geometric or ():
+            M.destroy()
+        self._geometric = (forces, variables)
 
     def destroy(self) -> None:
         """Restore A (:meth:`restore`) and free everything but A (collective)."""
@@ -99,7 +109,14 @@ class NewtonMatrix(PETScOwner):
         self._rows_of_A.copy(rows, _SAME)
         self._D_minus_I.matMult(self._rows_of_A, result=self._DA)
         rows.axpy(1.0, self._DA, _SUBSET)
-        rows.axpy(1.0, self._U, _SUBSET)
+        if self._geometric is None:
+            rows.axpy(1.0, self._U, _SUBSET)
+        else:
+            forces, variables = self._geometric
+            rows.axpy(1.0, forces, _SUBSET)
+            for product in (self._D_minus_I.matMult(forces), self._U.matMult(variables)):
+                rows.axpy(1.0, product, _SUBSET)
+                product.destroy()
         if fixed is not None:
             self._eliminate(fixed, gamma, x, b)
         self.change.axpy(1.0, rows, _SAME)

@@ -27,6 +27,9 @@ field               read by
                     step's increment (``_settle``)
 ``node_states``     the predictor: touching nodes start the next step without a slip increment
 ``target``          the stopping target ||y^|| of every later step (the first step's)
+``increment``,      the predictor of pairs searched ``"newton"``: the last solve's change of the
+``stride``          displacement, extrapolated along its change of load factor and translation
+                    (:meth:`PathState.extrapolation`)
 ==================  ===========================================================================
 
 The Newton-step solver's preconditioner is not part of the state: it is solver data,
@@ -73,6 +76,8 @@ class PathState(PETScOwner):
             included) at step ``done``; -1 where it was no contact node.
         target: the first step's stopping target ||y^|| (N); 0 before it.
         fit: the fraction of the declared interferences resolved there (0 at rest).
+        increment: the change of u~ in the last converged solve (m; zero at rest).
+        stride: the change of (load factor, translation (m)) in it, (4,).
     """
 
     done: int
@@ -85,6 +90,12 @@ class PathState(PETScOwner):
     target: float
     rotation: Rotation | None = None
     fit: float = 0.0
+    increment: fem.Function | None = None
+    stride: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(4))
+
+    def __post_init__(self) -> None:
+        if self.increment is None:
+            self.increment = fem.Function(self.displacement.function_space, name="increment")
 
     @classmethod
     def at_rest(cls, problem: ContactProblem) -> PathState:
@@ -103,14 +114,36 @@ class PathState(PETScOwner):
         a whole load step, not a part of a cut one."""
         self.done += int(complete)
         self.solved += 1
+        before = self.position
+        self.increment.x.array[:] = -self.displacement.x.array
         self.load, self.translation = problem.load_factor, problem.translation.copy()
         self.rotation, self.fit = problem.step_rotation, problem.fit
         self.variables.waxpy(-1.0, problem.shift, u)
         problem.physical_displacement(u, self.displacement)
+        self.increment.x.array[:] += self.displacement.x.array
+        self.stride = self.position - before
         self.node_states[:] = -1
         self.node_states[problem.contact_blk] = result.states
         if self.solved == 1:
             self.target = result.target
+
+    @property
+    def position(self) -> np.ndarray:
+        """(4,) load factor and translation (m) of the last converged solve."""
+        return np.array([self.load, *self.translation])
+
+    def extrapolation(self, load: float, translation: typing.Sequence[float]) -> float:
+        """The factor of :attr:`increment` that extrapolates the last solve to a step to ``load``
+        and ``translation``: its change along the last solve's :attr:`stride`, relative to it (0
+        at rest or for a step that does not continue it; a fit over several steps is not
+        extrapolated). The predictor
+        u~ + factor x increment is the linear extrapolation of Abaqus/Standard's default and of
+        Code_Aster's ``PREDICTION = 'EXTRAPOLE'``."""
+        length = float(self.stride @ self.stride)
+        if length == 0.0:
+            return 0.0
+        change = np.array([load, *translation]) - self.position
+        return max(float(change @ self.stride) / length, 0.0)
 
     def contact_states(self, problem: ContactProblem) -> np.ndarray:
         """The states of ``problem``'s contact nodes (a node without one is not in contact)."""

@@ -58,7 +58,10 @@ from dolfinx import fem
 from dolfinx import mesh as dmesh
 
 from contactqvi.contact.hyperelastic import HyperelasticSystem, create_hyperelastic_system, prescribed_rows
-from contactqvi.contact.interface import BodyPair, Interface, ObstaclePair, Pair, build_interfaces, search_again
+from contactqvi.contact.current_geometry import CurrentGeometry, following_shift, geometric_rows
+from contactqvi.contact.interface import (BodyPair, Interface, ObstaclePair, Pair, build_interfaces, followed,
+                                          search_again)
+from contactqvi.contact.kinematics import roller_aligned
 from contactqvi.elasticity import BodyForce, elasticity_forms, lame_parameters, orthonormalize, rigid_motions_nullspace
 from contactqvi.laws import ContactLaw, Frictionless, NodalLaw, StackedLaw
 from contactqvi.lifetime import PETScOwner
@@ -74,6 +77,7 @@ from contactqvi.postprocess import ElasticBody
 __all__ = ["ContactProblem", "ElasticSystem", "assemble_contact_problem", "build_contact_problem"]
 
 _DIFFERENT = PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN
+_SAME = PETSc.Mat.Structure.SAME_NONZERO_PATTERN
 _SUBSET = PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN
 
 Vector3 = tuple[float, float, float]
@@ -150,6 +154,9 @@ class ContactProblem(PETScOwner):
         hyperelastic: the nonlinear f and its Jacobian of a hyperelastic body (finite strain,
             :mod:`contactqvi.contact.hyperelastic`): A is then the Jacobian at the last
             iterate, not a constant; None for linear elasticity (f(u) = A u - l).
+        current: where the geometry of the pairs searched ``"newton"`` was taken and their
+            slip's reference (:mod:`contactqvi.contact.current_geometry`); None without such pairs
+            until the first search.
     """
 
     V: fem.FunctionSpace
@@ -183,6 +190,7 @@ class ContactProblem(PETScOwner):
     setup_seconds: dict[str, float] = dataclasses.field(default_factory=dict)
     elastic: ElasticSystem | None = None
     hyperelastic: HyperelasticSystem | None = None
+    current: CurrentGeometry | None = None
 
     @property
     def comm(self) -> MPI.Comm:
@@ -217,12 +225,17 @@ class ContactProblem(PETScOwner):
         return self.elastic is not None
 
     @property
+    def follows_geometry(self) -> bool:
+        """Whether a pair's geometry follows the Newton iterate (``search = "newton"``)."""
+        return any(i.follows for i in self.interfaces)
+
+    @property
     def settles_geometry(self) -> bool:
         """Whether a load step is searched and solved again in the configuration it reached
         until that configuration settles (a pair with ``search = "until_settled"``)."""
         return any(i.settles for i in self.interfaces)
 
-    def search(self, displacement: fem.Function, *, change: bool = False) -> PETSc.Mat | None:
+    def search(self, displacement: fem.Function, *, change: bool = False, start: bool = True) -> PETSc.Mat | None:
         """Search the pairs searched each step again in the configuration x + ``displacement``
         (global components), and rebuild the nodal data and the change of variables from it:
         the contact nodes, frames, areas and laws, T, A = T^T A_K T and the loads.
@@ -234,6 +247,10 @@ class ContactProblem(PETScOwner):
         The step (load factor, translation) is kept, but its load and shift belong to the
         old variables: set a step (:meth:`set_step`) before solving. A solver built on the
         old problem (its contact nodes) must be rebuilt. Collective.
+
+        Pairs searched ``"newton"`` are found with their derivatives, and ``displacement`` becomes
+        their current geometry (:attr:`current`); with ``start`` it starts a load step (the
+        slip's reference C^start of (13.1)), else the step's reference is kept.
 
         Returns, with ``change``, the new A minus the old one (a new matrix, nonzero only
         on the rows near the interfaces), else None.
@@ -262,7 +279,89 @@ class ContactProblem(PETScOwner):
             h.prescribed = prescribed_rows(h.external, h.dirichlet_owned, self.rotation)
             h.forget_transform()
         self.setup_seconds = {"contact_search": search_seconds, "change_of_variables": variables_seconds}
+        if self.follows_geometry:
+            starts = [i.coupling if i.follows else None for i in self.interfaces]
+            if not start and self.current is not None:
+                starts = list(self.current.start)
+            self.current = CurrentGeometry.at(displacement, starts)
         return difference
+
+    def follow(self, displacement: fem.Function) -> None:
+        """Take the geometry of the pairs searched ``"newton"`` at x + ``displacement`` on the
+        facet pairs and slave nodes of their last search (:func:`~contactqvi.contact.interface.followed`):
+        their frames, areas and laws, R, N, T and the offsets c (new values in the same
+        objects, of the same patterns), and the shift d = v - w of their nodes
+        (:func:`~contactqvi.contact.current_geometry.following_shift`) with the load of the
+        current step. A and the Newton solver's nodes stay. Collective."""
+        elastic = self.elastic
+        interfaces = followed(self.V, self.interfaces, elastic.constrained, displacement)
+        contact_blk, _, frames, contact_area = _merged(interfaces)
+        frames = roller_aligned(frames, elastic.constrained[contact_blk])
+        rotation = _nodal_rotation(self.A, contact_blk, frames, always=True)
+        coupling = _mortar_rows(self.A, interfaces, elastic.constrained)
+        offsets = [_prescribed_offset(coupling, b, elastic.owned_dirichlet) for b in elastic.loads]
+        transform = _change_of_variables(coupling, rotation, elastic.owned_dirichlet)
+        for new, old in zip((rotation, coupling, transform), (self.rotation, self.coupling, self.transform)):
+            new.copy(old, _SAME)
+            new.destroy()
+        for new, old in zip(offsets, (self.offset, *self.translated_offset)):
+            new.copy(old)
+            new.destroy()
+        self.interfaces, self.frames, self.contact_area = tuple(interfaces), frames, contact_area
+        self.law = _nodal_law(interfaces, self.interface_of_node, contact_area)
+        self.current.displacement.x.array[:] = displacement.x.array
+        self._shift_following()
+        self._shifted_load()
+
+    def layout_changed(self, displacement: fem.Function) -> bool:
+        """Whether a search of the pairs searched ``"newton"`` in x + ``displacement`` finds other
+        facet pairs or slave nodes than their current geometry's (collective)."""
+        found = search_again(self.V, self.body.facet_tags, self.interfaces, self.elastic.constrained, displacement,
+                             self.translation, True, self.step_rotation, linearised=False)
+        return not all(old.coupling.layout.covers(new.coupling.layout, self.comm)
+                       for new, old in zip(found, self.interfaces) if old.follows)
+
+    def set_search_line(self, u: PETSc.Vec, du: PETSc.Vec) -> None:
+        """The line of a line search from u along du in the physical displacement: u~(u) and
+        u~(u + du) - u~(u) = T du (zero at the prescribed dofs) into :attr:`current`."""
+        current = self.current
+        self.physical_displacement(u, current.base)
+        end = u.copy()
+        end.axpy(1.0, du)
+        self.physical_displacement(end, current.direction)
+        end.destroy()
+        current.direction.x.array[:] -= current.base.x.array
+
+    def follow_line(self, alpha: float, out: PETSc.Vec) -> None:
+        """The geometry at u~ + alpha T du on the line of :meth:`set_search_line` (:meth:`follow`),
+        and the solver's variables there into ``out``: w + d, v at the contact nodes."""
+        current = self.current
+        trial = fem.Function(self.V)
+        trial.x.array[:] = current.base.x.array + alpha * current.direction.x.array
+        self.follow(trial)
+        self.solver_variables(trial, out)
+        out.axpy(1.0, self.shift)
+
+    def geometric_rows(self, u: PETSc.Vec) -> tuple[PETSc.Mat, PETSc.Mat]:
+        """Gamma T and (dv/du~) T of the Newton matrix at u (new matrices;
+        :func:`~contactqvi.contact.current_geometry.geometric_rows`)."""
+        h = self.hyperelastic
+        self.physical_displacement(u, h.displacement)
+        return geometric_rows(self.V, self.current, self.interfaces, self.elastic.constrained, self.contact_blk,
+                              self.transform, h.prescribed, h.assemble_residual(self.load_factor))
+
+    def _shift_following(self) -> None:
+        """The shift of the nodes of the pairs searched ``"newton"``: d = v - w at :attr:`current`,
+        zero on a prescribed (roller) component, whose variable stays w (zero) as for the frozen
+        geometry (:func:`_align_frames`; v vanishes there too, the projection lying in the plane)."""
+        w = self.A.createVecRight()
+        self.solver_variables(self.current.displacement, w)
+        nodes, d = following_shift(self.V, self.current, self.interfaces, self.contact_blk, self.interface_of_node,
+                                   self.fit, w.array_r)
+        w.destroy()
+        rollers = self.elastic.constrained[self.contact_blk[nodes]].sum(axis=1)  # the first frame components
+        d[np.arange(3) < rollers[:, None]] = 0.0
+        self.shift.array.reshape(-1, 3)[self.contact_blk[nodes]] = d
 
     def rigid_motion(self) -> np.ndarray:
         """The coefficients of the loads :attr:`translated` at the current step: the moved
@@ -379,15 +478,22 @@ class ContactProblem(PETScOwner):
         nodal[:, 2] = self.gap(translation, rotation, fit)
         self.shift.set(0.0)
         self.shift.array.reshape(-1, 3)[self.contact_blk] = nodal
-        self.applied.copy(self.load)
-        self.load.scale(load_factor)
         self.load_factor, self.translation, self.step_rotation = float(load_factor), translation, rotation
         self.fit = float(fit)
+        if self.current is not None:
+            self._shift_following()
+        self._shifted_load()
+
+    def _shifted_load(self) -> None:
+        """The load l of the current step and shift: lambda l~ + sum_k s_k l~_k + A d (a hyperelastic
+        f is evaluated at u - d itself: d only on its identity rows, as A d there)."""
+        self.applied.copy(self.load)
+        self.load.scale(self.load_factor)
         for t, b in zip(self.rigid_motion(), self.translated):  # moved groups follow the rigid motion
             self.load.axpy(t, b)
         if self.hyperelastic is None:
-            self.A.multAdd(self.shift, self.load, self.load)  # l = lambda l~ + sum_k s_k l~_k + A d
-        else:  # f is evaluated at u - d itself (no shift of the load): d only on the identity rows, as A d there
+            self.A.multAdd(self.shift, self.load, self.load)
+        else:
             self.load.axpy(1.0, self.shift)
 
     def _check_rotatable(self) -> None:
@@ -645,6 +751,10 @@ def assemble_contact_problem(
     )
     problem.set_step()
     _make_hyperelastic(problem, material, young, poisson, L, bcs, facet_tags, nodal)
+    for interface in interfaces:
+        require(problem.hyperelastic is not None or not interface.follows, f"{interface.pair.name}: search",
+                "'newton' takes the geometry of finite deformations into the Newton iteration and needs "
+                "hyperelastic bodies (a material model); for linear elasticity use 'every_step' or 'until_settled'")
     return problem
 
 
@@ -996,11 +1106,7 @@ def _align_frames(frames: np.ndarray, constrained: np.ndarray, comm: MPI.Comm) -
     bad = comm.allreduce(int(np.count_nonzero(~tangential)), op=MPI.SUM)
     require(bad == 0, "boundary.displacement", f"{bad} contact nodes have a prescribed displacement component "
             "along the obstacle's normal; only tangential components can be prescribed on the contact surface")
-    frames = frames.copy()
-    axis = np.eye(3)[np.argmax(constrained[partly], axis=1)]
-    frames[partly, 0] = axis
-    frames[partly, 1] = np.cross(normals, axis)
-    return frames
+    return roller_aligned(frames, constrained)
 
 
 def _nodal_rotation(A: PETSc.Mat, contact_blk: np.ndarray, frames: np.ndarray, always: bool) -> PETSc.Mat | None:

@@ -408,6 +408,8 @@ class SCDNewtonSolver(PETScOwner):
             return
         self.problem.tangent(u)
         self._newton.refresh(lagged=k > 0)
+        if self.problem.follows_geometry:  # J = D (A + Gamma T) + U (dv/du~) T (docs/finite_strain.md, Sect. 13)
+            self._newton.set_geometric(*self.problem.geometric_rows(u))
         if k == 0:
             self.step_solver.operator_replaced()
 
@@ -527,12 +529,17 @@ class SCDNewtonSolver(PETScOwner):
         and leaves the trial point in the work vectors ``u_trial``, ``r_trial``, ``d_trial``.
         Returns ``(alpha, graph point)``, or ``(None, None)`` when no step size is accepted.
         """
-        w, linear = self._work, self.problem.hyperelastic is None
+        w, linear, follows = self._work, self.problem.hyperelastic is None, self.problem.follows_geometry
         if linear:
             self._newton.mult_stiffness(w.du, w.Adu)
+        if follows:
+            self.problem.set_search_line(u, w.du)
         bound = 1.0 + 0.1 / (k + 1)
         for alpha in self._steps:
-            w.u_trial.waxpy(alpha, w.du, u)
+            if follows:  # the geometry at the trial point, the solver's variables there (v at the contact)
+                self.problem.follow_line(float(alpha), w.u_trial)
+            else:
+                w.u_trial.waxpy(alpha, w.du, u)
             if linear:
                 w.r_trial.waxpy(alpha, w.Adu, w.r)
             else:
@@ -587,7 +594,8 @@ class SCDNewtonSolver(PETScOwner):
             return Status.INTERRUPTED
         return None
 
-    def solve(self, u: PETSc.Vec, atol: float = 0.0, stop: typing.Callable[[], bool] | None = None) -> SCDNewtonResult:
+    def solve(self, u: PETSc.Vec, atol: float = 0.0, stop: typing.Callable[[], bool] | None = None,
+              search: typing.Callable[[PETSc.Vec], bool] | None = None) -> SCDNewtonResult:
         """Run Algorithm 1 from the initial guess ``u`` (shifted displacements), in place.
 
         Stops at ||y^|| <= max(rtol ||y^(0)||, floor ||l||, atol) (:meth:`stopping_target`),
@@ -596,14 +604,18 @@ class SCDNewtonSolver(PETScOwner):
         written into the storage of ``problem.A``
         (:class:`~contactqvi.contact.newton_matrix.NewtonMatrix`); it holds A again on return.
         ``stop()`` (collective, the same answer on every rank) is asked before each Newton
-        step; when it is true the solve ends with status ``interrupted``.
+        step; when it is true the solve ends with status ``interrupted``. ``search(u)``
+        (collective) is asked before each Newton step after the first: whether the contact must
+        be searched again at the iterate u (a geometry that follows the iterate,
+        :mod:`contactqvi.contact.current_geometry`); then the solve ends with status ``search_again``.
         """
         try:
-            return self._algorithm_1(u, atol, stop)
+            return self._algorithm_1(u, atol, stop, search)
         finally:
             self._newton.restore()
 
-    def _algorithm_1(self, u: PETSc.Vec, atol: float, stop: typing.Callable[[], bool] | None) -> SCDNewtonResult:
+    def _algorithm_1(self, u: PETSc.Vec, atol: float, stop: typing.Callable[[], bool] | None,
+                     search: typing.Callable[[PETSc.Vec], bool] | None) -> SCDNewtonResult:
         """Algorithm 1 of Sect. 4 (the loop of :meth:`solve`), A's storage left holding J."""
         comm, w = self.problem.comm, self._work
         result = SCDNewtonResult(status=Status.DIVERGED_MAX_IT, iterations=0, gamma=0.0, target=0.0,
@@ -625,6 +637,8 @@ class SCDNewtonSolver(PETScOwner):
                      "states": _state_counts(comm, result.states), "reversed": moved}
             result.history.append(entry)
             status = self._stopping_status(point.norm, norm0, result.target, k, stop)
+            if status is None and k > 0 and search is not None and search(u):
+                status = Status.SEARCH_AGAIN
             if status is not None:
                 result.status = status
                 _log_iteration(entry)
@@ -665,6 +679,8 @@ def checked_parameters(problem: ContactProblem, parameters: dict | None) -> dict
     p = PARAMETERS.check(parameters)
     if p["tol"] is None:
         p["tol"] = LINEAR_TOL if problem.hyperelastic is None else HYPERELASTIC_TOL
+    if problem.follows_geometry:  # the rows U (dv/du~) T are no identity rows
+        p["eliminate_fixed_rows"] = False
     return p
 
 

@@ -1,0 +1,135 @@
+"""The Newton step of pairs searched ``"newton"`` (issue 45, items 3-4; docs/finite_strain.md, Sects. 13-14).
+
+* The two Jacobians of (13.3), del_w f = A + Gamma T and del_w v = (dv/du~) T, assembled by
+  :func:`~contactqvi.contact.current_geometry.geometric_rows` at a deformed, slipped
+  configuration of the bulging block (two neo-Hookean blocks on non-matching tetrahedra, rollers
+  on symmetry planes through the interface), against central differences of f and of the law's
+  variables v taken with the geometry followed (:meth:`ContactProblem.follow`) along random
+  directions, on 1-3 ranks.
+* The homogeneous compression of benchmarks/data/homogeneous_compression/stacked_30.toml
+  searched ``"newton"``: the closed form of docs/finite_strain.md Sect. 12 at 30 %, no
+  tangential force on the flat frictionless interface, and at most 8 Newton steps in every
+  load step after the first.
+"""
+
+from __future__ import annotations
+
+import pathlib
+import tomllib
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from dolfinx import fem
+
+from contactqvi.case import parse_case
+from contactqvi.runner import build_problem
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+DATA = ROOT / "benchmarks" / "data" / "homogeneous_compression"
+#: Largest difference between the assembled Jacobians' action and central differences, relative to the action.
+BOUND = 1e-6
+
+
+def _case(name: str, friction: float = 0.0, **solver):
+    data = tomllib.loads((DATA / name).read_text())
+    for pair in data["contacts"]:
+        pair["search"] = "newton"
+        if friction:
+            pair.update(law="coulomb", friction=friction)
+    data.setdefault("solver", {}).update(solver)
+    return parse_case(data, DATA)
+
+
+def _deformed(x: np.ndarray, body: np.ndarray, amplitude: float) -> np.ndarray:
+    """A compression with a lateral bulge and a shear, and a node-wise wobble of 1e-3 m, a function
+    of the position and of the node's ``body`` (the same on any number of ranks): the meshes of the
+    two blocks share vertex positions on the interface, where D and M have kinks
+    (docs/finite_strain.md, Sect. 14), and the wobble moves them apart. Nodes on the symmetry
+    planes stay on them."""
+    z = x[:, 2]
+    smooth = amplitude * np.column_stack([0.3 * x[:, 0] * z + 0.05 * np.sin(3 * z), 0.25 * x[:, 1] * z
+                                          + 0.04 * np.cos(2 * z), -0.6 * z + 0.02 * x[:, 0] * x[:, 1]])
+    wobble = 1e-3 * np.sin(x @ np.array([[17.0, 5.0, 3.0], [7.0, 13.0, 2.0], [11.0, 3.0, 19.0]]) + body[:, None])
+    return (smooth + wobble) * (x > 1e-12)
+
+
+def test_newton_matrix_against_differences():
+    """(13.3)'s del_w f and del_w v at a slipped configuration against central differences
+    (measured: 5e-11 and 1.2e-8 on 1 rank, 4e-10 and 1.2e-7 on 2, 8e-11 and 3e-8 on 3)."""
+    comm = MPI.COMM_WORLD
+    problem = build_problem(_case("bulging_block.toml"), comm)
+    V = problem.V
+    x = V.tabulate_dof_coordinates()
+    start, here = fem.Function(V), fem.Function(V)
+    start.x.array[:] = _deformed(x, problem.node_body, 0.05).ravel()
+    here.x.array[:] = _deformed(x, problem.node_body, 0.1).ravel()
+    problem.set_step(0.2)  # the top moved by 0.12 m, as the deformation of here
+    problem.search(start)  # the step's start: the slip's reference
+    problem.search(here, start=False)  # the facet pairs of here
+    problem.set_step(0.2)  # the top moved by 0.12 m, as the deformation of here
+    u = problem.A.createVecRight()
+    problem.solver_variables(here, u)
+    u.axpy(1.0, problem.shift)
+    problem.tangent(u)
+    forces, variables = problem.geometric_rows(u)
+    gradient_f = problem.A.copy()
+    gradient_f.axpy(1.0, forces, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    contact = (3 * problem.contact_blk[:, None] + np.arange(3)).ravel()
+    free = np.ones(u.getLocalSize(), dtype=bool)
+    free[problem.hyperelastic.prescribed] = False
+    rng = np.random.default_rng(7 + comm.rank)
+    scale = comm.allreduce(float(np.abs(here.x.array).max()), op=MPI.MAX)
+    h = 1e-6 * scale
+
+    def at(w: PETSc.Vec) -> tuple[np.ndarray, np.ndarray]:
+        """f and the contact nodes' variables at u~ + T w, the geometry followed there."""
+        moved = fem.Function(V)
+        problem.transform.mult(w, moved.x.petsc_vec)
+        moved.x.scatter_forward()
+        moved.x.array[:] += here.x.array
+        problem_state = problem.current.displacement.x.array.copy()
+        problem.follow(moved)
+        trial = u.duplicate()
+        problem.solver_variables(moved, trial)
+        trial.axpy(1.0, problem.shift)
+        f = u.duplicate()
+        problem.residual(trial, f)
+        values = f.array.copy(), trial.array[contact].copy()
+        back = fem.Function(V)
+        back.x.array[:] = problem_state
+        problem.follow(back)
+        for vec in (trial, f):
+            vec.destroy()
+        return values
+
+    errors, sizes = np.zeros(2), np.zeros(2)
+    for _ in range(3):
+        direction = u.duplicate()
+        direction.array[:] = rng.standard_normal(u.getLocalSize()) * free * scale
+        plus, minus = direction.copy(), direction.copy()
+        plus.scale(h / scale)
+        minus.scale(-h / scale)
+        f_plus, v_plus = at(plus)
+        f_minus, v_minus = at(minus)
+        predicted_f, predicted_v = u.duplicate(), u.duplicate()
+        gradient_f.mult(direction, predicted_f)
+        variables.mult(direction, predicted_v)
+        difference_f = (f_plus - f_minus) / (2 * h / scale)
+        difference_v = (v_plus - v_minus) / (2 * h / scale)
+        for k, (predicted, difference) in enumerate(((predicted_f.array[free], difference_f[free]),
+                                                     (predicted_v.array[contact], difference_v))):
+            errors[k] = max(errors[k], np.abs(predicted - difference).max(initial=0.0))
+            sizes[k] = max(sizes[k], np.abs(predicted).max(initial=0.0))
+        for vec in (direction, plus, minus, predicted_f, predicted_v):
+            vec.destroy()
+    comm.Allreduce(MPI.IN_PLACE, errors, op=MPI.MAX)
+    comm.Allreduce(MPI.IN_PLACE, sizes, op=MPI.MAX)
+    for M in (forces, variables, gradient_f):
+        M.destroy()
+    u.destroy()
+    problem.destroy()
+    assert (sizes > 0).all()
+    assert (errors <= BOUND * sizes).all(), errors / sizes
