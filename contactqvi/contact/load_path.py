@@ -61,13 +61,14 @@ import numpy as np
 
 from dolfinx import fem
 
-from contactqvi.contact.newton_step_solver import NewtonStepSolver
+from contactqvi.contact.newton_step_solver import NEWTON_STEP_SOLVERS, NewtonStepSolver
 from contactqvi.contact.nodal import State
 from contactqvi.contact.path_state import PathState
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import (PARAMETERS, SCDNewtonResult, SCDNewtonSolver, checked_parameters,
                                             newton_step_solver)
 from contactqvi.lifetime import PETScOwner
+from contactqvi.linalg import create_ksp, preset
 from contactqvi.contact.surface import contact_facet_areas
 from contactqvi.load_steps import LoadStep, Rotation, check_steps, interpolated
 from contactqvi.parameters import Parameter, Parameters
@@ -85,6 +86,8 @@ StepCallback = typing.Callable[[int, LoadStep, PETSc.Vec, SCDNewtonResult, PathS
 TOUCHING = (State.SLIDING, State.STICKING, State.WEAK_STICKING)
 #: ``max_cuts`` of a hyperelastic body when not given (Code_Aster's SUBD_NIVEAU counts alike).
 HYPERELASTIC_CUTS = 4
+#: Relative residual of the linear solve of the elastic predictor (:func:`_elastic_predictor`).
+PREDICTOR_RTOL = 1e-8
 #: The load path's own parameters, given with the SCD solver's (``[solver]`` of a case file).
 PATH_PARAMETERS = Parameters(
     geometry_tol=Parameter(1e-3, "search = until_settled: a step has settled when a solve after a search changes the "
@@ -208,6 +211,8 @@ class _StepSolver(PETScOwner):
         if state.solved == 0 and self.initial is not None:
             self.initial.copy(u)  # the given guess, also for a retry of the first step
         _start(problem, step, u, state, from_rest, self.carried)
+        if problem.follows_geometry and state.solved == 0 and from_rest:
+            _elastic_predictor(problem, u, checked_parameters(problem, self.parameters)["pc"], self.prefix)
         if self.solver is None:
             self.solver = SCDNewtonSolver(problem, self.parameters, prefix=self.prefix, step_solver=self.carried)
             self.carried = None
@@ -305,6 +310,31 @@ def _start(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSta
         _search_in(problem, state.displacement, step_solver)
         problem.solver_variables(state.displacement, state.variables)
     _continue(problem, step, u, state)
+
+
+def _elastic_predictor(problem: ContactProblem, u: PETSc.Vec, pc: str, prefix: str) -> None:
+    """The predictor of a first step from rest with pairs searched ``"newton"`` into ``u``: the
+    linear elastic solution of the step's loads and prescribed values (A of the reference
+    configuration is the small-strain stiffness) with the contact nodes held where they are
+    (w = 0), the geometry taken there (Code_Aster's ``PREDICTION = 'ELASTIQUE'``). From rest
+    itself, a compression whose step moves a boundary by more than an element's height starts
+    from elements the prescribed values alone turn inside out, and is cut; later steps
+    extrapolate (:func:`_continue`). ``pc``: the Newton-step solver's preset."""
+    comm, A = problem.comm, problem.A.copy()
+    held = (3 * problem.contact_blk[:, None] + np.arange(3)).ravel()
+    A.zeroRows((A.getOwnershipRange()[0] + held).astype(PETSc.IntType), diag=1.0)
+    rhs = problem.load.copy()
+    rhs.axpy(-1.0, problem.shift)
+    rhs.array[held] = 0.0
+    ksp = create_ksp(comm, f"{prefix}predictor_", preset(NEWTON_STEP_SOLVERS[pc]), A, rtol=PREDICTOR_RTOL)
+    ksp.solve(rhs, u)
+    u.axpy(1.0, problem.shift)
+    predicted = problem.physical_displacement(u, fem.Function(problem.V))
+    problem.follow(predicted)
+    problem.solver_variables(predicted, u)
+    u.axpy(1.0, problem.shift)
+    for obj in (ksp, A, rhs):
+        obj.destroy()
 
 
 def _set_previous(problem: ContactProblem, state: PathState) -> None:

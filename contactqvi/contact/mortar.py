@@ -58,6 +58,9 @@ __all__ = ["MortarCoupling", "MortarLayout", "coupling_on_layout", "mortar_coupl
 #: A facet pair a search finds that overlaps by no more than this fraction of its slave facet's
 #: area is no reason to search again (:meth:`MortarLayout.covers`).
 NEGLIGIBLE_OVERLAP = 1e-9
+#: ... and a node coupled by the last search of a geometry that follows the iterate stays
+#: coupled down to this fraction (:func:`mortar_coupling`'s ``kept_blk``).
+KEPT_COVERAGE = 0.1
 #: Slave nodes whose mortar segments give D_ii below this fraction of their lumped
 #: area are not coupled (they lie at the rim of the master's shadow).
 MIN_COVERAGE = 0.5
@@ -218,7 +221,8 @@ def _exchange_master(comm: MPI.Comm, slave: SurfaceFacets, master: SurfaceFacets
 
 def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facets: np.ndarray,
                     search_distance: float | None = None, excluded_blk: np.ndarray | None = None,
-                    displacement: np.ndarray | None = None, linearised: bool = False) -> MortarCoupling:
+                    displacement: np.ndarray | None = None, linearised: bool = False,
+                    kept_blk: np.ndarray | None = None) -> MortarCoupling:
     """C = D^{-1} M, nodal normals and weighted gaps of a slave and a master surface.
 
     Args:
@@ -232,9 +236,12 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
             (ghosts included); None: the reference configuration.
         linearised: also the derivatives of the rows with respect to the searched positions
             (:func:`~contactqvi.contact.linearisation.coupling_derivatives`).
+        kept_blk: owned local nodes coupled by the last search, which stay coupled down to
+            :data:`KEPT_COVERAGE` (a geometry that follows the Newton iterate: a node at the rim
+            of the master's shadow does not come and go from one iterate to the next).
 
     Collective. Slave nodes with less than :data:`MIN_COVERAGE` of their lumped area
-    in the master's shadow are left out, and so are nodes whose weighted gap in the
+    in the master's shadow (:data:`KEPT_COVERAGE` for ``kept_blk``) are left out, and so are nodes whose weighted gap in the
     searched configuration exceeds ``search_distance`` (default: the node's own size
     sqrt(2 x lumped area)).
     """
@@ -253,7 +260,7 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
     layout = MortarLayout(np.asarray(slave_facets), pairs_s, mglob[pairs_m],
                           D_pair.sum(axis=1) / slave.area[pairs_s], np.empty(0, dtype=np.int32))
     coupling, lumped_area, gap = _integrated(V, layout, slave, mx[pairs_m], current, None, excluded_blk,
-                                             (D_pair, M_pair), linearised)
+                                             (D_pair, M_pair), linearised, kept_blk)
     # a node farther than the search distance (default: its own size) cannot touch in this step
     reach = np.sqrt(2.0 * lumped_area[coupling.slave_blk]) if search_distance is None else search_distance
     return coupling.restricted(gap <= reach)
@@ -276,13 +283,13 @@ def coupling_on_layout(V: fem.FunctionSpace, layout: MortarLayout, displacement:
 
 def _integrated(V: fem.FunctionSpace, layout: MortarLayout, slave: SurfaceFacets, master_x: np.ndarray,
                 current: np.ndarray, rows: np.ndarray | None, excluded_blk: np.ndarray | None,
-                integrals: tuple[np.ndarray, np.ndarray] | None,
-                linearised: bool) -> tuple[MortarCoupling, np.ndarray, np.ndarray]:
+                integrals: tuple[np.ndarray, np.ndarray] | None, linearised: bool,
+                kept_blk: np.ndarray | None = None) -> tuple[MortarCoupling, np.ndarray, np.ndarray]:
     """The coupling of the owned slave nodes ``rows`` by the facet pairs of ``layout`` (their
     master facets at ``master_x``, their :func:`segment_integrals` ``integrals`` if known), the
     lumped slave areas of the owned nodes and the rows' weighted gaps at the positions
     ``current``. ``rows`` None: the nodes the pairs cover for at least :data:`MIN_COVERAGE` of
-    their lumped area, less ``excluded_blk``."""
+    their lumped area (:data:`KEPT_COVERAGE` for ``kept_blk``), less ``excluded_blk``."""
     comm, index_map, x = V.mesh.comm, V.dofmap.index_map, V.tabulate_dof_coordinates()
     pairs_s = layout.pairs_s
     if integrals is None:
@@ -290,7 +297,10 @@ def _integrated(V: fem.FunctionSpace, layout: MortarLayout, slave: SurfaceFacets
     weight, lumped_area, normal, M = _owned_sums(comm, index_map, slave, pairs_s, layout.master_glob, *integrals)
     coupled = np.zeros(index_map.size_local, dtype=bool)
     if rows is None:
-        coupled = (lumped_area > 0.0) & (weight >= MIN_COVERAGE * lumped_area)
+        coverage = np.full(index_map.size_local, MIN_COVERAGE)
+        if kept_blk is not None:
+            coverage[kept_blk] = KEPT_COVERAGE
+        coupled = (lumped_area > 0.0) & (weight >= coverage * lumped_area)
         if excluded_blk is not None:
             coupled[excluded_blk[excluded_blk < index_map.size_local]] = False
     else:
