@@ -751,11 +751,15 @@ def assemble_contact_problem(
     )
     problem.set_step()
     _make_hyperelastic(problem, material, young, poisson, L, bcs, facet_tags, nodal)
-    for interface in interfaces:
-        require(problem.hyperelastic is not None or not interface.follows, f"{interface.pair.name}: search",
+    return problem
+
+
+def _check_linear_pairs(problem: ContactProblem) -> None:
+    """Raise if a pair of bodies of linear elasticity is searched ``"newton"``."""
+    for interface in problem.interfaces:
+        require(not interface.follows, f"{interface.pair.name}: search",
                 "'newton' takes the geometry of finite deformations into the Newton iteration and needs "
                 "hyperelastic bodies (a material model); for linear elasticity use 'every_step' or 'until_settled'")
-    return problem
 
 
 def _stiffness(V: fem.FunctionSpace, a: fem.Form, L: fem.Form, bcs: list[fem.DirichletBC],
@@ -778,8 +782,9 @@ def _make_hyperelastic(problem: ContactProblem, material: Material | None, young
                        facet_tags: dmesh.MeshTags, nodal: fem.Function | None = None) -> None:
     """Give ``problem`` the finite-strain f of a hyperelastic ``material`` (its ``hyperelastic``
     system, :mod:`contactqvi.contact.hyperelastic`, and the material of its volume results).
-    Nothing for a linear material (None)."""
+    Nothing for a linear material (None), whose pairs cannot be searched ``"newton"``."""
     if material is None:
+        _check_linear_pairs(problem)
         return
     problem.hyperelastic = create_hyperelastic_system(problem.V, material, young, poisson, load, bcs,
                                                       problem.dirichlet_dofs_loc, problem.rotation,
