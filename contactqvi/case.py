@@ -79,7 +79,9 @@ slave surface with a master surface (``"body.group"``) or with a rigid obstacle
     friction = 0.3
     # search_distance = 0.01            # m; default: each slave facet's longest edge
     # search = "every_step"             # "until_settled": also after each step, solved again
-    #                                   # until it settles; "once": the reference configuration
+    #                                   # until it settles; "newton": the geometry inside the
+    #                                   # Newton iteration (hyperelastic bodies); "once": the
+    #                                   # reference configuration
     # interference = 1e-4               # m: the surfaces overlap by this as meshed (a press fit), or
     #                                   # linear in x (a taper): {value = 1e-4, at = [0, 0, 0],
     #                                   # slope = [0, 0, 2e-3]}, delta(x) = value + slope . (x - at)
@@ -396,8 +398,10 @@ class ContactPair:
         search: when the pair is searched: ``"every_step"`` (before every load step
             after the first, in the configuration the step before ended in),
             ``"until_settled"`` (also after each step, which is solved again until its
-            configuration settles) or ``"once"`` (in the reference configuration only);
-            None: ``"every_step"`` for a ``master``, ``"once"`` for an obstacle.
+            configuration settles), ``"newton"`` (the geometry a function of the iterate
+            inside the Newton iteration, a ``master`` of hyperelastic bodies;
+            docs/finite_strain.md, Sect. 14) or ``"once"`` (in the reference configuration
+            only); None: ``"every_step"`` for a ``master``, ``"once"`` for an obstacle.
         interference: the overlap of the slave and master surfaces as meshed (m, >= 0;
             a press or shrink fit), or an :class:`~contactqvi.interference.Interference`
             linear in position (a taper); resolved in the first load step, or over the

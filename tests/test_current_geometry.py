@@ -6,10 +6,9 @@
   on symmetry planes through the interface), against central differences of f and of the law's
   variables v taken with the geometry followed (:meth:`ContactProblem.follow`) along random
   directions, on 1-3 ranks.
-* The homogeneous compression of benchmarks/data/homogeneous_compression/stacked_30.toml
-  searched ``"newton"``: the closed form of docs/finite_strain.md Sect. 12 at 30 %, no
-  tangential force on the flat frictionless interface, and at most 8 Newton steps in every
-  load step after the first.
+* ``search = "newton"`` between linear bodies is named as the pair's error.
+
+The closed-form compression searched ``"newton"`` is in tests/test_homogeneous_compression.py.
 """
 
 from __future__ import annotations
@@ -133,3 +132,17 @@ def test_newton_matrix_against_differences():
     problem.destroy()
     assert (sizes > 0).all()
     assert (errors <= BOUND * sizes).all(), errors / sizes
+
+
+def test_newton_on_linear_bodies_is_named():
+    """``search = "newton"`` between bodies of linear elasticity is an error naming the pair's key,
+    raised while the problem is built, before any solve."""
+    from contactqvi.parameters import ParameterError
+
+    data = tomllib.loads((DATA / "stacked_30.toml").read_text())
+    data["contacts"][0]["search"] = "newton"
+    for body in data["bodies"]:
+        del body["material"]["model"]
+    with pytest.raises(ParameterError, match=r"upper\.interface/lower\.interface: search: 'newton' takes the "
+                       r"geometry of finite deformations into the Newton iteration and needs hyperelastic bodies"):
+        build_problem(parse_case(data, DATA), MPI.COMM_WORLD)

@@ -94,7 +94,8 @@ PATH_PARAMETERS = Parameters(
                            "displacement by at most this times the step's increment (max norms)",
                            minimum=0.0, maximum=1.0),
     max_searches=Parameter(10, "search = until_settled: searches in a step's own configuration before the step "
-                           "fails (diverged_max_it)", type=int, minimum=1),
+                           "fails (diverged_max_it); search = newton: searches of a step after its first",
+                           type=int, minimum=1),
     max_cuts=Parameter(None, "a load step that does not converge is cut in half and retried from the last "
                        "converged state, at most this many halvings in a row (the step grows back after each "
                        f"success); None: {HYPERELASTIC_CUTS} for a hyperelastic body, 0 for linear elasticity",

@@ -402,6 +402,15 @@ class ContactProblem(PETScOwner):
         scale = self.load.norm()
         return scale if self.hyperelastic is None else max(scale, self.hyperelastic.force_scale)
 
+    def position_scale(self) -> float:
+        """The size (m) of the positions whose differences the law's variables v of pairs searched
+        ``"newton"`` are (13.1): the largest coordinate of the current configuration; 0 without
+        such pairs. Collective."""
+        if self.current is None:
+            return 0.0
+        x = self.V.tabulate_dof_coordinates() + self.current.displacement.x.array.reshape(-1, 3)
+        return self.comm.allreduce(float(np.abs(x).max(initial=0.0)), op=MPI.MAX)
+
     def residual(self, u: PETSc.Vec, out: PETSc.Vec) -> None:
         """f(u) of a hyperelastic problem into ``out``: T^T r_K(u~) at the current step (T = R
         without body pairs), the prescribed rows u_i - l_i as in the linear problem
