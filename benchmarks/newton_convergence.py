@@ -54,7 +54,8 @@ def rows(name: str, friction: float, work: pathlib.Path, comm: MPI.Comm) -> list
 
 
 def markdown(table: list[dict]) -> str:
-    lines = ["| case | mu | step | status | Newton | ||y^|| of the last solve's steps (N) | last three ||y^_k+1|| / ||y^_k||^2 |",
+    lines = ["| case | mu | step | status | Newton | ||y^|| of the last solve's steps (N) "
+             "| last three ||y^_k+1|| / ||y^_k||^2 |",
              "|---|---|---|---|---|---|---|"]
     for r in table:
         merit = ", ".join(f"{v:.2e}" for v in r["merit"])

@@ -51,7 +51,8 @@ class CurrentGeometry:
         displacement: u~ of the configuration the interfaces were integrated at.
         start: per interface, its coupling at the start of the load step (C^start of (13.1)), or
             None for a pair not searched ``"newton"``.
-        base, direction: the line of the line search, u~_k and T_k du (:meth:`~contactqvi.contact.problem.ContactProblem.set_search_line`).
+        base, direction: the line of the line search, u~_k and T_k du
+            (:meth:`~contactqvi.contact.problem.ContactProblem.set_search_line`).
     """
 
     displacement: fem.Function

@@ -34,8 +34,8 @@ from contactqvi.contact.mortar import MortarCoupling
 from contactqvi.contact.owners import fetch_rows
 from contactqvi.obstacles import frame_axes, tangent_frames
 
-__all__ = ["aligned_previous", "contact_variables", "frame_derivatives", "frame_turn", "master_shares", "pair_frame_derivatives",
-           "pair_frames", "roller_aligned", "variable_derivatives"]
+__all__ = ["aligned_previous", "contact_variables", "frame_derivatives", "frame_turn", "master_shares",
+           "pair_frame_derivatives", "pair_frames", "roller_aligned", "variable_derivatives"]
 
 
 def roller_aligned(frames: np.ndarray, constrained: np.ndarray) -> np.ndarray:

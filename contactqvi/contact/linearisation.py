@@ -46,7 +46,8 @@ from contactqvi.contact.facets import facet_areas, unit_normals
 from contactqvi.contact.owners import owner_ranges, sum_to_owners
 from contactqvi.contact.segments import diameters, segment_integrals
 
-__all__ = ["KINK", "KINK_OFFSET", "STEP", "CouplingDerivatives", "PairDerivatives", "complex_step", "coupling_derivatives", "segment_jacobians"]
+__all__ = ["KINK", "KINK_OFFSET", "STEP", "CouplingDerivatives", "PairDerivatives", "complex_step",
+           "coupling_derivatives", "segment_jacobians"]
 
 #: Imaginary step of the complex-step derivatives (in metres of coordinate): the truncation
 #: error is O(STEP^2) relative and nothing cancels, so any step far below round-off serves.

@@ -86,7 +86,7 @@ StepCallback = typing.Callable[[int, LoadStep, PETSc.Vec, SCDNewtonResult, PathS
 TOUCHING = (State.SLIDING, State.STICKING, State.WEAK_STICKING)
 #: ``max_cuts`` of a hyperelastic body when not given (Code_Aster's SUBD_NIVEAU counts alike).
 HYPERELASTIC_CUTS = 4
-#: Relative residual of the linear solve of the elastic predictor (:func:`_elastic_predictor`).
+#: Relative residual of the linear solve of the elastic predictor (:func:`_elastic_change`).
 PREDICTOR_RTOL = 1e-8
 #: The load path's own parameters, given with the SCD solver's (``[solver]`` of a case file).
 PATH_PARAMETERS = Parameters(
@@ -94,8 +94,7 @@ PATH_PARAMETERS = Parameters(
                            "displacement by at most this times the step's increment (max norms)",
                            minimum=0.0, maximum=1.0),
     max_searches=Parameter(10, "search = until_settled: searches in a step's own configuration before the step "
-                           "fails (diverged_max_it); search = newton: searches of a step after its first",
-                           type=int, minimum=1),
+                           "fails (diverged_max_it)", type=int, minimum=1),
     max_cuts=Parameter(None, "a load step that does not converge is cut in half and retried from the last "
                        "converged state, at most this many halvings in a row (the step grows back after each "
                        f"success); None: {HYPERELASTIC_CUTS} for a hyperelastic body, 0 for linear elasticity",
@@ -212,13 +211,14 @@ class _StepSolver(PETScOwner):
         if state.solved == 0 and self.initial is not None:
             self.initial.copy(u)  # the given guess, also for a retry of the first step
         _start(problem, step, u, state, from_rest, self.carried)
-        if problem.follows_geometry and state.solved == 0 and from_rest:
-            _elastic_predictor(problem, u, checked_parameters(problem, self.parameters)["pc"], self.prefix)
+        if problem.follows_geometry and (state.solved > 0 or from_rest):
+            _predict(problem, step, u, state, self.carried, checked_parameters(problem, self.parameters)["pc"],
+                     self.prefix)
         if self.solver is None:
             self.solver = SCDNewtonSolver(problem, self.parameters, prefix=self.prefix, step_solver=self.carried)
             self.carried = None
         if problem.follows_geometry:
-            self.solver, result = _follow(problem, step, u, state, self.solver, self.stop, self.path)
+            self.solver, result = _follow(problem, step, u, state, self.solver, self.stop)
             return result
         result = self.solver.solve(u, atol=state.target, stop=self.stop)
         self.solver, result = _settle(problem, step, u, state, self.solver, result, self.stop, self.path)
@@ -313,29 +313,50 @@ def _start(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSta
     _continue(problem, step, u, state)
 
 
-def _elastic_predictor(problem: ContactProblem, u: PETSc.Vec, pc: str, prefix: str) -> None:
-    """The predictor of a first step from rest with pairs searched ``"newton"`` into ``u``: the
-    linear elastic solution of the step's loads and prescribed values (A of the reference
-    configuration is the small-strain stiffness) with the contact nodes held where they are
-    (w = 0), the geometry taken there (Code_Aster's ``PREDICTION = 'ELASTIQUE'``). From rest
-    itself, a compression whose step moves a boundary by more than an element's height starts
-    from elements the prescribed values alone turn inside out, and is cut; later steps
-    extrapolate (:func:`_continue`). ``pc``: the Newton-step solver's preset."""
-    comm, A = problem.comm, problem.A.copy()
-    held = (3 * problem.contact_blk[:, None] + np.arange(3)).ravel()
+def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState,
+             step_solver: NewtonStepSolver | None, pc: str, prefix: str) -> None:
+    """The predictor of ``step`` (set in ``problem`` after ``state``) with pairs searched
+    ``"newton"`` into ``u``, the pairs searched there (``step_solver``'s levels updated). Where the
+    prescribed values alone move (the predictor of the other modes), a step that moves a boundary by more than an element's height
+    (a compression, a die slid sideways) turns elements inside out, and is cut. A step that
+    continues the last solve extrapolates its increment (:meth:`PathState.extrapolation`;
+    Abaqus' default, Code_Aster's ``PREDICTION = 'EXTRAPOLE'``); any other, the first from rest
+    too, adds the linear elastic response to the change of its loads and prescribed values, A of
+    the last search (the small-strain stiffness in the current variables), the contact nodes'
+    normal variables held and their tangential ones free (Code_Aster's ``'ELASTIQUE'``).
+    ``pc``: the Newton-step solver's preset."""
+    predicted = fem.Function(problem.V)
+    factor = state.extrapolation(step.load, step.translation)
+    if factor > 0.0:
+        predicted.x.array[:] = state.displacement.x.array + factor * state.increment.x.array
+    else:
+        change = _elastic_change(problem, state, pc, prefix)
+        if state.solved > 0:
+            change.axpy(1.0, state.variables)
+        change.axpy(1.0, problem.shift)
+        problem.physical_displacement(change, predicted)
+        change.destroy()
+    _search_at(problem, step, u, state, predicted, step_solver, start=False)
+
+
+def _elastic_change(problem: ContactProblem, state: PathState, pc: str, prefix: str) -> PETSc.Vec:
+    """The change of the solver's variables (a new vector) under the change of the loads and
+    prescribed values from ``state`` to the step set in ``problem``, by the stiffness A of the last
+    search with the contact nodes' normal variables held (:func:`_predict`)."""
+    change, before = problem.A.createVecRight(), problem.A.createVecRight()
+    problem.step_load(problem.load_factor, problem.translation, problem.step_rotation, change)
+    problem.step_load(state.load, state.translation, state.rotation, before)
+    change.axpy(-1.0, before)
+    held = 3 * problem.contact_blk + 2
+    A = problem.A.copy()
     A.zeroRows((A.getOwnershipRange()[0] + held).astype(PETSc.IntType), diag=1.0)
-    rhs = problem.load.copy()
-    rhs.axpy(-1.0, problem.shift)
-    rhs.array[held] = 0.0
-    ksp = create_ksp(comm, f"{prefix}predictor_", preset(NEWTON_STEP_SOLVERS[pc]), A, rtol=PREDICTOR_RTOL)
-    ksp.solve(rhs, u)
-    u.axpy(1.0, problem.shift)
-    predicted = problem.physical_displacement(u, fem.Function(problem.V))
-    problem.follow(predicted)
-    problem.solver_variables(predicted, u)
-    u.axpy(1.0, problem.shift)
-    for obj in (ksp, A, rhs):
+    change.array[held] = 0.0
+    ksp = create_ksp(problem.comm, f"{prefix}predictor_", preset(NEWTON_STEP_SOLVERS[pc]), A, rtol=PREDICTOR_RTOL)
+    solution = change.duplicate()
+    ksp.solve(change, solution)
+    for obj in (ksp, A, before, change):
         obj.destroy()
+    return solution
 
 
 def _set_previous(problem: ContactProblem, state: PathState) -> None:
@@ -417,14 +438,15 @@ def _settle(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSt
 
 
 def _follow(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState, solver: SCDNewtonSolver,
-            stop: typing.Callable[[], bool] | None, path: dict[str, typing.Any]) -> tuple[SCDNewtonSolver, SCDNewtonResult]:
+            stop: typing.Callable[[], bool] | None) -> tuple[SCDNewtonSolver, SCDNewtonResult]:
     """Solve ``step`` with pairs searched ``"newton"``: the geometry follows the iterate on the facet
     pairs of the last search, and where an iterate's projections leave them (or a converged
     solution's) the pairs are searched again there and the step is solved on from it (the slip
-    still from the step's start), at most ``max_searches`` times. Returns the last solve's solver
-    (``solver`` is destroyed otherwise) and the step's result, all its solves merged
-    (:func:`_merged`)."""
+    still from the step's start); the searches are part of the Newton iteration, whose
+    ``max_iterations`` bound all its steps. Returns the last solve's solver (``solver`` is
+    destroyed otherwise) and the step's result, all its solves merged (:func:`_merged`)."""
     reached = fem.Function(problem.V)
+    budget = solver.parameters["max_iterations"]
 
     def moved(iterate: PETSc.Vec) -> bool:
         problem.physical_displacement(iterate, reached)
@@ -433,10 +455,7 @@ def _follow(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSt
     result = solver.solve(u, atol=state.target, stop=stop, search=moved)
     solves, target = [result], result.target
     while result.status == Status.SEARCH_AGAIN or (result.converged and moved(u)):
-        if len(solves) > path["max_searches"]:
-            warn(problem.comm, logger, "not_settled", f"step {state.done + 1}: the facets the slave nodes project "
-                 f"onto still changed after {path['max_searches']} searches", step=state.done + 1,
-                 searches=path["max_searches"])
+        if sum(r.iterations for r in solves) >= budget:
             return solver, _merged(solves, Status.DIVERGED_MAX_IT)
         logger.info("step %d, search %d: the projections left the facets of the last search", state.done + 1,
                     len(solves))
@@ -449,11 +468,19 @@ def _follow(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSt
 
 def _search_reached(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState, reached: fem.Function,
                     solver: SCDNewtonSolver, start: bool = True) -> SCDNewtonSolver:
-    """Search ``step`` again in x + ``reached``, set it with the slip from the step before
-    (``state``, whose u~ in the new variables goes to ``state.variables``), put ``reached``
-    into ``u`` (new variables) and return a new solver for it, which takes over ``solver``'s
-    multigrid levels (``solver`` is destroyed); ``start`` as for :func:`_search_in`."""
+    """:func:`_search_at` ``reached`` and return a new solver for it, which takes over ``solver``'s
+    multigrid levels (``solver`` is destroyed)."""
     parameters, prefix, step_solver = solver.parameters, solver.prefix, _released(solver)
+    _search_at(problem, step, u, state, reached, step_solver, start)
+    return SCDNewtonSolver(problem, parameters, prefix=prefix, step_solver=step_solver)
+
+
+def _search_at(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState, reached: fem.Function,
+               step_solver: NewtonStepSolver | None, start: bool = True) -> None:
+    """Search ``step`` again in x + ``reached`` (``step_solver``'s levels updated, if any), set it
+    with the slip from the step before (``state``, whose u~ in the new variables goes to
+    ``state.variables``) and put ``reached`` into ``u`` (new variables); ``start`` as for
+    :func:`_search_in`."""
     _search_in(problem, reached, step_solver, start)
     _set_previous(problem, state)
     problem.solver_variables(state.displacement, state.variables)
@@ -461,7 +488,6 @@ def _search_reached(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state
                      step.fit_fraction)
     problem.solver_variables(reached, u)
     u.axpy(1.0, problem.shift)
-    return SCDNewtonSolver(problem, parameters, prefix=prefix, step_solver=step_solver)
 
 
 def _merged(solves: list[SCDNewtonResult], status: Status,
@@ -482,21 +508,10 @@ def _merged(solves: list[SCDNewtonResult], status: Status,
 
 def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState) -> None:
     """Set ``step`` after ``state``'s step, the slip measured from it; ``u`` gets the predictor:
-    u~ of that step, its touching nodes moved along with their master surface (no slip increment).
-    With pairs searched ``"newton"`` the predictor is that step's displacement extrapolated
-    (:meth:`~contactqvi.contact.path_state.PathState.extrapolation`), the geometry taken there:
-    a step that moves a boundary by more than an element's height (a compression) otherwise
-    starts from elements the prescribed values alone turn inside out, and is cut."""
+    u~ of that step, its touching nodes moved along with their master surface (no slip increment;
+    pairs searched ``"newton"`` predict otherwise: :func:`_predict`)."""
     problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation, state.rotation,
                      step.fit_fraction)
-    if problem.follows_geometry:
-        predicted = fem.Function(problem.V)
-        factor = state.extrapolation(step.load, step.translation)
-        predicted.x.array[:] = state.displacement.x.array + factor * state.increment.x.array
-        problem.follow(predicted)
-        problem.solver_variables(predicted, u)
-        u.axpy(1.0, problem.shift)
-        return
     u.waxpy(1.0, problem.shift, state.variables)
     touching = np.isin(state.contact_states(problem), TOUCHING)
     u.array.reshape(-1, 3)[problem.contact_blk[touching], :2] = 0.0

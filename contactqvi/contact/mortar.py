@@ -241,9 +241,9 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
             of the master's shadow does not come and go from one iterate to the next).
 
     Collective. Slave nodes with less than :data:`MIN_COVERAGE` of their lumped area
-    in the master's shadow (:data:`KEPT_COVERAGE` for ``kept_blk``) are left out, and so are nodes whose weighted gap in the
-    searched configuration exceeds ``search_distance`` (default: the node's own size
-    sqrt(2 x lumped area)).
+    in the master's shadow (:data:`KEPT_COVERAGE` for ``kept_blk``) are left out, and so are
+    nodes whose weighted gap in the searched configuration exceeds ``search_distance``
+    (default: the node's own size sqrt(2 x lumped area)).
     """
     comm, index_map, x = V.mesh.comm, V.dofmap.index_map, V.tabulate_dof_coordinates()
     current = x if displacement is None else x + displacement

@@ -367,10 +367,17 @@ class ContactProblem(PETScOwner):
         """The coefficients of the loads :attr:`translated` at the current step: the moved
         groups' displacement u = (Q - I)(X - c) + t is sum_c s_c e_c + sum_ab (Q - I)_ab e_a X_b
         with s = t - (Q - I) c; without a rotation t itself."""
-        if self.step_rotation is None:
-            return self.translation
-        turn = self.step_rotation.matrix() - np.eye(3)
-        return np.concatenate([self.translation - turn @ np.asarray(self.step_rotation.centre), turn.ravel()])
+        return _rigid_coefficients(self.translation, self.step_rotation)
+
+    def step_load(self, load_factor: float, translation: np.ndarray, rotation: Rotation | None,
+                  out: PETSc.Vec) -> PETSc.Vec:
+        """lambda l~ + sum_k s_k l~_k of a step (:meth:`set_step`'s arguments) into ``out``: the
+        small-strain loads and lifted prescribed values in the solver's variables, without the shift."""
+        self.applied.copy(out)
+        out.scale(load_factor)
+        for t, b in zip(_rigid_coefficients(np.asarray(translation, dtype=float), rotation), self.translated):
+            out.axpy(t, b)
+        return out
 
     def solver_variables(self, displacement: fem.Function, out: PETSc.Vec) -> PETSc.Vec:
         """The solver's variables u~ = T^-1 (u - lambda c - sum_k s_k c_k) of a physical
@@ -496,10 +503,7 @@ class ContactProblem(PETScOwner):
     def _shifted_load(self) -> None:
         """The load l of the current step and shift: lambda l~ + sum_k s_k l~_k + A d (a hyperelastic
         f is evaluated at u - d itself: d only on its identity rows, as A d there)."""
-        self.applied.copy(self.load)
-        self.load.scale(self.load_factor)
-        for t, b in zip(self.rigid_motion(), self.translated):  # moved groups follow the rigid motion
-            self.load.axpy(t, b)
+        self.step_load(self.load_factor, self.translation, self.step_rotation, self.load)
         if self.hyperelastic is None:
             self.A.multAdd(self.shift, self.load, self.load)
         else:
@@ -761,6 +765,14 @@ def assemble_contact_problem(
     problem.set_step()
     _make_hyperelastic(problem, material, young, poisson, L, bcs, facet_tags, nodal)
     return problem
+
+
+def _rigid_coefficients(translation: np.ndarray, rotation: Rotation | None) -> np.ndarray:
+    """:meth:`ContactProblem.rigid_motion` of a translation and a rotation (or None)."""
+    if rotation is None:
+        return translation
+    turn = rotation.matrix() - np.eye(3)
+    return np.concatenate([translation - turn @ np.asarray(rotation.centre), turn.ravel()])
 
 
 def _check_linear_pairs(problem: ContactProblem) -> None:
