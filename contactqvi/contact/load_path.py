@@ -317,8 +317,9 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
              step_solver: NewtonStepSolver | None, pc: str, prefix: str) -> None:
     """The predictor of ``step`` (set in ``problem`` after ``state``) with pairs searched
     ``"newton"`` into ``u``, the pairs searched there (``step_solver``'s levels updated). Where the
-    prescribed values alone move (the predictor of the other modes), a step that moves a boundary by more than an element's height
-    (a compression, a die slid sideways) turns elements inside out, and is cut. A step that
+    prescribed values alone move (the predictor of the other modes), a step that moves a boundary
+    by more than an element's height (a compression, a die slid sideways) turns elements inside
+    out, and is cut. A step that
     continues the last solve extrapolates its increment (:meth:`PathState.extrapolation`;
     Abaqus' default, Code_Aster's ``PREDICTION = 'EXTRAPOLE'``); any other, the first from rest
     too, adds the linear elastic response to the change of its loads and prescribed values, A of
