@@ -146,3 +146,34 @@ def test_newton_on_linear_bodies_is_named():
     with pytest.raises(ParameterError, match=r"upper\.interface/lower\.interface: search: 'newton' takes the "
                        r"geometry of finite deformations into the Newton iteration and needs hyperelastic bodies"):
         build_problem(parse_case(data, DATA), MPI.COMM_WORLD)
+
+
+def test_a_restarted_path_is_the_uninterrupted_one(mpi_tmp_path):
+    """The 30 % compression searched ``"newton"``, stopped after step 3 and restarted: the pair
+    forces and displacements of the uninterrupted run to 1e-12 (measured 1e-14: the slip's
+    reference and the predictor's increment come back from the checkpoint), the Newton steps to
+    one (the multigrid is set up again: round-off)."""
+    from contactqvi.paraview import read_vtx
+    from contactqvi.runner import run_case
+
+    comm = MPI.COMM_WORLD
+    data = tomllib.loads((DATA / "stacked_30.toml").read_text())
+    data["contacts"][0]["search"] = "newton"
+    case = parse_case(data, DATA)
+    whole, parts = mpi_tmp_path / "whole", mpi_tmp_path / "parts"
+    full, code = run_case(case, whole, comm, plot=False)
+    assert code == 0
+    run_case(case, parts, comm, plot=False, stop_after=3)
+    continued, code = run_case(case, parts, comm, plot=False, restart=True)
+    assert code == 0
+    counts = np.array([[a["iterations"], b["iterations"]] for a, b in zip(full["steps"], continued["steps"])])
+    assert np.abs(np.diff(counts, axis=1)).max() <= 1, counts  # round-off of the multigrid set up again
+    for a, b in zip(full["steps"], continued["steps"]):
+        (fa,), (fb,) = a["pair_forces"].values(), b["pair_forces"].values()
+        assert np.abs(np.subtract(fa, fb)).max() <= 1e-12 * np.abs(fa).max(), (a["step"], fa, fb)
+    difference = None
+    if comm.rank == 0:
+        last = len(full["steps"]) - 1
+        difference = float(np.abs(read_vtx(whole / "body.bp", last).point_data["displacement [m]"]
+                                  - read_vtx(parts / "body.bp", last).point_data["displacement [m]"]).max())
+    assert comm.bcast(difference, root=0) <= 1e-12
