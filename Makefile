@@ -50,7 +50,8 @@ test-mpi: $(PY)
 # continued on 3): a small, fast subset; the marker ranks(...) of a test says on which it runs.
 RANK_TESTS ?= tests/test_ranks.py tests/test_output_parallel.py \
 	tests/test_restart_paths.py::test_a_path_restarted_on_another_number_of_ranks \
-	tests/test_dynamics.py::test_history_on_any_number_of_ranks
+	tests/test_dynamics.py::test_history_on_any_number_of_ranks \
+	tests/test_current_geometry.py::test_newton_matrix_against_differences
 test-ranks: $(PY)
 	$(MPIENV) mpirun -n 3 $(PY) -m mpi4py -m pytest -q --color=no -p no:cacheprovider $(RANK_TESTS)
 	$(MPIENV) mpirun -n 4 $(PY) -m mpi4py -m pytest -q --color=no -p no:cacheprovider $(RANK_TESTS)
