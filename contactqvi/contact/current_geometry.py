@@ -135,14 +135,17 @@ def geometric_rows(V: fem.FunctionSpace, current: CurrentGeometry, interfaces: t
         matrices.append(product)
     # a prescribed (roller) component of a contact node: its variable is w + d, d the shift, as
     # for the frozen geometry (:func:`~contactqvi.contact.problem._align_frames`): an identity row
-    rollers = free.duplicate()
-    rollers.set(0.0)
     contact_dofs = (3 * contact_blk[:, None] + np.arange(3)).ravel()
-    rollers.array[contact_dofs] = 1.0 - free.array_r[contact_dofs]
-    matrices[1].setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
-    matrices[1].setDiagonal(rollers, addv=PETSc.InsertMode.ADD_VALUES)
-    for vec in (free, rollers):
-        vec.destroy()
+    rollers = contact_dofs[free.array_r[contact_dofs] == 0.0]
+    marked = np.zeros(transform.getLocalSize()[0], dtype=PETSc.IntType)
+    marked[rollers] = 1
+    identity = PETSc.Mat().createAIJ(size=transform.getSizes(), comm=transform.getComm(), csr=(
+        np.concatenate([[0], np.cumsum(marked)]).astype(PETSc.IntType),
+        (transform.getOwnershipRange()[0] + rollers).astype(PETSc.IntType), np.ones(len(rollers))))
+    identity.assemble()
+    matrices[1].axpy(1.0, identity, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    for obj in (free, identity):
+        obj.destroy()
     return matrices[0], matrices[1]
 
 

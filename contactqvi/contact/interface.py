@@ -270,15 +270,15 @@ def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: t
 
 
 def followed(V: fem.FunctionSpace, interfaces: typing.Sequence[Interface], constrained: np.ndarray,
-             displacement: fem.Function) -> list[Interface]:
+             displacement: fem.Function, linearised: bool = False) -> list[Interface]:
     """The interfaces with the pairs searched ``"newton"`` integrated again at x + ``displacement``
     on the facet pairs and slave nodes of their last search
-    (:func:`~contactqvi.contact.mortar.coupling_on_layout`), with their derivatives; the others
-    as they are (collective)."""
+    (:func:`~contactqvi.contact.mortar.coupling_on_layout`), with their derivatives if
+    ``linearised``; the others as they are (collective)."""
     x = displacement.x.array.reshape(-1, 3)
 
     def again(interface: Interface) -> Interface:
-        coupling = coupling_on_layout(V, interface.coupling.layout, x, linearised=True)
+        coupling = coupling_on_layout(V, interface.coupling.layout, x, linearised=linearised)
         normal, frames = pair_frames(coupling.normal, constrained[coupling.slave_blk])
         return dataclasses.replace(interface, frames=frames, area=coupling.weight, coupling=coupling,
                                    initial_gap=np.einsum("ij,ij->i", normal, coupling.separation))

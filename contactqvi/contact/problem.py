@@ -286,15 +286,16 @@ class ContactProblem(PETScOwner):
             self.current = CurrentGeometry.at(displacement, starts)
         return difference
 
-    def follow(self, displacement: fem.Function) -> None:
+    def follow(self, displacement: fem.Function, linearised: bool = False) -> None:
         """Take the geometry of the pairs searched ``"newton"`` at x + ``displacement`` on the
-        facet pairs and slave nodes of their last search (:func:`~contactqvi.contact.interface.followed`):
+        facet pairs and slave nodes of their last search (:func:`~contactqvi.contact.interface.followed`;
+        with its derivatives if ``linearised``, which only a Newton step needs, not a trial point):
         their frames, areas and laws, R, N, T and the offsets c (new values in the same
         objects, of the same patterns), and the shift d = v - w of their nodes
         (:func:`~contactqvi.contact.current_geometry.following_shift`) with the load of the
         current step. A and the Newton solver's nodes stay. Collective."""
         elastic = self.elastic
-        interfaces = followed(self.V, self.interfaces, elastic.constrained, displacement)
+        interfaces = followed(self.V, self.interfaces, elastic.constrained, displacement, linearised)
         contact_blk, _, frames, contact_area = _merged(interfaces)
         frames = roller_aligned(frames, elastic.constrained[contact_blk])
         rotation = _nodal_rotation(self.A, contact_blk, frames, always=True)
@@ -343,8 +344,10 @@ class ContactProblem(PETScOwner):
         out.axpy(1.0, self.shift)
 
     def geometric_rows(self, u: PETSc.Vec) -> tuple[PETSc.Mat, PETSc.Mat]:
-        """Gamma T and (dv/du~) T of the Newton matrix at u (new matrices;
-        :func:`~contactqvi.contact.current_geometry.geometric_rows`)."""
+        """Gamma T and (dv/du~) T of the Newton matrix at u, the iterate the geometry was last
+        taken at (new matrices; :func:`~contactqvi.contact.current_geometry.geometric_rows`)."""
+        if any(i.follows and i.coupling.derivatives is None for i in self.interfaces):
+            self.follow(self.current.displacement, linearised=True)  # the same values, with derivatives
         h = self.hyperelastic
         self.physical_displacement(u, h.displacement)
         return geometric_rows(self.V, self.current, self.interfaces, self.elastic.constrained, self.contact_blk,
