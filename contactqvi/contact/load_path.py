@@ -324,7 +324,8 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
     Abaqus' default, Code_Aster's ``PREDICTION = 'EXTRAPOLE'``); any other, the first from rest
     too, adds the linear elastic response to the change of its loads and prescribed values, A of
     the last search (the small-strain stiffness in the current variables), the contact nodes'
-    normal variables held and their tangential ones free (Code_Aster's ``'ELASTIQUE'``).
+    variables held (Code_Aster's ``'ELASTIQUE'``; with the tangential ones free, a body held by
+    friction alone was free to move, and the predictor was A's null space).
     ``pc``: the Newton-step solver's preset."""
     predicted = fem.Function(problem.V)
     factor = state.extrapolation(step.load, step.translation)
@@ -343,12 +344,12 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
 def _elastic_change(problem: ContactProblem, state: PathState, pc: str, prefix: str) -> PETSc.Vec:
     """The change of the solver's variables (a new vector) under the change of the loads and
     prescribed values from ``state`` to the step set in ``problem``, by the stiffness A of the last
-    search with the contact nodes' normal variables held (:func:`_predict`)."""
+    search with the contact nodes' variables held (:func:`_predict`)."""
     change, before = problem.A.createVecRight(), problem.A.createVecRight()
     problem.step_load(problem.load_factor, problem.translation, problem.step_rotation, change)
     problem.step_load(state.load, state.translation, state.rotation, before)
     change.axpy(-1.0, before)
-    held = 3 * problem.contact_blk + 2
+    held = (3 * problem.contact_blk[:, None] + np.arange(3)).ravel()
     A = problem.A.copy()
     A.zeroRows((A.getOwnershipRange()[0] + held).astype(PETSc.IntType), diag=1.0)
     change.array[held] = 0.0
