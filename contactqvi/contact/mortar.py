@@ -278,7 +278,8 @@ def coupling_on_layout(V: fem.FunctionSpace, layout: MortarLayout, displacement:
     nm = layout.master_glob.shape[1]
     master_x = fetch_rows(comm, index_map, current[:index_map.size_local],
                           layout.master_glob.ravel()).reshape(-1, nm, 3)
-    return _integrated(V, layout, slave, master_x, current, layout.rows, None, None, linearised)[0]
+    with np.errstate(divide="ignore", invalid="ignore"):  # a row no pair covers: NaN, a trial the line search rejects
+        return _integrated(V, layout, slave, master_x, current, layout.rows, None, None, linearised)[0]
 
 
 def _integrated(V: fem.FunctionSpace, layout: MortarLayout, slave: SurfaceFacets, master_x: np.ndarray,
