@@ -28,7 +28,6 @@ from __future__ import annotations
 import dataclasses
 import typing
 
-from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
