@@ -142,7 +142,7 @@ def test_a_checkpoint_of_another_case_is_a_named_error(tmp_path):
     assert read_checkpoint(MPI.COMM_SELF, tmp_path, case) is None
     (tmp_path / DIRECTORY).mkdir()
     marker = {"step": 2, "solved": 2, "file": "step_0002.bp", "load": 1.0, "translation": [0.0, 0.0, 0.0],
-              "target": 1.0, "rotation": None, "fit": 1.0, "stride": [1.0, 0.0, 0.0, 0.0],
+              "target": 1.0, "rotation": None, "fit": 1.0, "stride": [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
               "summary": {"case": case, "steps": [{}, {}]}}
     (tmp_path / DIRECTORY / "checkpoint.json").write_text(json.dumps(marker))
     assert read_checkpoint(MPI.COMM_SELF, tmp_path, case).step == 2

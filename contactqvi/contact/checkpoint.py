@@ -16,7 +16,7 @@ After every converged load step the runner writes, into ``OUTPUT/checkpoint/``
   factor, translation (the obstacles' position the next step's slip is measured
   from), rotation of the obstacles and moved groups (``{axis, angle, centre}`` or null)
   and fraction of the declared interferences resolved (``fit``), the last solve's change of
-  load factor and translation (``stride``), the first step's stopping target and the
+  load factor, translation and rotation (``stride``), the first step's stopping target and the
   summary so far.
 
 A checkpoint exists only once ``checkpoint.json`` names it: a step file being written
@@ -86,7 +86,7 @@ class Checkpoint:
     summary: dict[str, typing.Any]
     rotation: Rotation | None = None
     fit: float = 1.0
-    stride: tuple[float, ...] = (0.0,) * 4
+    stride: tuple[float, ...] = (0.0,) * 7
 
     def resume(self, problem: ContactProblem) -> PathState:
         """The load path's state after :attr:`step`, read into ``problem``'s space (collective;

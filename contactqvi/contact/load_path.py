@@ -319,8 +319,8 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
     ``"newton"`` into ``u``, the pairs searched there (``step_solver``'s levels updated). Where the
     prescribed values alone move (the predictor of the other modes), a step that moves a boundary
     by more than an element's height (a compression, a die slid sideways) turns elements inside
-    out, and is cut. A step that
-    continues the last solve extrapolates its increment (:meth:`PathState.extrapolation`;
+    out, and is cut. A step that continues the last solve (along its change of load,
+    translation and rotation) extrapolates its increment (:meth:`PathState.extrapolation`;
     Abaqus' default, Code_Aster's ``PREDICTION = 'EXTRAPOLE'``); any other, the first from rest
     too, adds the linear elastic response to the change of its loads and prescribed values, A of
     the last search (the small-strain stiffness in the current variables), the contact nodes'
@@ -328,7 +328,7 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
     friction alone was free to move, and the predictor was A's null space).
     ``pc``: the Newton-step solver's preset."""
     predicted = fem.Function(problem.V)
-    factor = state.extrapolation(step.load, step.translation)
+    factor = state.extrapolation(step.load, step.translation, step.rotation)
     if factor > 0.0:
         predicted.x.array[:] = state.displacement.x.array + factor * state.increment.x.array
     else:

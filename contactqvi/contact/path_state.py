@@ -28,7 +28,8 @@ field               read by
 ``node_states``     the predictor: touching nodes start the next step without a slip increment
 ``target``          the stopping target ||y^|| of every later step (the first step's)
 ``increment``,      the predictor of pairs searched ``"newton"``: the last solve's change of the
-``stride``          displacement, extrapolated along its change of load factor and translation
+``stride``          displacement, extrapolated along its change of load factor, translation and
+                    rotation
                     (:meth:`PathState.extrapolation`)
 ==================  ===========================================================================
 
@@ -77,7 +78,7 @@ class PathState(PETScOwner):
         target: the first step's stopping target ||y^|| (N); 0 before it.
         fit: the fraction of the declared interferences resolved there (0 at rest).
         increment: the change of u~ in the last converged solve (m; zero at rest).
-        stride: the change of (load factor, translation (m)) in it, (4,).
+        stride: the change of (load factor, translation (m), rotation vector (rad)) in it, (7,).
     """
 
     done: int
@@ -91,7 +92,7 @@ class PathState(PETScOwner):
     rotation: Rotation | None = None
     fit: float = 0.0
     increment: fem.Function | None = None
-    stride: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(4))
+    stride: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(7))
 
     def __post_init__(self) -> None:
         if self.increment is None:
@@ -129,23 +130,29 @@ class PathState(PETScOwner):
 
     @property
     def position(self) -> np.ndarray:
-        """(4,) load factor and translation (m) of the last converged solve."""
-        return np.array([self.load, *self.translation])
+        """(7,) load factor, translation (m) and rotation vector (rad) of the last converged solve."""
+        return _position(self.load, self.translation, self.rotation)
 
-    def extrapolation(self, load: float, translation: typing.Sequence[float]) -> float:
-        """The factor of :attr:`increment` that extrapolates the last solve to a step to ``load``
-        and ``translation``: its change along the last solve's :attr:`stride`, relative to it (0
-        at rest or for a step that does not continue it; a fit over several steps is not
+    def extrapolation(self, load: float, translation: typing.Sequence[float], rotation: Rotation | None) -> float:
+        """The factor of :attr:`increment` that extrapolates the last solve to a step to ``load``,
+        ``translation`` and ``rotation``: its change along the last solve's :attr:`stride`, relative
+        to it (0 at rest or for a step that does not continue it; a fit over several steps is not
         extrapolated). The predictor
         u~ + factor x increment is the linear extrapolation of Abaqus/Standard's default and of
         Code_Aster's ``PREDICTION = 'EXTRAPOLE'``."""
         length = float(self.stride @ self.stride)
         if length == 0.0:
             return 0.0
-        change = np.array([load, *translation]) - self.position
+        change = _position(load, translation, rotation) - self.position
         return max(float(change @ self.stride) / length, 0.0)
 
     def contact_states(self, problem: ContactProblem) -> np.ndarray:
         """The states of ``problem``'s contact nodes (a node without one is not in contact)."""
         states = self.node_states[problem.contact_blk]
         return np.where(states < 0, State.NO_CONTACT, states).astype(np.int8)
+
+
+def _position(load: float, translation: typing.Sequence[float], rotation: Rotation | None) -> np.ndarray:
+    """(7,) a step's load factor, translation (m) and rotation vector (angle times axis, rad)."""
+    turn = np.zeros(3) if rotation is None else np.radians(rotation.angle) * np.asarray(rotation.axis, dtype=float)
+    return np.array([load, *translation, *turn])
