@@ -52,20 +52,22 @@ class CurrentGeometry:
             None for a pair not searched ``"newton"``.
         base, direction: the line of the line search, u~_k and T_k du
             (:meth:`~contactqvi.contact.problem.ContactProblem.set_search_line`).
+        trial: its trial point u~_k + alpha T_k du.
     """
 
     displacement: fem.Function
     start: tuple[MortarCoupling | None, ...]
     base: fem.Function
     direction: fem.Function
+    trial: fem.Function
 
     @classmethod
     def at(cls, displacement: fem.Function, couplings: typing.Sequence[MortarCoupling | None]) -> CurrentGeometry:
         """The geometry at ``displacement`` (copied), the load step starting there with ``couplings``."""
         copy = fem.Function(displacement.function_space)
         copy.x.array[:] = displacement.x.array
-        return cls(copy, tuple(couplings), fem.Function(displacement.function_space),
-                   fem.Function(displacement.function_space))
+        V = displacement.function_space
+        return cls(copy, tuple(couplings), fem.Function(V), fem.Function(V), fem.Function(V))
 
 
 def following_shift(V: fem.FunctionSpace, current: CurrentGeometry, interfaces: typing.Sequence[Interface],
@@ -172,14 +174,15 @@ class _Entries:
         rows = np.concatenate([np.empty(0, dtype=np.int64), *self.rows]).astype(PETSc.IntType)
         cols = np.concatenate([np.empty(0, dtype=np.int64), *self.cols]).astype(PETSc.IntType)
         values = np.concatenate([np.empty(0), *self.values])
-        keys, inverse = np.unique(np.column_stack([rows, cols]), axis=0, return_inverse=True)
+        width = np.int64(like.getSize()[1])  # one int64 key per (row, column)
+        keys, inverse = np.unique(rows.astype(np.int64) * width + cols, return_inverse=True)
         summed = np.bincount(inverse.ravel(), weights=values, minlength=len(keys))
-        nodes, starts = np.unique(keys[:, 0], return_index=True)
+        nodes, starts = np.unique(keys // width, return_index=True)
         indptr = np.append(starts, len(keys)).astype(PETSc.IntType)
         M = PETSc.Mat().createAIJ(size=like.getSizes(), comm=like.getComm())
         M.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
         M.setUp()
-        M.setValuesIJV(indptr, keys[:, 1].astype(PETSc.IntType), summed, addv=PETSc.InsertMode.ADD_VALUES,
+        M.setValuesIJV(indptr, (keys % width).astype(PETSc.IntType), summed, addv=PETSc.InsertMode.ADD_VALUES,
                        rowmap=nodes.astype(PETSc.IntType))
         M.assemble()
         return M

@@ -151,9 +151,12 @@ class MortarLayout:
         def keys(layout: MortarLayout, pairs: np.ndarray) -> np.ndarray:
             return np.column_stack([layout.pairs_s[pairs], np.sort(layout.master_glob[pairs], axis=1)])
 
-        mine = {tuple(k) for k in keys(self, np.arange(len(self.pairs_s)))}
-        needed = keys(found, np.flatnonzero(found.overlap > NEGLIGIBLE_OVERLAP))
-        local = np.array_equal(self.rows, found.rows) and all(tuple(k) in mine for k in needed)
+        needed = np.flatnonzero(found.overlap > NEGLIGIBLE_OVERLAP)
+        _, key = np.unique(np.concatenate([keys(self, np.arange(len(self.pairs_s))), keys(found, needed)]), axis=0,
+                           return_inverse=True)
+        key = key.ravel()
+        local = np.array_equal(self.rows, found.rows) and bool(np.isin(key[len(self.pairs_s):],
+                                                                       key[:len(self.pairs_s)]).all())
         return comm.allreduce(local, op=MPI.LAND)
 
 

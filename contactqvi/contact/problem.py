@@ -317,10 +317,10 @@ class ContactProblem(PETScOwner):
     def layout_changed(self, displacement: fem.Function) -> bool:
         """Whether a search of the pairs searched ``"newton"`` in x + ``displacement`` finds other
         facet pairs or slave nodes than their current geometry's (collective)."""
-        found = search_again(self.V, self.body.facet_tags, self.interfaces, self.elastic.constrained, displacement,
+        following = [i for i in self.interfaces if i.follows]
+        found = search_again(self.V, self.body.facet_tags, following, self.elastic.constrained, displacement,
                              self.translation, True, self.step_rotation, linearised=False)
-        return not all(old.coupling.layout.covers(new.coupling.layout, self.comm)
-                       for new, old in zip(found, self.interfaces) if old.follows)
+        return not all(old.coupling.layout.covers(new.coupling.layout, self.comm) for new, old in zip(found, following))
 
     def set_search_line(self, u: PETSc.Vec, du: PETSc.Vec) -> None:
         """The line of a line search from u along du in the physical displacement: u~(u) and
@@ -337,17 +337,17 @@ class ContactProblem(PETScOwner):
         """The geometry at u~ + alpha T du on the line of :meth:`set_search_line` (:meth:`follow`),
         and the solver's variables there into ``out``: w + d, v at the contact nodes."""
         current = self.current
-        trial = fem.Function(self.V)
-        trial.x.array[:] = current.base.x.array + alpha * current.direction.x.array
-        self.follow(trial)
-        self.solver_variables(trial, out)
+        current.trial.x.array[:] = current.base.x.array + alpha * current.direction.x.array
+        self.follow(current.trial)
+        self.solver_variables(current.trial, out)
         out.axpy(1.0, self.shift)
 
     def geometric_rows(self, u: PETSc.Vec) -> tuple[PETSc.Mat, PETSc.Mat]:
         """Gamma T and (dv/du~) T of the Newton matrix at u, the iterate the geometry was last
         taken at (new matrices; :func:`~contactqvi.contact.current_geometry.geometric_rows`)."""
-        if any(i.follows and i.coupling.derivatives is None for i in self.interfaces):
-            self.follow(self.current.displacement, linearised=True)  # the same values, with derivatives
+        if any(i.follows and i.coupling.derivatives is None for i in self.interfaces):  # a trial's: the same
+            self.interfaces = tuple(followed(self.V, self.interfaces, self.elastic.constrained,  # values, with
+                                             self.current.displacement, linearised=True))  # their derivatives
         h = self.hyperelastic
         self.physical_displacement(u, h.displacement)
         return geometric_rows(self.V, self.current, self.interfaces, self.elastic.constrained, self.contact_blk,
@@ -362,9 +362,9 @@ class ContactProblem(PETScOwner):
         nodes, d = following_shift(self.V, self.current, self.interfaces, self.contact_blk, self.interface_of_node,
                                    self.fit, w.array_r)
         w.destroy()
-        rollers = self.elastic.constrained[self.contact_blk[nodes]].sum(axis=1)  # the first frame components
-        d[np.arange(3) < rollers[:, None]] = 0.0
         self.shift.array.reshape(-1, 3)[self.contact_blk[nodes]] = d
+        dofs = (3 * self.contact_blk[nodes, None] + np.arange(3)).ravel()
+        self.shift.array[np.intersect1d(dofs, self.hyperelastic.prescribed)] = 0.0
 
     def rigid_motion(self) -> np.ndarray:
         """The coefficients of the loads :attr:`translated` at the current step: the moved
