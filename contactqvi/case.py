@@ -92,7 +92,8 @@ the ``[[steps]]``, if any, are time points (the load factor and translation line
 between them, :func:`~contactqvi.load_steps.at_time`; none: constant loads)::
 
     [dynamics]
-    scheme = "newmark"                  # contact-stabilised Newmark, beta = 1/4, gamma = 1/2
+    scheme = "newmark"                  # or "hht" (alpha = 0.05), "generalized_alpha" (rho_infinity = 0.8);
+                                        # all contact-stabilised; newmark: beta = 1/4, gamma = 1/2
     dt = 1e-5                           # time step (s) > 0
     end = 1e-3                          # end time (s)
     initial_velocity = [0.0, 0.0, -1.0] # m/s; with [[bodies]]: each body's own key
@@ -164,6 +165,7 @@ from contactqvi.parameters import (
     require_number,
     require_positive,
 )
+from contactqvi.time_scheme import SCHEMES, TimeScheme
 
 __all__ = [
     "OBSTACLE_KEYS",
@@ -171,6 +173,8 @@ __all__ = [
     "Boundary",
     "Contact",
     "ContactCase",
+    "DEFAULT_HHT_ALPHA",
+    "DEFAULT_RHO_INFINITY",
     "DYNAMICS_SCHEMES",
     "Dynamics",
     "ContactPair",
@@ -354,10 +358,13 @@ class Body:
     initial_velocity: Vector | None = None
 
 
-#: Time-stepping schemes of ``[dynamics] scheme`` (docs/dynamics.md): Newmark's average
-#: acceleration (beta = 1/4, gamma = 1/2) with the contact-stabilised predictor of
-#: Deuflhard, Krause and Ertel (2008).
-DYNAMICS_SCHEMES = ("newmark",)
+#: Time-stepping schemes of ``[dynamics] scheme`` (docs/dynamics.md, :mod:`contactqvi.time_scheme`),
+#: each with the contact-stabilised predictor of Deuflhard, Krause and Ertel (2008).
+DYNAMICS_SCHEMES = SCHEMES
+#: The defaults of HHT's ``alpha`` (Abaqus/Standard's "moderate dissipation", -0.05 in its sign)
+#: and of generalized-α's ``rho_infinity``.
+DEFAULT_HHT_ALPHA = 0.05
+DEFAULT_RHO_INFINITY = 0.8
 
 
 @dataclasses.dataclass(frozen=True)
@@ -371,12 +378,25 @@ class Dynamics:
         scheme: one of :data:`DYNAMICS_SCHEMES`.
         initial_velocity: the body's velocity at time 0 (m/s), one body; with ``[[bodies]]``
             each body's ``initial_velocity``. None: at rest.
+        alpha: HHT's alpha in [0, 1/3] (``scheme = "hht"`` only; None: :data:`DEFAULT_HHT_ALPHA`).
+        rho_infinity: generalized-α's spectral radius at infinite frequency in [0, 1]
+            (``scheme = "generalized_alpha"`` only; None: :data:`DEFAULT_RHO_INFINITY`).
     """
 
     dt: float
     end: float
     scheme: str = "newmark"
     initial_velocity: Vector | None = None
+    alpha: float | None = None
+    rho_infinity: float | None = None
+
+    def time_scheme(self) -> TimeScheme:
+        """The (alpha_m, alpha_f, beta, gamma) of ``scheme`` and its parameter."""
+        if self.scheme == "hht":
+            return TimeScheme.hht(DEFAULT_HHT_ALPHA if self.alpha is None else self.alpha)
+        if self.scheme == "generalized_alpha":
+            return TimeScheme.generalized_alpha(DEFAULT_RHO_INFINITY if self.rho_infinity is None else self.rho_infinity)
+        return TimeScheme.newmark()
 
     @property
     def steps(self) -> int:
@@ -949,6 +969,8 @@ def _check_dynamics(case: ContactCase) -> Dynamics:
     dynamics = case.dynamics
     _instance(dynamics, Dynamics, "dynamics")
     require_choice("dynamics.scheme", dynamics.scheme, DYNAMICS_SCHEMES)
+    alpha = _scheme_parameter(dynamics, "alpha", "hht", (0.0, 1.0 / 3.0))
+    rho_infinity = _scheme_parameter(dynamics, "rho_infinity", "generalized_alpha", (0.0, 1.0))
     dt = require_number("dynamics.dt", dynamics.dt)
     require(dt > 0.0, "dynamics.dt", f"the time step must be > 0 (s), got {dynamics.dt!r}")
     end = require_number("dynamics.end", dynamics.end)
@@ -970,7 +992,20 @@ def _check_dynamics(case: ContactCase) -> Dynamics:
     for i, search in enumerate(searches):
         key = "contact.search" if case.contact is not None else f"contacts[{i}].search"
         require(search in (None, "once"), key, f"[dynamics] searches the contact once for now, got {search!r}")
-    return Dynamics(dt, end, dynamics.scheme, velocity)
+    return Dynamics(dt, end, dynamics.scheme, velocity, alpha, rho_infinity)
+
+
+def _scheme_parameter(dynamics: Dynamics, key: str, scheme: str, bounds: tuple[float, float]) -> float | None:
+    """``dynamics.<key>``, the parameter of ``scheme`` alone, checked within ``bounds`` (None: not given)."""
+    value = getattr(dynamics, key)
+    if value is None:
+        return None
+    require(dynamics.scheme == scheme, f"dynamics.{key}", f"a parameter of scheme = {scheme!r}, not of "
+            f"{dynamics.scheme!r}")
+    value = require_number(f"dynamics.{key}", value)
+    require(bounds[0] <= value <= bounds[1], f"dynamics.{key}", f"must be in [{bounds[0]:g}, {bounds[1]:.4g}] "
+            f"(unconditional stability), got {value!r}")
+    return value
 
 
 def _check_time_points(case: ContactCase, bodies: typing.Sequence[Body], paths: typing.Sequence[str]) -> None:

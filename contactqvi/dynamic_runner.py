@@ -1,4 +1,4 @@
-"""Run a case with ``[dynamics]``: the contact-stabilised Newmark method over time (docs/dynamics.md).
+"""Run a case with ``[dynamics]``: a contact-stabilised Newmark-family scheme over time (docs/dynamics.md).
 
 ``python -m contactqvi run CASE.toml`` comes here when the case has a ``[dynamics]`` table.
 Each converged time step is
@@ -42,19 +42,19 @@ from contactqvi.case import ContactCase, check_solver
 from contactqvi.contact.checkpoint import DIRECTORY, ENGINE, read_marker, write_step_file
 from contactqvi.contact.diagnosis import failure_cause
 from contactqvi.contact.figures import draw_on_rank_0
-from contactqvi.contact.dynamics import ENERGY_TERMS, BodyMotion, DynamicState, StabilisedNewmark
+from contactqvi.contact.dynamics import ENERGY_TERMS, BodyMotion, DynamicState, StabilisedNewmark, global_components
 from contactqvi.contact.load_path import contact_resultants
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult
 from contactqvi.elasticity import cellwise
 from contactqvi.linalg import default_options
 from contactqvi.paraview import MeshPiece, VTXDatasetWriter
-from contactqvi.parameters import Parameter, Parameters
+from contactqvi.parameters import Parameter, ParameterError, Parameters
 from contactqvi.records import Recorder, warn
 from contactqvi.result import Status
 from contactqvi.runner import EXIT_CODES, PREFIX, build_problem, stop_signals
 
-__all__ = ["SOLVER_PARAMETERS", "read_dynamic_checkpoint", "run_dynamics"]
+__all__ = ["SOLVER_PARAMETERS", "STATE_FIELDS", "read_dynamic_checkpoint", "run_dynamics"]
 
 logger = logging.getLogger(__name__)
 
@@ -64,6 +64,9 @@ BODY_FIELDS = ("displacement [m]", "velocity [m/s]", "acceleration [m/s^2]")
 SOLVER_PARAMETERS = Parameters({**PARAMETERS, "max_cuts": Parameter(
     4, "a time step that does not converge is halved and retried from the last converged state, at most this many "
     "halvings in a row (the step grows back after each part that converges)", type=int, minimum=0)})
+#: The vectors of a checkpoint (:func:`_state_vectors`), by name in its step file.
+STATE_FIELDS = ("solver_variables", "physical_displacement", "solver_velocity", "solver_acceleration",
+                "solver_newmark_acceleration", "inertial_force")
 _MARKER = "dynamics.json"
 
 
@@ -86,14 +89,17 @@ def run_dynamics(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm =
     out = tables.prepare_output_dir(comm, output)
     warnings = Recorder()
     with warnings, default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, stop_signals() as signal:
-        with StabilisedNewmark(problem, _density(case, problem), dynamics.dt, parameters, PREFIX,
-                               case.steps) as integrator, BodyMotion(problem, integrator.mass) as motion:
+        scheme = dynamics.time_scheme()
+        with StabilisedNewmark(problem, _density(case, problem), dynamics.dt, parameters, PREFIX, case.steps,
+                               scheme) as integrator, BodyMotion(problem, integrator.mass) as motion:
             velocity = _initial_velocity(case, problem)
             state = integrator.initial_state(velocity)
             velocity.destroy()
             summary = {"problem": "dynamic contact case", "case": case.to_dict(), "mpi_size": comm.size,
-                       "p": problem.n_contact, "n": problem.n_free, "scheme": "contact-stabilised Newmark "
-                       "(Deuflhard, Krause, Ertel 2008), beta = 1/4, gamma = 1/2", "steps": []}
+                       "p": problem.n_contact, "n": problem.n_free,
+                       "scheme": {"name": scheme.name, **scheme.parameters(),
+                                  "stabilisation": "contact-stabilised predictor (Deuflhard, Krause, Ertel 2008)"},
+                       "steps": []}
             if restart:
                 summary = read_dynamic_checkpoint(problem, out, case, state, summary)
             def stop() -> bool:  # collective: a signal on any rank
@@ -142,12 +148,12 @@ def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: B
                 tables.write_summary(problem.comm, out / "summary.json", summary)
                 return EXIT_CODES["not converged"]
             state.done += 1
-            summary["steps"].append(_entry(problem, state, projection, result, motion)
+            summary["steps"].append(_entry(problem, state, projection, result, motion, integrator.scheme.force_factor)
                                     | ({"parts": parts} if len(parts) > 1 else {}))
             state.physical.copy(displacement.x.petsc_vec)
             displacement.x.scatter_forward()
-            _global(problem, state.velocity, velocity)
-            _global(problem, state.acceleration, acceleration)
+            global_components(problem, state.velocity, velocity)
+            global_components(problem, state.acceleration, acceleration)
             writer.write(piece.dataset(fields), state.time)
             tables.write_summary(problem.comm, out / "summary.json", summary)
             write_dynamic_checkpoint(problem, out, state, summary)
@@ -189,11 +195,12 @@ def _advance(problem: ContactProblem, integrator: StabilisedNewmark, state: Dyna
 
 
 def _entry(problem: ContactProblem, state: DynamicState, projection: SCDNewtonResult, result: SCDNewtonResult,
-           motion: BodyMotion) -> dict[str, typing.Any]:
+           motion: BodyMotion, factor: float) -> dict[str, typing.Any]:
     """The summary entry of the time step just recorded in ``state``. The contact force is the
-    step's mean, half the multiplier of the step's GE (docs/dynamics.md, Sect. 3)."""
-    mean = dataclasses.replace(result, normal_force=0.5 * result.normal_force,
-                               friction_force=0.5 * result.friction_force)
+    step's mean, ``factor`` times the multiplier of the step's GE (docs/dynamics.md, Sect. 3;
+    1/2 for Newmark's rule)."""
+    mean = dataclasses.replace(result, normal_force=factor * result.normal_force,
+                               friction_force=factor * result.friction_force)
     logger.info("time step %d, t = %.6g s: %d + %d Newton steps; kinetic %.6g J, elastic %.6g J, balance error "
                 "%.3g J", state.done, state.time, projection.iterations, result.iterations,
                 state.energy["kinetic"], state.energy["elastic"], state.energy["balance_error"])
@@ -226,32 +233,23 @@ def _initial_velocity(case: ContactCase, problem: ContactProblem) -> PETSc.Vec:
     return problem.solver_variables(field, problem.A.createVecRight())
 
 
-def _global(problem: ContactProblem, velocity: PETSc.Vec, out: fem.Function) -> None:
-    """T v: a velocity in the solver's variables in global components (no shift, no offsets)."""
-    if problem.to_global is None:
-        velocity.copy(out.x.petsc_vec)
-    else:
-        problem.to_global.mult(velocity, out.x.petsc_vec)
-    out.x.scatter_forward()
-
-
 def write_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, state: DynamicState,
                              summary: dict[str, typing.Any]) -> None:
-    """Checkpoint ``state``: w_n, v_n and the last acceleration in the solver's variables and the
-    physical u_n (against the mesh's input order) and a marker with the step, time, energies and
-    the summary, written last (:func:`~contactqvi.contact.checkpoint.write_step_file`). Collective."""
+    """Checkpoint ``state``: w_n, v_n, the last acceleration, Newmark's a_n and m_n in the
+    solver's variables and the physical u_n (:data:`STATE_FIELDS`, against the mesh's input
+    order) and a marker with the step, time, energies and the summary, written last
+    (:func:`~contactqvi.contact.checkpoint.write_step_file`). Collective."""
     comm = problem.comm
     tables.prepare_output_dir(comm, out / DIRECTORY)
     name = f"time_{state.done:06d}.bp"
     write_step_file(comm, out, name, _state_functions(problem.V, state, fill=True), state.done, _MARKER,
-                    {"step": state.done, "time": state.time, "file": name, "energy": state.energy,
-                     "initial_energy": state.initial_energy, "summary": summary})
+                    {"step": state.done, "time": state.time, "file": name, "fields": list(STATE_FIELDS),
+                     "energy": state.energy, "initial_energy": state.initial_energy, "summary": summary})
 
 
 def _state_functions(V: fem.FunctionSpace, state: DynamicState, fill: bool) -> list[fem.Function]:
     """Functions on ``V`` for the vectors of :func:`_state_vectors`, holding them if ``fill``."""
-    names = ("solver_variables", "physical_displacement", "solver_velocity", "solver_acceleration")
-    fields = [fem.Function(V, name=name) for name in names]
+    fields = [fem.Function(V, name=name) for name in STATE_FIELDS]
     if fill:
         for field, vector in zip(fields, _state_vectors(state)):
             field.x.array[: vector.getLocalSize()] = vector.array
@@ -261,7 +259,8 @@ def _state_functions(V: fem.FunctionSpace, state: DynamicState, fill: bool) -> l
 
 def _state_vectors(state: DynamicState) -> tuple[PETSc.Vec, ...]:
     """The vectors of ``state`` a checkpoint holds, in the order of :func:`_state_functions`."""
-    return state.displacement, state.physical, state.velocity, state.acceleration
+    return (state.displacement, state.physical, state.velocity, state.acceleration, state.newmark_acceleration,
+            state.inertial_force)
 
 
 def read_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, case: ContactCase, state: DynamicState,
@@ -273,6 +272,10 @@ def read_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, case: Co
     if data is None:
         logger.warning("no checkpoint in %s: the run starts at time 0", out)
         return summary
+    if data.get("fields") != list(STATE_FIELDS):
+        raise ParameterError("--restart", f"the checkpoint in {out / DIRECTORY} was written by an older contactqvi "
+                             f"(without {', '.join(sorted(set(STATE_FIELDS) - set(data.get('fields', ()))))}); "
+                             "run again without --restart, or into a new --output directory")
     fields = _state_functions(problem.V, state, fill=False)
     for field, vector in zip(fields, _state_vectors(state)):
         adios4dolfinx.read_function(out / DIRECTORY / data["file"], field, engine=ENGINE, time=float(data["step"]),

@@ -1,19 +1,25 @@
-"""Implicit dynamic contact: the contact-stabilised Newmark method, each step solved by SCD Newton.
+"""Implicit dynamic contact: contact-stabilised Newmark-family schemes, each step solved by SCD Newton.
 
-Newmark's average acceleration rule (beta = 1/4, gamma = 1/2) with the contact-stabilised
-predictor of Deuflhard, Krause and Ertel (2008); derivation and energy identity in
-docs/dynamics.md. With tau the time step, M the mass and K the stiffness in the solver's
-variables w (M = T^T M_K T, K = T^T A_K T of :mod:`contactqvi.contact.problem`), F(t) the
-load at time t (load factor and translation of the case's time points,
-:func:`~contactqvi.load_steps.at_time`) and K the admissible set (the contact conditions at
-t_{n+1}), a step from (w_n, v_n) is
+A member (α_m, α_f, β, γ) of the generalized-α family (:mod:`contactqvi.time_scheme`:
+Newmark's average acceleration rule, HHT-α, Chung-Hulbert's generalized-α) with the
+contact-stabilised predictor of Deuflhard, Krause and Ertel (2008); derivation and energy
+identity in docs/dynamics.md. With tau the time step, M the mass and K the stiffness in the
+solver's variables w (M = T^T M_K T, K = T^T A_K T of :mod:`contactqvi.contact.problem`),
+F(t) the load at time t (load factor and translation of the case's time points,
+:func:`~contactqvi.load_steps.at_time`), g = F - K w the force without contact, m_n the
+inertial force without contact (m_n = g_n for Newmark's rule), a_n Newmark's acceleration and
+K the admissible set (the contact conditions at t_{n+1}), a step from (w_n, v_n, a_n, m_n) is
 
 1. predictor   w_pred = w_n + tau v_n,
 2. projection  w_bar = argmin_{w in K} 1/2 ||w - w_pred||_M^2, i.e. the GE
                0 in M (w - w_pred) + Q_0(w) (frictionless Q) -- a contact problem with A = M,
-3. step        0 in (4/tau^2) M (w - w_bar) + K w - F_{n+1} - (F_n - K w_n) + Q(w)   (docs/dynamics.md (3.3))
-               -- a contact problem with A_eff = K + (4/tau^2) M and a shifted load,
-4. velocity    v_{n+1} = v_n + (2/tau) (w_{n+1} - w_bar).
+3. step        0 in c M (w - w_bar) + K w - F_{n+1} - (alpha_f g_n - c_a m_n) / (1 - alpha_f) + Q(w)
+               (docs/dynamics.md (3.3); c, c_a of the scheme) -- a contact problem with
+               A_eff = K + c M and a shifted load,
+4. update      a_{n+1} = (w_{n+1} - w_bar) / (beta tau^2) - (1/2 - beta) / beta a_n,
+               v_{n+1} = v_n + tau ((1 - gamma) a_n + gamma a_{n+1}),
+               m_{n+1} = ((1 - alpha_f) g_{n+1} + alpha_f g_n - alpha_m m_n) / (1 - alpha_m)
+               (Newmark's rule: v_{n+1} = v_n + (2/tau)(w_{n+1} - w_bar), no a_n).
 
 A step that fails may be retried with a shorter tau (:meth:`StabilisedNewmark.step` takes
 any tau; A_eff and the step's solver follow it).
@@ -43,6 +49,7 @@ from dolfinx import fem
 from contactqvi.contact.hyperelastic import HyperelasticSystem
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult, SCDNewtonSolver
+from contactqvi.time_scheme import TimeScheme
 from contactqvi.elasticity import lame_parameters
 from contactqvi.laws import Frictionless
 from contactqvi.lifetime import PETScOwner, VectorSet
@@ -51,13 +58,14 @@ from contactqvi.load_steps import LoadStep, at_time
 from contactqvi.parameters import require
 from contactqvi.postprocess import internal_force_form, load_form
 
-__all__ = ["BETA", "ENERGY_TERMS", "BodyMotion", "DynamicState", "InertialSystem", "PhysicalEnergy", "StabilisedNewmark",
-           "global_mass_matrix", "mass_matrix"]
+__all__ = ["ENERGY_TERMS", "MASS_RTOL", "BodyMotion", "DynamicState", "InertialSystem", "PhysicalEnergy",
+           "StabilisedNewmark", "global_components", "global_mass_matrix", "mass_matrix"]
 
 logger = logging.getLogger(__name__)
 
-#: Newmark's beta of the average acceleration rule (its gamma is 1/2).
-BETA = 0.25
+#: Relative tolerance of the mass solves M â = m of the schemes that carry â (CG, Jacobi: the
+#: consistent mass is spectrally equivalent to its diagonal, some 20 iterations).
+MASS_RTOL = 1e-12
 #: The energy terms of a step (J), as in ``summary.json`` (docs/dynamics.md, Sect. 4).
 ENERGY_TERMS = ("kinetic", "elastic", "external_work", "support_work", "friction_dissipation", "contact_work",
                 "balance_error")
@@ -92,17 +100,18 @@ class InertialSystem(HyperelasticSystem):
     components, with r_K(u) = int P(F) : grad v dX - lambda_{n+1} l(v) of
     :class:`~contactqvi.contact.hyperelastic.HyperelasticSystem` (zero on the prescribed rows),
 
-        r(u) = r_K(u) + c M_K u + b,   b = -c M_K u_bar + r_K(u_n)   (lambda_n in r_K(u_n)),
-        dr/du = K_T(u) + c M_K,        c = 1 / (beta tau^2),
+        r(u) = r_K(u) + c M_K u + b,   b = -c M_K u_bar + (alpha_f r_K(u_n) + c_a m_n) / (1 - alpha_f),
+        dr/du = K_T(u) + c M_K,        (lambda_n in r_K(u_n); c, c_a of the time scheme)
 
-    the linear step's (1/(beta tau^2)) M (w - w_bar) + K w - F_{n+1} - (F_n - K w_n) with the
+    with m_n = -r_K(u_n) for Newmark's rule and M_K T â_n for the others: the linear step's
+    c M (w - w_bar) + K w - F_{n+1} - (alpha_f g_n - c_a M â_n) / (1 - alpha_f) with the
     internal force P(F) in place of K w. The problem maps r and dr/du to its variables
     (:meth:`~contactqvi.contact.problem.ContactProblem.residual`, ``tangent``) as for a static
     step; :class:`StabilisedNewmark` sets ``coefficient`` and ``inertia`` per step.
 
     Attributes:
         mass: M_K (global components, zero rows and columns at the prescribed dofs; not owned).
-        coefficient: c = 1 / (beta tau^2) of the current time step.
+        coefficient: c of the scheme and the current time step (:meth:`TimeScheme.inertia_coefficient`).
         inertia: b (global components, ghosted; not owned).
         work: a vector for M_K u (not owned).
     """
@@ -136,8 +145,13 @@ class DynamicState(PETScOwner):
         physical: u_n, the physical displacement in global components (owned dofs of the
             displacement space; the energies' variable).
         velocity: v_n in the solver's variables (m/s).
-        acceleration: (v_n - v_{n-1}) / tau, the last step's mean acceleration (m/s^2; the
-            trapezoidal rule's acceleration at t_{n - 1/2}), zero at time 0; output only, no step reads it.
+        acceleration: (v_n - v_{n-1}) / tau, the last step's mean acceleration (m/s^2), zero at
+            time 0; output only, no step reads it.
+        newmark_acceleration: Newmark's a_n in the solver's variables (m/s^2), and
+        inertial_force: m_n, the inertial force without the contact forces (N; in the variables
+            of f: the solver's for a linear body, global components for a hyperelastic one; zero
+            at the prescribed dofs), both for the schemes that carry them
+            (:attr:`TimeScheme.carries_acceleration`), zero for Newmark's rule.
         energy: the step's energy terms (:data:`ENERGY_TERMS`), the works and the dissipation
             summed from time 0 (J).
         initial_energy: kinetic + elastic energy at time 0 (J).
@@ -149,19 +163,23 @@ class DynamicState(PETScOwner):
     physical: PETSc.Vec
     velocity: PETSc.Vec
     acceleration: PETSc.Vec
+    newmark_acceleration: PETSc.Vec
+    inertial_force: PETSc.Vec
     energy: dict[str, float]
     initial_energy: float
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [self.displacement, self.physical, self.velocity, self.acceleration]
+        return [self.displacement, self.physical, self.velocity, self.acceleration, self.newmark_acceleration,
+                self.inertial_force]
 
 
 @dataclasses.dataclass
 class _Work(VectorSet):
     """The vectors of one time step (solver variables), reused by every step: ``scratch`` for
     products, the predictor w_pred (3.1) (then delta = w_bar - w_pred), the projected w_bar (3.2),
-    the next displacement w_{n+1}, its increment Delta w, the velocity change (3.4) and the
-    load F_n of the step's start."""
+    the next displacement w_{n+1}, its increment Delta w, the velocity change (3.4), the
+    load F_n of the step's start (then any load) and the force without contact g_n there (in
+    the variables of :attr:`DynamicState.inertial_force`)."""
 
     scratch: PETSc.Vec
     predicted: PETSc.Vec
@@ -170,6 +188,7 @@ class _Work(VectorSet):
     increment: PETSc.Vec
     velocity_change: PETSc.Vec
     previous_load: PETSc.Vec
+    previous_force: PETSc.Vec
 
 
 class PhysicalEnergy(PETScOwner):
@@ -250,47 +269,48 @@ class PhysicalEnergy(PETScOwner):
 
 
 class StabilisedNewmark(PETScOwner):
-    """The contact-stabilised Newmark method (module docstring) on a linear or hyperelastic ``problem``.
+    """A contact-stabilised scheme of the Newmark family (module docstring) on a linear or
+    hyperelastic ``problem``.
 
-    For a linear body turns ``problem.A`` into A_eff = K + M / (beta tau^2) in place (K is kept
-    as a copy for the step's load); a hyperelastic body's f and Jacobian, which the solver
-    assembles at every Newton step into A, get the inertia from an :class:`InertialSystem` that
-    takes the place of ``problem.hyperelastic`` while the integrator lives (put back by
-    :meth:`destroy`). Owns the two SCD solvers: the M-projection of the predictor and the
-    implicit step. The problem's contact is searched once (the mass and T of the reference
-    configuration). ``parameters`` and ``prefix`` are the SCD solver's; the projection's
-    Krylov solver reads its options under ``prefix + "predictor_"``. The loads, prescribed
+    For a linear body turns ``problem.A`` into A_eff = K + c M in place (K is kept as a copy for
+    the step's load); a hyperelastic body's f and Jacobian, which the solver assembles at every
+    Newton step into A, get the inertia from an :class:`InertialSystem` that takes the place of
+    ``problem.hyperelastic`` while the integrator lives (put back by :meth:`destroy`). Owns the
+    two SCD solvers, the M-projection of the predictor and the implicit step. The problem's contact is searched once (the mass and T of the reference
+    configuration). ``parameters`` and ``prefix`` are the SCD solver's; the projection's Krylov
+    solver reads its options under ``prefix + "predictor_"``. The loads, prescribed
     displacements and the obstacles' and moved groups' translation follow the time points
     ``path`` (:func:`~contactqvi.load_steps.at_time`; the default: constant loads).
 
     Attributes:
+        scheme: the time scheme (α_m, α_f, β, γ).
         prescribed: owned local indices of the prescribed dofs in the solver's variables.
         tau: the time step A_eff and the step's solver are made for (s).
     """
 
     def __init__(self, problem: ContactProblem, density: float | fem.Function, dt: float,
                  parameters: dict | None = None, prefix: str = "dynamics_",
-                 path: typing.Sequence[LoadStep] = (LoadStep(),)):
+                 path: typing.Sequence[LoadStep] = (LoadStep(),), scheme: TimeScheme = TimeScheme.newmark()):
         require(not problem.searched_each_step, "dynamics",
                 "the contact-stabilised Newmark step takes a problem searched once (docs/dynamics.md)")
         require(problem.hyperelastic is None or problem.body.nodal is None, "material.formulation",
                 "[dynamics] takes a hyperelastic body in the displacement formulation")
         require(dt > 0.0, "dynamics.dt", f"the time step must be > 0 (s), got {dt!r}")
-        self.problem, self.tau, self.path = problem, float(dt), tuple(path)
+        self.problem, self.tau, self.path, self.scheme = problem, float(dt), tuple(path), scheme
         self._parameters, self._prefix = parameters, prefix
         self.global_mass = global_mass_matrix(problem, density)
         self.mass = mass_matrix(problem, self.global_mass)
         self.static = problem.hyperelastic
+        coefficient = scheme.inertia_coefficient(self.tau)
         if self.static is None:
             self.stiffness = problem.A.duplicate(copy=True)
-            problem.A.axpy(1.0 / (BETA * self.tau**2), self.mass, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+            problem.A.axpy(coefficient, self.mass, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         else:
             self.stiffness = None
             inertia = self.static.internal.duplicate()
             problem.hyperelastic = InertialSystem(
                 **{f.name: getattr(self.static, f.name) for f in dataclasses.fields(self.static)},
-                mass=self.global_mass, coefficient=1.0 / (BETA * self.tau**2), inertia=inertia,
-                work=inertia.duplicate())
+                mass=self.global_mass, coefficient=coefficient, inertia=inertia, work=inertia.duplicate())
         self.projection_matrix = self.mass.duplicate(copy=True)
         diagonal = self.mass.getDiagonal()
         self.prescribed = _zero_rows(diagonal)
@@ -321,17 +341,22 @@ class StabilisedNewmark(PETScOwner):
 
     def initial_state(self, velocity: PETSc.Vec | None = None) -> DynamicState:
         """The state at time 0: at rest in the reference configuration with the initial velocity
-        ``velocity`` (solver variables; None: zero), zero at the prescribed dofs."""
-        w, v, a = (self.problem.A.createVecRight() for _ in range(3))
+        ``velocity`` (solver variables; None: zero), zero at the prescribed dofs, and for a scheme
+        that carries them the loads' force m_0 = g_0 of time 0 and the acceleration a_0 = M^-1 g_0
+        (the bodies start free of contact forces)."""
+        w, v, a, newmark, force = (self.problem.A.createVecRight() for _ in range(5))
         physical = self.energy.load.copy()
-        for vector in (w, v, a, physical):
+        for vector in (w, v, a, newmark, force, physical):
             vector.set(0.0)
         if velocity is not None:
             velocity.copy(v)
             v.array[self.prescribed] = 0.0
+        if self.scheme.carries_acceleration:
+            self._free_force(at_time(self.path, 0.0), w, None, force)
+            self._initial_acceleration(force, newmark)
         energy = {name: 0.0 for name in ENERGY_TERMS}
         energy["kinetic"] = 0.5 * _energy_norm(self.mass, v, self._work.scratch)
-        return DynamicState(0, 0.0, w, physical, v, a, energy, energy["kinetic"])
+        return DynamicState(0, 0.0, w, physical, v, a, newmark, force, energy, energy["kinetic"])
 
     def step(self, state: DynamicState, u: PETSc.Vec, tau: float | None = None,
              stop: typing.Callable[[], bool] | None = None) -> tuple[SCDNewtonResult, SCDNewtonResult]:
@@ -361,56 +386,127 @@ class StabilisedNewmark(PETScOwner):
             self._set_inertia(state, u, before.load)
         result = self.solver.solve(u, stop=stop)
         if result.converged:
-            self._record(state, u, result, (before.load, after.load))
+            self._record(state, u, result, (before, after))
         return projection, result
 
     def _use_time_step(self, tau: float) -> None:
-        """Make A_eff = K + M / (beta tau^2) and the step's solver (its gamma and preconditioner
-        are A_eff's) for ``tau``, unless they are made for it (to round-off)."""
+        """Make A_eff = K + c M and the step's solver (its gamma and preconditioner are A_eff's)
+        for ``tau``, unless they are made for it (to round-off)."""
         require(tau > 0.0, "dynamics.dt", f"the time step must be > 0 (s), got {tau!r}")
         if abs(tau - self.tau) <= 1e-12 * self.tau:
             return
+        scheme = self.scheme
         if self.static is None:
-            self.problem.A.axpy(1.0 / (BETA * tau**2) - 1.0 / (BETA * self.tau**2), self.mass,
+            self.problem.A.axpy(scheme.inertia_coefficient(tau) - scheme.inertia_coefficient(self.tau), self.mass,
                                 PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         else:
-            self.problem.hyperelastic.coefficient = 1.0 / (BETA * tau**2)
+            self.problem.hyperelastic.coefficient = scheme.inertia_coefficient(tau)
         self.tau = float(tau)
         self.solver.destroy()
         self.solver = SCDNewtonSolver(self.problem, self._parameters, prefix=self._prefix)
 
     def _add_inertia(self, state: DynamicState, projected: PETSc.Vec) -> None:
-        """The step's load of (3.3): l = F_{n+1} + A_eff d (set_step) + M w_bar / (beta tau^2) + (F_n - K w_n),
-        the last term zero at the prescribed rows."""
-        problem, work = self.problem, self._work.scratch
+        """The step's load of (3.3): l = F_{n+1} + A_eff d (set_step) + c M w_bar + (alpha_f g_n -
+        c_a m_n) / (1 - alpha_f), g_n = F_n - K w_n zero at the prescribed rows, m_n = g_n for
+        Newmark's rule (c_a = -1, alpha_f = 0: the last term is g_n)."""
+        problem, work, scheme = self.problem, self._work.scratch, self.scheme
         self.mass.mult(projected, work)
-        problem.load.axpy(1.0 / (BETA * self.tau**2), work)
-        self.stiffness.mult(state.displacement, work)
-        work.aypx(-1.0, self._work.previous_load)
-        work.array[self.prescribed] = 0.0
-        problem.load.axpy(1.0, work)
+        problem.load.axpy(scheme.inertia_coefficient(self.tau), work)
+        force = self._work.previous_force
+        self.stiffness.mult(state.displacement, force)
+        force.aypx(-1.0, self._work.previous_load)
+        force.array[self.prescribed] = 0.0
+        history = state.inertial_force if scheme.carries_acceleration else force
+        problem.load.axpy(-scheme.history_factor / (1.0 - scheme.alpha_f), history)
+        if scheme.alpha_f != 0.0:
+            problem.load.axpy(scheme.alpha_f / (1.0 - scheme.alpha_f), force)
 
     def _set_inertia(self, state: DynamicState, u: PETSc.Vec, load: float) -> None:
-        """The hyperelastic step's b = -c M_K u_bar + r_K(u_n) at the load factor ``load`` of t_n
-        (:class:`InertialSystem`; u_bar the physical displacement of the projected ``u``)."""
-        system, problem = self.problem.hyperelastic, self.problem
+        """The hyperelastic step's b = -c M_K u_bar + (alpha_f r_K(u_n) + c_a m_n) / (1 - alpha_f) at
+        the load factor ``load`` of t_n (:class:`InertialSystem`; u_bar the physical displacement
+        of the projected ``u``), m_n = -r_K(u_n) for Newmark's rule; g_n = -r_K(u_n) kept for
+        the update of m (global components)."""
+        system, problem, scheme = self.problem.hyperelastic, self.problem, self.scheme
         problem.physical_displacement(u, system.displacement)
         self.global_mass.mult(system.displacement.x.petsc_vec, system.inertia)
         system.inertia.scale(-system.coefficient)
         state.physical.copy(system.displacement.x.petsc_vec)
         system.displacement.x.scatter_forward()
-        system.inertia.axpy(1.0, HyperelasticSystem.assemble_residual(system, load))
+        residual = HyperelasticSystem.assemble_residual(system, load)
+        if not scheme.carries_acceleration:
+            system.inertia.axpy(-scheme.history_factor / (1.0 - scheme.alpha_f), residual)
+            return
+        system.inertia.axpy(scheme.alpha_f / (1.0 - scheme.alpha_f), residual)
+        system.inertia.axpy(scheme.history_factor / (1.0 - scheme.alpha_f), state.inertial_force)
+        force = self._work.previous_force
+        force.array[:] = residual.array_r[: force.getLocalSize()]
+        force.scale(-1.0)
 
-    def _record(self, state: DynamicState, u: PETSc.Vec, result: SCDNewtonResult, loads: tuple[float, float]) -> None:
-        """Advance ``state`` over the step just solved: w_{n+1} = u - d, u_{n+1}, v_{n+1} (3.4), the
-        step's mean acceleration, the time and the energy terms (4.1)-(4.2) of docs/dynamics.md."""
-        problem, tau, work = self.problem, self.tau, self._work
+    def _free_force(self, step: LoadStep, w: PETSc.Vec, u: PETSc.Vec | None, out: PETSc.Vec) -> None:
+        """g = F - K w without contact, zero at the prescribed rows, at the load factor and
+        translation of ``step``: of a linear body from w (solver's variables), of a hyperelastic
+        one -r_K at the physical displacement of the shifted ``u`` (None: zero; global
+        components). Uses the work vector ``previous_load``."""
+        problem = self.problem
+        if self.static is None:
+            self.stiffness.mult(w, out)
+            _lifted_load(problem, step, self._work.previous_load)
+            out.aypx(-1.0, self._work.previous_load)
+        else:
+            system = problem.hyperelastic
+            if u is None:
+                system.displacement.x.array[:] = 0.0
+            else:
+                problem.physical_displacement(u, system.displacement)
+            out.array[:] = HyperelasticSystem.assemble_residual(system, step.load).array_r[: out.getLocalSize()]
+            out.scale(-1.0)
+            return
+        out.array[self.prescribed] = 0.0
+
+    def _initial_acceleration(self, force: PETSc.Vec, out: PETSc.Vec) -> None:
+        """a_0 = M^-1 g_0 (solver's variables; zero at the prescribed rows, where M_p has identity
+        rows) of the force ``force`` of :meth:`_free_force`: CG with Jacobi to :data:`MASS_RTOL`
+        (options under the integrator's prefix + ``"mass_"``)."""
+        rhs = self._work.scratch
+        if self.static is None:
+            force.copy(rhs)
+        else:
+            transform = self.problem.to_global
+            if transform is None:
+                force.copy(rhs)
+            else:
+                transform.multTranspose(force, rhs)
+            rhs.array[self.prescribed] = 0.0
+        ksp = PETSc.KSP().create(self.mass.getComm())
+        try:
+            ksp.setOperators(self.projection_matrix)
+            ksp.setType(PETSc.KSP.Type.CG)
+            ksp.getPC().setType(PETSc.PC.Type.JACOBI)
+            ksp.setTolerances(rtol=MASS_RTOL, atol=0.0, max_it=1000)
+            ksp.setOptionsPrefix(self._prefix + "mass_")
+            ksp.setFromOptions()
+            ksp.solve(rhs, out)
+            if ksp.getConvergedReason() <= 0:
+                raise RuntimeError(f"the mass solve M a_0 = g_0 of the initial acceleration did not converge (KSP "
+                                   f"reason {ksp.getConvergedReason()}, {ksp.getIterationNumber()} iterations)")
+        finally:
+            ksp.destroy()
+
+    def _record(self, state: DynamicState, u: PETSc.Vec, result: SCDNewtonResult,
+                steps: tuple[LoadStep, LoadStep]) -> None:
+        """Advance ``state`` over the step just solved: w_{n+1} = u - d, u_{n+1}, v_{n+1} (3.4), a_{n+1}
+        and m_{n+1} (3.6) of a scheme that carries them, the step's mean acceleration, the time
+        and the energy terms (4.1)-(4.2) of docs/dynamics.md."""
+        problem, tau, work, scheme = self.problem, self.tau, self._work, self.scheme
         w_next, increment, velocity_change = work.next_displacement, work.increment, work.velocity_change
         w_next.waxpy(-1.0, problem.shift, u)
         increment.waxpy(-1.0, state.displacement, w_next)
         work.predicted.aypx(-1.0, work.projected)  # delta = w_bar - w_pred
         velocity_change.waxpy(-1.0, work.projected, w_next)
-        velocity_change.scale(2.0 / tau)  # v_{n+1} - v_n
+        if scheme.carries_acceleration:
+            self._advance_acceleration(state, steps[1], w_next, u)  # velocity_change: w_{n+1} - w_bar in, v_{n+1} - v_n out
+        else:
+            velocity_change.scale(2.0 / tau)  # v_{n+1} - v_n
         self.mass.mult(velocity_change, work.scratch)
         projection_work = -work.predicted.dot(work.scratch) / tau
         state.velocity.axpy(1.0, velocity_change)
@@ -418,10 +514,10 @@ class StabilisedNewmark(PETScOwner):
         state.acceleration.scale(1.0 / tau)
         w_next.copy(state.displacement)
         physical = problem.physical_displacement(u, self.energy.field).x.petsc_vec.copy()
-        changes = self.energy.step(state.physical, physical, loads)
+        changes = self.energy.step(state.physical, physical, (steps[0].load, steps[1].load))
         physical.copy(state.physical)
         physical.destroy()
-        normal, tangential, friction = _contact_work(problem, result, increment, u)
+        normal, tangential, friction = _contact_work(problem, result, increment, u, scheme.force_factor)
         energy = state.energy
         for name, change in changes.items():
             energy[name] += change
@@ -432,6 +528,26 @@ class StabilisedNewmark(PETScOwner):
         energy["balance_error"] = (stored - energy["external_work"] - energy["support_work"] - energy["contact_work"]
                                    + energy["friction_dissipation"])
         state.time += tau
+
+    def _advance_acceleration(self, state: DynamicState, step: LoadStep, w_next: PETSc.Vec, u: PETSc.Vec) -> None:
+        """Newmark's a_{n+1} = (w_{n+1} - w_bar)/(beta tau^2) - (1/2 - beta)/beta a_n, the velocity change
+        tau ((1 - gamma) a_n + gamma a_{n+1}) into the work vector ``velocity_change`` (which holds
+        w_{n+1} - w_bar), and m_{n+1} = ((1 - alpha_f) g_{n+1} + alpha_f g_n - alpha_m m_n)/(1 - alpha_m),
+        the balance of the step without its contact forces (g_n of the step's start, g_{n+1} at
+        ``step``), into ``state`` (3.6)."""
+        scheme, tau, change = self.scheme, self.tau, self._work.velocity_change
+        a = state.newmark_acceleration
+        change.scale(1.0 / (scheme.beta * tau**2))
+        change.axpy(-(0.5 - scheme.beta) / scheme.beta, a)  # a_{n+1}
+        a.scale(tau * (1.0 - scheme.gamma))
+        a.axpy(tau * scheme.gamma, change)  # v_{n+1} - v_n
+        a.swap(change)
+        m, g = state.inertial_force, self._work.scratch
+        self._free_force(step, w_next, u, g)
+        m.scale(-scheme.alpha_m)
+        m.axpy(1.0 - scheme.alpha_f, g)
+        m.axpy(scheme.alpha_f, self._work.previous_force)
+        m.scale(1.0 / (1.0 - scheme.alpha_m))
 
 
 class BodyMotion(PETScOwner):
@@ -487,18 +603,31 @@ def _energy_norm(A: PETSc.Mat, x: PETSc.Vec, work: PETSc.Vec) -> float:
 
 
 def _contact_work(problem: ContactProblem, result: SCDNewtonResult, increment: PETSc.Vec,
-                  u: PETSc.Vec) -> tuple[float, float, float]:
+                  u: PETSc.Vec, factor: float) -> tuple[float, float, float]:
     """The work of the step's contact forces (docs/dynamics.md (4.1)), summed over the contact
-    nodes (nodal frames; the relative displacement at a body pair's slave nodes): on the body,
-    1/2 lambda_n . Delta w_n (normal) and 1/2 R_t . Delta w_t (tangential), and the friction's,
-    1/2 R_t . u_t (<= 0) over the slip increment u_t relative to the obstacle (the shifted
-    solution's tangential part; Delta w_t where the obstacle does not move). Collective."""
+    nodes (nodal frames; the relative displacement at a body pair's slave nodes), with the
+    step's mean force ``factor`` times the multipliers (:attr:`TimeScheme.force_factor`, 1/2
+    for Newmark's rule): on the body, factor lambda_n . Delta w_n (normal) and factor R_t . Delta
+    w_t (tangential), and the friction's, factor R_t . u_t (<= 0) over the slip increment u_t
+    relative to the obstacle (the shifted solution's tangential part; Delta w_t where the
+    obstacle does not move). Collective."""
     nodal = increment.array.reshape(-1, 3)[problem.contact_blk]
     slip = u.array.reshape(-1, 3)[problem.contact_blk, :2]
-    works = np.array([0.5 * np.dot(result.normal_force, nodal[:, 2]), 0.5 * np.sum(result.friction_force * nodal[:, :2]),
-                      0.5 * np.sum(result.friction_force * slip)])
+    works = factor * np.array([np.dot(result.normal_force, nodal[:, 2]),
+                               np.sum(result.friction_force * nodal[:, :2]), np.sum(result.friction_force * slip)])
     normal, tangential, friction = problem.comm.allreduce(works, op=MPI.SUM)
     return float(normal), float(tangential - friction), float(friction)
+
+
+def global_components(problem: ContactProblem, x: PETSc.Vec, out: fem.Function) -> fem.Function:
+    """T x: a velocity or acceleration in the solver's variables in global components (no shift,
+    no offsets), written into ``out`` (ghosts updated)."""
+    if problem.to_global is None:
+        x.copy(out.x.petsc_vec)
+    else:
+        problem.to_global.mult(x, out.x.petsc_vec)
+    out.x.scatter_forward()
+    return out
 
 
 def _lifted_load(problem: ContactProblem, step: LoadStep, out: PETSc.Vec) -> None:
