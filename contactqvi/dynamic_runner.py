@@ -148,7 +148,7 @@ def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: B
                 tables.write_summary(problem.comm, out / "summary.json", summary)
                 return EXIT_CODES["not converged"]
             state.done += 1
-            summary["steps"].append(_entry(problem, state, projection, result, motion, integrator.scheme.force_factor)
+            summary["steps"].append(_entry(problem, state, projection, result, motion)
                                     | ({"parts": parts} if len(parts) > 1 else {}))
             state.physical.copy(displacement.x.petsc_vec)
             displacement.x.scatter_forward()
@@ -195,12 +195,11 @@ def _advance(problem: ContactProblem, integrator: StabilisedNewmark, state: Dyna
 
 
 def _entry(problem: ContactProblem, state: DynamicState, projection: SCDNewtonResult, result: SCDNewtonResult,
-           motion: BodyMotion, factor: float) -> dict[str, typing.Any]:
+           motion: BodyMotion) -> dict[str, typing.Any]:
     """The summary entry of the time step just recorded in ``state``. The contact force is the
-    step's mean, ``factor`` times the multiplier of the step's GE (docs/dynamics.md, Sect. 3;
-    1/2 for Newmark's rule)."""
-    mean = dataclasses.replace(result, normal_force=factor * result.normal_force,
-                               friction_force=factor * result.friction_force)
+    step's mean (:attr:`~contactqvi.contact.dynamics.DynamicState.contact_forces`; half the
+    multiplier of the step's GE for Newmark's rule, docs/dynamics.md Sect. 3)."""
+    mean = dataclasses.replace(result, normal_force=state.contact_forces[0], friction_force=state.contact_forces[1])
     logger.info("time step %d, t = %.6g s: %d + %d Newton steps; kinetic %.6g J, elastic %.6g J, balance error "
                 "%.3g J", state.done, state.time, projection.iterations, result.iterations,
                 state.energy["kinetic"], state.energy["elastic"], state.energy["balance_error"])

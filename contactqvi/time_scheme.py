@@ -80,14 +80,6 @@ class TimeScheme:
         return self.alpha_m - (1.0 - self.alpha_m) * (0.5 - self.beta) / self.beta
 
     @property
-    def force_factor(self) -> float:
-        """κ = (1 - α_f)/(1 - c_a) = 2β (1 - α_f)/(1 - α_m): the step's contact force is κ times the
-        multiplier of its GE, exactly so for a steady contact (a body at rest on its support:
-        the reaction; docs/dynamics.md Sect. 3.2); 1/2 for Newmark's rule, where it is the mean
-        of the step's impulse."""
-        return 2.0 * self.beta * (1.0 - self.alpha_f) / (1.0 - self.alpha_m)
-
-    @property
     def carries_acceleration(self) -> bool:
         """Whether a step reads the Newmark acceleration a_n and the contact-free inertial force
         m_n of the step before (all but Newmark's rule, where m_n = F_n - K w_n and γ = 2β

@@ -152,6 +152,9 @@ class DynamicState(PETScOwner):
             of f: the solver's for a linear body, global components for a hyperelastic one; zero
             at the prescribed dofs), both for the schemes that carry them
             (:attr:`TimeScheme.carries_acceleration`), zero for Newmark's rule.
+        contact_forces: the last step's mean contact force per owned contact node, normal (N,
+            >= 0) and tangential ((N, 2), nodal frames) as the solver reports them (docs/dynamics.md
+            Sect. 3.2); empty at time 0; output only.
         energy: the step's energy terms (:data:`ENERGY_TERMS`), the works and the dissipation
             summed from time 0 (J).
         initial_energy: kinetic + elastic energy at time 0 (J).
@@ -167,6 +170,7 @@ class DynamicState(PETScOwner):
     inertial_force: PETSc.Vec
     energy: dict[str, float]
     initial_energy: float
+    contact_forces: tuple[np.ndarray, np.ndarray] = (np.empty(0), np.empty((0, 2)))
 
     def petsc_objects(self) -> list[typing.Any]:
         return [self.displacement, self.physical, self.velocity, self.acceleration, self.newmark_acceleration,
@@ -178,8 +182,9 @@ class _Work(VectorSet):
     """The vectors of one time step (solver variables), reused by every step: ``scratch`` for
     products, the predictor w_pred (3.1) (then delta = w_bar - w_pred), the projected w_bar (3.2),
     the next displacement w_{n+1}, its increment Delta w, the velocity change (3.4), the
-    load F_n of the step's start (then any load) and the force without contact g_n there (in
-    the variables of :attr:`DynamicState.inertial_force`)."""
+    load F_n of the step's start (then any load), the force without contact g_n there (in
+    the variables of :attr:`DynamicState.inertial_force`) and the contact force of the step
+    (solver's variables)."""
 
     scratch: PETSc.Vec
     predicted: PETSc.Vec
@@ -189,6 +194,7 @@ class _Work(VectorSet):
     velocity_change: PETSc.Vec
     previous_load: PETSc.Vec
     previous_force: PETSc.Vec
+    contact_force: PETSc.Vec
 
 
 class PhysicalEnergy(PETScOwner):
@@ -492,6 +498,19 @@ class StabilisedNewmark(PETScOwner):
         finally:
             ksp.destroy()
 
+    def _contact_part(self, state: DynamicState, out: PETSc.Vec) -> None:
+        """d = m - M a of ``state`` in the solver's variables (T^T m for a hyperelastic body): the
+        contact forces that Newmark's acceleration holds and the inertial force without contact
+        does not (3.7), zero at the prescribed rows. Uses the work vector ``previous_load``."""
+        transform = self.problem.to_global
+        if self.static is None or transform is None:
+            state.inertial_force.copy(out)
+        else:
+            transform.multTranspose(state.inertial_force, out)
+        self.mass.mult(state.newmark_acceleration, self._work.previous_load)
+        out.axpy(-1.0, self._work.previous_load)
+        out.array[self.prescribed] = 0.0
+
     def _record(self, state: DynamicState, u: PETSc.Vec, result: SCDNewtonResult,
                 steps: tuple[LoadStep, LoadStep]) -> None:
         """Advance ``state`` over the step just solved: w_{n+1} = u - d, u_{n+1}, v_{n+1} (3.4), a_{n+1}
@@ -505,8 +524,11 @@ class StabilisedNewmark(PETScOwner):
         velocity_change.waxpy(-1.0, work.projected, w_next)
         if scheme.carries_acceleration:
             self._advance_acceleration(state, steps[1], w_next, u)  # velocity_change: w_{n+1} - w_bar in, v_{n+1} - v_n out
+            mean = work.contact_force.array.reshape(-1, 3)[problem.contact_blk]
+            state.contact_forces = (mean[:, 2].copy(), mean[:, :2].copy())
         else:
             velocity_change.scale(2.0 / tau)  # v_{n+1} - v_n
+            state.contact_forces = (0.5 * result.normal_force, 0.5 * result.friction_force)
         self.mass.mult(velocity_change, work.scratch)
         projection_work = -work.predicted.dot(work.scratch) / tau
         state.velocity.axpy(1.0, velocity_change)
@@ -517,7 +539,7 @@ class StabilisedNewmark(PETScOwner):
         changes = self.energy.step(state.physical, physical, (steps[0].load, steps[1].load))
         physical.copy(state.physical)
         physical.destroy()
-        normal, tangential, friction = _contact_work(problem, result, increment, u, scheme.force_factor)
+        normal, tangential, friction = _contact_work(problem, state.contact_forces, increment, u)
         energy = state.energy
         for name, change in changes.items():
             energy[name] += change
@@ -534,9 +556,11 @@ class StabilisedNewmark(PETScOwner):
         tau ((1 - gamma) a_n + gamma a_{n+1}) into the work vector ``velocity_change`` (which holds
         w_{n+1} - w_bar), and m_{n+1} = ((1 - alpha_f) g_{n+1} + alpha_f g_n - alpha_m m_n)/(1 - alpha_m),
         the balance of the step without its contact forces (g_n of the step's start, g_{n+1} at
-        ``step``), into ``state`` (3.6)."""
+        ``step``), into ``state`` (3.6); the step's mean contact force -((1 - gamma) d_n + gamma d_{n+1}),
+        d = m - M a (3.7), into the work vector ``contact_force``."""
         scheme, tau, change = self.scheme, self.tau, self._work.velocity_change
-        a = state.newmark_acceleration
+        a, d = state.newmark_acceleration, self._work.contact_force
+        self._contact_part(state, d)  # d_n
         change.scale(1.0 / (scheme.beta * tau**2))
         change.axpy(-(0.5 - scheme.beta) / scheme.beta, a)  # a_{n+1}
         a.scale(tau * (1.0 - scheme.gamma))
@@ -548,6 +572,9 @@ class StabilisedNewmark(PETScOwner):
         m.axpy(1.0 - scheme.alpha_f, g)
         m.axpy(scheme.alpha_f, self._work.previous_force)
         m.scale(1.0 / (1.0 - scheme.alpha_m))
+        self._contact_part(state, g)  # d_{n+1}
+        d.scale(-(1.0 - scheme.gamma))
+        d.axpy(-scheme.gamma, g)
 
 
 class BodyMotion(PETScOwner):
@@ -602,19 +629,18 @@ def _energy_norm(A: PETSc.Mat, x: PETSc.Vec, work: PETSc.Vec) -> float:
     return x.dot(work)
 
 
-def _contact_work(problem: ContactProblem, result: SCDNewtonResult, increment: PETSc.Vec,
-                  u: PETSc.Vec, factor: float) -> tuple[float, float, float]:
-    """The work of the step's contact forces (docs/dynamics.md (4.1)), summed over the contact
-    nodes (nodal frames; the relative displacement at a body pair's slave nodes), with the
-    step's mean force ``factor`` times the multipliers (:attr:`TimeScheme.force_factor`, 1/2
-    for Newmark's rule): on the body, factor lambda_n . Delta w_n (normal) and factor R_t . Delta
-    w_t (tangential), and the friction's, factor R_t . u_t (<= 0) over the slip increment u_t
-    relative to the obstacle (the shifted solution's tangential part; Delta w_t where the
-    obstacle does not move). Collective."""
+def _contact_work(problem: ContactProblem, forces: tuple[np.ndarray, np.ndarray], increment: PETSc.Vec,
+                  u: PETSc.Vec) -> tuple[float, float, float]:
+    """The work of the step's mean contact forces ``forces`` = (lambda_n, R_t) (docs/dynamics.md
+    (4.1)), summed over the contact nodes (nodal frames; the relative displacement at a body
+    pair's slave nodes): on the body, lambda_n . Delta w_n (normal) and R_t . Delta w_t
+    (tangential), and the friction's, R_t . u_t (<= 0) over the slip increment u_t relative to
+    the obstacle (the shifted solution's tangential part; Delta w_t where the obstacle does not
+    move). Collective."""
     nodal = increment.array.reshape(-1, 3)[problem.contact_blk]
     slip = u.array.reshape(-1, 3)[problem.contact_blk, :2]
-    works = factor * np.array([np.dot(result.normal_force, nodal[:, 2]),
-                               np.sum(result.friction_force * nodal[:, :2]), np.sum(result.friction_force * slip)])
+    normal, friction = forces
+    works = np.array([np.dot(normal, nodal[:, 2]), np.sum(friction * nodal[:, :2]), np.sum(friction * slip)])
     normal, tangential, friction = problem.comm.allreduce(works, op=MPI.SUM)
     return float(normal), float(tangential - friction), float(friction)
 
