@@ -114,7 +114,7 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
     pressures = {f"{b.name}.{group}": p for b in case.bodies for group, p in b.boundary.pressure.items()}
     moved = [name for b in case.bodies for name in qualified(b, b.boundary.moved)]
     body_force = {b.name: b.boundary.body_force for b in case.bodies if b.boundary.body_force is not None}
-    pairs = [_pair(pair) for pair in case.contacts]
+    pairs = [_pair(pair, key) for pair, (key, _) in zip(case.contacts, case.pair_keys)]
     return assemble_contact_problem(msh, tags, young, poisson, tractions, pairs, clamped, body_force or None,
                                     displacements=displacements, cell_tags=cell_tags, moved=moved,
                                     material=_material(case.bodies[0].material.model), pressures=pressures,
@@ -139,11 +139,12 @@ def _material(model: str | None) -> Material | None:
     return None if model is None else create_material(model)
 
 
-def _pair(pair: ContactPair) -> ObstaclePair | BodyPair:
-    """The contact pair of a ``[[contacts]]`` entry."""
+def _pair(pair: ContactPair, key: str) -> ObstaclePair | BodyPair:
+    """The contact pair of the ``[[contacts]]`` entry ``key`` (``contacts[0]``), which its errors name."""
     if pair.obstacle is not None:
-        return ObstaclePair(pair.slave, pair.obstacle.create(), pair.law, pair.search)
-    return BodyPair(pair.slave, pair.master, pair.law, pair.search_distance, pair.search, pair.interference or 0.0)
+        return ObstaclePair(pair.slave, pair.obstacle.create(), pair.law, pair.search, key)
+    return BodyPair(pair.slave, pair.master, pair.law, pair.search_distance, pair.search, pair.interference or 0.0,
+                    key)
 
 
 def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
