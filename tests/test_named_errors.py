@@ -151,6 +151,26 @@ def test_an_initial_penetration_is_named_by_the_obstacle_key():
                         r"position and, for a plane, that the normal points into the body's side\)", str(error.value))
 
 
+def test_a_wrong_contact_group_is_named_by_the_key_that_selects_it(mpi_tmp_path):
+    """A plate 1 mm off the block's face x = 0 (its normal +x), the contact group the opposite face
+    ``side_x`` (11 mm away), nothing moving: the likely cause names the key that selects the group,
+    ``contacts[0].slave`` with [[bodies]], ``contact.surface`` with [contact]."""
+    plate = {"type": "plane", "point": [-0.001, 0.0, 0.0], "normal": [1.0, 0.0, 0.0]}
+    with pytest.raises(ParameterError) as error:
+        run_case(_as_bodies("side_x", plate, steps=False), mpi_tmp_path / "out", plot=False)
+    assert error.value.name == "contacts[0]"
+    assert str(error.value).endswith("Likely cause: a wrong contact group: nodes of the body off 'block.side_x' come "
+                                     "within 0.001 m of the obstacle, nearer than the group; name the face that "
+                                     "meets it in contacts[0].slave")
+    case = _flipped()
+    single = dataclasses.replace(case, contact=dataclasses.replace(case.contact, surface="side_x"),
+                                 obstacle=dataclasses.replace(case.obstacle, point=(-0.001, 0.0, 0.0),
+                                                              normal=(1.0, 0.0, 0.0)), steps=())
+    with build_problem(single, MPI.COMM_WORLD) as problem, pytest.raises(ParameterError) as error:
+        check_reach(problem, single.steps, keys=single.pair_keys)
+    assert str(error.value).endswith("name the face that meets it in contact.surface")
+
+
 @pytest.mark.one_rank(reason="case-file checks on dataclasses against a list of names: no mesh")
 def test_a_pair_that_misspells_a_body_is_named_with_the_body():
     """The body named as in the mesh, the pair misspelt: the pair's key is named, with the body."""
