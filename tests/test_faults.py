@@ -19,6 +19,7 @@ import pytest
 from contactqvi.case import load_case
 from contactqvi.parameters import ParameterError
 from contactqvi.runner import EXIT_CODES, run_case
+from program_runs import run_ranks
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 
@@ -155,3 +156,34 @@ def test_a_mesh_gmsh_cannot_read_is_named_on_every_rank(mpi_tmp_path):
     MPI.COMM_WORLD.Barrier()
     with pytest.raises(ParameterError, match="mesh: gmsh cannot read .*missing.geo"):
         read_gmsh(script, MPI.COMM_WORLD)
+
+
+#: Two tests under ``mpirun -n 2``: the first fails inside on_rank_0 on rank 0, the second calls a
+#: collective (as conftest.py's Barrier after every test does).
+RANK_0_FAILS = """
+from mpi4py import MPI
+from program_runs import on_rank_0
+
+
+def test_fails_on_rank_0():
+    def work():
+        assert 1 + 1 == 3, "rank 0's check"
+    on_rank_0(MPI.COMM_WORLD, work)
+
+
+def test_then_a_collective():
+    assert MPI.COMM_WORLD.allreduce(1) == MPI.COMM_WORLD.size
+"""
+
+
+@pytest.mark.serial
+def test_a_failure_inside_on_rank_0_fails_the_test_on_every_rank(tmp_path):
+    """A test failing inside tests/program_runs.py's on_rank_0 fails on every rank, and the run goes on
+    to the next test: before, rank 0 went on alone and the other ranks waited in on_rank_0 for ever."""
+    (tmp_path / "test_rank_0.py").write_text(RANK_0_FAILS)
+    done = run_ranks([sys.executable, "-m", "mpi4py", "-m", "pytest", "-q", "--color=no", "-p", "no:cacheprovider",
+                      str(tmp_path / "test_rank_0.py")], ranks=2, timeout=60.0,
+                     env={"PYTHONPATH": os.pathsep.join([str(ROOT / "tests"), os.environ.get("PYTHONPATH", "")])})
+    assert done.returncode != 0
+    assert done.stdout.count("1 failed, 1 passed") == 2, done.stdout[-3000:]
+    assert "RankZeroFailed: on rank 0: AssertionError: rank 0's check" in done.stdout, done.stdout[-3000:]
