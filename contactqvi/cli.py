@@ -7,6 +7,7 @@ option starting with ``-`` (e.g. ``-coulomb_ksp_type gmres``) goes to PETSc.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import logging
 import sys
 import traceback
@@ -14,6 +15,8 @@ import typing
 
 from mpi4py import MPI
 from petsc4py import PETSc
+
+from contactqvi.lifetime import abort_alone
 
 __all__ = ["abort_on_error", "make_parser", "parse_args", "pass_to_petsc", "print_error", "setup_logging"]
 
@@ -101,12 +104,15 @@ def abort_on_error(function: typing.Callable[[], int], comm: MPI.Comm | None = N
     rank only while the others wait in a collective call, which would hold a cluster
     allocation until its time limit. So under ``mpirun`` the traceback is printed and
     ``MPI_Abort`` ends every rank (exit code 1); on one rank the exception propagates
-    as usual.
+    as usual. An exception raised on one rank alone ends the job already at the first collective
+    clean-up it meets (a ``with`` block's ``destroy()``, the runner's output files), which would
+    otherwise wait for the other ranks for ever (:func:`contactqvi.lifetime.abort_alone`).
     """
+    comm = MPI.COMM_WORLD if comm is None else comm
     try:
-        return function()
+        with abort_alone(comm) if comm.size > 1 else contextlib.nullcontext():
+            return function()
     except Exception:
-        comm = MPI.COMM_WORLD if comm is None else comm
         if comm.size == 1:
             raise
         traceback.print_exc()

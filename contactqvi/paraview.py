@@ -38,6 +38,7 @@ from dolfinx import fem, io
 from dolfinx import mesh as dmesh
 from dolfinx.cpp.io import get_vtk_cell_type, perm_vtk
 
+from contactqvi.lifetime import unwind_together
 from contactqvi.tables import atomic_path
 
 __all__ = [
@@ -407,7 +408,8 @@ class VTXDatasetWriter:
     def __enter__(self) -> VTXDatasetWriter:
         return self
 
-    def __exit__(self, exc_type, *exc: object) -> None:
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: object) -> None:
+        unwind_together(exc)
         self.close(ok=exc_type is None)
 
 

@@ -44,6 +44,7 @@ from contactqvi.contact.reach import check_reach
 from contactqvi.contact.interface import BodyPair, ObstaclePair
 from contactqvi.contact.problem import ContactProblem, assemble_contact_problem, build_contact_problem
 from contactqvi.contact.scd_newton import SCDNewtonResult
+from contactqvi.lifetime import unwind_together
 from contactqvi.linalg import default_options
 from contactqvi.materials import Material, create_material
 from contactqvi.elasticity import body_materials
@@ -114,7 +115,7 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
     pressures = {f"{b.name}.{group}": p for b in case.bodies for group, p in b.boundary.pressure.items()}
     moved = [name for b in case.bodies for name in qualified(b, b.boundary.moved)]
     body_force = {b.name: b.boundary.body_force for b in case.bodies if b.boundary.body_force is not None}
-    pairs = [_pair(pair) for pair in case.contacts]
+    pairs = [_pair(pair, key) for pair, (key, _) in zip(case.contacts, case.pair_keys)]
     return assemble_contact_problem(msh, tags, young, poisson, tractions, pairs, clamped, body_force or None,
                                     displacements=displacements, cell_tags=cell_tags, moved=moved,
                                     material=_material(case.bodies[0].material.model), pressures=pressures,
@@ -139,11 +140,12 @@ def _material(model: str | None) -> Material | None:
     return None if model is None else create_material(model)
 
 
-def _pair(pair: ContactPair) -> ObstaclePair | BodyPair:
-    """The contact pair of a ``[[contacts]]`` entry."""
+def _pair(pair: ContactPair, key: str) -> ObstaclePair | BodyPair:
+    """The contact pair of the ``[[contacts]]`` entry ``key`` (``contacts[0]``), which its errors name."""
     if pair.obstacle is not None:
-        return ObstaclePair(pair.slave, pair.obstacle.create(), pair.law, pair.search)
-    return BodyPair(pair.slave, pair.master, pair.law, pair.search_distance, pair.search, pair.interference or 0.0)
+        return ObstaclePair(pair.slave, pair.obstacle.create(), pair.law, pair.search, key)
+    return BodyPair(pair.slave, pair.master, pair.law, pair.search_distance, pair.search, pair.interference or 0.0,
+                    key)
 
 
 def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
@@ -180,9 +182,7 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
     with warnings:
         checkpoint = _checkpoint(case, output, comm, restart)
     if checkpoint is not None and checkpoint.step >= len(steps):
-        logger.info("the checkpoint in %s holds every step asked for: nothing to solve", output)
-        status = Status[checkpoint.summary["status"].upper()]
-        return checkpoint.summary, EXIT_CODES["converged" if status.converged else "not converged"]
+        return _nothing_to_solve(checkpoint, output)
     with warnings, default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, stop_signals() as stop:
         logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks",
                     problem.n_contact, problem.n_free, len(case.steps), comm.size)
@@ -197,6 +197,9 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
             if code == EXIT_CODES["converged"] and len(steps) < len(case.steps):
                 recorder.stopped(len(steps))
                 code = EXIT_CODES["interrupted"]
+        except Exception as exc:
+            unwind_together(exc)  # an error of one rank alone ends the job here, under abort_on_error
+            raise
         finally:
             for owner in (u, state):
                 owner.destroy()
@@ -204,6 +207,13 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
     if plot and recorder.writer.last is not None:
         _draw_figures(recorder.writer, recorder.summary, comm)
     return recorder.summary, code
+
+
+def _nothing_to_solve(checkpoint: Checkpoint, output: str | pathlib.Path) -> tuple[dict[str, typing.Any], int]:
+    """The summary and exit code of a restart whose checkpoint holds every step asked for."""
+    logger.info("the checkpoint in %s holds every step asked for: nothing to solve", output)
+    status = Status[checkpoint.summary["status"].upper()]
+    return checkpoint.summary, EXIT_CODES["converged" if status.converged else "not converged"]
 
 
 def _checkpoint(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm, restart: bool) -> Checkpoint | None:

@@ -43,13 +43,19 @@ def test_log_view_through_the_petsc_pass_through(tmp_path):
 
 
 class _Ranks:
-    """A communicator stand-in that records MPI_Abort."""
+    """A communicator stand-in that records MPI_Abort (its duplicate is itself)."""
 
     def __init__(self, size: int):
-        self.size, self.aborted = size, None
+        self.size, self.rank, self.aborted = size, 0, None
 
     def Abort(self, code: int) -> None:
         self.aborted = code
+
+    def Dup(self) -> _Ranks:
+        return self
+
+    def Free(self) -> None:
+        pass
 
 
 def _fails() -> int:

@@ -143,7 +143,7 @@ def test_newton_on_linear_bodies_is_named():
     data["contacts"][0]["search"] = "newton"
     for body in data["bodies"]:
         del body["material"]["model"]
-    with pytest.raises(ParameterError, match=r"upper\.interface/lower\.interface: search: 'newton' takes the "
+    with pytest.raises(ParameterError, match=r"^contacts\[0\]\.search: 'newton' takes the "
                        r"geometry of finite deformations into the Newton iteration and needs hyperelastic bodies"):
         build_problem(parse_case(data, DATA), MPI.COMM_WORLD)
 

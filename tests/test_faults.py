@@ -19,6 +19,7 @@ import pytest
 from contactqvi.case import load_case
 from contactqvi.parameters import ParameterError
 from contactqvi.runner import EXIT_CODES, run_case
+from program_runs import run_ranks
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 
@@ -155,3 +156,82 @@ def test_a_mesh_gmsh_cannot_read_is_named_on_every_rank(mpi_tmp_path):
     MPI.COMM_WORLD.Barrier()
     with pytest.raises(ParameterError, match="mesh: gmsh cannot read .*missing.geo"):
         read_gmsh(script, MPI.COMM_WORLD)
+
+
+#: Two tests under ``mpirun -n 2``: the first fails inside on_rank_0 on rank 0, the second calls a
+#: collective (as conftest.py's Barrier after every test does).
+RANK_0_FAILS = """
+from mpi4py import MPI
+from program_runs import on_rank_0
+
+
+def test_fails_on_rank_0():
+    def work():
+        assert 1 + 1 == 3, "rank 0's check"
+    on_rank_0(MPI.COMM_WORLD, work)
+
+
+def test_then_a_collective():
+    assert MPI.COMM_WORLD.allreduce(1) == MPI.COMM_WORLD.size
+"""
+
+
+@pytest.mark.serial
+def test_a_failure_inside_on_rank_0_fails_the_test_on_every_rank(tmp_path):
+    """A test failing inside tests/program_runs.py's on_rank_0 fails on every rank, and the run goes on
+    to the next test: before, rank 0 went on alone and the other ranks waited in on_rank_0 for ever."""
+    (tmp_path / "test_rank_0.py").write_text(RANK_0_FAILS)
+    done = run_ranks([sys.executable, "-m", "mpi4py", "-m", "pytest", "-q", "--color=no", "-p", "no:cacheprovider",
+                      str(tmp_path / "test_rank_0.py")], ranks=2, timeout=60.0,
+                     env={"PYTHONPATH": os.pathsep.join([str(ROOT / "tests"), os.environ.get("PYTHONPATH", "")])})
+    assert done.returncode != 0
+    assert done.stdout.count("1 failed, 1 passed") == 2, done.stdout[-3000:]
+    assert "RankZeroFailed: on rank 0: AssertionError: rank 0's check" in done.stdout, done.stdout[-3000:]
+
+
+#: ``run_case`` of the patch test on 2 ranks under abort_on_error; rank 0 fails alone while recording
+#: step 1 (as a failed write of its own would), the other rank goes on to step 2.
+ONE_RANK_FAILS = """
+import sys
+
+from mpi4py import MPI
+
+import contactqvi.lifetime
+import contactqvi.runner as runner
+from contactqvi.case import load_case, parse_case
+from contactqvi.cli import abort_on_error
+
+contactqvi.lifetime.UNWIND_TIMEOUT = 2.0
+comm = MPI.COMM_WORLD
+solve = runner.solve_load_path
+
+
+def failing_on_rank_0(problem, steps, u, parameters, prefix, record, *args):
+    def record_or_fail(*step):
+        if comm.rank == 0:
+            raise RuntimeError("raised on rank 0 alone")
+        return record(*step)
+    return solve(problem, steps, u, parameters, prefix, record_or_fail, *args)
+
+
+runner.solve_load_path = failing_on_rank_0
+raw = load_case(sys.argv[1]).to_dict()
+raw["steps"] = [{"load": 0.5}, {"load": 1.0}]
+case = parse_case(raw, sys.argv[2])
+sys.exit(abort_on_error(lambda: runner.run_case(case, sys.argv[3], comm, plot=False)[1]))
+"""
+
+
+@pytest.mark.serial
+def test_an_error_on_one_rank_ends_the_job_instead_of_hanging_in_the_clean_up(tmp_path):
+    """An error raised on rank 0 alone during a run: the job ends (MPI_Abort, exit code 1) at the first
+    collective clean-up, after contactqvi.lifetime.UNWIND_TIMEOUT (2 s here), naming the error. Before, rank 0
+    waited for ever closing the output files (a collective) and rank 1 in step 2's solve."""
+    script = tmp_path / "one_rank_fails.py"
+    script.write_text(ONE_RANK_FAILS)
+    started = time.monotonic()
+    done = run_ranks([sys.executable, str(script), str(ROOT / "cases" / "patch_test.toml"), str(ROOT / "cases"),
+                      str(tmp_path / "out")], ranks=2, timeout=120.0)
+    assert done.returncode != 0 and time.monotonic() - started < 120.0
+    assert "RuntimeError: raised on rank 0 alone" in done.stderr, done.stderr[-3000:]
+    assert "rank 0: no other rank met an error within 2 s" in done.stderr and "MPI_ABORT" in done.stderr

@@ -113,11 +113,7 @@ def test_a_pair_that_can_never_touch_is_named_by_its_key(mpi_tmp_path):
     ``obstacle.normal`` above (m08), ``contacts[0]`` and ``contacts[0].obstacle.normal`` for the same
     block and plate as one of [[bodies]] with its [[contacts]]; without keys (the Python API) the pair's
     groups name it."""
-    data = tomllib.loads((DATA / "m08_normal_flipped.toml").read_text())
-    bodies = parse_case({"mesh": data["mesh"], "steps": data["steps"],
-                         "bodies": [{"name": "block", "material": data["material"], "boundary": data["boundary"]}],
-                         "contacts": [{"slave": "block.top", "law": "frictionless", "obstacle": data["obstacle"]}]},
-                        DATA)
+    bodies = _as_bodies()
     assert bodies.pair_keys == [("contacts[0]", "contacts[0].obstacle")] and _flipped().pair_keys == [
         ("contact", "obstacle")]
     with pytest.raises(ParameterError) as error:
@@ -130,6 +126,49 @@ def test_a_pair_that_can_never_touch_is_named_by_its_key(mpi_tmp_path):
     with build_problem(case, MPI.COMM_WORLD) as problem, pytest.raises(ParameterError) as error:
         check_reach(problem, case.steps)
     assert str(error.value) == NEVER.replace("contact: the pair top/obstacle", "top/obstacle: the pair")
+
+
+def _as_bodies(slave: str = "top", obstacle: dict | None = None, steps: bool = True) -> ContactCase:
+    """m08's block and plate as the body "block" of [[bodies]] with one [[contacts]] pair: its
+    group ``slave`` against the plate (or ``obstacle``), along m08's steps (or one step at rest)."""
+    data = tomllib.loads((DATA / "m08_normal_flipped.toml").read_text())
+    contact = {"slave": f"block.{slave}", "law": "frictionless", "obstacle": obstacle or data["obstacle"]}
+    return parse_case({"mesh": data["mesh"], "steps": data["steps"] if steps else [{}],
+                       "bodies": [{"name": "block", "material": data["material"], "boundary": data["boundary"]}],
+                       "contacts": [contact]}, DATA)
+
+
+def test_an_initial_penetration_is_named_by_the_obstacle_key():
+    """The plate 1 mm below the block's top face, the block on its -z side: the top face starts
+    inside it; the error names the pair's obstacle by its key, ``contacts[0].obstacle``, with the
+    group and the hint."""
+    inside = {"type": "plane", "point": [0.0, 0.0, 0.009], "normal": [0.0, 0.0, -1.0]}
+    with pytest.raises(ParameterError) as error:
+        build_problem(_as_bodies(obstacle=inside), MPI.COMM_WORLD)
+    assert error.value.name == "contacts[0].obstacle"
+    assert re.fullmatch(r"contacts\[0\]\.obstacle: initial penetration: \d+ contact nodes of 'block\.top' lie inside "
+                        r"the obstacle, the deepest by 1\.000e-03 m; the body must start outside it \(check its "
+                        r"position and, for a plane, that the normal points into the body's side\)", str(error.value))
+
+
+def test_a_wrong_contact_group_is_named_by_the_key_that_selects_it(mpi_tmp_path):
+    """A plate 1 mm off the block's face x = 0 (its normal +x), the contact group the opposite face
+    ``side_x`` (11 mm away), nothing moving: the likely cause names the key that selects the group,
+    ``contacts[0].slave`` with [[bodies]], ``contact.surface`` with [contact]."""
+    plate = {"type": "plane", "point": [-0.001, 0.0, 0.0], "normal": [1.0, 0.0, 0.0]}
+    with pytest.raises(ParameterError) as error:
+        run_case(_as_bodies("side_x", plate, steps=False), mpi_tmp_path / "out", plot=False)
+    assert error.value.name == "contacts[0]"
+    assert str(error.value).endswith("Likely cause: a wrong contact group: nodes of the body off 'block.side_x' come "
+                                     "within 0.001 m of the obstacle, nearer than the group; name the face that "
+                                     "meets it in contacts[0].slave")
+    case = _flipped()
+    single = dataclasses.replace(case, contact=dataclasses.replace(case.contact, surface="side_x"),
+                                 obstacle=dataclasses.replace(case.obstacle, point=(-0.001, 0.0, 0.0),
+                                                              normal=(1.0, 0.0, 0.0)), steps=())
+    with build_problem(single, MPI.COMM_WORLD) as problem, pytest.raises(ParameterError) as error:
+        check_reach(problem, single.steps, keys=single.pair_keys)
+    assert str(error.value).endswith("name the face that meets it in contact.surface")
 
 
 @pytest.mark.one_rank(reason="case-file checks on dataclasses against a list of names: no mesh")

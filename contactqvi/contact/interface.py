@@ -41,8 +41,8 @@ from contactqvi.obstacles import Obstacle, tangent_frames
 from contactqvi.parameters import require
 from contactqvi.records import warn
 
-__all__ = ["MESHED_INTERFERENCE", "BodyPair", "Interface", "MeshedFit", "ObstaclePair", "build_interfaces", "followed",
-           "search_again"]
+__all__ = ["MESHED_INTERFERENCE", "BodyPair", "Interface", "MeshedFit", "ObstaclePair", "build_interfaces", "error_key",
+           "followed", "search_again"]
 
 logger = logging.getLogger(__name__)
 
@@ -61,12 +61,15 @@ class ObstaclePair:
             obstacle); ``"every_step"``, ``"until_settled"``: found again in the deformed
             configuration as a body pair is (:class:`BodyPair`), the gap linearised about it
             (finite displacements on a curved obstacle).
+        key: the pair's key in a case file (``contacts[0]``), which errors about it name
+            (:func:`error_key`); None: its :attr:`name` (the Python API) and ``obstacle``.
     """
 
     surface: str
     obstacle: Obstacle
     law: ContactLaw = Frictionless()
     search: str = "once"
+    key: str | None = dataclasses.field(default=None, compare=False)
 
     @property
     def name(self) -> str:
@@ -100,6 +103,7 @@ class BodyPair:
             deeper), and some node must. The contact conditions are those of the measured gaps
             once the fit is resolved: in the first load step, or over the steps' ``fit``
             fractions (:meth:`Interface.gap`; docs/press_fit.md).
+        key: as for :class:`ObstaclePair`.
     """
 
     slave: str
@@ -108,6 +112,7 @@ class BodyPair:
     search_distance: float | None = None
     search: str = "every_step"
     interference: float | Interference = 0.0
+    key: str | None = dataclasses.field(default=None, compare=False)
 
     @property
     def name(self) -> str:
@@ -115,6 +120,17 @@ class BodyPair:
 
 
 Pair = ObstaclePair | BodyPair
+
+
+def error_key(pair: Pair, sub: str | None = None) -> str:
+    """The name of an error about ``pair``, or about its key ``sub``: the key path in the case
+    file of a pair read from one (``contacts[0]``, ``contacts[0].interference``), else the pair's
+    name (``top/obstacle``, ``top/obstacle: search``); an obstacle without a key is ``obstacle``."""
+    if pair.key is not None:
+        return pair.key if sub is None else f"{pair.key}.{sub}"
+    if sub == "obstacle":
+        return "obstacle"
+    return pair.name if sub is None else f"{pair.name}: {sub}"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -296,8 +312,9 @@ def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: 
     rotated by ``rotation`` and translated by ``translation``: its normals there; :meth:`Interface.gap` measures the gap
     to the obstacle of each step. The nodal areas are those of the surface deformed by
     ``deformed`` if given, else of the reference one."""
-    require(pair.search in SEARCHES, f"{pair.name}: search", f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
-    require(pair.search != "newton", f"{pair.name}: search", "'newton' (the geometry inside the Newton iteration) "
+    require(pair.search in SEARCHES, error_key(pair, "search"),
+            f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
+    require(pair.search != "newton", error_key(pair, "search"), "'newton' (the geometry inside the Newton iteration) "
             "is for pairs of meshed bodies; an obstacle pair takes 'every_step' or 'until_settled'")
     n_owned = V.dofmap.index_map.size_local
     excluded_blk = np.flatnonzero(constrained.all(axis=1))
@@ -311,10 +328,12 @@ def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: 
         gap, normal = placed(pair.obstacle, translation, rotation).distance(x + searched_at)
     comm = V.mesh.comm
     undefined = comm.allreduce(int(np.count_nonzero(~np.isfinite(normal).all(axis=1))), op=MPI.SUM)
-    require(undefined == 0, "obstacle", f"{undefined} contact nodes lie where the obstacle has no normal "
-            "(a sphere's centre or a cylinder's axis)")
+    require(undefined == 0, error_key(pair, "obstacle"), f"{undefined} contact nodes of {pair.surface!r} lie where "
+            "the obstacle has no normal (a sphere's centre or a cylinder's axis)")
     if searched_at is None:
-        _check_overlap(comm, V, gap, "obstacle", "contact nodes lie inside the obstacle")
+        _check_overlap(comm, V, gap, error_key(pair, "obstacle"), f"contact nodes of {pair.surface!r} lie inside "
+                       "the obstacle", hint="; the body must start outside it (check its position and, for a plane, "
+                       "that the normal points into the body's side)")
     area = _lumped_area(V, facet_tags, pair.surface, deformed)[blk]
     return Interface(pair, blk, tangent_frames(normal), area, None, gap, searched_at)
 
@@ -336,15 +355,16 @@ def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: Body
     long as they are covered at all (:func:`~contactqvi.contact.mortar.mortar_coupling`)."""
     slave, master = boundary_facets(facet_tags, pair.slave), boundary_facets(facet_tags, pair.master)
     distance = pair.search_distance
-    require(distance is None or distance > 0.0, f"{pair.name}: search_distance", f"must be > 0, got {distance!r}")
-    require(pair.search in SEARCHES, f"{pair.name}: search", f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
+    require(distance is None or distance > 0.0, error_key(pair, "search_distance"), f"must be > 0, got {distance!r}")
+    require(pair.search in SEARCHES, error_key(pair, "search"),
+            f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
     coupling = mortar_coupling(V, slave, master, distance, np.flatnonzero(constrained.all(axis=1)), displacement,
                                linearised, kept_blk)
     comm = V.mesh.comm
     if displacement is None:
         found = comm.allreduce(len(coupling.slave_blk), op=MPI.SUM)
         reach = "one facet size" if distance is None else f"{distance:.3g} m"
-        require(found > 0, f"{pair.name}", f"no node of {pair.slave!r} has a facet of {pair.master!r} within "
+        require(found > 0, error_key(pair), f"no node of {pair.slave!r} has a facet of {pair.master!r} within "
                 f"{reach} facing it: the surfaces are nowhere near each other (raise search_distance?)")
     # on a symmetry plane through the interface (prescribed components) the normal lies in the plane
     normal, frames = pair_frames(coupling.normal, constrained[coupling.slave_blk])
@@ -388,14 +408,16 @@ def _check_interference(comm: MPI.Comm, V: fem.FunctionSpace, gap: np.ndarray, p
     text = _declared_text(comm, interference, declared)
     fit = comm.allreduce(float(declared.max(initial=0.0)), op=MPI.MAX) > 0.0
     allowance = f"the declared interference {text} plus {faceting_text}" if fit else faceting_text
-    hint = "" if fit else "; for a press or shrink fit, declare the overlap as [[contacts]] interference (m)"
-    _check_overlap(comm, V, gap, pair.name, f"nodes of {pair.slave!r} lie inside the body of "
-                   f"{pair.master!r} by more than {allowance}", declared + faceting, hint)
+    declare = "[[contacts]] interference" if pair.key is None else error_key(pair, "interference")
+    hint = "" if fit else f"; for a press or shrink fit, declare the overlap as {declare} (m)"
+    _check_overlap(comm, V, gap, error_key(pair, "interference") if fit else error_key(pair),
+                   f"nodes of {pair.slave!r} lie inside the body of {pair.master!r} by more than {allowance}",
+                   declared + faceting, hint)
     if not fit:
         return None
     reached = comm.allreduce(float(np.max(faceting - gap - declared, initial=-np.inf)), op=MPI.MAX)
     overlap = comm.allreduce(float(np.max(-gap, initial=0.0)), op=MPI.MAX)
-    require(reached >= 0.0, f"{pair.name}: interference", f"declared {text}, but the surfaces "
+    require(reached >= 0.0, error_key(pair, "interference"), f"declared {text}, but the surfaces "
             f"overlap by at most {overlap:.3e} m as meshed, less than it by more than {faceting_text}: "
             "mesh the bodies overlapping by the interference, e.g. a pin of radius b + interference in a "
             "hole of radius b")
@@ -417,7 +439,7 @@ def _check_sign(comm: MPI.Comm, declared: np.ndarray, pair: BodyPair) -> None:
     """Raise unless the declared interference δ(x_i) (m) is >= 0 at every slave node x_i."""
     count = comm.allreduce(int(np.count_nonzero(declared < 0.0)), op=MPI.SUM)
     lowest = comm.allreduce(float(declared.min(initial=np.inf)), op=MPI.MIN)
-    require(count == 0, f"{pair.name}: interference", f"delta(x) = value + slope . (x - at) is negative at {count} "
+    require(count == 0, error_key(pair, "interference"), f"delta(x) = value + slope . (x - at) is negative at {count} "
             f"nodes of {pair.slave!r}, down to {lowest:.3e} m; it must be >= 0 on the contact surface")
 
 
@@ -455,8 +477,8 @@ def _check_disjoint(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typ
             master = fem.locate_dofs_topological(V, V.mesh.topology.dim - 1, boundary_facets(facet_tags, pair.master))
             master = master[master < n_owned]
             both = comm.allreduce(int(np.count_nonzero(slave_count[master])), op=MPI.SUM)
-            require(both == 0, f"{pair.name}", f"{both} nodes of the master surface {pair.master!r} are slave "
-                    "nodes of a pair; a node cannot be both")
+            require(both == 0, error_key(pair, "master"), f"{both} nodes of the master surface {pair.master!r} are "
+                    "slave nodes of a pair; a node cannot be both")
 
 
 def _lumped_area(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, surface: str,

@@ -57,6 +57,7 @@ from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult
 from contactqvi.contact.surface import (STATE_NAMES, UNITS, ContactSurface, contact_facet_areas, labelled,
                                         pressure_summary, state_names)
+from contactqvi.lifetime import unwind_together
 from contactqvi.paraview import MeshPiece, VTXDatasetWriter
 from contactqvi.postprocess import StressFields, applied_force, reaction_forces
 from contactqvi.records import warn
@@ -296,7 +297,8 @@ class ContactResultsWriter:
     def __enter__(self) -> ContactResultsWriter:
         return self
 
-    def __exit__(self, exc_type, *exc: object) -> None:
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: object) -> None:
+        unwind_together(exc)
         self.close(ok=exc_type is None)
 
 

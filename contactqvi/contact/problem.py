@@ -59,8 +59,8 @@ from dolfinx import mesh as dmesh
 
 from contactqvi.contact.hyperelastic import HyperelasticSystem, create_hyperelastic_system, prescribed_rows
 from contactqvi.contact.current_geometry import CurrentGeometry, following_shift, geometric_rows
-from contactqvi.contact.interface import (BodyPair, Interface, ObstaclePair, Pair, build_interfaces, followed,
-                                          search_again)
+from contactqvi.contact.interface import (BodyPair, Interface, ObstaclePair, Pair, build_interfaces, error_key,
+                                          followed, search_again)
 from contactqvi.contact.kinematics import roller_aligned
 from contactqvi.elasticity import BodyForce, elasticity_forms, lame_parameters, orthonormalize, rigid_motions_nullspace
 from contactqvi.laws import ContactLaw, Frictionless, NodalLaw, StackedLaw
@@ -521,7 +521,7 @@ class ContactProblem(PETScOwner):
         require(len(self.translated) == 12 or bool(obstacles), "steps.rotation", "rotates the groups boundary.moved "
                 "and the rigid obstacles; this problem has neither")
         for interface in obstacles:
-            require(interface.searched_each_step, f"{interface.pair.name}: search", "a rotated obstacle's normals "
+            require(interface.searched_each_step, error_key(interface.pair, "search"), "a rotated obstacle's normals "
                     "turn: its pair must be searched each step ('every_step' or 'until_settled'), got 'once'")
 
     def _obstacle_motion(self, translation: np.ndarray, rotation: Rotation | None, previous_translation: np.ndarray,
@@ -781,7 +781,7 @@ def _rigid_coefficients(translation: np.ndarray, rotation: Rotation | None) -> n
 def _check_linear_pairs(problem: ContactProblem) -> None:
     """Raise if a pair of bodies of linear elasticity is searched ``"newton"``."""
     for interface in problem.interfaces:
-        require(not interface.follows, f"{interface.pair.name}: search",
+        require(not interface.follows, error_key(interface.pair, "search"),
                 "'newton' takes the geometry of finite deformations into the Newton iteration and needs "
                 "hyperelastic bodies (a material model); for linear elasticity use 'every_step' or 'until_settled'")
 

@@ -77,7 +77,8 @@ def check_reach(problem: ContactProblem, steps: typing.Sequence[LoadStep], presc
             key, obstacle = keys[k] if keys is not None else (interface.pair.name, "obstacle")
             pair = f" {interface.pair.name}" if keys is not None else ""  # else the error's name
             raise ParameterError(key, f"the pair{pair} can never touch: "
-                                 + _never_text(problem, steps, interface, approach, travel, obstacle))
+                                 + _never_text(problem, steps, interface, approach, travel,
+                                               _CaseKeys(obstacle, key if keys is not None else None)))
 
 
 def body_travel(problem: ContactProblem, steps: typing.Sequence[LoadStep], prescribed: float = 0.0) -> float | None:
@@ -131,9 +132,24 @@ def _approach(problem: ContactProblem, steps: typing.Sequence[LoadStep], k: int)
     return _Approach(gaps[step], step)
 
 
+class _CaseKeys(typing.NamedTuple):
+    """The keys a likely cause names: the obstacle's (``contacts[0].obstacle``; None for a body
+    pair) and the pair's (``contacts[0]``, ``contact``; None: none, the Python API)."""
+
+    obstacle: str | None
+    pair: str | None
+
+    def group(self, side: str) -> str | None:
+        """The key that selects the pair's ``side`` ("slave", "master") group: ``contacts[0].slave``,
+        [contact]'s ``contact.surface``; None without keys."""
+        if self.pair is None:
+            return None
+        return "contact.surface" if self.pair == "contact" else f"{self.pair}.{side}"
+
+
 def _never_text(problem: ContactProblem, steps: typing.Sequence[LoadStep], interface: Interface,
-                approach: _Approach, travel: float, obstacle_key: str | None) -> str:
-    """Why a pair can never touch: gap, travels, likely cause (naming ``obstacle_key.normal``)."""
+                approach: _Approach, travel: float, keys: _CaseKeys) -> str:
+    """Why a pair can never touch: gap, travels, likely cause (naming the keys to change)."""
     obstacle = interface.obstacle is not None
     moved = max(float(np.linalg.norm(step.translation)) for step in steps)
     turned = max(abs(step.rotation.angle) if step.rotation is not None else 0.0 for step in steps)
@@ -143,17 +159,18 @@ def _never_text(problem: ContactProblem, steps: typing.Sequence[LoadStep], inter
             f"to {'the obstacle' if obstacle else 'the master surface'} in the {len(steps)} load steps (the smallest "
             f"gap, at step {approach.step + 1}{travels}), and nothing moves the bodies more than {travel:.4g} m "
             "(prescribed displacements, moved groups, the other pairs; no force acts). "
-            f"Likely cause: {_cause(problem, steps[approach.step], interface, approach.gap, obstacle_key)}")
+            f"Likely cause: {_cause(problem, steps[approach.step], interface, approach.gap, keys)}")
 
 
-def _cause(problem: ContactProblem, step: LoadStep, interface: Interface, gap: float,
-           obstacle_key: str | None) -> str:
+def _cause(problem: ContactProblem, step: LoadStep, interface: Interface, gap: float, keys: _CaseKeys) -> str:
     """Why a pair's slave nodes stay ``gap`` away at ``step``: an obstacle facing away from the
     slave body (part of it lies behind the obstacle's surface), nodes off the contact group nearer
     to the obstacle than it (a wrong group), or an obstacle placed away from the body."""
     if interface.obstacle is None:
-        return ("a wrong group (the slave or the master surface), or a load or a motion missing that brings the "
-                "surfaces together")
+        groups = "the slave or the master surface"
+        if keys.pair is not None:
+            groups = f"{keys.group('slave')} or {keys.group('master')}"
+        return f"a wrong group ({groups}), or a load or a motion missing that brings the surfaces together"
     comm = problem.comm
     n_owned = problem.V.dofmap.index_map.size_local
     x = problem.V.tabulate_dof_coordinates()[:n_owned]
@@ -169,8 +186,9 @@ def _cause(problem: ContactProblem, step: LoadStep, interface: Interface, gap: f
     if behind:
         return (f"the obstacle faces away from the body: {behind} of its {total} nodes lie behind the obstacle's "
                 f"surface (signed distance down to {deepest:.4g} m, at {step_position(step)}); a plane's normal "
-                f"must point into the body's side (flip {obstacle_key}.normal)")
+                f"must point into the body's side (flip {keys.obstacle}.normal)")
     if deepest < gap:
+        where = "" if keys.pair is None else f" in {keys.group('slave')}"
         return (f"a wrong contact group: nodes of the body off {interface.slave_surface!r} come within "
-                f"{deepest:.4g} m of the obstacle, nearer than the group; name the face that meets it")
+                f"{deepest:.4g} m of the obstacle, nearer than the group; name the face that meets it{where}")
     return "the obstacle is placed (point, translation) away from the body, or moves away from it"
