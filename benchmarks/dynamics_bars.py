@@ -1,4 +1,4 @@
-"""Two equal bars meeting head-on (issue 44): the contact-stabilised Newmark method against 1D wave theory.
+"""Two equal bars meeting head-on (issue 44): the contact-stabilised time schemes against 1D wave theory.
 
 This benchmark illustrates how to run a dynamic case from Python (``run_dynamics``) and
 checks it against the closed form: two bars of length L, one hexahedron across (lateral
@@ -7,10 +7,13 @@ the constrained modulus), ``--elements`` hexahedra along each, meet at +-v. The 
 2L/c, the bars then leave with the velocities exchanged and, for an exact scheme, the energy
 they had. Per mesh and time step (tau = (2L/c) / (k n) for k of ``--courant-steps``, n the
 elements along a bar: k = 2 is Courant number 1): the contact duration, the mean velocities
-after separation, the energy after separation and the balance error (docs/dynamics.md, Sect. 4).
+after separation, the energy after separation and the balance error (docs/dynamics.md, Sect. 4:
+the solver's error for Newmark's rule; for HHT-α and generalized-α also the scheme's own
+numerical dissipation, which the energy after separation then holds as well). ``--schemes``
+takes ``newmark``, ``hht:ALPHA`` and ``generalized_alpha:RHO_INFINITY``.
 
 Issue 44's bounds: duration 1 %, velocities 2 %, energy 1 %. Writes
-``benchmarks/results/dynamics.{json,md}``.
+``benchmarks/results/<--table>.{json,md}`` (default ``dynamics``).
 """
 
 from __future__ import annotations
@@ -66,12 +69,23 @@ def parse() -> argparse.Namespace:
     parser.add_argument("--elements", type=int, nargs="+", default=[20, 40, 80, 160], help="hexahedra along a bar")
     parser.add_argument("--courant-steps", type=int, nargs="+", default=[2, 4],
                         help="k: time steps per element crossing time h/c times 1/2 (tau = (2L/c) / (k n))")
+    parser.add_argument("--schemes", nargs="+", default=["newmark"],
+                        help="newmark, hht:ALPHA, generalized_alpha:RHO_INFINITY")
     parser.add_argument("--output", default=str(ROOT / "benchmarks" / "results"))
+    parser.add_argument("--table", default="dynamics", help="the results' file name, without suffix")
     return parser.parse_args()
 
 
-def run(n: int, k: int, directory: pathlib.Path) -> list:
-    """One mesh and time step: the row of the table."""
+def dynamics(tau: float, scheme: str) -> Dynamics:
+    """[dynamics] to 1.25 (2L/c) with the time step ``tau`` and ``scheme`` (``name[:parameter]``)."""
+    name, _, value = scheme.partition(":")
+    key = {"hht": "alpha", "generalized_alpha": "rho_infinity"}.get(name)
+    parameters = {key: float(value)} if key and value else {}
+    return Dynamics(tau, 1.25 * DURATION, scheme=name, **parameters)
+
+
+def run(n: int, k: int, scheme: str, directory: pathlib.Path) -> list:
+    """One mesh, time step and scheme: the row of the table."""
     mesh = directory / f"bars_{n}.geo"
     if MPI.COMM_WORLD.rank == 0:
         mesh.write_text(GEO.format(n=n, a=L / n, L=L))
@@ -82,9 +96,9 @@ def run(n: int, k: int, directory: pathlib.Path) -> list:
     case = ContactCase(mesh=MeshSource(file=mesh), bodies=(Body("left", material, rollers, (V0, 0.0, 0.0)),
                                                            Body("right", material, rollers, (-V0, 0.0, 0.0))),
                        contacts=(ContactPair("right.interface", "left.interface", law=Frictionless(), search="once"),),
-                       dynamics=Dynamics(tau, 1.25 * DURATION), solver={"pc": "lu"})
+                       dynamics=dynamics(tau, scheme), solver={"pc": "lu"})
     start = time.perf_counter()
-    summary, _ = run_dynamics(case, directory / f"run_{n}_{k}", plot=False)
+    summary, _ = run_dynamics(case, directory / f"run_{n}_{k}_{scheme}", plot=False)
     seconds = time.perf_counter() - start
     steps = summary["steps"]
     touching = [s["time"] for s in steps if s["contact_area"] > 0.0]
@@ -94,22 +108,22 @@ def run(n: int, k: int, directory: pathlib.Path) -> list:
     after = (last["energy"]["kinetic"] + last["energy"]["elastic"]) / before
     velocities = last["body_velocity"]["left"][0], last["body_velocity"]["right"][0]
     balance = max(abs(s["energy"]["balance_error"]) for s in steps) / before
-    return [n, f"(2L/c)/{k * n}", duration, velocities[0], velocities[1], after, balance, round(seconds, 1)]
+    return [scheme, n, f"(2L/c)/{k * n}", duration, velocities[0], velocities[1], after, balance, round(seconds, 1)]
 
 
 def main() -> None:
     args = parse()
     comm = MPI.COMM_WORLD
     directory = pathlib.Path(comm.bcast(tempfile.mkdtemp(prefix="bars-") if comm.rank == 0 else None, root=0))
-    rows = [run(n, k, directory) for n in args.elements for k in args.courant_steps]
-    header = ["elements along a bar", "tau", "duration / (2L/c)", "v left after (m/s)", "v right after (m/s)",
+    rows = [run(n, k, scheme, directory) for scheme in args.schemes for n in args.elements for k in args.courant_steps]
+    header = ["scheme", "elements along a bar", "tau", "duration / (2L/c)", "v left after (m/s)", "v right after (m/s)",
               "energy after / before", "largest balance error / energy", "seconds"]
     text = (f"# Two bars head-on (benchmarks/dynamics_bars.py, {comm.size} rank(s))\n\n"
             f"L = {L} m, one hexahedron across (lateral rollers), E = {E:g} Pa, nu = {NU}, rho = {RHO} kg/m^3, "
             f"v = +-{V0} m/s; c = {C:.1f} m/s (constrained modulus), 2L/c = {DURATION * 1e6:.2f} us; exact: "
-            "duration 1, velocities -1 and +1 m/s, energy 1. Contact-stabilised Newmark (docs/dynamics.md).\n\n"
+            "duration 1, velocities -1 and +1 m/s, energy 1. Contact-stabilised schemes (docs/dynamics.md).\n\n"
             + tables.markdown_table(header, rows))
-    tables.write_table(comm, pathlib.Path(args.output) / "dynamics", {"header": header, "rows": rows}, text)
+    tables.write_table(comm, pathlib.Path(args.output) / args.table, {"header": header, "rows": rows}, text)
 
 
 if __name__ == "__main__":

@@ -475,6 +475,14 @@ def _case_file(**dynamics) -> dict:
         steps=[{"time": 0.0, "load": 1.0}]), "steps[0].load", "must be 0 at time 0"),
     (lambda d: d.pop("dynamics") and d.update(steps=[{"time": 1e-5}]), "steps[0].time", "add [dynamics]"),
     (lambda d: d["dynamics"].update(velocity=[1, 0, 0]), "dynamics.velocity", "did you mean 'initial_velocity'"),
+    (lambda d: d["dynamics"].update(alpha=0.1), "dynamics.alpha", "a parameter of scheme = 'hht', not of 'newmark'"),
+    (lambda d: d["dynamics"].update(scheme="hht", alpha=0.5), "dynamics.alpha", "must be in [0, 0.3333]"),
+    (lambda d: d["dynamics"].update(scheme="hht", alpha="big"), "dynamics.alpha", "number"),
+    (lambda d: d["dynamics"].update(scheme="generalized_alpha", rho_infinity=1.5), "dynamics.rho_infinity",
+     "must be in [0, 1]"),
+    (lambda d: d["dynamics"].update(scheme="hht", rho_infinity=0.5), "dynamics.rho_infinity",
+     "a parameter of scheme = 'generalized_alpha', not of 'hht'"),
+    (lambda d: d["dynamics"].update(scheme="generalised_alpha"), "dynamics.scheme", "did you mean 'generalized_alpha'"),
 ])
 def test_named_errors(change, key, words):
     data = _case_file()
@@ -494,3 +502,23 @@ def test_dynamics_table():
     free = _case_file()
     del free["bodies"][0]["boundary"]
     assert parse_case(free).bodies[0].boundary.displacement == {}  # with mass, no body needs a support
+
+
+@pytest.mark.one_rank(reason="case-file parsing and the scheme's parameters: no mesh")
+def test_time_schemes():
+    """Each ``scheme`` with its parameter (or its default) gives Chung and Hulbert's (alpha_m,
+    alpha_f, beta, gamma): second order (gamma = 1/2 - alpha_m + alpha_f), unconditionally
+    stable (alpha_m <= alpha_f <= 1/2, beta >= 1/4 + (alpha_f - alpha_m)/2)."""
+    schemes = {"newmark": (0.0, 0.0, 0.25, 0.5), "hht": (0.0, 0.05, 1.05**2 / 4, 0.55),
+               "generalized_alpha": (1 / 3, 4 / 9, (1 - 1 / 3 + 4 / 9)**2 / 4, 0.5 - 1 / 3 + 4 / 9)}
+    for name, expected in schemes.items():
+        case = parse_case(_case_file(scheme=name))
+        scheme = case.dynamics.time_scheme()
+        assert (scheme.alpha_m, scheme.alpha_f, scheme.beta, scheme.gamma) == pytest.approx(expected, rel=1e-14)
+        assert scheme.gamma == pytest.approx(0.5 - scheme.alpha_m + scheme.alpha_f, rel=1e-14)
+        assert scheme.alpha_m <= scheme.alpha_f <= 0.5 and scheme.beta >= 0.25 + (scheme.alpha_f - scheme.alpha_m) / 2
+        assert scheme.carries_acceleration == (name != "newmark")
+    hht = parse_case(_case_file(scheme="hht", alpha=0.1))
+    assert hht.to_dict()["dynamics"] == {"dt": 1e-5, "end": 1e-4, "scheme": "hht", "alpha": 0.1}
+    assert hht.dynamics.time_scheme().alpha_f == 0.1
+    assert parse_case(_case_file(scheme="generalized_alpha", rho_infinity=0.0)).dynamics.time_scheme().alpha_m == -1.0
