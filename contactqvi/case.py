@@ -965,7 +965,7 @@ def _check_dynamics(case: ContactCase) -> Dynamics:
     """``[dynamics]`` checked against the case: a known scheme, dt > 0, end >= dt, a density
     for every body (none for some and one for others is named as such), the time points of
     ``[[steps]]`` (:func:`_check_time_points`), a hyperelastic body in the displacement
-    formulation, contact searched once (docs/dynamics.md, what is not done yet)."""
+    formulation, contact searched once or before every time step (docs/dynamics.md)."""
     dynamics = case.dynamics
     _instance(dynamics, Dynamics, "dynamics")
     require_choice("dynamics.scheme", dynamics.scheme, DYNAMICS_SCHEMES)
@@ -991,7 +991,8 @@ def _check_dynamics(case: ContactCase) -> Dynamics:
     searches = [case.contact.search] if case.contact is not None else [p.search for p in case.contacts]
     for i, search in enumerate(searches):
         key = "contact.search" if case.contact is not None else f"contacts[{i}].search"
-        require(search in (None, "once"), key, f"[dynamics] searches the contact once for now, got {search!r}")
+        require(search in (None, "once", "every_step"), key, "[dynamics] searches the contact once or before "
+                f"every time step (\"once\", \"every_step\"), got {search!r}")
     return Dynamics(dt, end, dynamics.scheme, velocity, alpha, rho_infinity)
 
 
@@ -1028,7 +1029,8 @@ def _check_time_points(case: ContactCase, bodies: typing.Sequence[Body], paths: 
                 "(s); the loads are linear in time between them")
         require(step.time >= 0.0 and step.time > before, f"steps[{i}].time", f"must be >= 0 and increase from "
                 f"step to step, got {step.time!r} after {before!r}")
-        require(step.rotation is None, f"steps[{i}].rotation", "[dynamics] searches the contact once: no rotations")
+        require(step.rotation is None, f"steps[{i}].rotation", "[dynamics] takes no rotations in time yet "
+                "(docs/dynamics.md, Sect. 6)")
         require(step.fit is None, f"steps[{i}].fit", "not used with [dynamics] (interferences are resolved at t = 0)")
         before = step.time
     if steps[0].time == 0.0:

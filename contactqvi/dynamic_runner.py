@@ -91,7 +91,7 @@ def run_dynamics(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm =
     with warnings, default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, stop_signals() as signal:
         scheme = dynamics.time_scheme()
         with StabilisedNewmark(problem, _density(case, problem), dynamics.dt, parameters, PREFIX, case.steps,
-                               scheme) as integrator, BodyMotion(problem, integrator.mass) as motion:
+                               scheme) as integrator, BodyMotion(problem, integrator.global_mass) as motion:
             velocity = _initial_velocity(case, problem)
             state = integrator.initial_state(velocity)
             velocity.destroy()
@@ -102,6 +102,8 @@ def run_dynamics(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm =
                        "steps": []}
             if restart:
                 summary = read_dynamic_checkpoint(problem, out, case, state, summary)
+                if state.done and problem.searched_each_step:  # the variables the checkpoint was written in
+                    integrator.search(state, carry=False)
             def stop() -> bool:  # collective: a signal on any rank
                 return comm.allreduce(signal.is_set(), op=MPI.LOR)
 
@@ -150,6 +152,8 @@ def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: B
             state.done += 1
             summary["steps"].append(_entry(problem, state, projection, result, motion)
                                     | ({"parts": parts} if len(parts) > 1 else {}))
+            if problem.searched_each_step:  # the next step's contact, and the checkpoint's variables
+                integrator.search(state)
             state.physical.copy(displacement.x.petsc_vec)
             displacement.x.scatter_forward()
             global_components(problem, state.velocity, velocity)

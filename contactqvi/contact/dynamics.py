@@ -297,26 +297,37 @@ class StabilisedNewmark(PETScOwner):
     def __init__(self, problem: ContactProblem, density: float | fem.Function, dt: float,
                  parameters: dict | None = None, prefix: str = "dynamics_",
                  path: typing.Sequence[LoadStep] = (LoadStep(),), scheme: TimeScheme = TimeScheme.newmark()):
-        require(not problem.searched_each_step, "dynamics",
-                "the contact-stabilised Newmark step takes a problem searched once (docs/dynamics.md)")
+        require(not (problem.settles_geometry or problem.follows_geometry), "dynamics",
+                "a time step searches its contact once or before each step, not until it settles or at each Newton "
+                "step (docs/dynamics.md)")
         require(problem.hyperelastic is None or problem.body.nodal is None, "material.formulation",
                 "[dynamics] takes a hyperelastic body in the displacement formulation")
         require(dt > 0.0, "dynamics.dt", f"the time step must be > 0 (s), got {dt!r}")
         self.problem, self.tau, self.path, self.scheme = problem, float(dt), tuple(path), scheme
         self._parameters, self._prefix = parameters, prefix
         self.global_mass = global_mass_matrix(problem, density)
-        self.mass = mass_matrix(problem, self.global_mass)
         self.static = problem.hyperelastic
-        coefficient = scheme.inertia_coefficient(self.tau)
-        if self.static is None:
-            self.stiffness = problem.A.duplicate(copy=True)
-            problem.A.axpy(coefficient, self.mass, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
-        else:
-            self.stiffness = None
+        if self.static is not None:
             inertia = self.static.internal.duplicate()
             problem.hyperelastic = InertialSystem(
                 **{f.name: getattr(self.static, f.name) for f in dataclasses.fields(self.static)},
-                mass=self.global_mass, coefficient=coefficient, inertia=inertia, work=inertia.duplicate())
+                mass=self.global_mass, coefficient=scheme.inertia_coefficient(self.tau), inertia=inertia,
+                work=inertia.duplicate())
+        self._assemble()
+        self.energy = PhysicalEnergy(problem)
+        self._work = _Work.create(problem.A)
+
+    def _assemble(self) -> None:
+        """What depends on the problem's last search (its T): M = T^T M_K T, a linear body's K
+        (a copy of A) and A_eff = K + c M in A, the projection's M_p and problem, the
+        prescribed rows and the two SCD solvers."""
+        problem = self.problem
+        self.mass = mass_matrix(problem, self.global_mass)
+        self.stiffness = None
+        if self.static is None:
+            self.stiffness = problem.A.duplicate(copy=True)
+            problem.A.axpy(self.scheme.inertia_coefficient(self.tau), self.mass,
+                           PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         self.projection_matrix = self.mass.duplicate(copy=True)
         diagonal = self.mass.getDiagonal()
         self.prescribed = _zero_rows(diagonal)
@@ -326,18 +337,57 @@ class StabilisedNewmark(PETScOwner):
         diagonal.destroy()
         self.projection = dataclasses.replace(problem, A=self.projection_matrix, load=problem.load.duplicate(),
                                               law=Frictionless().lumped(problem.contact_area), hyperelastic=None)
-        self.predictor_solver = SCDNewtonSolver(self.projection, parameters, prefix=prefix + "predictor_")
-        self.solver = SCDNewtonSolver(problem, parameters, prefix=prefix)
-        self.energy = PhysicalEnergy(problem)
-        self._work = _Work.create(problem.A)
+        self.predictor_solver = SCDNewtonSolver(self.projection, self._parameters, prefix=self._prefix + "predictor_")
+        self.solver = SCDNewtonSolver(problem, self._parameters, prefix=self._prefix)
+
+    def _assembled(self) -> list[typing.Any]:
+        """The PETSc objects of :meth:`_assemble`."""
+        return [self.predictor_solver, self.solver, self.mass, self.stiffness, self.projection_matrix,
+                self.projection.load]
 
     def petsc_objects(self) -> list[typing.Any]:
         """The solvers, M, M_K, K, the projection's matrix and load, the energies' vectors, the work
         vectors and a hyperelastic step's inertia vectors (not the problem's)."""
         system = self.problem.hyperelastic
         inertial = [system.inertia, system.work] if isinstance(system, InertialSystem) else []
-        return [self.predictor_solver, self.solver, self.mass, self.global_mass, self.stiffness,
-                self.projection_matrix, self.projection.load, self.energy, self._work, *inertial]
+        return [*self._assembled(), self.global_mass, self.energy, self._work, *inertial]
+
+    def search(self, state: DynamicState, carry: bool = True) -> None:
+        """Search the problem's pairs again in the configuration ``state`` ended in (its physical
+        displacement u_n; docs/dynamics.md Sect. 3.3) and rebuild what depends on T
+        (:meth:`_assemble`). With ``carry`` the state's vectors in the solver's variables are
+        carried over to the new ones: w_n = T^-1 (u_n - offsets), the velocity and the
+        accelerations by T_new^-1 T_old,
+        m_n of a linear body by T_new^T T_old^-T (a hyperelastic body's m_n is in global components);
+        without, they are left as they are (a restart reads them in the new variables). Collective."""
+        problem, scheme = self.problem, self.scheme
+        carried = [state.velocity, state.acceleration, state.newmark_acceleration] if carry else []
+        forces = [state.inertial_force] if carry and self.static is None and scheme.carries_acceleration else []
+        moved = [x.copy() for x in carried + forces]
+        field = fem.Function(problem.V)
+        for x, y in zip(carried, moved):
+            global_components(problem, x, field).x.petsc_vec.copy(y)
+        for x, y in zip(forces, moved[len(carried):]):
+            problem.force_to_global(x, y)
+        state.physical.copy(field.x.petsc_vec)
+        field.x.scatter_forward()
+        problem.search(field)
+        for obj in self._assembled():
+            if obj is not None:
+                obj.destroy()
+        self._assemble()
+        if carry:
+            problem.solver_variables(field, state.displacement)
+            for x, y in zip(carried, moved):
+                problem.from_global(y, x)
+            transform = problem.to_global
+            for x, y in zip(forces, moved[len(carried):]):
+                if transform is None:
+                    y.copy(x)
+                else:
+                    transform.multTranspose(y, x)
+        for y in moved:
+            y.destroy()
 
     def destroy(self) -> None:
         """Free the PETSc objects (collective) and give the problem back its static hyperelastic system."""
@@ -578,39 +628,45 @@ class StabilisedNewmark(PETScOwner):
 
 
 class BodyMotion(PETScOwner):
-    """Each body's mean velocity, the mass-weighted v_b = z_b^T M v / z_b^T M z_b per axis, with
-    z_b = T^-1 e_b the rigid translation e_b of body b in the solver's variables (the momentum
-    of the free dofs over their mass; a component prescribed on all of a body has no mass: 0).
+    """Each body's mean velocity, the mass-weighted v_b = e_b^T M_K T v / e_b^T M_K e_b per axis,
+    with e_b the rigid translation of body b in global components (the momentum of the free
+    dofs over their mass; a component prescribed on all of a body has no mass: 0). In global
+    components, so that a new search (a new T) leaves it as it is.
 
     Args:
         problem: the contact problem (``node_body`` names the bodies; None: one body ``"body"``).
-        mass: M of :func:`mass_matrix`.
+        mass: M_K of :func:`global_mass_matrix`.
     """
 
     def __init__(self, problem: ContactProblem, mass: PETSc.Mat):
-        self.mass = mass
+        self.problem, self.mass = problem, mass
         names = list(problem.body.cell_tags.names) if problem.node_body is not None else ["body"]
-        node_body = problem.node_body if problem.node_body is not None else np.zeros(
-            problem.V.dofmap.index_map.size_local + problem.V.dofmap.index_map.num_ghosts, dtype=np.int32)
-        field = fem.Function(problem.V)
+        n = problem.V.dofmap.index_map.size_local
+        node_body = problem.node_body[:n] if problem.node_body is not None else np.zeros(n, dtype=np.int32)
         self.translations: dict[str, list[PETSc.Vec]] = {}
         for k, name in enumerate(names):
             self.translations[name] = []
             for axis in range(3):
-                field.x.array[:] = 0.0
-                field.x.array.reshape(-1, 3)[node_body == k, axis] = 1.0
-                self.translations[name].append(problem.solver_variables(field, problem.A.createVecRight()))
-        self._work = problem.A.createVecRight()
+                z = mass.createVecRight()
+                z.set(0.0)
+                z.array.reshape(-1, 3)[node_body == k, axis] = 1.0
+                self.translations[name].append(z)
+        self._work, self._global = mass.createVecRight(), mass.createVecRight()
         self.masses = {name: [_energy_norm(mass, z, self._work) for z in zs] for name, zs in self.translations.items()}
 
     def petsc_objects(self) -> list[typing.Any]:
-        """The translations and the work vector (not M)."""
-        return [*(z for zs in self.translations.values() for z in zs), self._work]
+        """The translations and the work vectors (not M_K)."""
+        return [*(z for zs in self.translations.values() for z in zs), self._work, self._global]
 
     def velocities(self, velocity: PETSc.Vec) -> dict[str, list[float]]:
         """Each body's mean velocity (m/s, global axes) of ``velocity`` (solver variables); of a
         displacement, its mean displacement (m). Collective."""
-        self.mass.mult(velocity, self._work)
+        transform = self.problem.to_global
+        if transform is None:
+            velocity.copy(self._global)
+        else:
+            transform.mult(velocity, self._global)
+        self.mass.mult(self._global, self._work)
         return {name: [z.dot(self._work) / m if m > 0.0 else 0.0 for z, m in zip(zs, self.masses[name])]
                 for name, zs in self.translations.items()}
 

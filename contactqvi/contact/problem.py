@@ -393,9 +393,17 @@ class ContactProblem(PETScOwner):
         for t, c in zip(self.rigid_motion(), self.translated_offset):
             if c is not None:
                 local.axpy(-t, c)
+        self.from_global(local, out)
+        local.destroy()
+        return out
+
+    def from_global(self, x: PETSc.Vec, out: PETSc.Vec) -> PETSc.Vec:
+        """T^-1 x = R^T (I - N) x of a vector x in global components (a velocity, an acceleration:
+        no offsets), written into ``out``."""
+        local = x.copy()
         if self.coupling is not None:
             coupled = local.duplicate()
-            self.coupling.mult(local, coupled)
+            self.coupling.mult(x, coupled)
             local.axpy(-1.0, coupled)
             coupled.destroy()
         if self.rotation is None:
@@ -403,6 +411,24 @@ class ContactProblem(PETScOwner):
         else:
             self.rotation.multTranspose(local, out)
         local.destroy()
+        return out
+
+    def force_to_global(self, x: PETSc.Vec, out: PETSc.Vec) -> PETSc.Vec:
+        """T^-T x = (I - N)^T R x of a force x in the solver's variables (T^T f = x): the force
+        in global components, written into ``out``."""
+        local = out if self.rotation is None else x.duplicate()
+        if self.rotation is None:
+            x.copy(local)
+        else:
+            self.rotation.mult(x, local)
+        if self.coupling is not None:
+            coupled = local.duplicate()
+            self.coupling.multTranspose(local, coupled)
+            local.axpy(-1.0, coupled)
+            coupled.destroy()
+        if local is not out:
+            local.copy(out)
+            local.destroy()
         return out
 
     def force_scale(self) -> float:
