@@ -47,6 +47,7 @@ from contactqvi.contact.load_path import contact_resultants
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult
 from contactqvi.elasticity import cellwise
+from contactqvi.lifetime import unwind_together
 from contactqvi.linalg import default_options
 from contactqvi.paraview import MeshPiece, VTXDatasetWriter
 from contactqvi.parameters import Parameter, ParameterError, Parameters
@@ -161,8 +162,11 @@ def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: B
             writer.write(piece.dataset(fields), state.time)
             tables.write_summary(problem.comm, out / "summary.json", summary)
             write_dynamic_checkpoint(problem, out, state, summary)
+    except Exception as exc:
+        unwind_together(exc)  # an error of one rank alone ends the job here, under abort_on_error
+        raise
     finally:
-        writer.close()
+        writer.close()  # keeps every converged step, also when a later one raised
         u.destroy()
     return EXIT_CODES["converged"]
 
