@@ -154,7 +154,8 @@ import typing
 from contactqvi import obstacles
 from contactqvi.interference import Interference, check_interference
 from contactqvi.laws import LAWS, ContactLaw, create_law, parameter_names
-from contactqvi.load_steps import SEARCHES, Rotation, check_fit, check_rotation, check_steps, rotates
+from contactqvi.load_steps import (SEARCHES, Rotation, check_fit, check_rotation, check_steps, rotates,
+                                   rotation_of_points)
 from contactqvi.materials import FORMULATIONS, MATERIALS
 from contactqvi.load_steps import LoadStep as Step
 from contactqvi.parameters import (
@@ -1011,10 +1012,11 @@ def _scheme_parameter(dynamics: Dynamics, key: str, scheme: str, bounds: tuple[f
 
 def _check_time_points(case: ContactCase, bodies: typing.Sequence[Body], paths: typing.Sequence[str]) -> None:
     """The ``[[steps]]`` of a time integration are time points (docs/dynamics.md, Sect. 1): each
-    with its ``time``, increasing, no rotation (the contact is searched once) and no ``fit``; the
-    body starts at rest where meshed, so at t = 0 nothing is translated and a prescribed
-    displacement is zero (load factor 0 there, or no nonzero prescribed component). Without
-    steps the loads are constant (load factor 1 from t = 0)."""
+    with its ``time``, increasing, its rotation (if any) about the axis and centre of the others
+    (:func:`~contactqvi.load_steps.rotation_of_points`) and no ``fit``; the body starts at rest
+    where meshed, so at t = 0 nothing is translated or rotated and a prescribed displacement is
+    zero (load factor 0 there, or no nonzero prescribed component). Without steps the loads are
+    constant (load factor 1 from t = 0)."""
     steps = case.steps
     prescribed = next((f"{path + '.' if path else ''}boundary.displacement.{name}"
                        for body, path in zip(bodies, paths) for name, given in body.boundary.displacement.items()
@@ -1029,13 +1031,14 @@ def _check_time_points(case: ContactCase, bodies: typing.Sequence[Body], paths: 
                 "(s); the loads are linear in time between them")
         require(step.time >= 0.0 and step.time > before, f"steps[{i}].time", f"must be >= 0 and increase from "
                 f"step to step, got {step.time!r} after {before!r}")
-        require(step.rotation is None, f"steps[{i}].rotation", "[dynamics] takes no rotations in time yet "
-                "(docs/dynamics.md, Sect. 6)")
         require(step.fit is None, f"steps[{i}].fit", "not used with [dynamics] (interferences are resolved at t = 0)")
         before = step.time
+    rotation_of_points(steps)
     if steps[0].time == 0.0:
         require(steps[0].translation == (0.0, 0.0, 0.0), "steps[0].translation", "the obstacles and moved groups "
                 "start where meshed: the translation at time 0 must be zero")
+        require(steps[0].rotation is None or steps[0].rotation.angle == 0.0, "steps[0].rotation.angle",
+                "the obstacles and moved groups start where meshed: the angle at time 0 must be zero")
         require(prescribed is None or steps[0].load == 0.0, "steps[0].load", f"must be 0 at time 0: {prescribed} "
                 "is nonzero and the body starts at rest where meshed")
 

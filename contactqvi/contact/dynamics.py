@@ -425,9 +425,10 @@ class StabilisedNewmark(PETScOwner):
         problem, tau = self.problem, self.tau
         predicted, projected = self._work.predicted, self._work.projected
         before, after = at_time(self.path, state.time), at_time(self.path, state.time + tau)
-        _lifted_load(problem, before, self._work.previous_load)
-        problem.set_step(after.load, after.translation, previous=state.displacement,
-                         previous_translation=before.translation)  # d: gaps at t_{n+1}, slip measured from w_n
+        problem.step_load(before.load, before.translation, before.rotation, self._work.previous_load)
+        problem.set_step(after.load, after.translation, previous=state.displacement, rotation=after.rotation,
+                         previous_translation=before.translation, previous_rotation=before.rotation)
+        # d: gaps at t_{n+1}, slip measured from w_n and the obstacles' motion over the step
         predicted.waxpy(tau, state.velocity, state.displacement)
         self.projection_matrix.mult(predicted, self.projection.load)
         self.projection_matrix.multAdd(problem.shift, self.projection.load, self.projection.load)
@@ -506,7 +507,7 @@ class StabilisedNewmark(PETScOwner):
         problem = self.problem
         if self.static is None:
             self.stiffness.mult(w, out)
-            _lifted_load(problem, step, self._work.previous_load)
+            problem.step_load(step.load, step.translation, step.rotation, self._work.previous_load)
             out.aypx(-1.0, self._work.previous_load)
         else:
             system = problem.hyperelastic
@@ -710,13 +711,3 @@ def global_components(problem: ContactProblem, x: PETSc.Vec, out: fem.Function) 
         problem.to_global.mult(x, out.x.petsc_vec)
     out.x.scatter_forward()
     return out
-
-
-def _lifted_load(problem: ContactProblem, step: LoadStep, out: PETSc.Vec) -> None:
-    """F(t) in the solver's variables at the load factor and translation of ``step``: lambda l~ +
-    sum_c t_c l~_c (the lifted loads of :meth:`~contactqvi.contact.problem.ContactProblem.set_step`
-    without the shift), into ``out``."""
-    problem.applied.copy(out)
-    out.scale(step.load)
-    for t, b in zip(step.translation, problem.translated):
-        out.axpy(t, b)
