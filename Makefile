@@ -3,6 +3,7 @@
 #   make test   install what is missing, run the test suite serially (2 workers), with 2 ranks, a subset with 3 and 4
 #   make container-check   build docker/Dockerfile (docker or podman), run the flagship and the tests inside
 #   make paraview          install ParaView 5.13 from Debian, render the standard views of a fresh result
+#   make paraview-dynamics the same over time: frames of a fresh drop test, and a state file for the GUI
 VENV    ?= .venv
 PY      := $(VENV)/bin/python
 NP      ?= 2
@@ -16,7 +17,7 @@ endif
 MPIENV  += OMPI_MCA_rmaps_base_oversubscribe=1 PRTE_MCA_rmaps_default_mapping_policy=:oversubscribe OMPI_MCA_btl=self,sm
 MPIRUN  := $(MPIENV) mpirun -n $(NP)
 
-.PHONY: deps venv demo test test-serial test-mpi test-ranks benchmarks container-check paraview peers clean
+.PHONY: deps venv demo test test-serial test-mpi test-ranks benchmarks container-check paraview paraview-dynamics peers clean
 
 deps:
 	bash scripts/install-deps.sh
@@ -75,6 +76,14 @@ paraview: $(PY)
 	rm -rf $(PV_OUT)
 	$(MPIRUN) $(PY) demos/coulomb3d.py --lev 4 --geometry d3 --load L2 --output $(PV_OUT)
 	bash scripts/paraview/run.sh $(PV_OUT) $(PV_IMAGES)
+
+# Views over time (scripts/paraview/pv_time.py) of a fresh drop test, to docs/images; the state
+# file for ParaView's GUI beside its body.bp: paraview --state=$(PV_DYNAMICS_OUT)/paraview_time.pvsm
+PV_DYNAMICS_OUT ?= $(OUT)/drop_test
+paraview-dynamics: $(PY)
+	rm -rf $(PV_DYNAMICS_OUT)
+	$(PY) -m contactqvi run cases/drop_test.toml --output $(PV_DYNAMICS_OUT)
+	bash scripts/paraview/run.sh $(PV_DYNAMICS_OUT) $(PV_IMAGES)
 
 # Peer codes for benchmarks/peers (GetFEM from Debian trixie, Kratos into build/kratos-venv); make test needs neither.
 peers:

@@ -3,7 +3,11 @@
 The script lists its files (``SOURCES``) and fields (``FIELDS``) in one place; this
 test checks that list against a fresh demo result, and the parts of the views that
 need no ParaView: the step and obstacle read from ``summary.json``, and the frame a
-contact surface is seen in (VTK only, as pyvista installs it).
+contact surface is seen in (VTK only, as pyvista installs it). For a dynamic result
+(``pv_time.py``): its detection, the frames chosen from the contact force (on the shipped
+drop test too), the obstacles' motion, the colour range, the errors that name a missing
+key, field or file; and, where ParaView is installed (``make paraview``), the drop test
+rendered by ``scripts/paraview/run.sh``.
 """
 
 from __future__ import annotations
@@ -11,12 +15,15 @@ from __future__ import annotations
 import importlib.util
 import json
 import pathlib
+import shutil
+import subprocess
 import xml.etree.ElementTree as ET
 
 from mpi4py import MPI
 
 import numpy as np
 import pytest
+from shipped_runs import group
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 SCRIPT = ROOT / "scripts" / "paraview" / "pv_views.py"
@@ -164,3 +171,126 @@ def test_paraview_colours_the_pressure_as_the_pictures_do(pv_views):
     assert top < 193e6
     assert top == pytest.approx(robust_scale("p", pressure[pressure > 0], np.zeros((65, 3)), "nodes").high, rel=1e-14)
     assert pv_common.robust_top(np.zeros(4)) == 0.0
+
+
+def timed_steps(forces, dt=1e-5):
+    """Summary entries of a dynamic run with these contact forces (N, along x3)."""
+    return [{"step": k + 1, "converged": True, "time": (k + 1) * dt, "contact_force": [0.0, 0.0, f]}
+            for k, f in enumerate(forces)]  # fmt: skip
+
+
+@pytest.mark.one_rank(reason="the choice of frames from a summary, serial arithmetic")
+def test_the_frames_over_time_follow_the_contact_force(pv_views):
+    """Before contact, first contact, the peak force, separation and the end, each on its step;
+    events on one step share a frame; a run without contact is filled up to MIN_FRAMES."""
+    import pv_time
+
+    forces = [0.0, 0.0, 1e-9, 5.0, 9.0, 4.0, 1e-7, 0.0, 0.0, 0.0]  # 1e-9, 1e-7: round-off, no contact
+    assert pv_views.chosen_frames(timed_steps(forces)) == [
+        (0, "first step"), (2, "before contact"), (3, "first contact"), (4, "peak contact force"),
+        (6, "separation"), (9, "end")]  # fmt: skip
+    assert pv_views.chosen_frames(timed_steps([3.0, 2.0, 1.0, 0.0, 0.0, 0.0])) == [
+        (0, "first step, first contact, peak contact force"), (1, ""), (3, "separation"), (5, "end")]
+    assert pv_views.chosen_frames(timed_steps([0.0] * 9)) == [(0, "first step"), (2, ""), (4, ""), (8, "end")]
+    assert pv_views.chosen_frames(timed_steps([1.0])) == [(0, "first step, first contact, peak contact force, end")]
+    assert pv_time.time_unit(679.4e-6) == ("\u00b5s", 1e6) and pv_time.time_unit(0.374)[0] == "ms"
+    assert pv_time.time_unit(2.0) == ("s", 1.0)
+
+
+@pytest.mark.one_rank(reason="the detection of a dynamic summary, serial arithmetic")
+def test_a_dynamic_result_is_told_by_its_summary(pv_views):
+    """A scheme and timed steps make the views over time; a quasi-static summary, or none, does not.
+    A step without a key the frames are chosen from, a missing velocity field or a missing
+    summary.json (``--time``) stop the script with their names."""
+    import pv_common
+    import pv_time
+
+    dynamic = {"scheme": {"name": "newmark"}, "steps": timed_steps([0.0, 1.0])}
+    assert pv_views.is_dynamic(dynamic)
+    assert not pv_views.is_dynamic({"steps": [{"step": 1, "converged": True, "translation": [0, 0, 0]}]})
+    assert not pv_views.is_dynamic(pv_common.read_summary(ROOT / "nothing"))
+    with pytest.raises(pv_common.ResultError, match=r"summary.json: step 2 has no 'contact_force'"):
+        del dynamic["steps"][1]["contact_force"]
+        pv_time.written_steps(dynamic, "summary.json")
+    with pytest.raises(pv_common.ResultError, match=r"field 'velocity' \(velocity\) not in .*body.bp"):
+        pv_common.field_name(["displacement [m]", "acceleration [m/s^2]"], "velocity", "out/body.bp", required=True)
+    assert pv_common.field_name(["velocity [m/s]"], "velocity", "out/body.bp", required=True) == "velocity [m/s]"
+    with pytest.raises(pv_common.ResultError, match=r"nothing/summary.json"):
+        pv_common.read_summary(ROOT / "nothing", required=True)
+
+
+@pytest.mark.one_rank(reason="piecewise-linear interpolation, serial arithmetic")
+def test_the_obstacles_move_in_the_frames_as_in_the_run(pv_views):
+    """The obstacles' translation at a frame's time is contactqvi.load_steps.at_time's."""
+    from contactqvi.load_steps import LoadStep, at_time
+
+    import pv_time
+
+    for steps in ([LoadStep(0.5, (0.0, 0.1, 0.0), time=0.2), LoadStep(1.0, (0.3, 0.1, -0.2), time=0.5)],
+                  [LoadStep(1.0, (0.0, 0.0, 0.0), time=0.0), LoadStep(1.0, (1.0, 0.0, 0.0), time=1.0)],
+                  [LoadStep(1.0, (0.0, 0.0, -0.01))]):  # fmt: skip
+        case = {"steps": [{"load": s.load, "translation": list(s.translation), "time": s.time} for s in steps]}
+        for time in (0.0, 0.1, 0.2, 0.35, 0.5, 0.9, 2.0):
+            expected = at_time(steps, time).translation
+            assert pv_time.obstacle_translation(case, time) == pytest.approx(expected, abs=1e-15)
+
+
+@pytest.mark.one_rank(reason="colour ranges of numpy arrays, serial arithmetic")
+def test_a_few_ringing_nodes_do_not_set_the_colours_over_time(pv_views):
+    """The speeds' colours end at the largest speed of the run unless a few nodes ring far above
+    the rest (the drop test's contact tip after separation: 7.6 m/s, the ball 1 m/s)."""
+    import pv_time
+
+    rng = np.random.default_rng(3)
+    speeds = rng.uniform(0.0, 1.0, 5000)
+    assert pv_time.speed_top(speeds) == speeds.max()
+    ringing = np.concatenate([speeds, rng.uniform(2.0, 7.6, 20)])
+    assert pv_time.speed_top(ringing) == pytest.approx(np.percentile(speeds, 99), rel=0.01)
+
+
+@group("drop_test")
+def test_the_drop_test_frames(pv_views, shipped_runs):
+    """The shipped drop test is told dynamic by its summary.json, its body.bp holds the fields of
+    the frames, and they fall where Hertz's impact has its events: contact from the first step,
+    the peak force at t_c / 2, separation at t_c = 522.7 us (cases/drop_test.toml)."""
+    import pv_common
+
+    shipped_runs.steps("drop_test")
+    out = shipped_runs["drop_test"]["output"]
+    summary = pv_common.read_summary(out, required=True)
+    assert pv_views.is_dynamic(summary)
+    names = field_names(out / pv_common.SOURCES["volume"])
+    assert all(pv_common.field_name(names, name, "body.bp", required=True) for name in ("displacement", "velocity"))
+    frames = pv_views.chosen_frames([step for step in summary["steps"] if step["converged"]])
+    assert [what for _, what in frames] == ["first step, first contact", "peak contact force", "separation", "end"]
+    t_c, dt = 522.7e-6, summary["case"]["dynamics"]["dt"]
+    times = [summary["steps"][index]["time"] for index, _ in frames]
+    assert abs(times[1] - t_c / 2) < dt and abs(times[2] - t_c) < dt and times[3] == summary["steps"][-1]["time"]
+
+
+@pytest.mark.serial
+@pytest.mark.skipif(shutil.which("pvbatch") is None or shutil.which("xvfb-run") is None,
+                    reason="ParaView (make paraview installs it) and xvfb-run render only where installed")
+@group("drop_test")
+def test_paraview_renders_the_drop_test_over_time(shipped_runs, mpi_tmp_path):
+    """scripts/paraview/run.sh on the drop test: the frames and the state file; without its
+    summary.json, ``--time`` stops with exit code 2 and names it."""
+    import pv_common
+    import pv_time
+
+    shipped_runs.steps("drop_test")
+    shipped, result = shipped_runs["drop_test"]["output"], mpi_tmp_path / "drop_test"
+    result.mkdir()
+    shutil.copytree(shipped / pv_common.SOURCES["volume"], result / pv_common.SOURCES["volume"])
+    shutil.copy(shipped / pv_common.SUMMARY, result)
+    run = subprocess.run(["bash", str(SCRIPT.parent / "run.sh"), str(result), str(mpi_tmp_path / "images")],
+                         capture_output=True, text=True, timeout=300)  # fmt: skip
+    assert run.returncode == 0, run.stdout + run.stderr
+    frames = sorted((mpi_tmp_path / "images").glob("paraview_time_*.png"))
+    assert [frame.name for frame in frames] == [pv_time.FRAME_NAME.format(k) for k in (1, 2, 3, 4)]
+    assert all(frame.read_bytes()[16:24] == bytes([0, 0, 6, 64, 0, 0, 3, 132]) for frame in frames)  # 1600 x 900
+    assert str(result / "body.bp") in (result / pv_time.STATE).read_text()
+    (result / pv_common.SUMMARY).unlink()
+    run = subprocess.run(["bash", str(SCRIPT.parent / "run.sh"), str(result), str(mpi_tmp_path / "images"), "--time"],
+                         capture_output=True, text=True, timeout=300)  # fmt: skip
+    assert run.returncode == 2 and f"{result / 'summary.json'}: " in run.stderr, run.stdout + run.stderr

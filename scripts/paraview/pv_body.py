@@ -9,28 +9,44 @@ import numpy as np
 from pv_common import FIELDS, SOURCES, add_array, add_title, colour_bar, field, new_view, plane_basis, producer, save
 
 
-def obstacle_source(obstacle, translation, centre, extent):
-    """A ParaView source of the rigid obstacle (``summary.json``'s case.obstacle) moved by ``translation``."""
+def obstacle_source(obstacle, centre, extent):
+    """A ParaView source of the rigid obstacle (``summary.json``'s case.obstacle) at its initial place."""
     from paraview import simple
 
-    shift = np.asarray(translation or [0.0, 0.0, 0.0], dtype=float)
     kind = obstacle["type"]
     if kind == "sphere":
-        return simple.Sphere(Center=list(np.add(obstacle["center"], shift)), Radius=obstacle["radius"],
+        return simple.Sphere(Center=list(obstacle["center"]), Radius=obstacle["radius"],
                              ThetaResolution=96, PhiResolution=48)  # fmt: skip
     if kind == "cylinder":
         axis = np.asarray(obstacle["axis"], dtype=float) / np.linalg.norm(obstacle["axis"])
-        point = np.add(obstacle["point"], shift)
+        point = np.asarray(obstacle["point"], dtype=float)
         middle = point + np.dot(np.asarray(centre) - point, axis) * axis
         line = simple.Line(Point1=list(middle - extent * axis), Point2=list(middle + extent * axis))
         return simple.Tube(Input=line, Radius=obstacle["radius"], NumberofSides=96)
     normal = np.asarray(obstacle["normal"], dtype=float) / np.linalg.norm(obstacle["normal"])
-    point = np.add(obstacle["point"], shift)
+    point = np.asarray(obstacle["point"], dtype=float)
     origin = np.asarray(centre) - np.dot(np.asarray(centre) - point, normal) * normal  # the centre on the plane
     e1, e2 = plane_basis(normal)
     corner = origin - 0.7 * extent * (e1 + e2)
     return simple.Plane(Origin=list(corner), Point1=list(corner + 1.4 * extent * e1),
                         Point2=list(corner + 1.4 * extent * e2))  # fmt: skip
+
+
+def show_obstacles(view, obstacles, centre, extent, when):
+    """The rigid ``obstacles`` (brown, half transparent) about the body's ``centre``: the Transform
+    filters that move them (set ``Transform.Translate``) and a caption line for each, ``when``
+    saying at which time they are drawn."""
+    from paraview import simple
+
+    moved, captions = [], []
+    for obstacle in obstacles:
+        moved.append(simple.Transform(Input=obstacle_source(obstacle, centre, extent)))
+        moved[-1].Transform = "Transform"
+        shape = simple.Show(moved[-1], view)
+        shape.DiffuseColor = shape.AmbientColor = [0.55, 0.45, 0.35]
+        shape.Opacity = 0.5
+        captions.append(f"brown: the rigid obstacle ({obstacle['type']}) {when}")
+    return moved, captions
 
 
 def drawing_scale(u_max, extent, finite, touching):
@@ -64,6 +80,33 @@ def _colour(grid, u):
     return "POINTS", "displacement magnitude", FIELDS["displacement"][4], shown, "colour: |u| (no von Mises stress)"
 
 
+def show_body(view, source, u_name, scale):
+    """The outline of ``source`` (grey, undeformed) and ``source`` warped by ``u_name`` times
+    ``scale``, surface with edges: the warp's display."""
+    from paraview import simple
+
+    outline = simple.Show(simple.Outline(Input=source), view)
+    outline.DiffuseColor = outline.AmbientColor = [0.45, 0.45, 0.45]
+    display = simple.Show(simple.WarpByVector(Input=source, Vectors=["POINTS", u_name], ScaleFactor=scale), view)
+    display.Representation, display.EdgeColor = "Surface With Edges", [0.25, 0.25, 0.25]
+    return display
+
+
+def oblique_camera(view, centre, extent, bounds=None):
+    """Look at ``centre`` from the front left, above, x3 up; all that is shown in the picture (or
+    ``bounds``), clear of the colour bar."""
+    from paraview import simple
+
+    view.CameraFocalPoint = centre
+    view.CameraPosition = [centre[0] - 1.6 * extent, centre[1] - 2.4 * extent, centre[2] + 1.5 * extent]
+    view.CameraViewUp = [0.0, 0.0, 1.0]
+    if bounds is None:
+        simple.ResetCamera(view)
+    else:
+        view.ResetCamera(list(bounds))
+    view.CameraPosition = [c + 0.95 * (p - c) for p, c in zip(view.CameraPosition, centre)]
+
+
 def deformed_view(result, path):
     """The body warped by the displacement (true scale at finite strain or where bodies
     touch, :func:`drawing_scale`), coloured by von Mises (or |u|), with the obstacles if described."""
@@ -81,27 +124,16 @@ def deformed_view(result, path):
     association, label, unit, shown, what = _colour(grid, u)
     add_array(grid, association, "shown", shown)
     view = new_view()
-    body = producer(grid)
-    outline = simple.Show(simple.Outline(Input=body), view)
-    outline.DiffuseColor = outline.AmbientColor = [0.45, 0.45, 0.45]
-    display = simple.Show(simple.WarpByVector(Input=body, Vectors=["POINTS", u_name], ScaleFactor=scale), view)
-    display.Representation, display.EdgeColor = "Surface With Edges", [0.25, 0.25, 0.25]
+    display = show_body(view, producer(grid), u_name, scale)
     simple.ColorBy(display, (association, "shown"))
     lut = simple.GetColorTransferFunction("shown")
     lut.ApplyPreset("Turbo" if "von Mises" in label else "Viridis (matplotlib)", True)
     lut.RescaleTransferFunction(0.0, float(shown.max()) or 1.0)
     colour_bar(view, lut, f"{label} ({unit})", shown.max(), position=(0.85, 0.2))
-    captions = [f"{drawn} (largest displacement {u_max * 1e3:.3g} mm); {what}; grey box: undeformed"]
-    translation = scale * np.asarray(case.get("translation") or [0.0, 0.0, 0.0], dtype=float)
-    for obstacle in case.get("obstacles") or []:
-        shape = simple.Show(obstacle_source(obstacle, list(translation), centre, extent), view)
-        shape.DiffuseColor = shape.AmbientColor = [0.55, 0.45, 0.35]
-        shape.Opacity = 0.5
-        captions.append(f"brown: the rigid obstacle ({obstacle['type']}) at this step")
-    view.CameraFocalPoint = centre
-    view.CameraPosition = [centre[0] - 1.6 * extent, centre[1] - 2.4 * extent, centre[2] + 1.5 * extent]
-    view.CameraViewUp = [0.0, 0.0, 1.0]
-    simple.ResetCamera(view)
-    view.CameraPosition = [c + 0.95 * (p - c) for p, c in zip(view.CameraPosition, centre)]  # clear of the bar
+    moved, captions = show_obstacles(view, case.get("obstacles") or [], centre, extent, "at this step")
+    for obstacle in moved:
+        obstacle.Transform.Translate = list(scale * np.asarray(case.get("translation") or [0.0, 0.0, 0.0], float))
+    captions.insert(0, f"{drawn} (largest displacement {u_max * 1e3:.3g} mm); {what}; grey box: undeformed")
+    oblique_camera(view, centre, extent)
     add_title(view, f"Deformed body ({case['label']})", "\n".join(captions))
     save(view, path)

@@ -6,17 +6,21 @@ Imports of ParaView and VTK are inside the functions: the tables and
 
 from __future__ import annotations
 
+import json
 import os
 
 import numpy as np
 
 #: The file of each dataset of a result directory.
 SOURCES = {"volume": "body.bp", "surface": "contact_surface.bp"}
+#: The run's description: its case, its steps (their times and contact forces in a dynamic result).
+SUMMARY = "summary.json"
 
 #: Fields: name -> (dataset, required, label, unit in the files, unit shown, factor from the
 #: file's unit to the shown one). A name also matches with a unit suffix ("von_mises [Pa]").
 FIELDS = {
     "displacement": ("volume", True, "displacement", "m", "mm", 1e3),
+    "velocity": ("volume", False, "velocity", "m/s", "m/s", 1.0),  # a dynamic result's (pv_time.py)
     "von_mises": ("volume", False, "von Mises stress", "Pa", "MPa", 1e-6),
     "contact_pressure": ("surface", True, "contact pressure", "Pa", "MPa", 1e-6),
     "friction_traction": ("surface", True, "friction traction", "Pa", "MPa", 1e-6),
@@ -37,7 +41,7 @@ CONTACT_STATES = {
 ALWAYS_IN_LEGEND = (0, 1, 2)
 #: Corner of each tributary patch (node, edge midpoint, facet centre, edge midpoint) that is its node.
 PATCH_NODE_CORNER = 0
-UNIT_SUFFIXES = ("m", "Pa", "MPa", "1")
+UNIT_SUFFIXES = ("m", "Pa", "MPa", "1", "m/s")
 IMAGE_SIZE = (1600, 900)
 FONT = 22
 
@@ -52,6 +56,24 @@ def finite_strain(case):
     """Whether the summary's ``case`` has a hyperelastic body (a ``model`` in a material)."""
     materials = [case.get("material") or {}] + [body.get("material") or {} for body in case.get("bodies") or []]
     return any(material.get("model") for material in materials)
+
+
+def obstacles_of(case):
+    """The rigid obstacles of the summary's ``case``: its ``obstacle`` and those of its ``contacts``."""
+    obstacles = [case["obstacle"]] if case.get("obstacle") else []
+    return obstacles + [pair["obstacle"] for pair in case.get("contacts") or [] if pair.get("obstacle")]
+
+
+def read_summary(result_dir, required=False):
+    """The result's ``summary.json``; {} when it is missing or unreadable, unless ``required``."""
+    path = os.path.join(result_dir, SUMMARY)
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError) as error:
+        if required:
+            raise ResultError(f"{path}: {error} (SUMMARY in {os.path.basename(__file__)})") from error
+        return {}
 
 
 def pressure_name(case):
@@ -72,7 +94,8 @@ FENCE = 1.5
 def robust_top(values):
     """The top of a contact pressure's colours as contactqvi's bodies.png takes it: the 99th
     percentile of the positive (pressing) ``values``, at most FENCE interquartile ranges above
-    the upper quartile, so that a few corner nodes at symmetry planes do not set it; 0 for none."""
+    the upper quartile, so that a few corner nodes at symmetry planes do not set it; 0 for none.
+    The same for the speeds of a dynamic result (pv_time.py): a few ringing nodes do not set it."""
     pressing = np.asarray(values)[np.asarray(values) > 0.0]
     if len(pressing) == 0:
         return 0.0
@@ -98,22 +121,26 @@ def field_matches(found, name):
     return rest == "" or (rest is not None and rest[:1] in " [(_" and rest.strip(" []()_") in UNIT_SUFFIXES)
 
 
-def read_grid(path, step):
-    """Step ``step`` (1-based, negative from the end) of the VTX file ``path`` as one unstructured grid."""
-    from paraview import servermanager, simple
-    from vtkmodules.vtkFiltersCore import vtkAppendFilter
+def open_vtx(path):
+    """An ``ADIOS2VTXReader`` of the VTX file ``path`` and its times (a list, [0.0] for none)."""
+    from paraview import simple
 
     if not os.path.exists(path):
         raise ResultError(f"{path}: not found (SOURCES in {os.path.basename(__file__)})")
-    reader = simple.ADIOS2VTXReader(FileName=path)
+    reader = simple.ADIOS2VTXReader(FileName=os.path.abspath(path))
     times = getattr(reader, "TimestepValues", None) or [0.0]
-    times = [times] if isinstance(times, float) else list(times)  # one step: ParaView gives a number
-    index = step - 1 if step > 0 else step
-    if step == 0 or not -len(times) <= index < len(times):
-        raise ResultError(f"{path}: no step {step}; it holds {len(times)} (--step 1 ... {len(times)})")
-    reader.UpdatePipeline(times[index])
+    return reader, [times] if isinstance(times, float) else list(times)  # one step: ParaView gives a number
+
+
+def grid_at(reader, time, where):
+    """The data of ``reader`` at ``time`` as one unstructured grid: the pieces of the ranks that
+    wrote the file appended; ``where`` names the file and step in an error."""
+    from paraview import servermanager
+    from vtkmodules.vtkFiltersCore import vtkAppendFilter
+
+    reader.UpdatePipeline(time)
     data = servermanager.Fetch(reader)
-    append = vtkAppendFilter()  # the pieces of the ranks that wrote the file
+    append = vtkAppendFilter()
     leaves = [data]
     if data.IsA("vtkCompositeDataSet"):
         leaves, it = [], data.NewIterator()
@@ -125,23 +152,44 @@ def read_grid(path, step):
         if leaf is not None and leaf.GetNumberOfPoints():
             append.AddInputData(leaf)
     if not append.GetNumberOfInputConnections(0):
-        raise ResultError(f"{path}: no data at step {step} (an empty or unfinished file?)")
+        raise ResultError(f"{where}: no data (an empty or unfinished file?)")
     append.Update()
-    simple.Delete(reader)
     return append.GetOutput()
 
 
-def field(grid, name, where):
-    """(association, numpy array) of field ``name`` (``FIELDS``); None for a missing optional one."""
+def read_grid(path, step):
+    """Step ``step`` (1-based, negative from the end) of the VTX file ``path`` as one unstructured grid."""
+    from paraview import simple
+
+    reader, times = open_vtx(path)
+    index = step - 1 if step > 0 else step
+    if step == 0 or not -len(times) <= index < len(times):
+        raise ResultError(f"{path}: no step {step}; it holds {len(times)} (--step 1 ... {len(times)})")
+    grid = grid_at(reader, times[index], f"{path} at step {step}")
+    simple.Delete(reader)
+    return grid
+
+
+def field_name(names, name, where, required=None):
+    """The one of ``names`` (a dataset's arrays) that is field ``name`` (:func:`field_matches`); None
+    when it is missing and optional, a ResultError naming it when it is required (``required``, or
+    as ``FIELDS`` says)."""
+    found = next((found for found in names if field_matches(found or "", name)), None)
+    if found is None and (FIELDS[name][1] if required is None else required):
+        raise ResultError(f"field '{name}' ({FIELDS[name][2]}) not in {where} (FIELDS in {os.path.basename(__file__)})")
+    return found
+
+
+def field(grid, name, where, required=None):
+    """(association, numpy array, its name) of field ``name`` (``FIELDS``); None for a missing
+    optional one (``required`` overrides ``FIELDS``)."""
     from vtkmodules.util.numpy_support import vtk_to_numpy
 
     for association, data in (("POINTS", grid.GetPointData()), ("CELLS", grid.GetCellData())):
-        for i in range(data.GetNumberOfArrays()):
-            if field_matches(data.GetArrayName(i) or "", name):
-                return association, vtk_to_numpy(data.GetArray(i)), data.GetArrayName(i)
-    if FIELDS[name][1]:
-        raise ResultError(f"field '{name}' ({FIELDS[name][2]}) not in {where} (FIELDS in {os.path.basename(__file__)})")
-    return None
+        found = field_name([data.GetArrayName(i) for i in range(data.GetNumberOfArrays())], name, where, False)
+        if found is not None:
+            return association, vtk_to_numpy(data.GetArray(found)), found
+    return field_name([], name, where, required)  # raises for a required field
 
 
 def add_array(grid, association, name, values):
@@ -215,14 +263,26 @@ def new_view():
     return view
 
 
-def add_title(view, title, caption=""):
+def show_text(view, source, location="Upper Center", size=FONT + 4):
+    """Show a text ``source`` (a Text, an AnnotateTimeFilter) in black at ``location``."""
     from paraview import simple
 
+    display = simple.Show(source, view)
+    display.WindowLocation, display.FontSize, display.Color = location, size, [0.0, 0.0, 0.0]
+    display.Justification = "Center" if location == "Upper Center" else "Left"
+    return display
+
+
+def add_title(view, title, caption=""):
+    """The ``title`` at the top and the ``caption`` at the lower left; their Text sources (those given)."""
+    from paraview import simple
+
+    sources = []
     for text, location, size in ((title, "Upper Center", FONT + 4), (caption, "Lower Left Corner", FONT - 4)):
         if text:
-            display = simple.Show(simple.Text(Text=text), view)
-            display.WindowLocation, display.FontSize, display.Color = location, size, [0.0, 0.0, 0.0]
-            display.Justification = "Center" if location == "Upper Center" else "Left"
+            sources.append(simple.Text(Text=text))
+            show_text(view, sources[-1], location, size)
+    return sources
 
 
 def colour_bar(view, lut, title, largest=None, position=(0.86, 0.2), length=0.6):
@@ -248,12 +308,23 @@ def flat(display):
     display.Ambient, display.Diffuse, display.Specular = 1.0, 0.0, 0.0
 
 
-def save(view, path):
+def screenshot(view, path):
     from paraview import simple
 
     simple.Render(view)
     simple.SaveScreenshot(path, view, ImageResolution=list(IMAGE_SIZE), TransparentBackground=0)
     print(f"pv_views: wrote {path}")
-    for source in list(simple.GetSources().values()):  # the next view starts from nothing
+
+
+def clear(view):
+    """Delete every source and ``view``: the next view starts from nothing."""
+    from paraview import simple
+
+    for source in list(simple.GetSources().values()):
         simple.Delete(source)
     simple.Delete(view)
+
+
+def save(view, path):
+    screenshot(view, path)
+    clear(view)

@@ -2,9 +2,10 @@
 
 Run with ParaView's Python (5.13: ``pvbatch`` or ``pvpython``) under a display or
 ``xvfb-run``; ``scripts/paraview/run.sh`` sets that up and ``make paraview``
-installs ParaView from Debian and runs it on a fresh result::
+installs ParaView from Debian and runs it on a fresh result (``make paraview-dynamics``: on a
+fresh drop test)::
 
-    xvfb-run -a pvbatch scripts/paraview/pv_views.py RESULT_DIR [--step N] [--out DIR]
+    xvfb-run -a pvbatch scripts/paraview/pv_views.py RESULT_DIR [--step N] [--out DIR] [--time]
 
 Writes three PNGs of one load step (``--step N``: the N-th written step; default the last)
 to ``--out`` (default: the result directory): ``paraview_deformed.png``, the body warped
@@ -16,15 +17,21 @@ pressure named as contactqvi names it (Cauchy or nominal), with friction-tractio
 ``paraview_stick_slip.png``, the contact states of the tributary patches (one cell per
 node) with their areas.
 
-Every file and field the script reads is listed in ``SOURCES`` and ``FIELDS``; a
-missing file or field stops it with a message that names it. Files are read with
-``ADIOS2VTXReader``; the pieces of several ranks are appended onto one grid.
+A dynamic result (a case with ``[dynamics]``: ``summary.json`` has a ``scheme`` and timed
+steps, or ``--time``) gets views over time instead (``pv_time.py``): ``paraview_time_NN.png``,
+the body coloured by its velocity at a few chosen times (before contact, first contact, peak
+contact force, separation, end), and ``RESULT_DIR/paraview_time.pvsm`` for ParaView's GUI
+(``paraview --state=RESULT_DIR/paraview_time.pvsm``, then Play).
+
+Every file and field the script reads is listed in ``SOURCES``, ``SUMMARY`` and ``FIELDS``
+(a dynamic result's steps: ``STEP_KEYS``); a missing file or field stops it with a message
+that names it. Files are read with ``ADIOS2VTXReader``; the pieces of several ranks are
+appended onto one grid.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 
@@ -35,16 +42,21 @@ from pv_common import (  # noqa: E402
     CONTACT_STATES,
     FIELDS,
     SOURCES,
+    SUMMARY,
     ResultError,
     field_matches,
     finite_strain,
+    obstacles_of,
     pressure_name,
     read_grid,
+    read_summary,
     surface_frame,
 )
 from pv_surface import stick_slip_view, traction_view  # noqa: E402
+from pv_time import STEP_KEYS, chosen_frames, is_dynamic, time_views  # noqa: E402
 
-__all__ = ["CONTACT_STATES", "FIELDS", "SOURCES", "field_matches", "main"]
+__all__ = ["CONTACT_STATES", "FIELDS", "SOURCES", "STEP_KEYS", "SUMMARY", "chosen_frames", "field_matches",
+           "is_dynamic", "main"]
 
 VIEWS = {
     "paraview_deformed.png": deformed_view,
@@ -56,11 +68,7 @@ VIEWS = {
 def describe(result_dir, step):
     """From ``summary.json``: a label, the obstacles (if the result has any) and their translation
     at ``step``, whether a body is hyperelastic and the contact pressure's name (:func:`pressure_name`)."""
-    try:
-        with open(os.path.join(result_dir, "summary.json")) as f:
-            summary = json.load(f)
-    except (OSError, ValueError):
-        summary = {}
+    summary = read_summary(result_dir)
     p, case, steps = summary.get("parameters", {}), summary.get("case", {}), summary.get("steps", [])
     label = os.path.basename(os.path.normpath(result_dir))
     if "lev" in p:
@@ -70,9 +78,7 @@ def describe(result_dir, step):
     entry = written[index] if step != 0 and -len(written) <= index < len(written) else {}
     if steps:
         label += f", step {entry.get('step', '?')} of {len(steps)}"
-    obstacles = [case["obstacle"]] if case.get("obstacle") else []
-    obstacles += [pair["obstacle"] for pair in case.get("contacts") or [] if pair.get("obstacle")]
-    return {"label": label, "obstacle": case.get("obstacle"), "obstacles": obstacles,
+    return {"label": label, "obstacle": case.get("obstacle"), "obstacles": obstacles_of(case),
             "translation": entry.get("translation"), "finite_strain": finite_strain(case),
             "pressure": pressure_name(case)}
 
@@ -82,6 +88,8 @@ def main(argv=None):
     parser.add_argument("result_dir", help="output directory of demos/coulomb3d.py or python -m contactqvi run")
     parser.add_argument("--step", type=int, default=-1, help="the N-th written load step (1, 2, ...; -1: the last)")
     parser.add_argument("--out", help="directory for the PNGs (default: result_dir)")
+    parser.add_argument("--time", action="store_true",
+                        help="views over time of a dynamic result (default: when summary.json has a scheme and times)")
     args = parser.parse_args(argv)
     out = args.out or args.result_dir
     os.makedirs(out, exist_ok=True)
@@ -89,6 +97,10 @@ def main(argv=None):
 
     simple.LoadPalette("WhiteBackground")
     try:
+        summary = read_summary(args.result_dir, required=args.time)
+        if args.time or is_dynamic(summary):
+            time_views(args.result_dir, out, summary)
+            return 0
         result = {role: read_grid(os.path.join(args.result_dir, name), args.step) for role, name in SOURCES.items()}
         b = result["volume"].GetBounds()
         result["frame"] = surface_frame(result["surface"], [(b[0] + b[1]) / 2, (b[2] + b[3]) / 2, (b[4] + b[5]) / 2])

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Render the standard ParaView views of a result directory (`make paraview`).
 #
-#   scripts/paraview/run.sh RESULT_DIR [IMAGE_DIR [--step N]]
+#   scripts/paraview/run.sh RESULT_DIR [IMAGE_DIR [--step N | --time]]
 #
+# A dynamic result (a case with [dynamics]) gets its views over time (pv_time.py):
+# IMAGE_DIR/paraview_time_NN.png and RESULT_DIR/paraview_time.pvsm for the GUI.
 # Installs ParaView 5.13 from Debian (scripts/paraview/packages.txt, through
 # scripts/install-deps.sh) when missing. Its Python modules (python3-paraview)
 # conflict with python3-vtk9, which pyvista needs, so they are not installed but
@@ -13,10 +15,10 @@ set -euo pipefail
 
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 repo=$(cd "$here/../.." && pwd)
-[ $# -ge 1 ] || { echo "usage: $0 RESULT_DIR [IMAGE_DIR [--step N]]" >&2; exit 2; }
+[ $# -ge 1 ] || { echo "usage: $0 RESULT_DIR [IMAGE_DIR [--step N | --time]]" >&2; exit 2; }
 result_dir=$1
 image_dir=${2:-$1}
-shift $(( $# >= 2 ? 2 : 1 ))  # the rest goes to pv_views.py (--step N)
+shift $(( $# >= 2 ? 2 : 1 ))  # the rest goes to pv_views.py (--step N, --time)
 
 bash "$repo/scripts/install-deps.sh" "$here/packages.txt"
 
