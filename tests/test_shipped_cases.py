@@ -58,11 +58,14 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 #: The Mindlin paths run every other step since issue 35 (shipped_runs.COARSE); on all 15 steps
 #: they took cattaneo_mindlin [8, 5, 4, 5, 4, 4, 5, 5, 4, 4, 4, 4, 4, 4, 4] / [8, 5, 5, 5, 5, 4, 5,
 #: 4, 4, 5, 4, 4, 4, 4, 4] and cattaneo_mindlin_nu045 [9, 6, 7, 6, 6, 7, 6, 5, 5, 6, 5, 6, 6, 6, 6].
+#: The stopping floor's share floor gamma max|u| at the contact rows (scd_newton.stopping_target,
+#: session 27) ends cattaneo_mindlin_nu045's second step one Newton step earlier, on round-off:
+#: [9, 7, 7, 6, 7, 6, 7, 6] became [9, 6, 7, 6, 7, 6, 7, 6]; every other count is unchanged.
 NEWTON_STEPS = {
     "arch_block": {1: [10, 8, 8, 9], 2: [10, 8, 7, 7]},
     "cattaneo_mindlin": {1: [8, 5, 5, 5, 5, 5, 4, 4], 2: [8, 6, 5, 5, 5, 5, 5, 4]},
     "cattaneo_mindlin_bodies": {1: [8, 7, 6]},
-    "cattaneo_mindlin_nu045": {1: [9, 7, 7, 6, 7, 6, 7, 6]},
+    "cattaneo_mindlin_nu045": {1: [9, 6, 7, 6, 7, 6, 7, 6]},
     "hertz": {1: [6, 6, 6, 6], 2: [6, 6, 6, 7]},
     "hertz_bodies": {1: [5, 7, 7, 7], 2: [6, 6, 6, 6]},
     "hex_patch": {1: [5], 2: [5]},
@@ -81,11 +84,14 @@ NEWTON_STEPS = {
 
 #: The same guard for the cases with ``[dynamics]`` (a Newton count per time step is one of
 #: dozens): the Newton steps of the implicit steps (3.3) and of the projections (3.2) of
-#: docs/dynamics.md summed over the run, with the default solver.
+#: docs/dynamics.md summed over the run, with the default solver. Session 27: the projection's
+#: Newton steps by GMRES + Jacobi to 1e-8 (dynamics.PROJECTION_TOL; before: the step's multigrid
+#: to tol) and the stopping floor's gamma max|u| changed bars_impact (198, 168) / (156, 168),
+#: drop_test (83, 108) / (83, 106) and sliding_block (261, 0) / (249, 0) to the counts below.
 DYNAMIC_NEWTON_STEPS = {
-    "bars_impact": {1: (198, 168), 2: (156, 168)},
-    "drop_test": {1: (83, 108), 2: (83, 106)},
-    "sliding_block": {1: (261, 0), 2: (249, 0)},
+    "bars_impact": {1: (199, 84), 2: (158, 84)},
+    "drop_test": {1: (83, 56), 2: (83, 56)},
+    "sliding_block": {1: (181, 0), 2: (182, 0)},
 }
 
 #: Newton steps allowed per load step: 15 for the Hertz case (issue 23), 25 for any other (a
