@@ -67,9 +67,6 @@ _GMRES_RIGHT = {"ksp_type": "fgmres", "ksp_pc_side": "right", "ksp_norm_type": "
 #: * ``gmres_hypre``: as ``gmres_gamg`` with BoomerAMG (scalar coarsening; its
 #:   nodal/vector interpolation variants broke down on eliminated rows here).
 #: * ``cg_jacobi``: CG + point Jacobi (cheap, for well-conditioned mass-like systems).
-#: * ``gmres_jacobi``: as ``gmres_gamg`` with point Jacobi: the Newton steps of a mass-like
-#:   problem (the projection of a dynamic step's predictor, docs/dynamics.md Sect. 3), whose
-#:   matrix is spectrally equivalent to its diagonal.
 KSP_PRESETS: dict[str, OptionsDict] = {
     "lu": {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"},
     "cg_gamg": {"ksp_type": "cg", "ksp_norm_type": "unpreconditioned", "pc_type": "gamg"},
@@ -96,7 +93,6 @@ KSP_PRESETS: dict[str, OptionsDict] = {
         "pc_hypre_boomeramg_strong_threshold": 0.5,
     },
     "cg_jacobi": {"ksp_type": "cg", "pc_type": "jacobi"},
-    "gmres_jacobi": {**_GMRES_RIGHT, "ksp_max_it": 2000, "pc_type": "jacobi"},
 }
 
 

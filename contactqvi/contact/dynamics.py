@@ -58,7 +58,7 @@ from contactqvi.load_steps import LoadStep, at_time
 from contactqvi.parameters import require
 from contactqvi.postprocess import internal_force_form, load_form
 
-__all__ = ["ENERGY_TERMS", "MASS_RTOL", "PROJECTION_TOL", "BodyMotion", "DynamicState", "InertialSystem", "PhysicalEnergy",
+__all__ = ["ENERGY_TERMS", "MASS_RTOL", "BodyMotion", "DynamicState", "InertialSystem", "PhysicalEnergy",
            "StabilisedNewmark", "global_components", "global_mass_matrix", "mass_matrix"]
 
 logger = logging.getLogger(__name__)
@@ -66,8 +66,6 @@ logger = logging.getLogger(__name__)
 #: Relative tolerance of the mass solves M â = m of the schemes that carry â (CG, Jacobi: the
 #: consistent mass is spectrally equivalent to its diagonal, some 20 iterations).
 MASS_RTOL = 1e-12
-#: Relative tolerance of the Krylov solves of the projection's Newton steps (GMRES + Jacobi on M_p).
-PROJECTION_TOL = 1e-8
 #: The energy terms of a step (J), as in ``summary.json`` (docs/dynamics.md, Sect. 4).
 ENERGY_TERMS = ("kinetic", "elastic", "external_work", "support_work", "friction_dissipation", "contact_work",
                 "balance_error")
@@ -339,21 +337,8 @@ class StabilisedNewmark(PETScOwner):
         diagonal.destroy()
         self.projection = dataclasses.replace(problem, A=self.projection_matrix, load=problem.load.duplicate(),
                                               law=Frictionless().lumped(problem.contact_area), hyperelastic=None)
-        self.predictor_solver = SCDNewtonSolver(self.projection, self._projection_parameters(),
-                                                prefix=self._prefix + "predictor_")
+        self.predictor_solver = SCDNewtonSolver(self.projection, self._parameters, prefix=self._prefix + "predictor_")
         self.solver = SCDNewtonSolver(problem, self._parameters, prefix=self._prefix)
-
-    def _projection_parameters(self) -> dict:
-        """The SCD parameters of the projection (3.2): the step's, with its Newton steps solved by
-        GMRES and point Jacobi to :data:`PROJECTION_TOL` unless they are exact (``pc = "lu"``):
-        M_p is spectrally equivalent to its diagonal (some 13 Krylov iterations per Newton step
-        on the drop test). With the step's multigrid and its Krylov tolerance the drop test's
-        projection stalled at 2e-6 N after 100 Newton steps with generalized-alpha (and with
-        Jacobi at tol 0.1 alike; docs/dynamics.md, Sect. 5)."""
-        parameters = dict(self._parameters or {})
-        if parameters.get("pc", "gamg") != "lu":
-            parameters.update(pc="jacobi", tol=PROJECTION_TOL)
-        return parameters
 
     def _assembled(self) -> list[typing.Any]:
         """The PETSc objects of :meth:`_assemble`."""

@@ -35,8 +35,7 @@ FALLBACK = "lu"
 #: at the unpreconditioned relative residual (the paper's test, Sect. 7); ``paper``:
 #: GMRES + block-Jacobi/ILU(0) as in Sect. 7; ``hypre``: FGMRES + BoomerAMG; ``lu``:
 #: exact (MUMPS), the reference for the Newton counts. Measured in docs/coulomb.md.
-NEWTON_STEP_SOLVERS = {"gamg": "gmres_gamg", "paper": "gmres_ilu", "hypre": "gmres_hypre", "lu": "lu",
-                       "jacobi": "gmres_jacobi"}
+NEWTON_STEP_SOLVERS = {"gamg": "gmres_gamg", "paper": "gmres_ilu", "hypre": "gmres_hypre", "lu": "lu"}
 
 
 class NewtonStepSolver(PETScOwner):
