@@ -396,7 +396,8 @@ class Dynamics:
         if self.scheme == "hht":
             return TimeScheme.hht(DEFAULT_HHT_ALPHA if self.alpha is None else self.alpha)
         if self.scheme == "generalized_alpha":
-            return TimeScheme.generalized_alpha(DEFAULT_RHO_INFINITY if self.rho_infinity is None else self.rho_infinity)
+            rho_infinity = DEFAULT_RHO_INFINITY if self.rho_infinity is None else self.rho_infinity
+            return TimeScheme.generalized_alpha(rho_infinity)
         return TimeScheme.newmark()
 
     @property

@@ -254,7 +254,8 @@ def test_block_slides_to_a_stop_on_a_block(variant, balance, mpi_tmp_path):
     case = block_on_block()
     if variant == "neo_hookean":
         case = with_scheme(dataclasses.replace(case, bodies=tuple(
-            dataclasses.replace(b, material=dataclasses.replace(b.material, model="neo_hookean")) for b in case.bodies)),
+            dataclasses.replace(b, material=dataclasses.replace(b.material, model="neo_hookean"))
+            for b in case.bodies)),
             "generalized_alpha", rho_infinity=0.8)
     summary, code = run_dynamics(case, mpi_tmp_path, plot=False)
     assert code == 0
@@ -481,7 +482,8 @@ def test_generalized_alpha_one_is_newmark(name, tolerance, mpi_tmp_path):
     _same_history(run, newmark, tolerance, projections=name != "ball")
 
 
-@pytest.mark.parametrize("scheme", [{"scheme": "hht", "alpha": 0.1}, {"scheme": "generalized_alpha", "rho_infinity": 0.8}],
+@pytest.mark.parametrize("scheme", [{"scheme": "hht", "alpha": 0.1},
+                                    {"scheme": "generalized_alpha", "rho_infinity": 0.8}],
                          ids=["hht", "generalized_alpha"])
 def test_second_order_in_time(scheme, mpi_tmp_path):
     """The load ramp of :func:`test_load_ramp` (a linear acceleration, then a constant one) with dt
@@ -593,7 +595,8 @@ def _case_file(**dynamics) -> dict:
         steps=[{"time": 0.0, "rotation": {"angle": 1.0}}]), "steps[0].rotation.angle", "angle at time 0 must be zero"),
     (lambda d: d["bodies"][1].update(boundary={"moved": ["sides_y"]}) or d.update(steps=[
         {"time": 1e-5, "rotation": {"axis": [0, 0, 1], "angle": 1.0}},
-        {"time": 2e-5, "rotation": {"axis": [1, 0, 0], "angle": 2.0}}]), "steps[1].rotation.axis", "must be that of steps[0]"),
+        {"time": 2e-5, "rotation": {"axis": [1, 0, 0], "angle": 2.0}}]), "steps[1].rotation.axis",
+     "must be that of steps[0]"),
 ])
 def test_named_errors(change, key, words):
     data = _case_file()

@@ -282,11 +282,13 @@ class StabilisedNewmark(PETScOwner):
     the step's load); a hyperelastic body's f and Jacobian, which the solver assembles at every
     Newton step into A, get the inertia from an :class:`InertialSystem` that takes the place of
     ``problem.hyperelastic`` while the integrator lives (put back by :meth:`destroy`). Owns the
-    two SCD solvers, the M-projection of the predictor and the implicit step. The problem's contact is searched once (the mass and T of the reference
-    configuration). ``parameters`` and ``prefix`` are the SCD solver's; the projection's Krylov
-    solver reads its options under ``prefix + "predictor_"``. The loads, prescribed
-    displacements and the obstacles' and moved groups' translation follow the time points
-    ``path`` (:func:`~contactqvi.load_steps.at_time`; the default: constant loads).
+    two SCD solvers, the M-projection of the predictor and the implicit step. The problem's
+    contact is searched once (M and T of the reference configuration) or, for pairs searched
+    ``"every_step"``, again after every step (:meth:`search`, which the runner calls).
+    ``parameters`` and ``prefix`` are the SCD solver's; the projection's Krylov solver reads its
+    options under ``prefix + "predictor_"``. The loads, prescribed displacements and the
+    obstacles' and moved groups' translation and rotation follow the time points ``path``
+    (:func:`~contactqvi.load_steps.at_time`; the default: constant loads).
 
     Attributes:
         scheme: the time scheme (α_m, α_f, β, γ).
@@ -357,9 +359,9 @@ class StabilisedNewmark(PETScOwner):
         displacement u_n; docs/dynamics.md Sect. 3.3) and rebuild what depends on T
         (:meth:`_assemble`). With ``carry`` the state's vectors in the solver's variables are
         carried over to the new ones: w_n = T^-1 (u_n - offsets), the velocity and the
-        accelerations by T_new^-1 T_old,
-        m_n of a linear body by T_new^T T_old^-T (a hyperelastic body's m_n is in global components);
-        without, they are left as they are (a restart reads them in the new variables). Collective."""
+        accelerations by T_new^-1 T_old, m_n of a linear body by T_new^T T_old^-T (a hyperelastic
+        body's m_n is in global components); without, they are left as they are (a restart reads
+        them in the new variables). Collective."""
         problem, scheme = self.problem, self.scheme
         carried = [state.velocity, state.acceleration, state.newmark_acceleration] if carry else []
         forces = [state.inertial_force] if carry and self.static is None and scheme.carries_acceleration else []
@@ -574,7 +576,8 @@ class StabilisedNewmark(PETScOwner):
         work.predicted.aypx(-1.0, work.projected)  # delta = w_bar - w_pred
         velocity_change.waxpy(-1.0, work.projected, w_next)
         if scheme.carries_acceleration:
-            self._advance_acceleration(state, steps[1], w_next, u)  # velocity_change: w_{n+1} - w_bar in, v_{n+1} - v_n out
+            # velocity_change: w_{n+1} - w_bar in, v_{n+1} - v_n out
+            self._advance_acceleration(state, steps[1], w_next, u)
             mean = work.contact_force.array.reshape(-1, 3)[problem.contact_blk]
             state.contact_forces = (mean[:, 2].copy(), mean[:, :2].copy())
         else:
