@@ -36,23 +36,20 @@ as the values are (:mod:`contactqvi.contact.owners`) and combined into (L.1)-(L.
 from __future__ import annotations
 
 import dataclasses
-import typing
 
 from mpi4py import MPI
 
 import numpy as np
 
+from contactqvi.contact.dual import Dual
 from contactqvi.contact.facets import facet_areas, unit_normals
 from contactqvi.contact.owners import owner_ranges, sum_to_owners
 from contactqvi.contact.segments import diameters, segment_integrals
 
-__all__ = ["KINK", "KINK_OFFSET", "STEP", "CouplingDerivatives", "PairDerivatives", "complex_step",
-           "coupling_derivatives", "segment_jacobians"]
+__all__ = ["KINK", "KINK_OFFSET", "CouplingDerivatives", "PairDerivatives", "coupling_derivatives",
+           "segment_jacobians"]
 
-#: Imaginary step of the complex-step derivatives (in metres of coordinate): the truncation
-#: error is O(STEP^2) relative and nothing cancels, so any step far below round-off serves.
-STEP = 1e-30
-#: A pair whose complex-step dD or dM exceed this times its slave facet's diameter (they are of
+#: A pair whose dD or dM exceed this times its slave facet's diameter (they are of
 #: the order of it: D is an area) is at a kink (:func:`segment_jacobians`).
 KINK = 10.0
 #: ... and is differentiated with its master facet moved by this fraction of that diameter.
@@ -61,31 +58,6 @@ KINK_OFFSET = 1e-6
 #: bounds the work arrays as :data:`~contactqvi.contact.mortar` bounds its own.
 _CHUNK = 1 << 12
 _QUADRILATERAL_CHUNK = 1 << 7
-
-
-def complex_step(function: typing.Callable[[np.ndarray], tuple[np.ndarray, ...]],
-                 x: np.ndarray) -> tuple[list[np.ndarray], list[np.ndarray]]:
-    """Values and Jacobians of a function of each row's coordinates, by the complex step.
-
-    Args:
-        function: maps coordinates (Q, n, d) (complex) to arrays with Q leading rows; it is
-            called once, with Q = P n d: row p's coordinates perturbed along each of its n d
-            directions in turn (row p k is row p with i STEP added to coordinate k).
-        x: (P, n, d) real coordinates.
-
-    Returns:
-        ``(values, jacobians)``: per output of ``function``, its value (P, ...) and its
-        derivatives (P, ..., n, d) with respect to the row's coordinates.
-    """
-    P, n, d = x.shape
-    K = n * d
-    z = x[:, None] + (1j * STEP) * np.eye(K).reshape(K, n, d)
-    values, jacobians = [], []
-    for out in function(z.reshape(P * K, n, d)):
-        out = out.reshape(P, K, *out.shape[1:])
-        values.append(out[:, 0].real.copy())
-        jacobians.append(np.moveaxis(out.imag / STEP, 1, -1).reshape(P, *out.shape[2:], n, d))
-    return values, jacobians
 
 
 def _orientation(x: np.ndarray, normal: np.ndarray) -> np.ndarray:
@@ -106,11 +78,11 @@ def segment_jacobians(slave: np.ndarray, normal: np.ndarray,
         (P, n_s, n_m, N, 3) with respect to the pair's N = n_s + n_m vertices, slave first.
     """
     orientation = _orientation(slave, normal)
-    (D, M), (dD, dM) = _integral_jacobians(slave, master, orientation)
+    D, M, dD, dM = _integral_jacobians(slave, master, orientation)
     # At a kink of D and M (facets that coincide: conforming parts of two meshes, whose clipped
     # polygons have vertices on two edges at once) the clipping's crossings are 0/0 forms and
-    # the complex step is no derivative; there the one-sided derivative of the master facet
-    # moved by KINK_OFFSET of its size (a fixed pattern) serves, an element of the generalized
+    # their derivatives are no derivatives of D and M; there the one-sided derivative of the master
+    # facet moved by KINK_OFFSET of its size (a fixed pattern) serves, an element of the generalized
     # derivative of the semismooth Newton step (docs/finite_strain.md, Sect. 14).
     size = diameters(slave)
     kinked = ~(np.isfinite(dD).all(axis=(1, 2, 3)) & np.isfinite(dM).all(axis=(1, 2, 3, 4)))
@@ -119,33 +91,27 @@ def segment_jacobians(slave: np.ndarray, normal: np.ndarray,
     if kinked.any():
         pattern = np.sin(np.arange(master.shape[1] * 3) + 1.0).reshape(1, -1, 3)
         moved = master[kinked] + KINK_OFFSET * size[kinked, None, None] * pattern
-        _, (dD[kinked], dM[kinked]) = _integral_jacobians(slave[kinked], moved, orientation[kinked])
+        dD[kinked], dM[kinked] = _integral_jacobians(slave[kinked], moved, orientation[kinked])[2:]
     return D, M, dD, dM
 
 
 def _integral_jacobians(slave: np.ndarray, master: np.ndarray,
-                        orientation: np.ndarray) -> tuple[list[np.ndarray], list[np.ndarray]]:
-    """:func:`complex_step` of the segment integrals of facet pairs, the projection direction the
-    slave facets' :func:`unit_normals` times ``orientation`` (P,)."""
-    ns = slave.shape[1]
-    sign = np.repeat(orientation, 3 * (ns + master.shape[1]))[:, None]
-
-    def integrals(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return segment_integrals(z[:, :ns], sign * unit_normals(z[:, :ns]), z[:, ns:])
-
-    return complex_step(integrals, np.concatenate([slave, master], axis=1))
+                        orientation: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The segment integrals D, M of facet pairs and their derivatives dD, dM (the shapes of
+    :func:`segment_jacobians`), the projection direction the slave facets' :func:`unit_normals`
+    times ``orientation`` (P,): one evaluation on the pairs' coordinates seeded as duals."""
+    ns, N = slave.shape[1], slave.shape[1] + master.shape[1]
+    x = Dual.seed(np.concatenate([slave, master], axis=1))
+    D, M = segment_integrals(x[:, :ns], orientation[:, None] * unit_normals(x[:, :ns]), x[:, ns:])
+    return D.value, M.value, D.tangent.reshape(*D.shape, N, 3), M.tangent.reshape(*M.shape, N, 3)
 
 
 def _area_normal_jacobians(x: np.ndarray, outward: np.ndarray) -> np.ndarray:
     """(f, 3, n, 3) derivatives of -A_f N_f (area times unit normal, into the body) of facets
     (f, n, 3) with outward normals ``outward``, with respect to their vertices."""
-    K = 3 * x.shape[1]
-    sign = np.repeat(_orientation(x, outward), K)[:, None]
-
-    def area_normals(z: np.ndarray) -> tuple[np.ndarray]:
-        return (-sign * facet_areas(z)[:, None] * unit_normals(z),)
-
-    return complex_step(area_normals, x)[1][0]
+    z = Dual.seed(x)
+    area_normals = -_orientation(x, outward)[:, None] * facet_areas(z)[:, None] * unit_normals(z)
+    return area_normals.tangent.reshape(len(x), 3, *x.shape[1:])
 
 
 @dataclasses.dataclass(frozen=True)

@@ -17,17 +17,20 @@ parallelogram the inverse bilinear map is no polynomial, and a rule of degree 20
 (:data:`QUADRILATERAL_DEGREE`) meets the integrals to about 1e-12 on strongly
 distorted facets (a warped facet's area element too).
 
-Every function here is analytic in the vertex coordinates away from its branch decisions
-(which vertices a clipping edge keeps, a polygon's orientation, the rule a pair takes),
-and those are taken on the real parts: evaluated at complex coordinates x + i h e it gives
-the directional derivative along e as the imaginary part over h
-(:mod:`contactqvi.contact.linearisation`).
+Every function here takes plain arrays or :class:`~contactqvi.contact.dual.Dual` arrays
+(forward-mode automatic differentiation): given the vertex coordinates as duals it returns
+the integrals and their derivatives in one evaluation
+(:mod:`contactqvi.contact.linearisation`). The integrals are differentiable in the
+coordinates away from their branch decisions (which vertices a clipping edge keeps, a
+polygon's orientation, the rule a pair takes); those are taken on the values, so the
+derivatives are those of the branch the values take.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from contactqvi.contact.dual import primal
 from contactqvi.contact.facets import (
     POLYGON_ORDER,
     area_elements,
@@ -88,7 +91,7 @@ def clip_polygons(polygon: np.ndarray, count: np.ndarray, clip: np.ndarray) -> t
         nxt = polygon[rows[:, None], nxt_index]
         s_cur, s_nxt = side(polygon), side(nxt)
         valid = np.arange(K)[None, :] < count[:, None]
-        in_cur, in_nxt = s_cur.real >= 0.0, s_nxt.real >= 0.0
+        in_cur, in_nxt = s_cur >= 0.0, s_nxt >= 0.0
         denom = np.where(s_cur - s_nxt == 0.0, 1.0, s_cur - s_nxt)
         crossing = polygon + (s_cur / denom)[..., None] * (nxt - polygon)
         # emitted per input vertex i: [crossing if the edge i -> i+1 crosses] then [nxt if nxt inside]
@@ -97,7 +100,7 @@ def clip_polygons(polygon: np.ndarray, count: np.ndarray, clip: np.ndarray) -> t
         slots = np.cumsum(np.stack([emit_cross, emit_next], axis=2).reshape(P, 2 * K), axis=1) - 1
         values = np.stack([crossing, nxt], axis=2).reshape(P, 2 * K, 2)
         emitted = np.stack([emit_cross, emit_next], axis=2).reshape(P, 2 * K)
-        out = np.zeros((P, max(K, int(emitted.sum(axis=1).max(initial=0))), 2), dtype=polygon.dtype)
+        out = np.zeros((P, max(K, int(emitted.sum(axis=1).max(initial=0))), 2), like=polygon)
         p_idx, k_idx = np.nonzero(emitted)
         out[p_idx, slots[p_idx, k_idx]] = values[p_idx, k_idx]
         polygon, count = out, emitted.sum(axis=1)
@@ -129,7 +132,7 @@ def _separated(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     for e in range(L):
         p, edge = a[:, e], a[:, (e + 1) % L] - a[:, e]
         side = edge[:, None, 0] * (b[..., 1] - p[:, None, 1]) - edge[:, None, 1] * (b[..., 0] - p[:, None, 0])
-        separated |= (side.real < 0.0).all(axis=1)
+        separated |= (side < 0.0).all(axis=1)
     return separated
 
 
@@ -137,11 +140,11 @@ def _counter_clockwise(x2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Facets projected to the plane (P, n, 2), as counter-clockwise polygons, and their signed areas."""
     if x2.shape[1] == 3:
         area = _signed_area(x2)
-        return np.where((area.real < 0.0)[:, None, None], x2[:, [0, 2, 1]], x2), area
+        return np.where((area < 0.0)[:, None, None], x2[:, [0, 2, 1]], x2), area
     polygon = x2[:, POLYGON_ORDER[x2.shape[1]]]
     area = 0.5 * np.sum(polygon[..., 0] * np.roll(polygon[..., 1], -1, axis=1)
                         - np.roll(polygon[..., 0], -1, axis=1) * polygon[..., 1], axis=1)
-    return np.where((area.real < 0.0)[:, None, None], polygon[:, ::-1], polygon), area
+    return np.where((area < 0.0)[:, None, None], polygon[:, ::-1], polygon), area
 
 
 def _projected_pairs(slave: np.ndarray, normal: np.ndarray, master: np.ndarray) -> tuple:
@@ -159,8 +162,9 @@ def _projected_pairs(slave: np.ndarray, normal: np.ndarray, master: np.ndarray) 
     m_ccw, m_area = _counter_clockwise(m2)
     # a master facet seen edge-on has no shadow; most candidate pairs of a search are disjoint
     # (separating axis test, a tenth of the clipping's cost)
-    shadow = np.abs(m_area.real) > 1e-12 * np.abs(s_area.real)
-    pairs = np.flatnonzero(shadow & ~_separated(s_ccw, m_ccw) & ~_separated(m_ccw, s_ccw))
+    shadow = np.abs(primal(m_area)) > 1e-12 * np.abs(primal(s_area))
+    s_value, m_value = primal(s_ccw), primal(m_ccw)
+    pairs = np.flatnonzero(shadow & ~_separated(s_value, m_value) & ~_separated(m_value, s_value))
     return s2, m2, s_ccw, m_ccw, pairs
 
 
@@ -186,7 +190,8 @@ def _affine(x: np.ndarray) -> np.ndarray:
     """(P,) whether facets (P, n, 3) have an affine map: triangles, and parallelograms to round-off."""
     if x.shape[1] == 3:
         return np.ones(len(x), dtype=bool)
-    return np.linalg.norm(x.real[:, 3] - x.real[:, 2] - x.real[:, 1] + x.real[:, 0], axis=1) <= 1e-12 * diameters(x.real)
+    x = primal(x)
+    return np.linalg.norm(x[:, 3] - x[:, 2] - x[:, 1] + x[:, 0], axis=1) <= 1e-12 * diameters(x)
 
 
 def _rules(slave: np.ndarray, master: np.ndarray, degree: int | None) -> list[tuple[np.ndarray, tuple]]:
@@ -221,11 +226,11 @@ def segment_integrals(slave: np.ndarray, normal: np.ndarray, master: np.ndarray,
     """
     P, ns, nm = len(slave), slave.shape[1], master.shape[1]
     s2, m2, s_ccw, m_ccw, pairs = _projected_pairs(slave, normal, master)
-    polygon = np.zeros((len(pairs), ns + nm, 2), dtype=m_ccw.dtype)  # clipping adds at most one vertex per clipping edge
+    polygon = np.zeros((len(pairs), ns + nm, 2), like=m_ccw)  # clipping adds at most one vertex per clipping edge
     polygon[:, :nm] = m_ccw[pairs]
     polygon, count = clip_polygons(polygon, np.full(len(pairs), nm), s_ccw[pairs])
     dual = dual_coefficients(slave[pairs]) if ns == 4 else None
-    D, M = np.zeros((P, ns), dtype=polygon.dtype), np.zeros((P, ns, nm), dtype=polygon.dtype)
+    D, M = np.zeros((P, ns), like=polygon), np.zeros((P, ns, nm), like=polygon)
     for group, rule in _rules(slave[pairs], master[pairs], degree):
         for k in range(1, polygon.shape[1] - 1):  # fan (v0, v_k, v_k+1)
             has = group & (count >= k + 2)

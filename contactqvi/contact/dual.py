@@ -1,0 +1,260 @@
+"""Forward-mode automatic differentiation of vectorised numpy code: arrays of dual numbers.
+
+A :class:`Dual` is a value array of shape S and a tangent array of shape S + (k,): the
+derivatives of every entry along k directions. numpy's operations on it (arithmetic,
+``sqrt``, ``einsum``, ``stack``, ``where``, indexing, ...) compute the value with the same
+numpy call as on a plain array, so values are bitwise those of the plain evaluation, and
+carry the tangents by the chain rule alongside (forward mode: Griewank and Walther,
+"Evaluating Derivatives", 2nd ed., SIAM 2008, Ch. 3; vector mode, Sect. 3.2). One
+evaluation then gives the value and its derivatives in all k directions, with every
+branch (a comparison, ``np.where``'s condition, an index) taken on the values: the
+derivative of the branch the value took.
+
+The geometry of the mortar segments (:mod:`contactqvi.contact.segments`,
+:mod:`contactqvi.contact.facets`) is written for plain arrays and runs unchanged on
+duals; :mod:`contactqvi.contact.linearisation` seeds its coordinates. Only the operations
+that code uses are defined; any other numpy function raises ``TypeError`` rather than
+drop the tangents.
+"""
+
+from __future__ import annotations
+
+import string
+import typing
+
+import numpy as np
+
+__all__ = ["Dual", "primal"]
+
+
+def primal(a: typing.Any) -> typing.Any:
+    """The value of a :class:`Dual`; anything else as it is."""
+    return a.value if isinstance(a, Dual) else a
+
+
+def _tangent(a: typing.Any) -> typing.Any:
+    """The tangent of a :class:`Dual`; 0.0 (a constant) for anything else."""
+    return a.tangent if isinstance(a, Dual) else 0.0
+
+
+def _axis(axis: int, ndim: int) -> int:
+    """A value axis as a non-negative index (the tangent's axes are the value's, then k)."""
+    return axis + ndim if axis < 0 else axis
+
+
+def _tangent_index(index: typing.Any) -> typing.Any:
+    """The index of a tangent for an ``index`` of the value: the trailing axis k kept whole."""
+    index = index if isinstance(index, tuple) else (index,)
+    return (*index, slice(None)) if any(i is Ellipsis for i in index) else index
+
+
+class Dual(np.lib.mixins.NDArrayOperatorsMixin):
+    """Values (shape S) and their derivatives along k directions (shape S + (k,)).
+
+    Attributes:
+        value: the values, a float array.
+        tangent: d value / d(direction), the directions last.
+    """
+
+    __slots__ = ("tangent", "value")
+
+    def __init__(self, value: np.ndarray, tangent: np.ndarray):
+        self.value, self.tangent = np.asarray(value), np.asarray(tangent)
+
+    @classmethod
+    def seed(cls, x: np.ndarray) -> Dual:
+        """The independent variables x (P, ...): the derivatives of each row with respect to its
+        own entries, k = x[0].size directions in C order (row p's entry i along direction i)."""
+        k = x[0].size
+        return cls(x, np.broadcast_to(np.eye(k).reshape(*x.shape[1:], k), (*x.shape, k)))
+
+    @property
+    def directions(self) -> int:
+        return self.tangent.shape[-1]
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return self.value.shape
+
+    @property
+    def ndim(self) -> int:
+        return self.value.ndim
+
+    def __len__(self) -> int:
+        return len(self.value)
+
+    def __repr__(self) -> str:
+        return f"Dual(shape={self.shape}, directions={self.directions})"
+
+    def __getitem__(self, index: typing.Any) -> Dual:
+        return Dual(self.value[index], self.tangent[_tangent_index(index)])
+
+    def __setitem__(self, index: typing.Any, other: typing.Any) -> None:
+        if not self.tangent.flags.writeable:
+            self.tangent = self.tangent.copy()
+        self.value[index] = primal(other)
+        self.tangent[_tangent_index(index)] = _tangent(other)
+
+    # in-place operators make a new dual (a tangent may be a broadcast view)
+    def __iadd__(self, other): return self + other  # noqa: E704
+    def __isub__(self, other): return self - other  # noqa: E704
+    def __imul__(self, other): return self * other  # noqa: E704
+    def __itruediv__(self, other): return self / other  # noqa: E704
+
+    def reshape(self, *shape: int) -> Dual:
+        """The values reshaped to ``shape`` (no -1), the directions kept last."""
+        return Dual(self.value.reshape(shape), self.tangent.reshape(*shape, self.directions))
+
+    def sum(self, axis: int, keepdims: bool = False) -> Dual:
+        return np.sum(self, axis=axis, keepdims=keepdims)
+
+    def __array_ufunc__(self, ufunc, method, *inputs, **kwargs):
+        if method != "__call__" or "out" in kwargs or ufunc not in _UFUNCS:
+            return NotImplemented
+        return _UFUNCS[ufunc](*inputs)
+
+    def __array_function__(self, func, types, args, kwargs):
+        if func not in _FUNCTIONS:
+            return NotImplemented
+        if func is np.zeros:  # np.zeros(shape, like=dual): a constant with this dual's directions
+            value = np.zeros(*args, **kwargs)
+            return Dual(value, np.zeros((*value.shape, self.directions)))
+        return _FUNCTIONS[func](*args, **kwargs)
+
+
+def _add(a, b) -> Dual:
+    value = np.add(primal(a), primal(b))
+    if isinstance(a, Dual) and isinstance(b, Dual):
+        tangent = a.tangent + b.tangent
+    else:
+        tangent = a.tangent if isinstance(a, Dual) else b.tangent
+    return Dual(value, np.broadcast_to(tangent, (*value.shape, _k(a, b))))
+
+
+def _subtract(a, b) -> Dual:
+    value = np.subtract(primal(a), primal(b))
+    if isinstance(a, Dual) and isinstance(b, Dual):
+        tangent = a.tangent - b.tangent
+    else:
+        tangent = a.tangent if isinstance(a, Dual) else -b.tangent
+    return Dual(value, np.broadcast_to(tangent, (*value.shape, _k(a, b))))
+
+
+def _multiply(a, b) -> Dual:
+    va, vb = primal(a), primal(b)
+    tangent = 0.0
+    if isinstance(a, Dual):
+        tangent = a.tangent * np.asarray(vb)[..., None]
+    if isinstance(b, Dual):
+        tangent = tangent + np.asarray(va)[..., None] * b.tangent
+    value = np.multiply(va, vb)
+    return Dual(value, np.broadcast_to(tangent, (*value.shape, _k(a, b))))
+
+
+def _divide(a, b) -> Dual:
+    vb = np.asarray(primal(b))
+    value = np.true_divide(primal(a), vb)
+    tangent = _tangent(a)
+    if isinstance(b, Dual):
+        tangent = tangent - value[..., None] * b.tangent
+    return Dual(value, np.broadcast_to(tangent / vb[..., None], (*value.shape, _k(a, b))))
+
+
+def _negative(a: Dual) -> Dual:
+    return Dual(np.negative(a.value), np.negative(a.tangent))
+
+
+def _sqrt(a: Dual) -> Dual:
+    value = np.sqrt(a.value)
+    return Dual(value, a.tangent / (2.0 * value)[..., None])
+
+
+def _comparison(ufunc: np.ufunc) -> typing.Callable:
+    """A comparison: of the values (a branch decision)."""
+    return lambda a, b: ufunc(primal(a), primal(b))
+
+
+def _k(*arrays) -> int:
+    return next(a.directions for a in arrays if isinstance(a, Dual))
+
+
+_UFUNCS = {np.add: _add, np.subtract: _subtract, np.multiply: _multiply, np.true_divide: _divide,
+           np.negative: _negative, np.sqrt: _sqrt,
+           **{u: _comparison(u) for u in (np.equal, np.not_equal, np.less, np.less_equal, np.greater,
+                                          np.greater_equal)}}
+
+
+def _einsum(subscripts: str, *operands) -> Dual:
+    """Product rule: one term per dual operand, its tangent with the directions' letter added."""
+    inputs, output = subscripts.replace(" ", "").split("->")
+    inputs = inputs.split(",")
+    letter = next(c for c in reversed(string.ascii_letters) if c not in subscripts)
+    value = np.einsum(subscripts, *(primal(o) for o in operands))
+    tangent = 0.0
+    for i, operand in enumerate(operands):
+        if isinstance(operand, Dual):
+            terms = [s + letter if j == i else s for j, s in enumerate(inputs)]
+            tangent = tangent + np.einsum(",".join(terms) + "->" + output + letter,
+                                          *(operand.tangent if j == i else primal(o) for j, o in enumerate(operands)))
+    return Dual(value, tangent)
+
+
+def _joined(function: typing.Callable, arrays: typing.Sequence, axis: int, ndim: int) -> Dual:
+    """np.stack or np.concatenate of duals and constants along a value axis of ``ndim`` axes."""
+    k = _k(*arrays)
+    tangents = [a.tangent if isinstance(a, Dual) else np.zeros((*np.shape(a), k)) for a in arrays]
+    return Dual(function([primal(a) for a in arrays], axis=axis), function(tangents, axis=_axis(axis, ndim)))
+
+
+def _stack(arrays: typing.Sequence, axis: int = 0) -> Dual:
+    return _joined(np.stack, arrays, axis, np.ndim(primal(arrays[0])) + 1)
+
+
+def _concatenate(arrays: typing.Sequence, axis: int = 0) -> Dual:
+    return _joined(np.concatenate, arrays, axis, np.ndim(primal(arrays[0])))
+
+
+def _where(condition: np.ndarray, a, b) -> Dual:
+    value = np.where(condition, primal(a), primal(b))
+    k = _k(a, b)
+    tangent = np.where(np.asarray(condition)[..., None], _tangent(a), _tangent(b))
+    return Dual(value, np.broadcast_to(tangent, (*value.shape, k)))
+
+
+def _sum(a: Dual, axis: int, keepdims: bool = False) -> Dual:
+    return Dual(np.sum(a.value, axis=axis, keepdims=keepdims),
+                np.sum(a.tangent, axis=_axis(axis, a.ndim), keepdims=keepdims))
+
+
+def _cross(a, b) -> Dual:
+    """Cross products along the last value axis."""
+    va, vb = primal(a), primal(b)
+    tangent = 0.0
+    if isinstance(a, Dual):
+        tangent = np.cross(a.tangent, np.asarray(vb)[..., None], axis=-2)
+    if isinstance(b, Dual):
+        tangent = tangent + np.cross(np.asarray(va)[..., None], b.tangent, axis=-2)
+    return Dual(np.cross(va, vb), tangent)
+
+
+def _roll(a: Dual, shift: int, axis: int) -> Dual:
+    return Dual(np.roll(a.value, shift, axis=axis), np.roll(a.tangent, shift, axis=_axis(axis, a.ndim)))
+
+
+def _swapaxes(a: Dual, axis1: int, axis2: int) -> Dual:
+    return Dual(np.swapaxes(a.value, axis1, axis2),
+                np.swapaxes(a.tangent, _axis(axis1, a.ndim), _axis(axis2, a.ndim)))
+
+
+def _solve(a, b) -> Dual:
+    """x = a^{-1} b of stacked matrices (..., m, m), (..., m, n); dx = a^{-1} (db - da x)."""
+    va, vb = primal(a), primal(b)
+    x = np.linalg.solve(va, vb)
+    k = _k(a, b)
+    rhs = _tangent(b) - (np.einsum("...ijz,...jn->...inz", a.tangent, x) if isinstance(a, Dual) else 0.0)
+    return Dual(x, np.einsum("...ij,...jnz->...inz", np.linalg.inv(va), np.broadcast_to(rhs, (*x.shape, k))))
+
+
+_FUNCTIONS = {np.einsum: _einsum, np.stack: _stack, np.concatenate: _concatenate, np.where: _where,
+              np.sum: _sum, np.cross: _cross, np.roll: _roll, np.swapaxes: _swapaxes, np.linalg.solve: _solve,
+              np.zeros: None}
