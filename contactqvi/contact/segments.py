@@ -83,28 +83,30 @@ def clip_polygons(polygon: np.ndarray, count: np.ndarray, clip: np.ndarray) -> t
         K = polygon.shape[1]
         a, b = clip[:, e], clip[:, (e + 1) % L]
         edge = b - a
-
-        def side(p: np.ndarray) -> np.ndarray:
-            return edge[:, None, 0] * (p[..., 1] - a[:, None, 1]) - edge[:, None, 1] * (p[..., 0] - a[:, None, 0])
-
         nxt_index = (np.arange(K)[None, :] + 1) % np.maximum(count, 1)[:, None]
-        nxt = polygon[rows[:, None], nxt_index]
-        s_cur, s_nxt = side(polygon), side(nxt)
+        s_cur = _side(primal(a)[:, None], primal(edge)[:, None], primal(polygon))  # the decisions: on values
+        s_nxt = s_cur[rows[:, None], nxt_index]
         valid = np.arange(K)[None, :] < count[:, None]
         in_cur, in_nxt = s_cur >= 0.0, s_nxt >= 0.0
-        denom = np.where(s_cur - s_nxt == 0.0, 1.0, s_cur - s_nxt)
-        crossing = polygon + (s_cur / denom)[..., None] * (nxt - polygon)
         # emitted per input vertex i: [crossing if the edge i -> i+1 crosses] then [nxt if nxt inside]
         emit_cross = valid & (in_cur != in_nxt)
         emit_next = valid & in_nxt
-        slots = np.cumsum(np.stack([emit_cross, emit_next], axis=2).reshape(P, 2 * K), axis=1) - 1
-        values = np.stack([crossing, nxt], axis=2).reshape(P, 2 * K, 2)
         emitted = np.stack([emit_cross, emit_next], axis=2).reshape(P, 2 * K)
+        slots = np.cumsum(emitted, axis=1) - 1
         out = np.zeros((P, max(K, int(emitted.sum(axis=1).max(initial=0))), 2), like=polygon)
-        p_idx, k_idx = np.nonzero(emitted)
-        out[p_idx, slots[p_idx, k_idx]] = values[p_idx, k_idx]
+        p_idx, k_idx = np.nonzero(emit_cross)  # the crossings, of edges whose ends lie on either side
+        current, nxt = polygon[p_idx, k_idx], polygon[p_idx, nxt_index[p_idx, k_idx]]
+        side_cur, side_nxt = _side(a[p_idx], edge[p_idx], current), _side(a[p_idx], edge[p_idx], nxt)
+        out[p_idx, slots[p_idx, 2 * k_idx]] = current + (side_cur / (side_cur - side_nxt))[:, None] * (nxt - current)
+        p_idx, k_idx = np.nonzero(emit_next)
+        out[p_idx, slots[p_idx, 2 * k_idx + 1]] = polygon[p_idx, nxt_index[p_idx, k_idx]]
         polygon, count = out, emitted.sum(axis=1)
     return polygon, count
+
+
+def _side(a: np.ndarray, edge: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """edge x (p - a): positive where the points p lie left of the lines through a along edge."""
+    return edge[..., 0] * (p[..., 1] - a[..., 1]) - edge[..., 1] * (p[..., 0] - a[..., 0])
 
 
 def _plane_coordinates(origin: np.ndarray, e1: np.ndarray, e2: np.ndarray, x: np.ndarray) -> np.ndarray:
