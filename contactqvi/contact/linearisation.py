@@ -41,10 +41,10 @@ from mpi4py import MPI
 
 import numpy as np
 
-from contactqvi.contact.dual import Dual
+from contactqvi.contact.dual import Dual, primal
 from contactqvi.contact.facets import facet_areas, unit_normals
 from contactqvi.contact.owners import owner_ranges, sum_to_owners
-from contactqvi.contact.segments import diameters, segment_integrals
+from contactqvi.contact.segments import diameters, planar_integrals, plane_coordinates
 
 __all__ = ["KINK", "KINK_OFFSET", "CouplingDerivatives", "PairDerivatives", "coupling_derivatives",
            "segment_jacobians"]
@@ -99,11 +99,56 @@ def _integral_jacobians(slave: np.ndarray, master: np.ndarray,
                         orientation: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The segment integrals D, M of facet pairs and their derivatives dD, dM (the shapes of
     :func:`segment_jacobians`), the projection direction the slave facets' :func:`unit_normals`
-    times ``orientation`` (P,): one evaluation on the pairs' coordinates seeded as duals."""
+    times ``orientation`` (P,).
+
+    Two forward sweeps, the Jacobian of the first accumulated and multiplied onto the second's
+    (preaccumulation; Griewank and Walther 2008, Ch. 9-10): the projection onto the slave
+    facet's plane, on the pairs' 3 N coordinates; the integration there, on the plane
+    coordinates that vary (:func:`_planar_directions`), about half as many directions.
+    """
     ns, N = slave.shape[1], slave.shape[1] + master.shape[1]
     x = Dual.seed(np.concatenate([slave, master], axis=1))
-    D, M = segment_integrals(x[:, :ns], orientation[:, None] * unit_normals(x[:, :ns]), x[:, ns:])
-    return D.value, M.value, D.tangent.reshape(*D.shape, N, 3), M.tangent.reshape(*M.shape, N, 3)
+    s = x[:, :ns]
+    normal = orientation[:, None] * unit_normals(s)
+    s2, m2, axes = plane_coordinates(s, normal, x[:, ns:])
+    planar, jacobian = _planar_directions(np.concatenate([s2, m2], axis=1), s, normal)
+    if ns == 4:  # the area element and dual basis: of the facet moved as its plane coordinates and warp
+        frame = np.stack([primal(e) for e in (*axes, normal)], axis=1)  # (P, 3, 3): rows e1, e2, normal
+        heights = np.broadcast_to(_warp_seed(jacobian.shape[1]), (len(slave), 4, 1, jacobian.shape[1]))
+        local = np.concatenate([planar.tangent[:, :ns], heights], axis=2)
+        slave = Dual(slave, np.einsum("pvaj,pac->pvcj", local, frame))
+    D, M = planar_integrals(slave, planar[:, :ns], master, planar[:, ns:])
+    chained = [np.matmul(out.tangent.reshape(len(slave), -1, jacobian.shape[1]), jacobian) for out in (D, M)]
+    return D.value, M.value, chained[0].reshape(*D.shape, N, 3), chained[1].reshape(*M.shape, N, 3)
+
+
+#: The plane coordinates of a slave facet that are zero whatever its position (vertex 0 at the
+#: origin, vertex 1 on the first axis: :func:`~contactqvi.contact.segments.plane_coordinates`).
+_FIXED = ([0, 0, 1], [0, 1, 1])
+
+
+def _planar_directions(planar: Dual, slave: Dual, normal: Dual) -> tuple[Dual, np.ndarray]:
+    """The plane coordinates ``planar`` (P, N, 2) of a pair (slave facet first) seeded anew, and
+    the Jacobian (P, k, 3 N) of their k directions with respect to the pair's coordinates: the
+    coordinates that vary and, for a slave quadrilateral, its warp w = n . (x_1 - x_0) (its
+    vertices lie at heights (0, w, w, 0) over its mean plane), the last direction."""
+    free = np.ones(planar.shape[1:], dtype=bool)
+    free[_FIXED] = False
+    rows = [planar.tangent[:, free]]
+    if slave.shape[1] == 4:
+        rows.append(np.einsum("pc,pc->p", normal, slave[:, 1] - slave[:, 0]).tangent[:, None])
+    jacobian = np.concatenate(rows, axis=1)
+    seeds = np.zeros((*planar.shape[1:], jacobian.shape[1]))
+    seeds[free] = np.eye(free.sum(), jacobian.shape[1])
+    return Dual(planar.value, np.broadcast_to(seeds, (*planar.shape, jacobian.shape[1]))), jacobian
+
+
+def _warp_seed(k: int) -> np.ndarray:
+    """(4, 1, k) the heights of a quadrilateral's vertices over its mean plane along the warp,
+    the last of k directions."""
+    seed = np.zeros((4, 1, k))
+    seed[[1, 2], 0, -1] = 1.0
+    return seed
 
 
 def _area_normal_jacobians(x: np.ndarray, outward: np.ndarray) -> np.ndarray:

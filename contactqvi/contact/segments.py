@@ -43,7 +43,8 @@ from contactqvi.contact.facets import (
     triangle_rule,
 )
 
-__all__ = ["AFFINE_DEGREE", "QUADRILATERAL_DEGREE", "clip_polygons", "diameters", "segment_integrals"]
+__all__ = ["AFFINE_DEGREE", "QUADRILATERAL_DEGREE", "clip_polygons", "diameters", "planar_integrals",
+           "plane_coordinates", "segment_integrals"]
 
 #: Degree-2 rule on a triangle (barycentric points, weights summing to 1): exact for
 #: psi_i phi_j^m on a flat pair of linear triangles.
@@ -149,17 +150,28 @@ def _counter_clockwise(x2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.where((area < 0.0)[:, None, None], polygon[:, ::-1], polygon), area
 
 
-def _projected_pairs(slave: np.ndarray, normal: np.ndarray, master: np.ndarray) -> tuple:
-    """Slave and master facets in coordinates of the slave facet's plane (through its vertex 0,
-    normal ``normal``), their counter-clockwise polygons, and the pairs that may overlap there."""
+def plane_coordinates(slave: np.ndarray, normal: np.ndarray,
+                      master: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """Slave and master facets (P, n, 3), (P, m, 3) in coordinates of the slave facet's plane
+    (normal ``normal``): the origin its vertex 0, the axes e1 along its first edge (projected
+    onto a warped quadrilateral's mean plane) and e2 = normal x e1.
+
+    Returns:
+        ``(s2, m2, (e1, e2))``: (P, n, 2), (P, m, 2) and the axes (P, 3) each. s2[:, 0] and
+        s2[:, 1, 1] are zero whatever the positions.
+    """
     origin = slave[:, 0]
     e1 = slave[:, 1] - origin
     if slave.shape[1] == 4:  # the edge of a warped quadrilateral leaves its mean plane
         e1 -= np.einsum("ij,ij->i", e1, normal)[:, None] * normal
     e1 /= length(e1)[:, None]
     e2 = np.cross(normal, e1)
-    s2 = _plane_coordinates(origin, e1, e2, slave)
-    m2 = _plane_coordinates(origin, e1, e2, master)
+    return _plane_coordinates(origin, e1, e2, slave), _plane_coordinates(origin, e1, e2, master), (e1, e2)
+
+
+def _overlapping_shadows(s2: np.ndarray, m2: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The facets in the plane (P, n, 2), (P, m, 2) as counter-clockwise polygons, and the pairs
+    that may overlap there."""
     s_ccw, s_area = _counter_clockwise(s2)
     m_ccw, m_area = _counter_clockwise(m2)
     # a master facet seen edge-on has no shadow; most candidate pairs of a search are disjoint
@@ -167,7 +179,7 @@ def _projected_pairs(slave: np.ndarray, normal: np.ndarray, master: np.ndarray) 
     shadow = np.abs(primal(m_area)) > 1e-12 * np.abs(primal(s_area))
     s_value, m_value = primal(s_ccw), primal(m_ccw)
     pairs = np.flatnonzero(shadow & ~_separated(s_value, m_value) & ~_separated(m_value, s_value))
-    return s2, m2, s_ccw, m_ccw, pairs
+    return s_ccw, m_ccw, pairs
 
 
 def _shape_values(x2: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -226,8 +238,17 @@ def segment_integrals(slave: np.ndarray, normal: np.ndarray, master: np.ndarray,
         ``normal``, covers (zero where they do not overlap); quadrilaterals with their
         true area element.
     """
+    s2, m2, _ = plane_coordinates(slave, normal, master)
+    return planar_integrals(slave, s2, master, m2, degree)
+
+
+def planar_integrals(slave: np.ndarray, s2: np.ndarray, master: np.ndarray, m2: np.ndarray,
+                     degree: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`segment_integrals` of facet pairs from their :func:`plane_coordinates` s2 (P, n, 2)
+    and m2 (P, m, 2). The facets' vertices serve a slave quadrilateral's area element and dual
+    basis (unchanged by a rigid motion of the facet) and the choice of the rule."""
     P, ns, nm = len(slave), slave.shape[1], master.shape[1]
-    s2, m2, s_ccw, m_ccw, pairs = _projected_pairs(slave, normal, master)
+    s_ccw, m_ccw, pairs = _overlapping_shadows(s2, m2)
     polygon = np.zeros((len(pairs), ns + nm, 2), like=m_ccw)  # clipping adds at most one vertex per clipping edge
     polygon[:, :nm] = m_ccw[pairs]
     polygon, count = clip_polygons(polygon, np.full(len(pairs), nm), s_ccw[pairs])
