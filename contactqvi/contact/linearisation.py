@@ -227,6 +227,7 @@ def coupling_derivatives(comm: MPI.Comm, index_map, slave_glob: np.ndarray, slav
     """
     ns, nm = slave_x.shape[1], master_x.shape[1]
     chunk = _CHUNK if ns == nm == 3 else _QUADRILATERAL_CHUNK
+    # entries (row node, column node), per coordinate c of the column node 7 values: dD, dM x (3), da (3)
     rows, cols, values, pair_dM = [], [], [], [np.zeros((0, ns, nm, ns + nm, 3))]
     for start in range(0, len(pairs_s), chunk):
         s = pairs_s[start:start + chunk]
@@ -235,19 +236,20 @@ def coupling_derivatives(comm: MPI.Comm, index_map, slave_glob: np.ndarray, slav
         pair_dM.append(dM)
         dMx = np.einsum("pabvc,pbk->pavck", dM, m_x)
         nodes = np.concatenate([slave_glob[s], m_glob], axis=1)  # (P, N): the pair's vertices
-        rows.append(np.broadcast_to(slave_glob[s][:, :, None, None], dD.shape).ravel())
-        cols.append(np.broadcast_to((3 * nodes[:, None, :, None] + np.arange(3)), dD.shape).ravel())
-        values.append(np.concatenate([dD[..., None], dMx, np.zeros((*dD.shape, 3))], axis=-1).reshape(-1, 7))
+        rows.append(np.broadcast_to(slave_glob[s][:, :, None], dD.shape[:3]).ravel())
+        cols.append(np.broadcast_to(nodes[:, None, :], dD.shape[:3]).ravel())
+        values.append(np.concatenate([dD[..., None], dMx, np.zeros((*dD.shape, 3))], axis=-1).reshape(-1, 21))
     # a_i: every slave facet at i, paired or not
     da = np.moveaxis(_area_normal_jacobians(slave_x, slave_normal), 1, -1)  # (f, n_s, 3, 3)
-    shape = (len(slave_x), ns, ns, 3)
-    rows.append(np.broadcast_to(slave_glob[:, :, None, None], shape).ravel())
-    cols.append(np.broadcast_to(3 * slave_glob[:, None, :, None] + np.arange(3), shape).ravel())
-    values.append(np.concatenate([np.zeros((*shape, 4)), np.broadcast_to(da[:, None], (*shape, 3))],
-                                 axis=-1).reshape(-1, 7))
-    owned_rows, dofs, summed = sum_to_owners(comm, owner_ranges(comm, index_map), np.concatenate(rows),
-                                             np.concatenate(cols), np.concatenate(values),
-                                             width=3 * index_map.size_global)
+    shape = (len(slave_x), ns, ns)
+    rows.append(np.broadcast_to(slave_glob[:, :, None], shape).ravel())
+    cols.append(np.broadcast_to(slave_glob[:, None, :], shape).ravel())
+    values.append(np.concatenate([np.zeros((*shape, 3, 4)), np.broadcast_to(da[:, None], (*shape, 3, 3))],
+                                 axis=-1).reshape(-1, 21))
+    owned_rows, nodes, summed = sum_to_owners(comm, owner_ranges(comm, index_map), np.concatenate(rows),
+                                              np.concatenate(cols), np.concatenate(values))
+    owned_rows, summed = np.repeat(owned_rows, 3), summed.reshape(-1, 7)
+    dofs = (3 * nodes[:, None] + np.arange(3)).ravel()
     position = np.searchsorted(coupled_glob, owned_rows)
     coupled = position < len(coupled_glob)
     coupled[coupled] = coupled_glob[position[coupled]] == owned_rows[coupled]
