@@ -102,16 +102,16 @@ def _integral_jacobians(slave: np.ndarray, master: np.ndarray,
     times ``orientation`` (P,).
 
     Two forward sweeps, the Jacobian of the first accumulated and multiplied onto the second's
-    (preaccumulation; Griewank and Walther 2008, Ch. 9-10): the projection onto the slave
-    facet's plane, on the pairs' 3 N coordinates; the integration there, on the plane
-    coordinates that vary (:func:`_planar_directions`), about half as many directions.
+    (preaccumulation; Griewank and Walther 2008, Ch. 10): the projection onto the slave facet's
+    plane, on the slave facet's coordinates (the master facet's enter it linearly); the
+    integration in the plane, on the plane coordinates that vary (:func:`_planar_directions`):
+    9 directions instead of 18 for two triangles, 14 instead of 24 for two quadrilaterals.
     """
     ns, N = slave.shape[1], slave.shape[1] + master.shape[1]
-    x = Dual.seed(np.concatenate([slave, master], axis=1))
-    s = x[:, :ns]
+    s = Dual.seed(slave)
     normal = orientation[:, None] * unit_normals(s)
-    s2, m2, axes = plane_coordinates(s, normal, x[:, ns:])
-    planar, jacobian = _planar_directions(np.concatenate([s2, m2], axis=1), s, normal)
+    s2, m2, axes = plane_coordinates(s, normal, master)
+    planar, jacobian = _planar_directions(s2, m2, axes, s, normal)
     if ns == 4:  # the area element and dual basis: of the facet moved as its plane coordinates and warp
         frame = np.stack([primal(e) for e in (*axes, normal)], axis=1)  # (P, 3, 3): rows e1, e2, normal
         heights = np.broadcast_to(_warp_seed(jacobian.shape[1]), (len(slave), 4, 1, jacobian.shape[1]))
@@ -127,20 +127,29 @@ def _integral_jacobians(slave: np.ndarray, master: np.ndarray,
 _FIXED = ([0, 0, 1], [0, 1, 1])
 
 
-def _planar_directions(planar: Dual, slave: Dual, normal: Dual) -> tuple[Dual, np.ndarray]:
-    """The plane coordinates ``planar`` (P, N, 2) of a pair (slave facet first) seeded anew, and
-    the Jacobian (P, k, 3 N) of their k directions with respect to the pair's coordinates: the
-    coordinates that vary and, for a slave quadrilateral, its warp w = n . (x_1 - x_0) (its
-    vertices lie at heights (0, w, w, 0) over its mean plane), the last direction."""
-    free = np.ones(planar.shape[1:], dtype=bool)
+def _planar_directions(s2: Dual, m2: Dual, axes: tuple[Dual, Dual], slave: Dual,
+                       normal: Dual) -> tuple[Dual, np.ndarray]:
+    """The plane coordinates s2 (P, n_s, 2), m2 (P, n_m, 2) of pairs, differentiated with respect
+    to the slave facets' coordinates, seeded anew as one dual (P, N, 2), and the Jacobian
+    (P, k, 3 N) of its k directions with respect to the pairs' coordinates (slave first): the
+    coordinates that vary, then, for a slave quadrilateral, its warp w = n . (x_1 - x_0) (its
+    vertices lie at heights (0, w, w, 0) over its mean plane). m2 = E (x - x_0) with E the rows
+    ``axes``: E is its derivative with respect to a master vertex x."""
+    P, ns, nm = len(s2), s2.shape[1], m2.shape[1]
+    free = np.ones((ns + nm, 2), dtype=bool)
     free[_FIXED] = False
-    rows = [planar.tangent[:, free]]
-    if slave.shape[1] == 4:
-        rows.append(np.einsum("pc,pc->p", normal, slave[:, 1] - slave[:, 0]).tangent[:, None])
-    jacobian = np.concatenate(rows, axis=1)
-    seeds = np.zeros((*planar.shape[1:], jacobian.shape[1]))
-    seeds[free] = np.eye(free.sum(), jacobian.shape[1])
-    return Dual(planar.value, np.broadcast_to(seeds, (*planar.shape, jacobian.shape[1]))), jacobian
+    by_slave = [s2.tangent[:, free[:ns]], m2.tangent.reshape(P, 2 * nm, 3 * ns)]
+    if ns == 4:
+        by_slave.append(np.einsum("pc,pc->p", normal, slave[:, 1] - slave[:, 0]).tangent[:, None])
+    by_slave = np.concatenate(by_slave, axis=1)
+    k, first = by_slave.shape[1], free[:ns].sum()
+    by_master = np.zeros((P, k, 3 * nm))
+    E = np.stack([primal(a) for a in axes], axis=1)  # (P, 2, 3)
+    by_master[:, first:first + 2 * nm] = np.einsum("vw,pac->pvawc", np.eye(nm), E).reshape(P, 2 * nm, 3 * nm)
+    seeds = np.zeros((ns + nm, 2, k))
+    seeds[free] = np.eye(free.sum(), k)
+    planar = np.concatenate([s2.value, m2.value], axis=1)
+    return Dual(planar, np.broadcast_to(seeds, (*planar.shape, k))), np.concatenate([by_slave, by_master], axis=2)
 
 
 def _warp_seed(k: int) -> np.ndarray:
