@@ -195,7 +195,7 @@ def _einsum(subscripts: str, *operands) -> Dual:
         if isinstance(operand, Dual):
             terms = [s + letter if j == i else s for j, s in enumerate(inputs)]
             tangent = tangent + np.einsum(",".join(terms) + "->" + output + letter,
-                                          *(operand.tangent if j == i else primal(o) for j, o in enumerate(operands)))
+                                          *(operand.tangent if j == i else primal(o) for j, o in enumerate(operands)), optimize=True)
     return Dual(value, tangent)
 
 
@@ -247,12 +247,16 @@ def _swapaxes(a: Dual, axis1: int, axis2: int) -> Dual:
 
 
 def _solve(a, b) -> Dual:
-    """x = a^{-1} b of stacked matrices (..., m, m), (..., m, n); dx = a^{-1} (db - da x)."""
-    va, vb = primal(a), primal(b)
-    x = np.linalg.solve(va, vb)
-    k = _k(a, b)
-    rhs = _tangent(b) - (np.einsum("...ijz,...jn->...inz", a.tangent, x) if isinstance(a, Dual) else 0.0)
-    return Dual(x, np.einsum("...ij,...jnz->...inz", np.linalg.inv(va), np.broadcast_to(rhs, (*x.shape, k))))
+    """x = a^{-1} b of stacked matrices (..., m, m), (..., m, n); dx = a^{-1} (db - da x). The
+    products are sums over the m columns (on these small matrices faster than ``einsum``)."""
+    va = primal(a)
+    x = np.linalg.solve(va, primal(b))
+    rhs = _tangent(b)
+    if isinstance(a, Dual):
+        rhs = rhs - sum(a.tangent[..., :, j, None, :] * x[..., j, None, :, None] for j in range(va.shape[-1]))
+    rhs = np.broadcast_to(rhs, (*x.shape, _k(a, b)))
+    inverse = np.linalg.inv(va)
+    return Dual(x, sum(inverse[..., :, j, None, None] * rhs[..., j, None, :, :] for j in range(va.shape[-1])))
 
 
 _FUNCTIONS = {np.einsum: _einsum, np.stack: _stack, np.concatenate: _concatenate, np.where: _where,
