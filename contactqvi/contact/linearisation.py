@@ -236,7 +236,7 @@ def coupling_derivatives(comm: MPI.Comm, index_map, slave_glob: np.ndarray, slav
     """
     ns, nm = slave_x.shape[1], master_x.shape[1]
     chunk = _CHUNK if ns == nm == 3 else _QUADRILATERAL_CHUNK
-    # entries (row node, column node), per coordinate c of the column node 7 values: dD, dM x (3), da (3)
+    # entries (row node, column node), per coordinate c of the column node: dD, dM x (3) of the pairs
     rows, cols, values, pair_dM = [], [], [], [np.zeros((0, ns, nm, ns + nm, 3))]
     for start in range(0, len(pairs_s), chunk):
         s = pairs_s[start:start + chunk]
@@ -247,16 +247,15 @@ def coupling_derivatives(comm: MPI.Comm, index_map, slave_glob: np.ndarray, slav
         nodes = np.concatenate([slave_glob[s], m_glob], axis=1)  # (P, N): the pair's vertices
         rows.append(np.broadcast_to(slave_glob[s][:, :, None], dD.shape[:3]).ravel())
         cols.append(np.broadcast_to(nodes[:, None, :], dD.shape[:3]).ravel())
-        values.append(np.concatenate([dD[..., None], dMx, np.zeros((*dD.shape, 3))], axis=-1).reshape(-1, 21))
-    # a_i: every slave facet at i, paired or not
+        values.append(np.concatenate([dD[..., None], dMx], axis=-1).reshape(-1, 12))
+    # ... and da (3) of every slave facet at the row, paired or not
     da = np.moveaxis(_area_normal_jacobians(slave_x, slave_normal), 1, -1)  # (f, n_s, 3, 3)
     shape = (len(slave_x), ns, ns)
-    rows.append(np.broadcast_to(slave_glob[:, :, None], shape).ravel())
-    cols.append(np.broadcast_to(slave_glob[:, None, :], shape).ravel())
-    values.append(np.concatenate([np.zeros((*shape, 3, 4)), np.broadcast_to(da[:, None], (*shape, 3, 3))],
-                                 axis=-1).reshape(-1, 21))
-    owned_rows, nodes, summed = sum_to_owners(comm, owner_ranges(comm, index_map), np.concatenate(rows),
-                                              np.concatenate(cols), np.concatenate(values))
+    facet_entries = (np.broadcast_to(slave_glob[:, :, None], shape).ravel(),
+                     np.broadcast_to(slave_glob[:, None, :], shape).ravel(),
+                     np.broadcast_to(da[:, None], (*shape, 3, 3)).reshape(-1, 9))
+    owned_rows, nodes, summed = _summed_on_owners(comm, index_map, tuple(map(np.concatenate, (rows, cols, values))),
+                                                  facet_entries)
     owned_rows, summed = np.repeat(owned_rows, 3), summed.reshape(-1, 7)
     dofs = (3 * nodes[:, None] + np.arange(3)).ravel()
     position = np.searchsorted(coupled_glob, owned_rows)
@@ -270,3 +269,18 @@ def coupling_derivatives(comm: MPI.Comm, index_map, slave_glob: np.ndarray, slav
     normal = (da - np.einsum("ij,ij->i", n[row], da)[:, None] * n[row]) / size[row, None]
     pairs = PairDerivatives(slave_glob[pairs_s], master_glob, np.concatenate(pair_dM))
     return CouplingDerivatives(row, dofs, separation, normal, summed[:, 0], pairs)
+
+
+def _summed_on_owners(comm: MPI.Comm, index_map, pair_entries: tuple, facet_entries: tuple) -> tuple:
+    """The entries (row node, column node, values) of the pairs (values (E, 3, 4): dD, dM x per
+    coordinate of the column node) and of the slave facets (E', 3, 3): da) summed on the owners
+    of the rows: (rows, columns, (K, 3, 7)) over the union of their sorted (row, column) keys."""
+    owners = owner_ranges(comm, index_map)
+    pairs, facets = sum_to_owners(comm, owners, *pair_entries), sum_to_owners(comm, owners, *facet_entries)
+    width = np.int64(index_map.size_global + 1)
+    pair_keys, facet_keys = pairs[0] * width + pairs[1], facets[0] * width + facets[1]
+    keys = np.union1d(pair_keys, facet_keys)
+    summed = np.zeros((len(keys), 3, 7))
+    summed[np.searchsorted(keys, pair_keys), :, :4] = pairs[2].reshape(-1, 3, 4)
+    summed[np.searchsorted(keys, facet_keys), :, 4:] = facets[2].reshape(-1, 3, 3)
+    return keys // width, keys % width, summed
