@@ -97,7 +97,8 @@ def clip_polygons(polygon: np.ndarray, count: np.ndarray, clip: np.ndarray) -> t
         out = np.zeros((P, max(K, int(emitted.sum(axis=1).max(initial=0))), 2), like=polygon)
         p_idx, k_idx = np.nonzero(emit_cross)  # the crossings, of edges whose ends lie on either side
         current, nxt = polygon[p_idx, k_idx], polygon[p_idx, nxt_index[p_idx, k_idx]]
-        side_cur, side_nxt = _side(a[p_idx], edge[p_idx], current), _side(a[p_idx], edge[p_idx], nxt)
+        a_cross, edge_cross = a[p_idx], edge[p_idx]
+        side_cur, side_nxt = _side(a_cross, edge_cross, current), _side(a_cross, edge_cross, nxt)
         out[p_idx, slots[p_idx, 2 * k_idx]] = current + (side_cur / (side_cur - side_nxt))[:, None] * (nxt - current)
         p_idx, k_idx = np.nonzero(emit_next)
         out[p_idx, slots[p_idx, 2 * k_idx + 1]] = polygon[p_idx, nxt_index[p_idx, k_idx]]
