@@ -243,7 +243,9 @@ def coupling_derivatives(comm: MPI.Comm, index_map, slave_glob: np.ndarray, slav
         m_x, m_glob = master_x[start:start + chunk], master_glob[start:start + chunk]
         _, _, dD, dM = segment_jacobians(slave_x[s], -slave_normal[s], m_x)
         pair_dM.append(dM)
-        dMx = np.einsum("pabvc,pbk->pavck", dM, m_x)
+        # dM x: sum_b dM_ab x_b, (P, n_s, N, 3, 3) (a batched product, einsum is slow here)
+        dMx = np.matmul(np.swapaxes(m_x, 1, 2)[:, None], dM.reshape(*dM.shape[:3], -1))
+        dMx = dMx.reshape(*dM.shape[:2], 3, *dM.shape[3:]).transpose(0, 1, 3, 4, 2)
         nodes = np.concatenate([slave_glob[s], m_glob], axis=1)  # (P, N): the pair's vertices
         rows.append(np.broadcast_to(slave_glob[s][:, :, None], dD.shape[:3]).ravel())
         cols.append(np.broadcast_to(nodes[:, None, :], dD.shape[:3]).ravel())
