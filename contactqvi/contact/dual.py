@@ -65,7 +65,7 @@ class Dual(np.lib.mixins.NDArrayOperatorsMixin):
     def seed(cls, x: np.ndarray) -> Dual:
         """The independent variables x (P, ...): the derivatives of each row with respect to its
         own entries, k = x[0].size directions in C order (row p's entry i along direction i)."""
-        k = x[0].size
+        k = int(np.prod(x.shape[1:]))
         return cls(x, np.broadcast_to(np.eye(k).reshape(*x.shape[1:], k), (*x.shape, k)))
 
     @property
@@ -221,7 +221,8 @@ def _matrix_product(sa: str, a: np.ndarray, sb: str, b: np.ndarray, out: str) ->
     if (len(set(sa)) < len(sa) or len(set(sb)) < len(sb) or len(batch) + len(left) + len(summed) != len(sa)
             or len(batch) + len(right) + len(summed) != len(sb)):
         return np.einsum(f"{sa},{sb}->{out}", a, b)
-    size = {c: max(dict(zip(sa, a.shape)).get(c, 1), dict(zip(sb, b.shape)).get(c, 1)) for c in sa + sb}
+    size = dict(zip(sb, b.shape))
+    size.update((c, n) for c, n in zip(sa, a.shape) if n != 1 or c not in size)  # the broadcast sizes
     if np.prod([size[c] for c in left]) > np.prod([size[c] for c in right]):
         return _matrix_product(sb, b, sa, a, out)  # matmul is fastest with the longer axis last
     a = np.broadcast_to(a, [size[c] for c in sa]).transpose([sa.index(c) for c in batch + left + summed])
@@ -292,7 +293,7 @@ def _solve(a, b) -> Dual:
     if isinstance(a, Dual):  # da x, summed over the m columns (faster than einsum on these shapes)
         rhs = rhs - sum(a.tangent[..., :, j, None, :] * x[..., j, None, :, None] for j in range(va.shape[-1]))
     rhs = np.broadcast_to(rhs, (*x.shape, k))
-    dx = np.matmul(_inverse(va), rhs.reshape(*rhs.shape[:-2], -1))
+    dx = np.matmul(_inverse(va), rhs.reshape(*rhs.shape[:-2], rhs.shape[-2] * rhs.shape[-1]))
     return Dual(x, dx.reshape(rhs.shape))
 
 

@@ -19,18 +19,17 @@ C_ij dx_j) and the *geometric* part, the coupling and the normals moving with th
 
 Popp, Gee and Wall (IJNME 79 (2009) 1354, Sect. 4; 3D: Popp, Gitterle, Gee, Wall, IJNME 83
 (2010) 1428) derive dD, dM and da by hand, through the clip polygon's vertices and the
-projections. Here they are taken by the complex step (Squire and Trapp, SIAM Rev. 40 (1998)
-110; Martins, Sturdza and Alonso, ACM TOMS 29 (2003) 245): the segment integration is
-analytic in the vertex coordinates away from its branch decisions, which it takes on real
-parts (:mod:`contactqvi.contact.segments`), so for a direction e
-
-    df(x) e = Im f(x + i h e) / h + O(h^2)
-
-with no difference of two values: exact to round-off for h = :data:`STEP`, on the branch
-(clipping pattern, orientation) of x. Each pair of facets depends on its 3 (n_s + n_m)
-coordinates; all their directions are evaluated at once, as pairs of a batch
-(:func:`complex_step`). On the owners of the slave nodes the pairs' derivatives are summed
-as the values are (:mod:`contactqvi.contact.owners`) and combined into (L.1)-(L.2).
+projections. Here they are taken by forward-mode automatic differentiation (Griewank and
+Walther, "Evaluating Derivatives", 2nd ed., SIAM 2008): the segment integration
+(:mod:`contactqvi.contact.segments`) runs once on dual numbers
+(:class:`~contactqvi.contact.dual.Dual`), values and a trailing axis of derivatives, its branch
+decisions (clipping pattern, orientation, rule) taken on the values: exact to round-off on the
+branch of x, with no difference of two values. Each pair of facets depends on its 3 (n_s + n_m)
+coordinates; the integration in the slave facet's plane depends on fewer, the plane coordinates
+that vary (and a quadrilateral's warp), so it is differentiated there and chained with the
+projection's Jacobian (:func:`_integral_jacobians`). On the owners of the slave nodes the pairs'
+derivatives are summed as the values are (:mod:`contactqvi.contact.owners`) and combined into
+(L.1)-(L.2).
 """
 
 from __future__ import annotations
@@ -54,7 +53,7 @@ __all__ = ["KINK", "KINK_OFFSET", "CouplingDerivatives", "PairDerivatives", "cou
 KINK = 10.0
 #: ... and is differentiated with its master facet moved by this fraction of that diameter.
 KINK_OFFSET = 1e-6
-#: Facet pairs differentiated at a time (each one evaluated in all its directions, complex):
+#: Facet pairs differentiated at a time (each value with its derivatives in all directions):
 #: bounds the work arrays as :data:`~contactqvi.contact.mortar` bounds its own.
 _CHUNK = 1 << 12
 _QUADRILATERAL_CHUNK = 1 << 7
@@ -86,8 +85,8 @@ def segment_jacobians(slave: np.ndarray, normal: np.ndarray,
     # derivative of the semismooth Newton step (docs/finite_strain.md, Sect. 14).
     size = diameters(slave)
     kinked = ~(np.isfinite(dD).all(axis=(1, 2, 3)) & np.isfinite(dM).all(axis=(1, 2, 3, 4)))
-    kinked |= np.abs(dD).reshape(len(dD), -1).max(axis=1, initial=0.0) > KINK * size
-    kinked |= np.abs(dM).reshape(len(dM), -1).max(axis=1, initial=0.0) > KINK * size
+    kinked |= np.abs(dD).max(axis=(1, 2, 3), initial=0.0) > KINK * size
+    kinked |= np.abs(dM).max(axis=(1, 2, 3, 4), initial=0.0) > KINK * size
     if kinked.any():
         pattern = np.sin(np.arange(master.shape[1] * 3) + 1.0).reshape(1, -1, 3)
         moved = master[kinked] + KINK_OFFSET * size[kinked, None, None] * pattern
@@ -118,7 +117,8 @@ def _integral_jacobians(slave: np.ndarray, master: np.ndarray,
         local = np.concatenate([planar.tangent[:, :ns], heights], axis=2)
         slave = Dual(slave, np.einsum("pvaj,pac->pvcj", local, frame))
     D, M = planar_integrals(slave, planar[:, :ns], master, planar[:, ns:])
-    chained = [np.matmul(out.tangent.reshape(len(slave), -1, jacobian.shape[1]), jacobian) for out in (D, M)]
+    chained = [np.matmul(out.tangent.reshape(len(slave), np.prod(out.shape[1:]), jacobian.shape[1]), jacobian)
+               for out in (D, M)]
     return D.value, M.value, chained[0].reshape(*D.shape, N, 3), chained[1].reshape(*M.shape, N, 3)
 
 
@@ -237,7 +237,8 @@ def coupling_derivatives(comm: MPI.Comm, index_map, slave_glob: np.ndarray, slav
     ns, nm = slave_x.shape[1], master_x.shape[1]
     chunk = _CHUNK if ns == nm == 3 else _QUADRILATERAL_CHUNK
     # entries (row node, column node), per coordinate c of the column node: dD, dM x (3) of the pairs
-    rows, cols, values, pair_dM = [], [], [], [np.zeros((0, ns, nm, ns + nm, 3))]
+    rows, cols = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)]  # a rank may have no pairs
+    values, pair_dM = [np.zeros((0, 12))], [np.zeros((0, ns, nm, ns + nm, 3))]
     for start in range(0, len(pairs_s), chunk):
         s = pairs_s[start:start + chunk]
         m_x, m_glob = master_x[start:start + chunk], master_glob[start:start + chunk]
