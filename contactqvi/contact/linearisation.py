@@ -43,7 +43,7 @@ import numpy as np
 from contactqvi.contact.dual import Dual, primal
 from contactqvi.contact.facets import facet_areas, unit_normals
 from contactqvi.contact.owners import owner_ranges, sum_to_owners
-from contactqvi.contact.segments import diameters, planar_integrals, plane_coordinates
+from contactqvi.contact.segments import diameters, edge_ties, planar_integrals, plane_coordinates
 
 __all__ = ["KINK", "KINK_OFFSET", "CouplingDerivatives", "PairDerivatives", "coupling_derivatives",
            "segment_jacobians"]
@@ -51,8 +51,12 @@ __all__ = ["KINK", "KINK_OFFSET", "CouplingDerivatives", "PairDerivatives", "cou
 #: A pair whose dD or dM exceed this times its slave facet's diameter (they are of
 #: the order of it: D is an area) is at a kink (:func:`segment_jacobians`).
 KINK = 10.0
-#: ... and is differentiated with its master facet moved by this fraction of that diameter.
+#: ... and is differentiated with its master facet moved by this fraction of that diameter
+#: along one direction for all pairs (:data:`_KINK_DIRECTION`).
 KINK_OFFSET = 1e-6
+#: The direction of that move, a unit vector along no mesh line or common normal: a master node
+#: moves alike in every pair it belongs to, so the pairs at a node take the same side of its kink.
+_KINK_DIRECTION = np.sin(np.arange(1.0, 4.0)) / np.linalg.norm(np.sin(np.arange(1.0, 4.0)))
 #: Facet pairs differentiated at a time (each value with its derivatives in all directions):
 #: bounds the work arrays as :data:`~contactqvi.contact.mortar` bounds its own.
 _CHUNK = 1 << 12
@@ -79,17 +83,18 @@ def segment_jacobians(slave: np.ndarray, normal: np.ndarray,
     orientation = _orientation(slave, normal)
     D, M, dD, dM = _integral_jacobians(slave, master, orientation)
     # At a kink of D and M (facets that coincide: conforming parts of two meshes, whose clipped
-    # polygons have vertices on two edges at once) the clipping's crossings are 0/0 forms and
-    # their derivatives are no derivatives of D and M; there the one-sided derivative of the master
-    # facet moved by KINK_OFFSET of its size (a fixed pattern) serves, an element of the generalized
-    # derivative of the semismooth Newton step (docs/finite_strain.md, Sect. 14).
+    # polygons have vertices on two edges at once) the clipping ties (a vertex exactly on an edge's
+    # line, where each pair would take the side its own values take) or its crossings are near 0/0
+    # forms (derivatives far beyond the facet's size); there the one-sided derivative of the master
+    # facet moved by KINK_OFFSET of its size along _KINK_DIRECTION serves, an element of the
+    # generalized derivative of the semismooth Newton step (docs/finite_strain.md, Sect. 14).
     size = diameters(slave)
-    kinked = ~(np.isfinite(dD).all(axis=(1, 2, 3)) & np.isfinite(dM).all(axis=(1, 2, 3, 4)))
+    kinked = edge_ties(*plane_coordinates(slave, orientation[:, None] * unit_normals(slave), master)[:2])
+    kinked |= ~(np.isfinite(dD).all(axis=(1, 2, 3)) & np.isfinite(dM).all(axis=(1, 2, 3, 4)))
     kinked |= np.abs(dD).max(axis=(1, 2, 3), initial=0.0) > KINK * size
     kinked |= np.abs(dM).max(axis=(1, 2, 3, 4), initial=0.0) > KINK * size
     if kinked.any():
-        pattern = np.sin(np.arange(master.shape[1] * 3) + 1.0).reshape(1, -1, 3)
-        moved = master[kinked] + KINK_OFFSET * size[kinked, None, None] * pattern
+        moved = master[kinked] + KINK_OFFSET * size[kinked, None, None] * _KINK_DIRECTION
         dD[kinked], dM[kinked] = _integral_jacobians(slave[kinked], moved, orientation[kinked])[2:]
     return D, M, dD, dM
 

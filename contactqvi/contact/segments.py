@@ -43,7 +43,7 @@ from contactqvi.contact.facets import (
     triangle_rule,
 )
 
-__all__ = ["AFFINE_DEGREE", "QUADRILATERAL_DEGREE", "clip_polygons", "diameters", "planar_integrals",
+__all__ = ["AFFINE_DEGREE", "QUADRILATERAL_DEGREE", "clip_polygons", "diameters", "edge_ties", "planar_integrals",
            "plane_coordinates", "segment_integrals"]
 
 #: Degree-2 rule on a triangle (barycentric points, weights summing to 1): exact for
@@ -128,16 +128,25 @@ def _signed_area(triangle: np.ndarray) -> np.ndarray:
     return 0.5 * (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
 
 
+def _edge_sides(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(P, L, K) :func:`_side` of the vertices of polygons ``b`` (P, K, 2) with respect to the edges
+    of the counter-clockwise polygons ``a`` (P, L, 2)."""
+    edges = np.roll(a, -1, axis=1) - a
+    return _side(a[:, :, None], edges[:, :, None], b[:, None])
+
+
 def _separated(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """(P,) whether the polygons ``b`` (P, K, 2) lie strictly outside an edge of the convex
     counter-clockwise polygons ``a`` (P, L, 2): one half of a separating axis test."""
-    separated = np.zeros(len(a), dtype=bool)
-    L = a.shape[1]
-    for e in range(L):
-        p, edge = a[:, e], a[:, (e + 1) % L] - a[:, e]
-        side = edge[:, None, 0] * (b[..., 1] - p[:, None, 1]) - edge[:, None, 1] * (b[..., 0] - p[:, None, 0])
-        separated |= (side < 0.0).all(axis=1)
-    return separated
+    return (_edge_sides(a, b) < 0.0).all(axis=2).any(axis=1)
+
+
+def edge_ties(s2: np.ndarray, m2: np.ndarray) -> np.ndarray:
+    """(P,) whether a vertex of a slave or master facet in the plane (:func:`plane_coordinates`)
+    lies exactly on the line of an edge of the other: a tie of the clipping's decisions, where
+    D and M have kinks (facets of conforming meshes, which share vertices)."""
+    s_ccw, m_ccw = _counter_clockwise(s2)[0], _counter_clockwise(m2)[0]
+    return (_edge_sides(s_ccw, m_ccw) == 0.0).any(axis=(1, 2)) | (_edge_sides(m_ccw, s_ccw) == 0.0).any(axis=(1, 2))
 
 
 def _counter_clockwise(x2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
