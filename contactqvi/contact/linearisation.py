@@ -81,7 +81,7 @@ def segment_jacobians(slave: np.ndarray, normal: np.ndarray,
         (P, n_s, n_m, N, 3) with respect to the pair's N = n_s + n_m vertices, slave first.
     """
     orientation = _orientation(slave, normal)
-    D, M, dD, dM = _integral_jacobians(slave, master, orientation)
+    D, M, dD, dM, kinked = _integral_jacobians(slave, master, orientation)
     # At a kink of D and M (facets that coincide: conforming parts of two meshes, whose clipped
     # polygons have vertices on two edges at once) the clipping ties (a vertex exactly on an edge's
     # line, where each pair would take the side its own values take) or its crossings are near 0/0
@@ -89,21 +89,20 @@ def segment_jacobians(slave: np.ndarray, normal: np.ndarray,
     # facet moved by KINK_OFFSET of its size along _KINK_DIRECTION serves, an element of the
     # generalized derivative of the semismooth Newton step (docs/finite_strain.md, Sect. 14).
     size = diameters(slave)
-    kinked = edge_ties(*plane_coordinates(slave, orientation[:, None] * unit_normals(slave), master)[:2])
     kinked |= ~(np.isfinite(dD).all(axis=(1, 2, 3)) & np.isfinite(dM).all(axis=(1, 2, 3, 4)))
     kinked |= np.abs(dD).max(axis=(1, 2, 3), initial=0.0) > KINK * size
     kinked |= np.abs(dM).max(axis=(1, 2, 3, 4), initial=0.0) > KINK * size
     if kinked.any():
         moved = master[kinked] + KINK_OFFSET * size[kinked, None, None] * _KINK_DIRECTION
-        dD[kinked], dM[kinked] = _integral_jacobians(slave[kinked], moved, orientation[kinked])[2:]
+        dD[kinked], dM[kinked] = _integral_jacobians(slave[kinked], moved, orientation[kinked])[2:4]
     return D, M, dD, dM
 
 
-def _integral_jacobians(slave: np.ndarray, master: np.ndarray,
-                        orientation: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _integral_jacobians(slave: np.ndarray, master: np.ndarray, orientation: np.ndarray) -> tuple[np.ndarray, ...]:
     """The segment integrals D, M of facet pairs and their derivatives dD, dM (the shapes of
     :func:`segment_jacobians`), the projection direction the slave facets' :func:`unit_normals`
-    times ``orientation`` (P,).
+    times ``orientation`` (P,), and (P,) whether the pair's clipping ties
+    (:func:`~contactqvi.contact.segments.edge_ties`).
 
     Two forward sweeps, the Jacobian of the first accumulated and multiplied onto the second's
     (preaccumulation; Griewank and Walther 2008, Ch. 10): the projection onto the slave facet's
@@ -124,7 +123,8 @@ def _integral_jacobians(slave: np.ndarray, master: np.ndarray,
     D, M = planar_integrals(slave, planar[:, :ns], master, planar[:, ns:])
     chained = [np.matmul(out.tangent.reshape(len(slave), np.prod(out.shape[1:]), jacobian.shape[1]), jacobian)
                for out in (D, M)]
-    return D.value, M.value, chained[0].reshape(*D.shape, N, 3), chained[1].reshape(*M.shape, N, 3)
+    ties = edge_ties(s2.value, m2.value)
+    return D.value, M.value, chained[0].reshape(*D.shape, N, 3), chained[1].reshape(*M.shape, N, 3), ties
 
 
 #: The plane coordinates of a slave facet that are zero whatever its position (vertex 0 at the
