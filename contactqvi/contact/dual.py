@@ -96,16 +96,24 @@ class Dual(np.lib.mixins.NDArrayOperatorsMixin):
         self.tangent[_tangent_index(index)] = _tangent(other)
 
     # in-place operators make a new dual (a tangent may be a broadcast view)
-    def __iadd__(self, other): return self + other  # noqa: E704
-    def __isub__(self, other): return self - other  # noqa: E704
-    def __imul__(self, other): return self * other  # noqa: E704
-    def __itruediv__(self, other): return self / other  # noqa: E704
+    def __iadd__(self, other: typing.Any) -> Dual:
+        return self + other
+
+    def __isub__(self, other: typing.Any) -> Dual:
+        return self - other
+
+    def __imul__(self, other: typing.Any) -> Dual:
+        return self * other
+
+    def __itruediv__(self, other: typing.Any) -> Dual:
+        return self / other
 
     def reshape(self, *shape: int) -> Dual:
         """The values reshaped to ``shape`` (no -1), the directions kept last."""
         return Dual(self.value.reshape(shape), self.tangent.reshape(*shape, self.directions))
 
     def sum(self, axis: int, keepdims: bool = False) -> Dual:
+        """np.sum along a value axis."""
         return np.sum(self, axis=axis, keepdims=keepdims)
 
     def __array_ufunc__(self, ufunc, method, *inputs, **kwargs):
@@ -199,7 +207,8 @@ def _einsum(subscripts: str, *operands) -> Dual:
     return Dual(np.einsum(subscripts, *values), tangent)
 
 
-def _tangent_term(subscript: str, tangent: np.ndarray, others: list[tuple[str, np.ndarray]], output: str) -> np.ndarray:
+def _tangent_term(subscript: str, tangent: np.ndarray, others: list[tuple[str, np.ndarray]],
+                  output: str) -> np.ndarray:
     """einsum of a tangent and constants ``others`` [(subscript, array)]: the constants contracted
     with each other first, then with the tangent as one batched matrix product."""
     if not others:
@@ -307,4 +316,4 @@ def _inverse(a: np.ndarray) -> np.ndarray:
 
 _FUNCTIONS = {np.einsum: _einsum, np.stack: _stack, np.concatenate: _concatenate, np.where: _where,
               np.sum: _sum, np.cross: _cross, np.roll: _roll, np.swapaxes: _swapaxes, np.linalg.solve: _solve,
-              np.zeros: None}
+              np.zeros: None}  # np.zeros(..., like=dual): Dual.__array_function__
