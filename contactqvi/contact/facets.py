@@ -24,6 +24,7 @@ from __future__ import annotations
 import basix
 import numpy as np
 
+from contactqvi.contact.dual import Dual, primal
 from contactqvi.parameters import ParameterError
 
 __all__ = ["POLYGON_ORDER", "area_elements", "dual_coefficients", "facet_areas", "length", "magnitude", "nodal_integrals",
@@ -42,15 +43,15 @@ NEWTON_MAX_IT = 25
 
 
 def length(v: np.ndarray, axis: int = -1) -> np.ndarray:
-    """Euclidean length along ``axis``, sqrt(sum v_k^2): for real v the arithmetic of
-    ``np.linalg.norm``; for complex v (a complex step, :mod:`contactqvi.contact.linearisation`)
-    the analytic continuation, not the modulus."""
+    """Euclidean length along ``axis``, sqrt(sum v_k^2): the arithmetic of ``np.linalg.norm``,
+    written with the operations a :class:`~contactqvi.contact.dual.Dual` differentiates."""
     return np.sqrt(np.sum(v * v, axis=axis))
 
 
 def magnitude(a: np.ndarray) -> np.ndarray:
-    """|a| taken by the sign of the real part: ``np.abs`` for real a, analytic for a complex step."""
-    return np.where(a.real < 0.0, -a, a)
+    """|a|, ``np.abs`` written as a branch on the value's sign (a :class:`~contactqvi.contact.dual.Dual`
+    then carries the derivative of the side taken)."""
+    return np.where(a < 0.0, -a, a)
 
 
 def unit_normals(x: np.ndarray) -> np.ndarray:
@@ -96,34 +97,46 @@ def planar_jacobians(x2: np.ndarray, xi: np.ndarray) -> np.ndarray:
     return magnitude(x_s[..., 0] * x_t[..., 1] - x_s[..., 1] * x_t[..., 0])
 
 
+def _bilinear_map(x2: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """x(xi) = a + b s + c t + d s t of planar quadrilaterals (P, 4, 2): (b, c, d, points - a), (P, 1, 2)
+    and (P, Q, 2)."""
+    a, b, c = x2[:, None, 0], x2[:, None, 1] - x2[:, None, 0], x2[:, None, 2] - x2[:, None, 0]
+    d = x2[:, None, 3] - x2[:, None, 2] - x2[:, None, 1] + x2[:, None, 0]
+    return b, c, d, points - a
+
+
+def _newton_step(b: np.ndarray, c: np.ndarray, d: np.ndarray, target: np.ndarray, xi: np.ndarray) -> np.ndarray:
+    """The step J^{-1} (x(xi) - point) of :func:`reference_coordinates` at xi (P, Q, 2)."""
+    s, t = xi[..., 0, None], xi[..., 1, None]
+    x_s, x_t = b + d * t, c + d * s
+    residual = s * x_s + c * t - target  # a + b s + c t + d s t - point
+    det = x_s[..., 0] * x_t[..., 1] - x_s[..., 1] * x_t[..., 0]
+    return np.stack([x_t[..., 1] * residual[..., 0] - x_t[..., 0] * residual[..., 1],
+                     x_s[..., 0] * residual[..., 1] - x_s[..., 1] * residual[..., 0]], axis=-1) / det[..., None]
+
+
 def reference_coordinates(x2: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Reference coordinates (P, Q, 2) of points (P, Q, 2) of the plane in the bilinear maps
     of planar quadrilaterals (P, 4, 2): Newton's method, all points at once, started from
     the centre (the first step is exact on a parallelogram; on the distorted facets of
     meshes/hertz_bodies_hex_coarse.geo 6 iterations, 7 from the vertex v0), until the
     steps are below :data:`NEWTON_TOL` or stall at round-off (:data:`ROUND_OFF_TOL`).
+    On :class:`~contactqvi.contact.dual.Dual` arguments the iteration runs on the values, and
+    the derivatives are those of its solution, -(J^{-1} r)' at the residual r(xi) = 0
+    (implicit differentiation; Griewank and Walther, "Evaluating Derivatives", SIAM 2008, Ch. 15).
 
     Raises:
         ParameterError: (``mesh``) Newton's method did not converge (a degenerate or
             non-convex quadrilateral).
     """
-    a, b, c = x2[:, None, 0], x2[:, None, 1] - x2[:, None, 0], x2[:, None, 2] - x2[:, None, 0]
-    d = x2[:, None, 3] - x2[:, None, 2] - x2[:, None, 1] + x2[:, None, 0]
-    if np.iscomplexobj(x2) or np.iscomplexobj(points):
-        # a complex step: from the real solution one Newton step gives the derivative (the
-        # imaginary part) exactly, and the next step is below the tolerance
-        xi = reference_coordinates(x2.real, points.real).astype(complex)
-    else:
-        xi = np.full(points.shape, 0.5)
-    target = points - a
+    if isinstance(x2, Dual) or isinstance(points, Dual):
+        xi = reference_coordinates(primal(x2), primal(points))
+        return Dual(xi, -_newton_step(*_bilinear_map(x2, points), xi).tangent)
+    b, c, d, target = _bilinear_map(x2, points)
+    xi = np.full(points.shape, 0.5)
     previous = np.inf
     for _ in range(NEWTON_MAX_IT):
-        s, t = xi[..., 0, None], xi[..., 1, None]
-        x_s, x_t = b + d * t, c + d * s
-        residual = s * x_s + c * t - target  # a + b s + c t + d s t - point
-        det = x_s[..., 0] * x_t[..., 1] - x_s[..., 1] * x_t[..., 0]
-        step = np.stack([x_t[..., 1] * residual[..., 0] - x_t[..., 0] * residual[..., 1],
-                         x_s[..., 0] * residual[..., 1] - x_s[..., 1] * residual[..., 0]], axis=-1) / det[..., None]
+        step = _newton_step(b, c, d, target, xi)
         xi -= step
         largest = np.abs(step).max(initial=0.0)
         if largest <= NEWTON_TOL or (largest <= ROUND_OFF_TOL and largest >= 0.5 * previous):

@@ -49,8 +49,8 @@ def sum_to_owners(comm: MPI.Comm, owners: np.ndarray, rows: np.ndarray, cols: np
     if values.ndim == 1:
         summed = np.bincount(inverse, weights=values, minlength=len(keys))
     else:
-        summed = np.column_stack([np.bincount(inverse, weights=values[:, k], minlength=len(keys))
-                                  for k in range(values.shape[1])])
+        summed = np.column_stack([np.bincount(inverse, weights=column, minlength=len(keys))
+                                  for column in np.ascontiguousarray(values.T)])
     return keys // width, keys % width, summed
 
 

@@ -17,17 +17,20 @@ parallelogram the inverse bilinear map is no polynomial, and a rule of degree 20
 (:data:`QUADRILATERAL_DEGREE`) meets the integrals to about 1e-12 on strongly
 distorted facets (a warped facet's area element too).
 
-Every function here is analytic in the vertex coordinates away from its branch decisions
-(which vertices a clipping edge keeps, a polygon's orientation, the rule a pair takes),
-and those are taken on the real parts: evaluated at complex coordinates x + i h e it gives
-the directional derivative along e as the imaginary part over h
-(:mod:`contactqvi.contact.linearisation`).
+Every function here takes plain arrays or :class:`~contactqvi.contact.dual.Dual` arrays
+(forward-mode automatic differentiation): given the vertex coordinates as duals it returns
+the integrals and their derivatives in one evaluation
+(:mod:`contactqvi.contact.linearisation`). The integrals are differentiable in the
+coordinates away from their branch decisions (which vertices a clipping edge keeps, a
+polygon's orientation, the rule a pair takes); those are taken on the values, so the
+derivatives are those of the branch the values take.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from contactqvi.contact.dual import primal
 from contactqvi.contact.facets import (
     POLYGON_ORDER,
     area_elements,
@@ -40,7 +43,8 @@ from contactqvi.contact.facets import (
     triangle_rule,
 )
 
-__all__ = ["AFFINE_DEGREE", "QUADRILATERAL_DEGREE", "clip_polygons", "diameters", "segment_integrals"]
+__all__ = ["AFFINE_DEGREE", "QUADRILATERAL_DEGREE", "clip_polygons", "diameters", "edge_ties", "planar_integrals",
+           "plane_coordinates", "segment_integrals"]
 
 #: Degree-2 rule on a triangle (barycentric points, weights summing to 1): exact for
 #: psi_i phi_j^m on a flat pair of linear triangles.
@@ -80,28 +84,31 @@ def clip_polygons(polygon: np.ndarray, count: np.ndarray, clip: np.ndarray) -> t
         K = polygon.shape[1]
         a, b = clip[:, e], clip[:, (e + 1) % L]
         edge = b - a
-
-        def side(p: np.ndarray) -> np.ndarray:
-            return edge[:, None, 0] * (p[..., 1] - a[:, None, 1]) - edge[:, None, 1] * (p[..., 0] - a[:, None, 0])
-
         nxt_index = (np.arange(K)[None, :] + 1) % np.maximum(count, 1)[:, None]
-        nxt = polygon[rows[:, None], nxt_index]
-        s_cur, s_nxt = side(polygon), side(nxt)
+        s_cur = _side(primal(a)[:, None], primal(edge)[:, None], primal(polygon))  # the decisions: on values
+        s_nxt = s_cur[rows[:, None], nxt_index]
         valid = np.arange(K)[None, :] < count[:, None]
-        in_cur, in_nxt = s_cur.real >= 0.0, s_nxt.real >= 0.0
-        denom = np.where(s_cur - s_nxt == 0.0, 1.0, s_cur - s_nxt)
-        crossing = polygon + (s_cur / denom)[..., None] * (nxt - polygon)
+        in_cur, in_nxt = s_cur >= 0.0, s_nxt >= 0.0
         # emitted per input vertex i: [crossing if the edge i -> i+1 crosses] then [nxt if nxt inside]
         emit_cross = valid & (in_cur != in_nxt)
         emit_next = valid & in_nxt
-        slots = np.cumsum(np.stack([emit_cross, emit_next], axis=2).reshape(P, 2 * K), axis=1) - 1
-        values = np.stack([crossing, nxt], axis=2).reshape(P, 2 * K, 2)
         emitted = np.stack([emit_cross, emit_next], axis=2).reshape(P, 2 * K)
-        out = np.zeros((P, max(K, int(emitted.sum(axis=1).max(initial=0))), 2), dtype=polygon.dtype)
-        p_idx, k_idx = np.nonzero(emitted)
-        out[p_idx, slots[p_idx, k_idx]] = values[p_idx, k_idx]
+        slots = np.cumsum(emitted, axis=1) - 1
+        out = np.zeros((P, max(K, int(emitted.sum(axis=1).max(initial=0))), 2), like=polygon)
+        p_idx, k_idx = np.nonzero(emit_cross)  # the crossings, of edges whose ends lie on either side
+        current, nxt = polygon[p_idx, k_idx], polygon[p_idx, nxt_index[p_idx, k_idx]]
+        a_cross, edge_cross = a[p_idx], edge[p_idx]
+        side_cur, side_nxt = _side(a_cross, edge_cross, current), _side(a_cross, edge_cross, nxt)
+        out[p_idx, slots[p_idx, 2 * k_idx]] = current + (side_cur / (side_cur - side_nxt))[:, None] * (nxt - current)
+        p_idx, k_idx = np.nonzero(emit_next)
+        out[p_idx, slots[p_idx, 2 * k_idx + 1]] = polygon[p_idx, nxt_index[p_idx, k_idx]]
         polygon, count = out, emitted.sum(axis=1)
     return polygon, count
+
+
+def _side(a: np.ndarray, edge: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """edge x (p - a): positive where the points p lie left of the lines through a along edge."""
+    return edge[..., 0] * (p[..., 1] - a[..., 1]) - edge[..., 1] * (p[..., 0] - a[..., 0])
 
 
 def _plane_coordinates(origin: np.ndarray, e1: np.ndarray, e2: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -121,47 +128,68 @@ def _signed_area(triangle: np.ndarray) -> np.ndarray:
     return 0.5 * (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
 
 
+def _edge_sides(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(P, L, K) :func:`_side` of the vertices of polygons ``b`` (P, K, 2) with respect to the edges
+    of the counter-clockwise polygons ``a`` (P, L, 2)."""
+    edges = np.roll(a, -1, axis=1) - a
+    return _side(a[:, :, None], edges[:, :, None], b[:, None])
+
+
 def _separated(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """(P,) whether the polygons ``b`` (P, K, 2) lie strictly outside an edge of the convex
     counter-clockwise polygons ``a`` (P, L, 2): one half of a separating axis test."""
-    separated = np.zeros(len(a), dtype=bool)
-    L = a.shape[1]
-    for e in range(L):
-        p, edge = a[:, e], a[:, (e + 1) % L] - a[:, e]
-        side = edge[:, None, 0] * (b[..., 1] - p[:, None, 1]) - edge[:, None, 1] * (b[..., 0] - p[:, None, 0])
-        separated |= (side.real < 0.0).all(axis=1)
-    return separated
+    return (_edge_sides(a, b) < 0.0).all(axis=2).any(axis=1)
+
+
+def edge_ties(s2: np.ndarray, m2: np.ndarray) -> np.ndarray:
+    """(P,) whether a vertex of a slave or master facet in the plane (:func:`plane_coordinates`)
+    lies exactly on the line of an edge of the other: a tie of the clipping's decisions, where
+    D and M have kinks (facets of conforming meshes, which share vertices)."""
+    s_ccw, m_ccw = _counter_clockwise(s2)[0], _counter_clockwise(m2)[0]
+    return (_edge_sides(s_ccw, m_ccw) == 0.0).any(axis=(1, 2)) | (_edge_sides(m_ccw, s_ccw) == 0.0).any(axis=(1, 2))
 
 
 def _counter_clockwise(x2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Facets projected to the plane (P, n, 2), as counter-clockwise polygons, and their signed areas."""
     if x2.shape[1] == 3:
         area = _signed_area(x2)
-        return np.where((area.real < 0.0)[:, None, None], x2[:, [0, 2, 1]], x2), area
+        return np.where((area < 0.0)[:, None, None], x2[:, [0, 2, 1]], x2), area
     polygon = x2[:, POLYGON_ORDER[x2.shape[1]]]
     area = 0.5 * np.sum(polygon[..., 0] * np.roll(polygon[..., 1], -1, axis=1)
                         - np.roll(polygon[..., 0], -1, axis=1) * polygon[..., 1], axis=1)
-    return np.where((area.real < 0.0)[:, None, None], polygon[:, ::-1], polygon), area
+    return np.where((area < 0.0)[:, None, None], polygon[:, ::-1], polygon), area
 
 
-def _projected_pairs(slave: np.ndarray, normal: np.ndarray, master: np.ndarray) -> tuple:
-    """Slave and master facets in coordinates of the slave facet's plane (through its vertex 0,
-    normal ``normal``), their counter-clockwise polygons, and the pairs that may overlap there."""
+def plane_coordinates(slave: np.ndarray, normal: np.ndarray,
+                      master: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """Slave and master facets (P, n, 3), (P, m, 3) in coordinates of the slave facet's plane
+    (normal ``normal``): the origin its vertex 0, the axes e1 along its first edge (projected
+    onto a warped quadrilateral's mean plane) and e2 = normal x e1.
+
+    Returns:
+        ``(s2, m2, (e1, e2))``: (P, n, 2), (P, m, 2) and the axes (P, 3) each. s2[:, 0] and
+        s2[:, 1, 1] are zero whatever the positions.
+    """
     origin = slave[:, 0]
     e1 = slave[:, 1] - origin
     if slave.shape[1] == 4:  # the edge of a warped quadrilateral leaves its mean plane
         e1 -= np.einsum("ij,ij->i", e1, normal)[:, None] * normal
     e1 /= length(e1)[:, None]
     e2 = np.cross(normal, e1)
-    s2 = _plane_coordinates(origin, e1, e2, slave)
-    m2 = _plane_coordinates(origin, e1, e2, master)
+    return _plane_coordinates(origin, e1, e2, slave), _plane_coordinates(origin, e1, e2, master), (e1, e2)
+
+
+def _overlapping_shadows(s2: np.ndarray, m2: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The facets in the plane (P, n, 2), (P, m, 2) as counter-clockwise polygons, and the pairs
+    that may overlap there."""
     s_ccw, s_area = _counter_clockwise(s2)
     m_ccw, m_area = _counter_clockwise(m2)
     # a master facet seen edge-on has no shadow; most candidate pairs of a search are disjoint
     # (separating axis test, a tenth of the clipping's cost)
-    shadow = np.abs(m_area.real) > 1e-12 * np.abs(s_area.real)
-    pairs = np.flatnonzero(shadow & ~_separated(s_ccw, m_ccw) & ~_separated(m_ccw, s_ccw))
-    return s2, m2, s_ccw, m_ccw, pairs
+    shadow = np.abs(primal(m_area)) > 1e-12 * np.abs(primal(s_area))
+    s_value, m_value = primal(s_ccw), primal(m_ccw)
+    pairs = np.flatnonzero(shadow & ~_separated(s_value, m_value) & ~_separated(m_value, s_value))
+    return s_ccw, m_ccw, pairs
 
 
 def _shape_values(x2: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -186,7 +214,8 @@ def _affine(x: np.ndarray) -> np.ndarray:
     """(P,) whether facets (P, n, 3) have an affine map: triangles, and parallelograms to round-off."""
     if x.shape[1] == 3:
         return np.ones(len(x), dtype=bool)
-    return np.linalg.norm(x.real[:, 3] - x.real[:, 2] - x.real[:, 1] + x.real[:, 0], axis=1) <= 1e-12 * diameters(x.real)
+    x = primal(x)
+    return np.linalg.norm(x[:, 3] - x[:, 2] - x[:, 1] + x[:, 0], axis=1) <= 1e-12 * diameters(x)
 
 
 def _rules(slave: np.ndarray, master: np.ndarray, degree: int | None) -> list[tuple[np.ndarray, tuple]]:
@@ -219,13 +248,22 @@ def segment_integrals(slave: np.ndarray, normal: np.ndarray, master: np.ndarray,
         ``normal``, covers (zero where they do not overlap); quadrilaterals with their
         true area element.
     """
+    s2, m2, _ = plane_coordinates(slave, normal, master)
+    return planar_integrals(slave, s2, master, m2, degree)
+
+
+def planar_integrals(slave: np.ndarray, s2: np.ndarray, master: np.ndarray, m2: np.ndarray,
+                     degree: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`segment_integrals` of facet pairs from their :func:`plane_coordinates` s2 (P, n, 2)
+    and m2 (P, m, 2). The facets' vertices serve a slave quadrilateral's area element and dual
+    basis (unchanged by a rigid motion of the facet) and the choice of the rule."""
     P, ns, nm = len(slave), slave.shape[1], master.shape[1]
-    s2, m2, s_ccw, m_ccw, pairs = _projected_pairs(slave, normal, master)
-    polygon = np.zeros((len(pairs), ns + nm, 2), dtype=m_ccw.dtype)  # clipping adds at most one vertex per clipping edge
+    s_ccw, m_ccw, pairs = _overlapping_shadows(s2, m2)
+    polygon = np.zeros((len(pairs), ns + nm, 2), like=m_ccw)  # clipping adds at most one vertex per clipping edge
     polygon[:, :nm] = m_ccw[pairs]
     polygon, count = clip_polygons(polygon, np.full(len(pairs), nm), s_ccw[pairs])
     dual = dual_coefficients(slave[pairs]) if ns == 4 else None
-    D, M = np.zeros((P, ns), dtype=polygon.dtype), np.zeros((P, ns, nm), dtype=polygon.dtype)
+    D, M = np.zeros((P, ns), like=polygon), np.zeros((P, ns, nm), like=polygon)
     for group, rule in _rules(slave[pairs], master[pairs], degree):
         for k in range(1, polygon.shape[1] - 1):  # fan (v0, v_k, v_k+1)
             has = group & (count >= k + 2)
