@@ -271,10 +271,11 @@ def test_block_slides_to_a_stop_on_a_block(variant, balance, mpi_tmp_path):
 def test_restart_mid_slide(mpi_tmp_path):
     """The block sliding on a block (pair searched every time step) stopped after step 8 of 22 and
     restarted: the checkpoint holds the state in the variables of the search at the end of step
-    8, which the restart searches again; the uninterrupted run's energies to 1e-12 and the
-    velocities to 1e-11 of the initial speed (measured 1.1e-12 to 1.9e-12 m/s of 1.9 m/s in
-    the last steps: the restarted search starts from the reference configuration's, the
-    uninterrupted one from step 7's, and their round-off differs).
+    8, which the restart searches again; the uninterrupted run's energies and velocities to
+    1e-10 (measured on 1 rank 1e-12 and 1.9e-12 m/s of 1.9 m/s, on 2 ranks 1.5e-11 in the friction
+    dissipation: the restarted search starts its projections from the reference configuration's,
+    the uninterrupted one from step 7's, and their round-off differs; the impact's restart of
+    :func:`test_restart_mid_impact`, searched once, agrees to 1e-12).
     """
     case = block_on_block()
     speed = case.bodies[1].initial_velocity[0]
@@ -286,8 +287,8 @@ def test_restart_mid_slide(mpi_tmp_path):
     scale = RHO * 0.5 * speed**2
     for a, b in zip(whole["steps"][8:], resumed["steps"][8:]):
         for term in ("kinetic", "elastic", "friction_dissipation"):
-            assert b["energy"][term] == pytest.approx(a["energy"][term], rel=1e-12, abs=1e-12 * scale)
-        assert b["body_velocity"]["upper"] == pytest.approx(a["body_velocity"]["upper"], abs=1e-11 * speed)
+            assert b["energy"][term] == pytest.approx(a["energy"][term], rel=1e-10, abs=1e-10 * scale)
+        assert b["body_velocity"]["upper"] == pytest.approx(a["body_velocity"]["upper"], abs=1e-10 * speed)
 
 
 def resting_block(law, body_force: tuple, steps: tuple[Step, ...], dt: float, end: float) -> ContactCase:
