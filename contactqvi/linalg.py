@@ -67,6 +67,12 @@ _GMRES_RIGHT = {"ksp_type": "fgmres", "ksp_pc_side": "right", "ksp_norm_type": "
 #: * ``gmres_hypre``: as ``gmres_gamg`` with BoomerAMG (scalar coarsening; its
 #:   nodal/vector interpolation variants broke down on eliminated rows here).
 #: * ``cg_jacobi``: CG + point Jacobi (cheap, for well-conditioned mass-like systems).
+#: * ``gmres_jacobi``: GMRES + point Jacobi, stopped at the left-preconditioned residual: the
+#:   Newton steps of a mass-like problem (the projection of a dynamic step's predictor,
+#:   docs/dynamics.md Sect. 3.2), whose matrix is spectrally equivalent to its diagonal but
+#:   whose rows span the masses of a graded mesh (9 orders of magnitude on the Hertz block):
+#:   an unpreconditioned residual is then the heavy rows' round-off. Relative to the initial
+#:   residual (the rows left after the elimination), not to a force-norm right-hand side.
 KSP_PRESETS: dict[str, OptionsDict] = {
     "lu": {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"},
     "cg_gamg": {"ksp_type": "cg", "ksp_norm_type": "unpreconditioned", "pc_type": "gamg"},
@@ -93,6 +99,9 @@ KSP_PRESETS: dict[str, OptionsDict] = {
         "pc_hypre_boomeramg_strong_threshold": 0.5,
     },
     "cg_jacobi": {"ksp_type": "cg", "pc_type": "jacobi"},
+    "gmres_jacobi": {"ksp_type": "gmres", "ksp_pc_side": "left", "ksp_norm_type": "preconditioned",
+                     "ksp_converged_use_initial_residual_norm": True, "ksp_gmres_restart": 200, "ksp_max_it": 2000,
+                     "pc_type": "jacobi"},
 }
 
 

@@ -71,17 +71,21 @@ ENERGY_TERMS = ("kinetic", "elastic", "external_work", "support_work", "friction
                 "balance_error")
 
 
-def global_mass_matrix(problem: ContactProblem, density: float | fem.Function) -> PETSc.Mat:
+def global_mass_matrix(problem: ContactProblem, density: float | fem.Function) -> tuple[PETSc.Mat, np.ndarray]:
     """M_K = (rho u, v), the consistent mass matrix in global components, with zero rows and
-    columns at the prescribed dofs (so that A + c M keeps A's identity rows)."""
+    columns at the prescribed dofs (so that A + c M keeps A's identity rows), and each owned
+    node's diagonal entry before that (kg; its three components' alike)."""
     V = problem.V
     u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
     M_K = dolfinx.fem.petsc.assemble_matrix(fem.form(density * ufl.inner(u, v) * ufl.dx))
     M_K.assemble()
+    diagonal = M_K.getDiagonal()
+    nodal = diagonal.array.reshape(-1, 3)[:, 0].copy()
+    diagonal.destroy()
     n_owned = 3 * V.dofmap.index_map.size_local
     owned = problem.dirichlet_dofs_loc[problem.dirichlet_dofs_loc < n_owned]
     M_K.zeroRowsColumns((owned + 3 * V.dofmap.index_map.local_range[0]).astype(PETSc.IntType), diag=0.0)
-    return M_K
+    return M_K, nodal
 
 
 def mass_matrix(problem: ContactProblem, M_K: PETSc.Mat) -> PETSc.Mat:
@@ -307,7 +311,7 @@ class StabilisedNewmark(PETScOwner):
         require(dt > 0.0, "dynamics.dt", f"the time step must be > 0 (s), got {dt!r}")
         self.problem, self.tau, self.path, self.scheme = problem, float(dt), tuple(path), scheme
         self._parameters, self._prefix = parameters, prefix
-        self.global_mass = global_mass_matrix(problem, density)
+        self.global_mass, self._nodal_mass = global_mass_matrix(problem, density)
         self.static = problem.hyperelastic
         if self.static is not None:
             inertia = self.static.internal.duplicate()
@@ -334,13 +338,25 @@ class StabilisedNewmark(PETScOwner):
         diagonal = self.mass.getDiagonal()
         self.prescribed = _zero_rows(diagonal)
         diagonal.set(0.0)
-        diagonal.array[self.prescribed] = 1.0
+        diagonal.array[self.prescribed] = self._nodal_mass[self.prescribed // 3]  # the node's mass: gamma, scaling
         self.projection_matrix.setDiagonal(diagonal, addv=PETSc.InsertMode.ADD_VALUES)
         diagonal.destroy()
         self.projection = dataclasses.replace(problem, A=self.projection_matrix, load=problem.load.duplicate(),
                                               law=Frictionless().lumped(problem.contact_area), hyperelastic=None)
-        self.predictor_solver = SCDNewtonSolver(self.projection, self._parameters, prefix=self._prefix + "predictor_")
+        self.predictor_solver = SCDNewtonSolver(self.projection, self._projection_parameters(),
+                                                prefix=self._prefix + "predictor_")
         self.solver = SCDNewtonSolver(problem, self._parameters, prefix=self._prefix)
+
+    def _projection_parameters(self) -> dict:
+        """The SCD parameters of the projection (3.2): the step's, with GMRES + point Jacobi for its
+        Newton steps unless they are exact (``pc = "lu"``; docs/dynamics.md Sect. 3.2): M_p is
+        spectrally equivalent to its diagonal, and on a graded mesh its rows span the nodes'
+        masses (6e-7 to 1e3 kg on the Hertz block), where a residual in force units is the
+        heavy rows' round-off."""
+        parameters = dict(self._parameters or {})
+        if parameters.get("pc", "gamg") != "lu":
+            parameters["pc"] = "jacobi"
+        return parameters
 
     def _assembled(self) -> list[typing.Any]:
         """The PETSc objects of :meth:`_assemble`."""

@@ -35,7 +35,9 @@ FALLBACK = "lu"
 #: at the unpreconditioned relative residual (the paper's test, Sect. 7); ``paper``:
 #: GMRES + block-Jacobi/ILU(0) as in Sect. 7; ``hypre``: FGMRES + BoomerAMG; ``lu``:
 #: exact (MUMPS), the reference for the Newton counts. Measured in docs/coulomb.md.
-NEWTON_STEP_SOLVERS = {"gamg": "gmres_gamg", "paper": "gmres_ilu", "hypre": "gmres_hypre", "lu": "lu"}
+#: ``jacobi``: GMRES + point Jacobi for a mass-like problem (a dynamic step's projection).
+NEWTON_STEP_SOLVERS = {"gamg": "gmres_gamg", "paper": "gmres_ilu", "hypre": "gmres_hypre", "lu": "lu",
+                       "jacobi": "gmres_jacobi"}
 
 
 class NewtonStepSolver(PETScOwner):
@@ -254,12 +256,13 @@ class NewtonStepSolver(PETScOwner):
         rhs|| (:meth:`~contactqvi.contact.scd_newton.SCDNewtonSolver.newton_system`; 1
         with one gamma, so the paper's tables are unchanged) gives 4-9 Newton steps per
         load step. Relative to the initial residual
-        (``-{prefix}ksp_converged_use_initial_residual_norm``, then not scaled) the
-        Mindlin steps converge alike, but Table 2 at lev 3-6 needs 2 Newton and 8
+        (``-{prefix}ksp_converged_use_initial_residual_norm``, or the preset's, then not
+        scaled) the Mindlin steps converge alike, but Table 2 at lev 3-6 needs 2 Newton and 8
         Krylov iterations more.
         """
-        option = self.ksp.getOptionsPrefix() + "ksp_converged_use_initial_residual_norm"
-        return tol if PETSc.Options().getBool(option, False) else tol * rhs_ratio
+        name = "ksp_converged_use_initial_residual_norm"
+        initial = self._options.get(name, False) or PETSc.Options().getBool(self.ksp.getOptionsPrefix() + name, False)
+        return tol if initial else tol * rhs_ratio
 
 
 def _smoothed_aggregation(prefix: str, options: OptionsDict) -> bool:
