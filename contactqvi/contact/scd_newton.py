@@ -84,7 +84,8 @@ PARAMETERS = Parameters(
     rtol=Parameter(1e-12, "stop when ||y^(k)|| <= rtol ||y^(0)|| (Sect. 7)", minimum=0.0, maximum=1.0, exclusive=True),
     floor=Parameter(1e-14, "... or when ||y^(k)|| <= floor ||l||, l the load in the shifted variables (A u - l is "
                     "evaluated to about eps ||l||; a hyperelastic f to about eps times its stress terms, "
-                    "ContactProblem.force_scale; 0: off)", minimum=0.0, maximum=1.0),
+                    "ContactProblem.force_scale), or <= floor gamma max|u| over the contact rows of the start "
+                    "(gamma u to eps of it; 0: off)", minimum=0.0, maximum=1.0),
     atol=Parameter(0.0, "... or when ||y^(k)|| <= atol (N)", minimum=0.0),
     max_iterations=Parameter(100, "Newton iterations before giving up", type=int, minimum=1),
     tol=Parameter(None, "relative residual reduction of the inner Krylov solve (tol, Sect. 7); None: "
