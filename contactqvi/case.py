@@ -154,8 +154,7 @@ import typing
 from contactqvi import obstacles
 from contactqvi.interference import Interference, check_interference
 from contactqvi.laws import LAWS, ContactLaw, create_law, parameter_names
-from contactqvi.load_steps import (SEARCHES, Rotation, check_fit, check_rotation, check_steps, rotates,
-                                   rotation_of_points)
+from contactqvi.load_steps import SEARCHES, Rotation, check_fit, check_rotation, check_steps, rotates
 from contactqvi.materials import FORMULATIONS, MATERIALS
 from contactqvi.load_steps import LoadStep as Step
 from contactqvi.parameters import (
@@ -1013,8 +1012,7 @@ def _scheme_parameter(dynamics: Dynamics, key: str, scheme: str, bounds: tuple[f
 
 def _check_time_points(case: ContactCase, bodies: typing.Sequence[Body], paths: typing.Sequence[str]) -> None:
     """The ``[[steps]]`` of a time integration are time points (docs/dynamics.md, Sect. 1): each
-    with its ``time``, increasing, its rotation (if any) about the axis and centre of the others
-    (:func:`~contactqvi.load_steps.rotation_of_points`) and no ``fit``; the body starts at rest
+    with its ``time``, increasing, and no ``fit``; the body starts at rest
     where meshed, so at t = 0 nothing is translated or rotated and a prescribed displacement is
     zero (load factor 0 there, or no nonzero prescribed component). Without steps the loads are
     constant (load factor 1 from t = 0)."""
@@ -1034,7 +1032,6 @@ def _check_time_points(case: ContactCase, bodies: typing.Sequence[Body], paths: 
                 f"step to step, got {step.time!r} after {before!r}")
         require(step.fit is None, f"steps[{i}].fit", "not used with [dynamics] (interferences are resolved at t = 0)")
         before = step.time
-    rotation_of_points(steps)
     if steps[0].time == 0.0:
         require(steps[0].translation == (0.0, 0.0, 0.0), "steps[0].translation", "the obstacles and moved groups "
                 "start where meshed: the translation at time 0 must be zero")

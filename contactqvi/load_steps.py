@@ -30,7 +30,7 @@ from contactqvi.obstacles import Obstacle
 from contactqvi.parameters import require, require_positive
 
 __all__ = ["SEARCHES", "LoadStep", "Rotation", "at_time", "check_fit", "check_rotation", "check_steps", "finite_vector",
-           "interpolated", "placed", "rigid_increment", "rotates", "rotation_of_points"]
+           "interpolated", "placed", "rigid_increment", "rotates"]
 
 #: When a pair of meshed bodies is searched along the load path: before every load step
 #: after the first, in the configuration the step before ended in; as that, and again
@@ -96,40 +96,20 @@ class LoadStep:
 
 def at_time(steps: typing.Sequence[LoadStep], time: float) -> LoadStep:
     """The load factor, translation and rotation at ``time`` (s) of the time points ``steps``
-    (their ``time`` increasing): linear between the points, through load factor 0, no
-    translation and no rotation at t = 0 unless the first point is at 0, constant after the
-    last point. The rotation's angle is linear in time about the axis and centre the points
-    share (:func:`rotation_of_points`; a point without a rotation has angle 0); None when no
-    point rotates. Steps without times (the default path of one step) hold from t = 0:
-    constant loads."""
+    (their ``time`` increasing): linear between the points (the rotation as a cut step's,
+    :func:`interpolated`), through load factor 0, no translation and no rotation at t = 0
+    unless the first point is at 0, constant after the last point. Steps without times (the
+    default path of one step) hold from t = 0: constant loads."""
     if steps[0].time is None:
         return dataclasses.replace(steps[0], time=time)
-    turn = rotation_of_points(steps)
-    times = np.array([step.time for step in steps], dtype=float)
-    values = np.array([[step.load, *step.translation, step.rotation.angle if step.rotation else 0.0]
-                       for step in steps], dtype=float)
-    if times[0] > 0.0:
-        times, values = np.concatenate([[0.0], times]), np.vstack([np.zeros(5), values])
-    load, *translation, angle = (float(np.interp(time, times, column)) for column in values.T)
-    rotation = None if turn is None else dataclasses.replace(turn, angle=angle)
+    points = list(steps) if steps[0].time == 0.0 else [LoadStep(0.0, time=0.0), *steps]
+    times = np.array([point.time for point in points], dtype=float)
+    values = np.array([[point.load, *point.translation] for point in points], dtype=float)
+    load, *translation = (float(np.interp(time, times, column)) for column in values.T)
+    k = min(int(np.searchsorted(times, time, side="right")) - 1, len(points) - 1)
+    rotation = points[k].rotation if k == len(points) - 1 else interpolated(
+        points[k].rotation, points[k + 1].rotation, (time - times[k]) / (times[k + 1] - times[k]))
     return LoadStep(load, tuple(translation), rotation, time=float(time))
-
-
-def rotation_of_points(steps: typing.Sequence[LoadStep]) -> Rotation | None:
-    """The axis and centre every rotating time point of ``steps`` shares (the first one's
-    rotation), or None when none rotates. Raises :class:`~contactqvi.parameters.ParameterError`
-    (``steps[i].rotation.axis`` or ``.centre``) for a point about another axis or centre: the
-    angle alone is interpolated in time."""
-    rotating = [(i, step.rotation) for i, step in enumerate(steps) if step.rotation is not None]
-    if not rotating:
-        return None
-    first = rotating[0][1]
-    for i, rotation in rotating[1:]:
-        for key in ("axis", "centre"):
-            require(np.allclose(getattr(rotation, key), getattr(first, key), rtol=0.0, atol=1e-12),
-                    f"steps[{i}].rotation.{key}", f"must be that of steps[{rotating[0][0]}] "
-                    f"({list(getattr(first, key))}): the angle alone is linear in time")
-    return first
 
 
 def finite_vector(value: typing.Any, name: str) -> tuple[float, float, float]:
