@@ -107,8 +107,8 @@ class InertialSystem(HyperelasticSystem):
         r(u) = r_K(u) + c M_K u + b,   b = -c M_K u_bar + (alpha_f r_K(u_n) + c_a m_n) / (1 - alpha_f),
         dr/du = K_T(u) + c M_K,        (lambda_n in r_K(u_n); c, c_a of the time scheme)
 
-    with m_n = -r_K(u_n) for Newmark's rule and M_K T â_n for the others: the linear step's
-    c M (w - w_bar) + K w - F_{n+1} - (alpha_f g_n - c_a M â_n) / (1 - alpha_f) with the
+    m_n the inertial force without contact (-r_K(u_n) for Newmark's rule; (3.6) of docs/dynamics.md):
+    the linear step's c M (w - w_bar) + K w - F_{n+1} - (alpha_f g_n - c_a m_n) / (1 - alpha_f) with the
     internal force P(F) in place of K w. The problem maps r and dr/du to its variables
     (:meth:`~contactqvi.contact.problem.ContactProblem.residual`, ``tangent``) as for a static
     step; :class:`StabilisedNewmark` sets ``coefficient`` and ``inertia`` per step.
@@ -398,12 +398,8 @@ class StabilisedNewmark(PETScOwner):
             problem.solver_variables(field, state.displacement)
             for x, y in zip(carried, moved):
                 problem.from_global(y, x)
-            transform = problem.to_global
             for x, y in zip(forces, moved[len(carried):]):
-                if transform is None:
-                    y.copy(x)
-                else:
-                    transform.multTranspose(y, x)
+                problem.force_from_global(y, x)
         for y in moved:
             y.destroy()
 
@@ -546,11 +542,7 @@ class StabilisedNewmark(PETScOwner):
         if self.static is None:
             force.copy(rhs)
         else:
-            transform = self.problem.to_global
-            if transform is None:
-                force.copy(rhs)
-            else:
-                transform.multTranspose(force, rhs)
+            self.problem.force_from_global(force, rhs)
             rhs.array[self.prescribed] = 0.0
         ksp = PETSc.KSP().create(self.mass.getComm())
         try:
@@ -571,11 +563,10 @@ class StabilisedNewmark(PETScOwner):
         """d = m - M a of ``state`` in the solver's variables (T^T m for a hyperelastic body): the
         contact forces that Newmark's acceleration holds and the inertial force without contact
         does not (3.7), zero at the prescribed rows. Uses the work vector ``previous_load``."""
-        transform = self.problem.to_global
-        if self.static is None or transform is None:
+        if self.static is None:
             state.inertial_force.copy(out)
         else:
-            transform.multTranspose(state.inertial_force, out)
+            self.problem.force_from_global(state.inertial_force, out)
         self.mass.mult(state.newmark_acceleration, self._work.previous_load)
         out.axpy(-1.0, self._work.previous_load)
         out.array[self.prescribed] = 0.0
@@ -681,12 +672,7 @@ class BodyMotion(PETScOwner):
     def velocities(self, velocity: PETSc.Vec) -> dict[str, list[float]]:
         """Each body's mean velocity (m/s, global axes) of ``velocity`` (solver variables); of a
         displacement, its mean displacement (m). Collective."""
-        transform = self.problem.to_global
-        if transform is None:
-            velocity.copy(self._global)
-        else:
-            transform.mult(velocity, self._global)
-        self.mass.mult(self._global, self._work)
+        self.mass.mult(self.problem.into_global(velocity, self._global), self._work)
         return {name: [z.dot(self._work) / m if m > 0.0 else 0.0 for z, m in zip(zs, self.masses[name])]
                 for name, zs in self.translations.items()}
 
@@ -724,9 +710,6 @@ def _contact_work(problem: ContactProblem, forces: tuple[np.ndarray, np.ndarray]
 def global_components(problem: ContactProblem, x: PETSc.Vec, out: fem.Function) -> fem.Function:
     """T x: a velocity or acceleration in the solver's variables in global components (no shift,
     no offsets), written into ``out`` (ghosts updated)."""
-    if problem.to_global is None:
-        x.copy(out.x.petsc_vec)
-    else:
-        problem.to_global.mult(x, out.x.petsc_vec)
+    problem.into_global(x, out.x.petsc_vec)
     out.x.scatter_forward()
     return out

@@ -413,6 +413,26 @@ class ContactProblem(PETScOwner):
         local.destroy()
         return out
 
+    def into_global(self, x: PETSc.Vec, out: PETSc.Vec) -> PETSc.Vec:
+        """T x of a vector x in the solver's variables (a velocity, a displacement without the
+        shift and the offsets): in global components, written into ``out`` (ghosts not updated)."""
+        transform = self.to_global
+        if transform is None:
+            x.copy(out)
+        else:
+            transform.mult(x, out)
+        return out
+
+    def force_from_global(self, f: PETSc.Vec, out: PETSc.Vec) -> PETSc.Vec:
+        """T^T f of a force f in global components (ghosted or not): the force in the solver's
+        variables, written into ``out``."""
+        transform = self.to_global
+        if transform is None:
+            out.array[:] = f.array_r[: out.getLocalSize()]
+        else:
+            transform.multTranspose(f, out)
+        return out
+
     def force_to_global(self, x: PETSc.Vec, out: PETSc.Vec) -> PETSc.Vec:
         """T^-T x = (I - N)^T R x of a force x in the solver's variables (T^T f = x): the force
         in global components, written into ``out``."""
@@ -453,12 +473,7 @@ class ContactProblem(PETScOwner):
         (:mod:`contactqvi.contact.hyperelastic`)."""
         system = self.hyperelastic
         self.physical_displacement(u, system.displacement)
-        r = system.assemble_residual(self.load_factor)
-        transform = self.to_global
-        if transform is None:
-            out.array[:] = r.array_r[: out.getLocalSize()]
-        else:
-            transform.multTranspose(r, out)
+        self.force_from_global(system.assemble_residual(self.load_factor), out)
         prescribed = system.prescribed
         out.array[prescribed] = u.array_r[prescribed] - self.load.array_r[prescribed]
 
@@ -575,16 +590,12 @@ class ContactProblem(PETScOwner):
         the stopping test in those unscaled identity rows but a force of K_ii times it in the
         reactions (two-body Hertz: 7 N of 81 kN, a force balance of 6e-5 instead of 1e-9).
         """
-        transform = self.to_global
         local = u.copy()
         local.axpy(-1.0, self.shift)
         prescribed = self.dirichlet_dofs_loc[self.dirichlet_dofs_loc < local.getLocalSize()]
         prescribed = prescribed[~np.isin(prescribed // 3, self.contact_blk)]  # rollers there: in nodal frames
         local.array[prescribed] = self.load.array[prescribed] - self.shift.array[prescribed]
-        if transform is None:
-            local.copy(out.x.petsc_vec)
-        else:
-            transform.mult(local, out.x.petsc_vec)
+        self.into_global(local, out.x.petsc_vec)
         local.destroy()
         if self.offset is not None:
             out.x.petsc_vec.axpy(self.load_factor, self.offset)
