@@ -84,6 +84,7 @@ paraview-dynamics: $(PY)
 	rm -rf $(PV_DYNAMICS_OUT)
 	$(PY) -m contactqvi run cases/drop_test.toml --output $(PV_DYNAMICS_OUT)
 	bash scripts/paraview/run.sh $(PV_DYNAMICS_OUT) $(PV_IMAGES)
+	$(PY) -m pytest -q --color=no -p no:cacheprovider -m paraview tests/test_paraview_script.py
 
 # Peer codes for benchmarks/peers (GetFEM from Debian trixie, Kratos into build/kratos-venv); make test needs neither.
 peers:

@@ -21,6 +21,10 @@ test out of the ranks' runs:
   does not run on several ranks (renamed, itself marked) is a usage error, so that no test
   leaves the parallel run unnoticed.
 
+A test marked ``paraview`` renders with ParaView, which ``scripts/paraview/run.sh`` installs
+from Debian: it runs where it is asked for (``-m paraview``, ``make paraview-dynamics``) and is
+deselected (not skipped) in every other run, ``make test`` among them.
+
 A fourth, ``ranks(*sizes)``, says on which numbers of ranks a test runs at all: a test
 that compares N ranks with one runs where ranks without contact facets occur (``ranks(3,
 4)``, ``RANK_TESTS`` of the Makefile), a restart written on N ranks where N -> M is asked
@@ -114,6 +118,10 @@ def pytest_collection_modifyitems(config, items):
                 raise pytest.UsageError(f"{item.nodeid}: {name} needs a reason, {name}(..., reason=...)")
         if config.pluginmanager.hasplugin("xdist") and _shares_a_module_fixture(item):
             item.add_marker(pytest.mark.xdist_group(item.path.name))
+    if "paraview" not in (config.option.markexpr or ""):
+        items_without = [item for item in items if item.get_closest_marker("paraview") is None]
+        config.hook.pytest_deselected(items=[item for item in items if item.get_closest_marker("paraview")])
+        items[:] = items_without
     selected = [item for item in items if not any(item.get_closest_marker(m) for m in ONE_RANK_MARKERS)]
     _check_twins(config, items, selected)
     if MPI.COMM_WORLD.size == 1:

@@ -6,8 +6,8 @@ need no ParaView: the step and obstacle read from ``summary.json``, and the fram
 contact surface is seen in (VTK only, as pyvista installs it). For a dynamic result
 (``pv_time.py``): its detection, the frames chosen from the contact force (on the shipped
 drop test too), the obstacles' motion, the colour range, the errors that name a missing
-key, field or file; and, where ParaView is installed (``make paraview``), the drop test
-rendered by ``scripts/paraview/run.sh``.
+key, field or file; and, run by ``make paraview-dynamics`` (``-m paraview``, which installs
+ParaView), the drop test rendered by ``scripts/paraview/run.sh``.
 """
 
 from __future__ import annotations
@@ -269,10 +269,9 @@ def test_the_drop_test_frames(pv_views, shipped_runs):
 
 
 @pytest.mark.serial
-@pytest.mark.skipif(shutil.which("pvbatch") is None or shutil.which("xvfb-run") is None,
-                    reason="ParaView (make paraview installs it) and xvfb-run render only where installed")
+@pytest.mark.paraview
 @group("drop_test")
-def test_paraview_renders_the_drop_test_over_time(shipped_runs, mpi_tmp_path):
+def test_paraview_renders_the_drop_test_over_time(pv_views, shipped_runs, mpi_tmp_path):
     """scripts/paraview/run.sh on the drop test: the frames and the state file; without its
     summary.json, ``--time`` stops with exit code 2 and names it."""
     import pv_common
