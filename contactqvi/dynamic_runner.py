@@ -103,8 +103,7 @@ def run_dynamics(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm =
                        "steps": []}
             if restart:
                 summary = read_dynamic_checkpoint(problem, out, case, state, summary)
-                if state.done and problem.searched_each_step:  # the variables the checkpoint was written in
-                    integrator.search(state, carry=False)
+                integrator.resume(state)
             def stop() -> bool:  # collective: a signal on any rank
                 return comm.allreduce(signal.is_set(), op=MPI.LOR)
 

@@ -403,6 +403,18 @@ class StabilisedNewmark(PETScOwner):
         for y in moved:
             y.destroy()
 
+    def resume(self, state: DynamicState) -> None:
+        """Put the problem where ``state``, read from a checkpoint, left it: its loads, obstacles
+        and moved groups at ``state.time`` and, for pairs searched every step, the search there
+        (:meth:`search` without carrying: the checkpoint holds the vectors in those variables).
+        Nothing to do at time 0. Collective."""
+        if state.done == 0:
+            return
+        at = at_time(self.path, state.time)
+        self.problem.set_step(at.load, at.translation, rotation=at.rotation)
+        if self.problem.searched_each_step:
+            self.search(state, carry=False)
+
     def destroy(self) -> None:
         """Free the PETSc objects (collective) and give the problem back its static hyperelastic system."""
         super().destroy()
