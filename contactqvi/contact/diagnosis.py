@@ -72,7 +72,8 @@ def _path_end(result: SCDNewtonResult) -> str:
     return (f"; {len(failed)} attempts failed after the step was cut: {reached}, and the nearest attempt "
             f"beyond, to {position(nearest)}, failed too. A path that cannot move on by so little most likely "
             "ends at a limit point of the quasi-static problem, where no equilibrium lies near the last one "
-            "(a snap, or a frictional stick-slip event: docs/finite_strain.md, Sect. 11)")
+            "(a snap, or a frictional stick-slip event: docs/finite_strain.md, Sect. 11); for a hyperelastic "
+            "body, solver.limit_points = \"relax\" goes on through the snap (Sect. 15)")
 
 
 def _status_cause(result: SCDNewtonResult) -> str:

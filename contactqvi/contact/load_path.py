@@ -65,13 +65,14 @@ from contactqvi.contact.newton_step_solver import NEWTON_STEP_SOLVERS, NewtonSte
 from contactqvi.contact.nodal import State
 from contactqvi.contact.path_state import PathState
 from contactqvi.contact.problem import ContactProblem
+from contactqvi.contact.relaxation import relax
 from contactqvi.contact.scd_newton import (PARAMETERS, SCDNewtonResult, SCDNewtonSolver, checked_parameters,
                                             newton_step_solver)
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import create_ksp, preset
 from contactqvi.contact.surface import contact_facet_areas
 from contactqvi.load_steps import LoadStep, Rotation, check_steps, interpolated
-from contactqvi.parameters import Parameter, Parameters
+from contactqvi.parameters import Parameter, Parameters, require
 from contactqvi.records import warn
 from contactqvi.result import Status, Timings
 
@@ -88,6 +89,8 @@ TOUCHING = (State.SLIDING, State.STICKING, State.WEAK_STICKING)
 HYPERELASTIC_CUTS = 4
 #: Relative residual of the linear solve of the elastic predictor (:func:`_elastic_change`).
 PREDICTOR_RTOL = 1e-8
+#: What ``limit_points`` may ask for.
+LIMIT_POINTS = ("relax", "stop")
 #: The load path's own parameters, given with the SCD solver's (``[solver]`` of a case file).
 PATH_PARAMETERS = Parameters(
     geometry_tol=Parameter(1e-3, "search = until_settled: a step has settled when a solve after a search changes the "
@@ -99,6 +102,11 @@ PATH_PARAMETERS = Parameters(
                        "converged state, at most this many halvings in a row (the step grows back after each "
                        f"success); None: {HYPERELASTIC_CUTS} for a hyperelastic body, 0 for linear elasticity",
                        type=int, minimum=0, optional=True),
+    limit_points=Parameter(None, "a hyperelastic load step that fails with its cuts used up (the path's end at a "
+                           "limit point, where a part has to snap): 'relax' follows the body's overdamped motion at "
+                           "the step's loads to an equilibrium and goes on from there (docs/finite_strain.md Sect. "
+                           "15), 'stop' ends the path; None: 'relax' for a hyperelastic body searched once or every "
+                           "step, 'stop' otherwise", type=str, choices=LIMIT_POINTS, optional=True),
 )
 #: A step whose displacement increment is below this fraction of the displacement has not
 #: moved (round-off): its configuration is the settled one of the step before.
@@ -151,10 +159,11 @@ def solve_load_path(
             while index < len(steps):
                 step = _toward(state, steps[index], cuts)
                 result = solve(step, u, state, from_rest)
-                attempts.append((step, result))
+                attempts.append((step, result, {}))
                 cuts = _cuts_after(problem, u, state, index, step, result, cuts, solve.cuts_allowed)
                 if cuts is not None:
                     continue
+                result = _relaxed(problem, index, steps[index], u, state, solve, attempts)
                 results.append(_cut(attempts, result.status) if len(attempts) > 1 else result)
                 attempts, cuts = [], 0
                 if on_step is not None:
@@ -184,6 +193,31 @@ def _cuts_after(problem: ContactProblem, u: PETSc.Vec, state: PathState, index: 
     return cuts + 1
 
 
+def _relaxed(problem: ContactProblem, index: int, step: LoadStep, u: PETSc.Vec, state: PathState,
+             solve: _StepSolver, attempts: list) -> SCDNewtonResult:
+    """The result of step ``index`` (``step``) after its ``attempts``: the last attempt's, unless it
+    failed with the step's cuts used up and ``solve`` relaxes (``limit_points``); then the step is
+    relaxed to an equilibrium after ``state`` (:func:`~contactqvi.contact.relaxation.relax`), its
+    solves added to ``attempts`` and the equilibrium that ends it recorded in ``state``, and the
+    result is the last solve's, ``diverged_max_it`` when the relaxation ended without one."""
+    result = attempts[-1][1]
+    if result.converged or result.status == Status.INTERRUPTED or not solve.relaxes:
+        return result
+    warn(problem.comm, logger, "relaxed", f"step {index + 1}: no equilibrium near the last one at "
+         f"{step_position(step)} (the quasi-static path's end at a limit point, where a part has "
+         "to snap): the body relaxes there by overdamped motion (docs/finite_strain.md Sect. 15)", step=index + 1)
+    solves = relax(problem, step, u, state, solve)
+    attempts.extend(solves)
+    step, result, mark = solves[-1]
+    if result.converged and mark["viscosity"] == 0.0:
+        state.record(problem, u, result, complete=True)
+        logger.info("step %d: relaxed in %d steps to an equilibrium", index + 1, mark["relaxation"])
+        return result
+    if result.status == Status.INTERRUPTED:
+        return result
+    return dataclasses.replace(result, status=Status.DIVERGED_MAX_IT)
+
+
 class _StepSolver(PETScOwner):
     """Solves the load steps of one path: the SCD solver (one per step when the problem is
     searched each step) and the multigrid levels it carries, the first step's initial
@@ -198,6 +232,11 @@ class _StepSolver(PETScOwner):
         self.carried = _path_levels(problem, parameters, prefix) if problem.searched_each_step else None
         default_cuts = HYPERELASTIC_CUTS if problem.hyperelastic is not None else 0
         self.cuts_allowed = path["max_cuts"] if path["max_cuts"] is not None else default_cuts
+        relaxable = problem.hyperelastic is not None and not (problem.follows_geometry or problem.settles_geometry)
+        limit_points = path["limit_points"] or ("relax" if relaxable else "stop")
+        require(limit_points == "stop" or relaxable, "solver.limit_points",
+                "'relax' takes a hyperelastic body whose pairs are searched once or every step")
+        self.relaxes = limit_points == "relax"
 
     def petsc_objects(self) -> list[typing.Any]:
         return [self.solver, self.carried, self.initial]
@@ -248,13 +287,13 @@ def step_position(step: LoadStep) -> str:
     return text
 
 
-def _cut(attempts: list[tuple[LoadStep, SCDNewtonResult]], status: Status) -> SCDNewtonResult:
+def _cut(attempts: list[tuple[LoadStep, SCDNewtonResult, dict[str, typing.Any]]], status: Status) -> SCDNewtonResult:
     """One step's result of its parts and failed attempts (:func:`_merged`), each history entry
     marked with its ``substep``, that part's load factor, translation and its status (so a failed
-    step tells how far its converged parts went)."""
+    step tells how far its converged parts went), and a relaxation's marks."""
     marks = [{"substep": j, "substep_load": step.load, "substep_translation": list(step.translation),
-              "substep_status": str(result.status)} for j, (step, result) in enumerate(attempts)]
-    return _merged([result for _, result in attempts], status, marks)
+              "substep_status": str(result.status), **mark} for j, (step, result, mark) in enumerate(attempts)]
+    return _merged([result for _, result, _ in attempts], status, marks)
 
 
 def _split(parameters: dict[str, typing.Any] | None) -> tuple[dict[str, typing.Any], dict[str, typing.Any]]:
