@@ -278,9 +278,8 @@ def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: t
             return _obstacle_interface(V, facet_tags, interface.pair, constrained, x,
                                        displacement if finite_strain else None, translation, rotation)
         kept = interface.coupling.slave_blk if interface.follows else None
-        follows = interface.follows and linearised
-        return dataclasses.replace(_body_interface(V, facet_tags, interface.pair, constrained, x, follows, kept,
-                                                   halo=follows),
+        return dataclasses.replace(_body_interface(V, facet_tags, interface.pair, constrained, x,
+                                                   interface.follows and linearised, kept),
                                    meshed_fit=interface.meshed_fit)
 
     return [again(i) if i.searched_each_step else i for i in interfaces]
@@ -349,19 +348,18 @@ FACETING = 0.02
 
 def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: BodyPair,
                     constrained: np.ndarray, displacement: np.ndarray | None = None,
-                    linearised: bool = False, kept_blk: np.ndarray | None = None, halo: bool = False) -> Interface:
+                    linearised: bool = False, kept_blk: np.ndarray | None = None) -> Interface:
     """A body pair's interface searched in the reference configuration (checked: it finds
     nodes, and they do not overlap) or in x + ``displacement`` (local nodes, 3); its coupling
     with its derivatives if ``linearised``, the nodes ``kept_blk`` of the last search kept as
-    long as they are covered at all, with a ``halo`` of facet pairs about them
-    (:func:`~contactqvi.contact.mortar.mortar_coupling`)."""
+    long as they are covered at all (:func:`~contactqvi.contact.mortar.mortar_coupling`)."""
     slave, master = boundary_facets(facet_tags, pair.slave), boundary_facets(facet_tags, pair.master)
     distance = pair.search_distance
     require(distance is None or distance > 0.0, error_key(pair, "search_distance"), f"must be > 0, got {distance!r}")
     require(pair.search in SEARCHES, error_key(pair, "search"),
             f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
     coupling = mortar_coupling(V, slave, master, distance, np.flatnonzero(constrained.all(axis=1)), displacement,
-                               linearised, kept_blk, halo)
+                               linearised, kept_blk)
     comm = V.mesh.comm
     if displacement is None:
         found = comm.allreduce(len(coupling.slave_blk), op=MPI.SUM)

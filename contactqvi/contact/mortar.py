@@ -225,7 +225,7 @@ def _exchange_master(comm: MPI.Comm, slave: SurfaceFacets, master: SurfaceFacets
 def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facets: np.ndarray,
                     search_distance: float | None = None, excluded_blk: np.ndarray | None = None,
                     displacement: np.ndarray | None = None, linearised: bool = False,
-                    kept_blk: np.ndarray | None = None, halo: bool = False) -> MortarCoupling:
+                    kept_blk: np.ndarray | None = None) -> MortarCoupling:
     """C = D^{-1} M, nodal normals and weighted gaps of a slave and a master surface.
 
     Args:
@@ -242,10 +242,6 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
         kept_blk: owned local nodes coupled by the last search, which stay coupled down to
             :data:`KEPT_COVERAGE` (a geometry that follows the Newton iterate: a node at the rim
             of the master's shadow does not come and go from one iterate to the next).
-        halo: the layout also holds the facet pairs that do not overlap but whose master facet
-            shares a node with one that overlaps the same slave facet (:func:`_halo`), so that
-            iterates and trial points that slide onto neighbouring master facets are integrated
-            on it (:func:`coupling_on_layout`).
 
     Collective. Slave nodes with less than :data:`MIN_COVERAGE` of their lumped area
     in the master's shadow (:data:`KEPT_COVERAGE` for ``kept_blk``) are left out, and so are
@@ -263,13 +259,7 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
     # candidate pairs: centroids within reach, bounding boxes within search_distance, facing normals
     pairs_s, pairs_m = _candidate_pairs(slave.x, slave.normal, mx, search_distance)
     facing = np.einsum("ij,ij->i", slave.normal[pairs_s], mnormal[pairs_m]) < 0.0
-    candidates = pairs_s[facing], pairs_m[facing]
-    pairs_s, pairs_m, D_pair, M_pair = _overlapping(slave, mx, *candidates)
-    if halo:
-        near_s, near_m = _halo(pairs_s, pairs_m, *candidates, mglob)
-        pairs_s, pairs_m = np.concatenate([pairs_s, near_s]), np.concatenate([pairs_m, near_m])
-        D_pair = np.concatenate([D_pair, np.zeros((len(near_s), D_pair.shape[1]))])
-        M_pair = np.concatenate([M_pair, np.zeros((len(near_s), *M_pair.shape[1:]))])
+    pairs_s, pairs_m, D_pair, M_pair = _overlapping(slave, mx, pairs_s[facing], pairs_m[facing])
     layout = MortarLayout(np.asarray(slave_facets), pairs_s, mglob[pairs_m],
                           D_pair.sum(axis=1) / slave.area[pairs_s], np.empty(0, dtype=np.int32))
     coupling, lumped_area, gap = _integrated(V, layout, slave, mx[pairs_m], current, None, excluded_blk,
@@ -374,21 +364,6 @@ def _overlapping(slave: SurfaceFacets, master_x: np.ndarray, pairs_s: np.ndarray
     D, M = _pair_integrals(slave, master_x[pairs_m], pairs_s)
     overlap = np.any(M != 0.0, axis=(1, 2))
     return pairs_s[overlap], pairs_m[overlap], D[overlap], M[overlap]
-
-
-def _halo(pairs_s: np.ndarray, pairs_m: np.ndarray, candidates_s: np.ndarray, candidates_m: np.ndarray,
-          master_glob: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The candidate pairs that do not overlap (not among ``pairs_s``, ``pairs_m``) whose master
-    facet shares a node with a master facet that overlaps the same slave facet: one ring of master
-    facets around each slave facet's shadow (``master_glob``: (n, n_m) global nodes of the master
-    facets the pairs index). Their integrals are zero at the search; the layout holds them so that
-    C keeps its pattern while a slave facet slides by less than a master facet."""
-    width = np.int64(master_glob.max(initial=0)) + 1
-    touched = np.unique((pairs_s[:, None] * width + master_glob[pairs_m]).ravel())
-    near = np.isin(candidates_s[:, None] * width + master_glob[candidates_m], touched).any(axis=1)
-    width = np.int64(len(master_glob))
-    near &= ~np.isin(candidates_s * width + candidates_m, pairs_s * width + pairs_m)
-    return candidates_s[near], candidates_m[near]
 
 
 def _chunk(slave: SurfaceFacets, master_x: np.ndarray) -> int:
