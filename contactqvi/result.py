@@ -58,6 +58,8 @@ class Status(enum.IntEnum):
     #: stopped for a new contact search: the iterate's projections left the facets of the last
     #: one (``search = "newton"``); the load path searches and solves on
     SEARCH_AGAIN = -11
+    #: the residual did not halve over the last ``stall_iterations`` Newton steps
+    DIVERGED_STALLED = -12
 
     @property
     def converged(self) -> bool:

@@ -125,3 +125,18 @@ def test_a_cut_step_names_where_its_parts_stopped():
     assert "converged up to load factor 1, translation (0, 0, -0.00129375) m" in text
     assert "the nearest attempt beyond, to load factor 1, translation (0, 0, -0.001298437) m, failed" in text
     assert _path_end(dataclasses.replace(result, history=[part(0, -1.35e-3, "diverged_max_it")])) == ""
+
+
+@pytest.mark.one_rank(reason="a function of a result's history")
+def test_a_stalled_solve_says_so():
+    """``diverged_stalled`` (``stall_iterations``): the cause names the stall and the last Newton step."""
+    from contactqvi.contact.diagnosis import _status_cause
+    from contactqvi.contact.scd_newton import SCDNewtonResult
+    from contactqvi.result import Status
+
+    history = [{"k": 21, "residual": 3.1e-1, "relative_residual": 3.9e-2}]
+    result = SCDNewtonResult(status=Status.DIVERGED_STALLED, iterations=21, gamma=1.0, target=1e-9,
+                             states=np.empty(0), normal_force=np.empty(0), friction_force=np.empty((0, 2)),
+                             history=history)
+    text = _status_cause(result)
+    assert text.startswith("stalled: ||y^|| did not halve") and "3.100e-01 N at Newton step 21" in text

@@ -29,6 +29,8 @@ from contactqvi.result import Status
 
 __all__ = ["failure_cause", "tangential_load"]
 
+#: Statuses of a Newton iteration that ran without getting near the solution.
+STALLED = (Status.DIVERGED_LINE_SEARCH, Status.DIVERGED_MAX_IT, Status.DIVERGED_STALLED)
 #: States of a touching node that friction holds in place.
 HOLDING = (State.STICKING, State.WEAK_STICKING, State.WEAK_CONTACT_STICKING)
 
@@ -37,12 +39,12 @@ def failure_cause(problem: ContactProblem, result: SCDNewtonResult) -> str | Non
     """The cause of a step that did not converge (None if it did), ``problem`` at that step. Collective."""
     if result.converged:
         return None
-    if result.status in (Status.DIVERGED_LINE_SEARCH, Status.DIVERGED_MAX_IT):
+    if result.status in STALLED:
         for k in range(len(problem.interfaces)):
             overload = _friction_overload(problem, result, k)
             if overload is not None:
                 return overload
-    stalled = result.status in (Status.DIVERGED_LINE_SEARCH, Status.DIVERGED_MAX_IT)
+    stalled = result.status in STALLED
     return _status_cause(result) + (_path_end(result) if stalled else "")
 
 
@@ -91,6 +93,8 @@ def _status_cause(result: SCDNewtonResult) -> str:
                                           if "direct_reason" in last else "")),
         Status.DIVERGED_FUNCTION_DOMAIN: ("the residual is undefined at the step's initial guess: an element is "
                                           "inverted (det F <= 0); take smaller load steps (solver.max_cuts)"),
+        Status.DIVERGED_STALLED: f"stalled: ||y^|| did not halve over the last Newton steps ({where}; target "
+                                 f"{result.target:.3e} N)",
         Status.INTERRUPTED: "stopped from outside (SIGTERM, SIGINT) or after the step asked for (--stop-after)",
     }
     return causes.get(result.status, str(result.status))

@@ -91,6 +91,9 @@ HYPERELASTIC_CUTS = 4
 PREDICTOR_RTOL = 1e-8
 #: What ``limit_points`` may ask for.
 LIMIT_POINTS = ("relax", "stop")
+#: ``stall_iterations`` of a path that relaxes past limit points: its failed attempts end there
+#: (at a limit point ||y^|| stays within 10 % for the rest of the 100 Newton steps, Sect. 15).
+RELAXING_STALL = 20
 #: The load path's own parameters, given with the SCD solver's (``[solver]`` of a case file).
 PATH_PARAMETERS = Parameters(
     geometry_tol=Parameter(1e-3, "search = until_settled: a step has settled when a solve after a search changes the "
@@ -237,6 +240,8 @@ class _StepSolver(PETScOwner):
         require(limit_points == "stop" or relaxable, "solver.limit_points",
                 "'relax' takes a hyperelastic body whose pairs are searched once or every step")
         self.relaxes = limit_points == "relax"
+        if self.relaxes and parameters.get("stall_iterations") is None:  # a failed attempt ends when it stalls
+            self.parameters = {**parameters, "stall_iterations": RELAXING_STALL}
 
     def petsc_objects(self) -> list[typing.Any]:
         return [self.solver, self.carried, self.initial]

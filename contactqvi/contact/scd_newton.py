@@ -88,6 +88,9 @@ PARAMETERS = Parameters(
                     "(gamma u to eps of it; 0: off)", minimum=0.0, maximum=1.0),
     atol=Parameter(0.0, "... or when ||y^(k)|| <= atol (N)", minimum=0.0),
     max_iterations=Parameter(100, "Newton iterations before giving up", type=int, minimum=1),
+    stall_iterations=Parameter(None, "a solve whose ||y^|| has not halved over this many Newton steps has stalled "
+                               "(diverged_stalled); None: never (a load path that relaxes past limit points takes "
+                               "20)", type=int, minimum=1, optional=True),
     tol=Parameter(None, "relative residual reduction of the inner Krylov solve (tol, Sect. 7); None: "
                   f"{LINEAR_TOL:g} (Sect. 7) for linear elasticity, {HYPERELASTIC_TOL:g} for a hyperelastic body",
                   minimum=0.0, maximum=1.0, exclusive=True, optional=True),
@@ -592,16 +595,20 @@ class SCDNewtonSolver(PETScOwner):
         return max(p["rtol"] * norm0, p["floor"] * self.problem.force_scale(), p["atol"], geometric)
 
     def _stopping_status(self, norm: float, norm0: float, target: float, k: int,
-                         stop: typing.Callable[[], bool] | None) -> Status | None:  # fmt: skip
-        """Why the iteration ends before Newton step k (converged, out of iterations, f undefined at
-        the iterate, or ``stop()``), or None. The line search accepts finite residuals only, so
-        an undefined f (an inverted element of a hyperelastic body) is the initial guess's."""
+                         stop: typing.Callable[[], bool] | None, history: list[dict]) -> Status | None:  # fmt: skip
+        """Why the iteration ends before Newton step k (converged, out of iterations, stalled over
+        ``stall_iterations`` steps of ``history``, f undefined at the iterate, or ``stop()``), or
+        None. The line search accepts finite residuals only, so an undefined f (an inverted
+        element of a hyperelastic body) is the initial guess's."""
         if not np.isfinite(norm):
             return Status.DIVERGED_FUNCTION_DOMAIN
         if norm <= target:
             return Status.CONVERGED_RTOL if norm <= self.parameters["rtol"] * norm0 else Status.CONVERGED_ATOL
         if k == self.parameters["max_iterations"]:
             return Status.DIVERGED_MAX_IT
+        window = self.parameters["stall_iterations"]
+        if window is not None and k >= window and norm > 0.5 * history[k - window]["residual"]:
+            return Status.DIVERGED_STALLED
         if stop is not None and stop():
             return Status.INTERRUPTED
         return None
@@ -649,7 +656,7 @@ class SCDNewtonSolver(PETScOwner):
             entry = {"k": k, "residual": point.norm, "relative_residual": point.norm / norm0 if norm0 else 0.0,
                      "states": _state_counts(comm, result.states), "reversed": moved}
             result.history.append(entry)
-            status = self._stopping_status(point.norm, norm0, result.target, k, stop)
+            status = self._stopping_status(point.norm, norm0, result.target, k, stop, result.history)
             if status is None and k > 0 and search is not None and search(u):
                 status = Status.SEARCH_AGAIN
             if status is not None:
