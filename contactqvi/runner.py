@@ -80,7 +80,10 @@ def read_mesh(case: ContactCase, comm: MPI.Comm) -> tuple[dmesh.Mesh, dmesh.Mesh
 
 
 def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
-    """Mesh and assembled contact problem of ``case`` (load factor 1, obstacles at rest)."""
+    """Mesh and assembled contact problem of ``case`` (load factor 1, obstacles at rest); a warning
+    when its steps turn a linear body by more than small-strain theory holds
+    (:func:`_warn_linear_rotation`)."""
+    _warn_linear_rotation(case, comm)
     if case.bodies:
         return _build_bodies(case, comm)
     msh, tags = read_mesh(case, comm)
@@ -130,9 +133,34 @@ def _largest_prescribed(case: ContactCase) -> float:
     return max(lengths, default=0.0)
 
 
+#: The stretch 1 - cos(angle) above which a rotation of a linear body is warned about (0.81 degrees).
+ROTATION_STRETCH = 1e-4
+
+
 def _rotations(case: ContactCase) -> bool:
     """Whether a step of ``case`` rotates the moved groups (the problem then builds the rotations' loads)."""
     return any(step.rotation is not None for step in case.steps)
+
+
+def _warn_linear_rotation(case: ContactCase, comm: MPI.Comm) -> None:
+    """Warn (key ``small_strain_rotation``) when a step turns the moved groups of a linear body by an
+    angle whose stretch 1 - cos(angle) exceeds :data:`ROTATION_STRETCH`: small-strain theory reads a
+    rigid rotation as that stretch, with a stress of about E (1 - cos(angle)) (docs/finite_strain.md,
+    Sect. 9)."""
+    model = case.bodies[0].material.model if case.bodies else case.material.model
+    moved = [m for b in case.bodies for m in b.boundary.moved] if case.bodies else case.boundary.moved
+    angles = [abs(step.rotation.angle) if step.rotation is not None else 0.0 for step in case.steps]
+    if model is not None or not moved or not angles:
+        return
+    index = max(range(len(angles)), key=angles.__getitem__)
+    stretch = 1.0 - math.cos(math.radians(angles[index]))
+    if stretch > ROTATION_STRETCH:
+        young = max(b.material.young for b in case.bodies) if case.bodies else case.material.young
+        warn(comm, logger, "small_strain_rotation", f"steps[{index}].rotation turns the groups boundary.moved of a "
+             f"linear (small-strain) body by {angles[index]:g} degrees, which small-strain theory reads as a stretch "
+             f"of 1 - cos(angle) = {stretch:.3g} (a spurious stress of about {young * stretch / 1e6:.3g} MPa); give "
+             "material.model = \"neo_hookean\" or \"saint_venant_kirchhoff\" for rotations this large",
+             angle=angles[index], stretch=stretch)
 
 
 def _material(model: str | None) -> Material | None:

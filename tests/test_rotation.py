@@ -281,3 +281,25 @@ def test_a_rotation_is_read_and_refused_with_a_rigid_obstacle_searched_once():
     data["bodies"][1]["boundary"] = {"displacement": {"top": {"z": 0.0}}}
     with pytest.raises(ParameterError, match=r"^steps\[0\]\.rotation: rotates the groups boundary.moved"):
         parse_case(data, ROOT / "cases")
+
+
+@pytest.mark.one_rank(reason="case-file data, no mesh")
+@pytest.mark.parametrize("model, angle, warned", [(None, 10.0, True), (None, 0.5, False),
+                                                   ("neo_hookean", 10.0, False)])
+def test_a_linear_body_turned_far_is_warned(model, angle, warned):
+    """A step that turns the moved groups of a linear body by 10 degrees is warned about (small strain
+    reads it as a stretch 1 - cos 10 deg = 0.0152); 0.5 degrees (3.8e-5) and a hyperelastic body are not."""
+    from contactqvi.records import Recorder
+    from contactqvi.runner import _warn_linear_rotation
+
+    data = _blocks_case(*({"angle": a, "centre": [0.5, 0.5, 1.0]} for a in (angle / 2, angle)))
+    if model is not None:
+        for body in data["bodies"]:
+            body["material"]["model"] = model
+    with Recorder() as recorder:
+        _warn_linear_rotation(parse_case(data, ROOT / "cases"), MPI.COMM_SELF)
+    records = [r for r in recorder.records if r["key"] == "small_strain_rotation"]
+    assert len(records) == int(warned)
+    if warned:
+        assert records[0]["message"].startswith("steps[1].rotation turns the groups boundary.moved of a linear")
+        assert records[0]["numbers"]["stretch"] == pytest.approx(1.0 - np.cos(np.radians(angle)))
