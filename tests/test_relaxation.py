@@ -8,10 +8,14 @@ import pathlib
 import numpy as np
 import pytest
 
+from mpi4py import MPI
+
 from contactqvi.case import check_solver, parse_case
-from contactqvi.contact.load_path import SOLVER_PARAMETERS
+from contactqvi.contact.load_path import SOLVER_PARAMETERS, solve_load_path
 from contactqvi.parameters import ParameterError
-from contactqvi.runner import run_case
+from contactqvi.runner import build_problem, run_case
+
+from petsc_audit import assert_frees_petsc_objects
 
 DATA = pathlib.Path(__file__).resolve().parent / "data"
 #: Half the strip's height (m): the quarter model's plate travel over it is the squeeze.
@@ -85,3 +89,18 @@ def test_relaxation_needs_a_hyperelastic_body():
         parse_case(linear)
     with pytest.raises(ParameterError, match=r"solver\.limit_points.*relax, stop.*'snap'"):
         check_solver(parse_case(seal("snap")), SOLVER_PARAMETERS)
+
+
+def test_relaxation_frees_its_petsc_objects(mpi_tmp_path):
+    """The seal's path to its relaxed step 18 by :func:`solve_load_path`: after ``destroy()`` nothing
+    the relaxation created (its mass matrix, its viscous system's vectors, the solvers) is alive."""
+    case = parse_case(seal())
+
+    def run():
+        problem = build_problem(case, MPI.COMM_WORLD)
+        u = problem.A.createVecRight()
+        results = solve_load_path(problem, case.steps[:18], u, {"max_cuts": 1}, "relax_", from_rest=True)
+        assert results[-1].converged and any("relaxation" in entry for entry in results[-1].history)
+        return [u, problem]
+
+    assert_frees_petsc_objects(run, mpi_tmp_path)
