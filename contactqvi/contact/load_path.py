@@ -218,6 +218,8 @@ def _relaxed(problem: ContactProblem, index: int, step: LoadStep, u: PETSc.Vec, 
         return result
     if result.status == Status.INTERRUPTED:
         return result
+    warn(problem.comm, logger, "not_relaxed", f"step {index + 1}: the relaxation reached no equilibrium in "
+         f"{mark['relaxation']} steps", step=index + 1, steps=mark["relaxation"])
     return dataclasses.replace(result, status=Status.DIVERGED_MAX_IT)
 
 
