@@ -39,7 +39,7 @@ def seal(limit_points: str | None = None) -> dict:
 def test_the_seal_relaxes_past_its_limit_point(mpi_tmp_path):
     """Default settings: step 18 (25.5 % to 27 %) has no equilibrium near step 17's (the path ends at
     25.99 %, docs/finite_strain.md Sect. 11): its two attempts stall (``stall_iterations`` 20 of a
-    path that relaxes) and the strip relaxes there (measured 17 relaxation steps) to an equilibrium,
+    path that relaxes) and the strip relaxes there (measured 14 relaxation steps) to an equilibrium,
     and the path goes on to 30 % with 7 Newton steps per step as before the limit point. Every step
     is in equilibrium (reactions = contact force to 1e-12 of it), the relaxation's last solve is a
     plain one, and the steps after it need no more Newton steps than the steps before the limit
