@@ -132,7 +132,7 @@ def test_the_30_percent_compression_searched_newton_is_the_closed_form(mpi_tmp_p
     top's travel (measured 4e-12), the flat frictionless interface carries no tangential force
     (at most 1e-10 of the normal; measured 5e-16) and the normal force is P33 times the reference
     area to 1e-10; no step is cut and none takes more than 8 Newton steps (measured 5-6), the
-    elastic predictor starting the first and the extrapolated one the later steps.
+    elastic predictor starting every step (only turns are extrapolated).
     (The intermediate steps have no closed form: the blocks expand differently there.)"""
     comm = MPI.COMM_WORLD
     data = tomllib.loads((DATA / "stacked_30.toml").read_text())

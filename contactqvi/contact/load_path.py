@@ -71,6 +71,7 @@ from contactqvi.contact.scd_newton import (PARAMETERS, SCDNewtonResult, SCDNewto
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import create_ksp, preset
 from contactqvi.contact.surface import contact_facet_areas
+from contactqvi.laws import Frictionless
 from contactqvi.load_steps import LoadStep, Rotation, check_steps, interpolated
 from contactqvi.parameters import Parameter, Parameters, require
 from contactqvi.records import warn
@@ -366,12 +367,10 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
     prescribed values alone move (the predictor of the other modes), a step that moves a boundary
     by more than an element's height (a compression, a die slid sideways) turns elements inside
     out, and is cut. A step that continues the last solve (along its change of load,
-    translation and rotation) extrapolates its increment (:meth:`PathState.extrapolation`;
-    Abaqus' default, Code_Aster's ``PREDICTION = 'EXTRAPOLE'``); any other, the first from rest
-    too, adds the linear elastic response to the change of its loads and prescribed values, A of
-    the last search (the small-strain stiffness in the current variables), the contact nodes'
-    variables held (Code_Aster's ``'ELASTIQUE'``; with the tangential ones free, a body held by
-    friction alone was free to move, and the predictor was A's null space).
+    translation and rotation), which continued the one before, extrapolates its increment
+    (:meth:`PathState.extrapolation`; Abaqus' default, Code_Aster's ``PREDICTION = 'EXTRAPOLE'``);
+    any other, the first from rest too, adds the linear elastic response to the change of its
+    loads and prescribed values (:func:`_elastic_change`; Code_Aster's ``'ELASTIQUE'``).
     ``pc``: the Newton-step solver's preset."""
     predicted = fem.Function(problem.V)
     factor = state.extrapolation(step.load, step.translation, step.rotation)
@@ -390,12 +389,19 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
 def _elastic_change(problem: ContactProblem, state: PathState, pc: str, prefix: str) -> PETSc.Vec:
     """The change of the solver's variables (a new vector) under the change of the loads and
     prescribed values from ``state`` to the step set in ``problem``, by the stiffness A of the last
-    search with the contact nodes' variables held (:func:`_predict`)."""
+    search (the small-strain stiffness in the current variables) with the contact nodes' variables
+    held: all three at a node of a frictional pair (with the tangential ones free, a body held by
+    friction alone was free to move, and the predictor was A's null space), the normal one at a
+    node of a frictionless pair, whose tangential variables carry no force (held, they sheared an
+    ironing die by its whole slide step; :func:`_predict`)."""
     change, before = problem.A.createVecRight(), problem.A.createVecRight()
     problem.step_load(problem.load_factor, problem.translation, problem.step_rotation, change)
     problem.step_load(state.load, state.translation, state.rotation, before)
     change.axpy(-1.0, before)
-    held = (3 * problem.contact_blk[:, None] + np.arange(3)).ravel()
+    frictionless = np.array([isinstance(i.pair.law, Frictionless) for i in problem.interfaces],
+                            dtype=bool)[problem.interface_of_node]
+    rows = np.where(frictionless[:, None], [[False, False, True]], [[True, True, True]])
+    held = (3 * problem.contact_blk[:, None] + np.arange(3))[rows]
     A = problem.A.copy()
     A.zeroRows((A.getOwnershipRange()[0] + held).astype(PETSc.IntType), diag=1.0)
     change.array[held] = 0.0
