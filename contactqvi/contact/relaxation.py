@@ -17,9 +17,8 @@ load, recorded in the path's state as a cut step's part is). This is the proxima
 Newton's method follows, and its fixed points (u_{k+1} = u_k) are the equilibria of the step.
 c_0 is the ratio of the diagonals of the small-strain stiffness and of M, so that the first step
 is a strongly damped one; after each step that converges c_k is halved, after each that fails it
-is multiplied by 4 and never again halved below twice the value that failed (the switched
-evolution relaxation of pseudo-transient continuation, Kelley and Keyes, SIAM J. Numer. Anal. 35
-(1998) 508). Once a step changes the displacement by at most :data:`SETTLED` of the largest change
+is multiplied by 4 (the switched evolution relaxation of pseudo-transient continuation, Kelley
+and Keyes, SIAM J. Numer. Anal. 35 (1998) 508). Once a step changes the displacement by at most :data:`SETTLED` of the largest change
 of the relaxation, the step is solved again without the viscous term (c = 0) from there: its
 solution, an equilibrium of the quasi-static problem with the slip measured from the relaxed
 configuration, ends the load step; if that solve fails, the relaxation goes on until the change
@@ -76,7 +75,6 @@ def relax(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathStat
                              coefficient=_initial_coefficient(problem, mass), inertia=inertia,
                              work=inertia.duplicate())
     solves, largest, settled, before = [], 0.0, np.inf, state.displacement.x.array.copy()
-    smallest = 0.0  # c is not halved below this: twice the last c that failed
     try:
         for k in range(MAX_STEPS):
             problem.hyperelastic = viscous
@@ -87,7 +85,6 @@ def relax(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathStat
             if result.status == Status.INTERRUPTED:
                 break
             if not result.converged:
-                smallest = 2.0 * viscous.coefficient
                 viscous.coefficient *= 4.0
                 continue
             state.record(problem, u, result, complete=False)
@@ -96,7 +93,7 @@ def relax(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathStat
             largest = max(largest, change)
             logger.info("relaxation step %d (c = %.3g 1/m^2): %d Newton steps, the displacement changed by %.3g m",
                         k + 1, viscous.coefficient, result.iterations, change)
-            viscous.coefficient = max(viscous.coefficient / GROWTH, smallest)
+            viscous.coefficient /= GROWTH
             if change <= SETTLED * min(largest, settled):
                 problem.hyperelastic = static
                 result = solve(step, u, state, False)
