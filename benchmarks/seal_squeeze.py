@@ -41,7 +41,8 @@ from contactqvi.tables import write_table
 
 HERE = pathlib.Path(__file__).resolve().parent
 CASE = HERE / "data" / "seal" / "seal_half.toml"
-#: Mesh name -> file in benchmarks/data/seal (element size at the contact group).
+#: Mesh name -> file in benchmarks/data/seal (element size at the contact group; the 0.25 mm one written by
+#: ../shared/repro/turn5/rubber/mesh_block.py --A 0.010 --B 0.002 --H 0.005 --h 0.25e-3 --merge_side 1).
 MESHES = {"h1.0": "seal_half_h1.0.msh", "h0.5": "seal_half_h0.5.msh", "h0.25": "seal_half_h0.25.msh"}
 #: Half the strip's height (m): the quarter model's plate travel over it is the squeeze.
 HALF_HEIGHT = 5e-3
