@@ -140,3 +140,26 @@ def test_a_stalled_solve_says_so():
                              history=history)
     text = _status_cause(result)
     assert text.startswith("stalled: ||y^|| did not halve") and "3.100e-01 N at Newton step 21" in text
+
+
+@pytest.mark.one_rank(reason="a function of a result's history")
+def test_a_relaxation_without_equilibrium_says_so():
+    """A step relaxed past a limit point (docs/finite_strain.md Sect. 15) that reached no
+    equilibrium: the failure counts its relaxation steps and the plain solves that did not converge
+    (not "the configuration did not settle", the message of its last solve's status); a step that
+    never relaxed gets none of it."""
+    from contactqvi.contact.diagnosis import _relaxation_end
+    from contactqvi.contact.scd_newton import SCDNewtonResult
+    from contactqvi.result import Status
+
+    def entry(j: int, k: int, viscosity: float) -> dict:
+        return {"k": 0, "residual": 1e-13, "substep": j, "relaxation": k, "viscosity": viscosity}
+
+    history = [{"k": 0, "substep": 0}, entry(1, 1, 1e7), entry(2, 2, 5e6), entry(3, 2, 0.0), entry(4, 3, 2e7)]
+    result = SCDNewtonResult(status=Status.DIVERGED_MAX_IT, iterations=0, gamma=1.0, target=1.0, states=np.empty(0),
+                             normal_force=np.empty(0), friction_force=np.empty((0, 2)), history=history)
+    text = _relaxation_end(result)
+    assert "relaxed past the limit point for 3 steps" in text and "1 solve without the viscous term from where it slowed down failed" in text
+    assert "never slowed down" in _relaxation_end(dataclasses.replace(result, history=history[:3]))
+    assert _relaxation_end(dataclasses.replace(result, history=history[:1])) is None
+    assert _relaxation_end(dataclasses.replace(result, status=Status.INTERRUPTED)) is None

@@ -52,7 +52,7 @@ def test_the_seal_relaxes_past_its_limit_point(mpi_tmp_path):
     relaxed = [w for w in summary["warnings"] if w["key"] == "relaxed"]
     assert [w["numbers"]["step"] for w in relaxed] == [18]
     marks = [entry for entry in steps[17]["history"] if "relaxation" in entry]
-    assert 1 < max(entry["relaxation"] for entry in marks) < 30
+    assert 2 <= max(entry["relaxation"] for entry in marks) <= 20  # regression guard: measured 14
     assert marks[-1]["viscosity"] == 0.0 and marks[-1]["substep_status"].startswith("converged")
     # the attempts that failed before the relaxation ended when they stalled, not after 100 Newton steps
     failed = {entry["substep"] for entry in steps[17]["history"]

@@ -39,6 +39,9 @@ def failure_cause(problem: ContactProblem, result: SCDNewtonResult) -> str | Non
     """The cause of a step that did not converge (None if it did), ``problem`` at that step. Collective."""
     if result.converged:
         return None
+    relaxation = _relaxation_end(result)
+    if relaxation is not None:
+        return relaxation
     if result.status in STALLED:
         for k in range(len(problem.interfaces)):
             overload = _friction_overload(problem, result, k)
@@ -46,6 +49,22 @@ def failure_cause(problem: ContactProblem, result: SCDNewtonResult) -> str | Non
                 return overload
     stalled = result.status in STALLED
     return _status_cause(result) + (_path_end(result) if stalled else "")
+
+
+def _relaxation_end(result: SCDNewtonResult) -> str | None:
+    """Why a step that relaxed past a limit point (its history's ``relaxation`` marks,
+    :mod:`contactqvi.contact.relaxation`) ended without an equilibrium; None if it did not relax or
+    was interrupted."""
+    relaxed = [entry for entry in result.history if "relaxation" in entry]
+    if not relaxed or result.status == Status.INTERRUPTED:
+        return None
+    plain = len({entry["substep"] for entry in relaxed if entry["viscosity"] == 0.0})
+    tried = "it never slowed down to a tenth of its largest move"
+    if plain:
+        tried = f"{plain} solve{'s' * (plain > 1)} without the viscous term from where it slowed down failed"
+    return (f"the step failed with its cuts used up, and the body relaxed past the limit point for "
+            f"{relaxed[-1]['relaxation']} steps without reaching an equilibrium: {tried} "
+            "(docs/finite_strain.md, Sect. 15)")
 
 
 def _path_end(result: SCDNewtonResult) -> str:

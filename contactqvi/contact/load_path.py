@@ -71,7 +71,6 @@ from contactqvi.contact.scd_newton import (PARAMETERS, SCDNewtonResult, SCDNewto
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import create_ksp, preset
 from contactqvi.contact.surface import contact_facet_areas
-from contactqvi.laws import Frictionless
 from contactqvi.load_steps import LoadStep, Rotation, check_steps, interpolated
 from contactqvi.parameters import Parameter, Parameters, require
 from contactqvi.records import warn
@@ -398,9 +397,8 @@ def _elastic_change(problem: ContactProblem, state: PathState, pc: str, prefix: 
     problem.step_load(problem.load_factor, problem.translation, problem.step_rotation, change)
     problem.step_load(state.load, state.translation, state.rotation, before)
     change.axpy(-1.0, before)
-    frictionless = np.array([isinstance(i.pair.law, Frictionless) for i in problem.interfaces],
-                            dtype=bool)[problem.interface_of_node]
-    rows = np.where(frictionless[:, None], [[False, False, True]], [[True, True, True]])
+    frictional = np.array([i.pair.law.frictional for i in problem.interfaces], dtype=bool)[problem.interface_of_node]
+    rows = np.where(frictional[:, None], [[True, True, True]], [[False, False, True]])
     held = (3 * problem.contact_blk[:, None] + np.arange(3))[rows]
     A = problem.A.copy()
     A.zeroRows((A.getOwnershipRange()[0] + held).astype(PETSc.IntType), diag=1.0)
