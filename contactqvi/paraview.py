@@ -32,11 +32,13 @@ from xml.sax.saxutils import quoteattr
 
 from mpi4py import MPI
 
+import basix
 import numpy as np
 
 from dolfinx import fem, io
 from dolfinx import mesh as dmesh
 from dolfinx.cpp.io import get_vtk_cell_type, perm_vtk
+from dolfinx.cpp.mesh import cell_num_vertices
 
 from contactqvi.lifetime import unwind_together
 from contactqvi.tables import atomic_path
@@ -87,9 +89,18 @@ class Dataset:
 
 
 def _is_nodal(V: fem.FunctionSpace) -> bool:
-    """One dof (per block) at each vertex and nowhere else: P1/Q1 on a degree-1 mesh."""
-    layout, cmap = V.dofmap.dof_layout, V.mesh.geometry.cmap
-    return cmap.degree == 1 and layout.num_dofs == cmap.dim and layout.num_entity_dofs(0) == 1
+    """One dof (per block) at each vertex and nowhere else: P1/Q1 (on a mesh of any degree)."""
+    layout = V.dofmap.dof_layout
+    vertices = cell_num_vertices(V.mesh.topology.cell_type)
+    return layout.num_dofs == vertices and layout.num_entity_dofs(0) == 1
+
+
+def _vertex_weights(msh: dmesh.Mesh) -> np.ndarray:
+    """(G, v) the P1/Q1 shape functions of a cell's vertices at its G geometry nodes: the values of
+    a vertex function at the nodes of a curved (degree-2) cell."""
+    coordinate = msh.ufl_domain().ufl_coordinate_element().basix_element
+    linear = basix.create_element(basix.ElementFamily.P, coordinate.cell_type, 1)
+    return linear.tabulate(0, coordinate.points)[0, :, :, 0]
 
 
 def _is_cellwise(V: fem.FunctionSpace) -> bool:
@@ -107,10 +118,12 @@ def _vtk_components(values: np.ndarray, bs: int, gdim: int) -> np.ndarray:
 
 
 class MeshPiece:
-    """The owned cells of a degree-1 mesh on this rank, in VTK order, and the nodes they use.
+    """The owned cells of a mesh on this rank, in VTK order, and the nodes they use.
 
     Made once per mesh; :meth:`dataset` then takes the values of functions on it.
-    Works on a rank that owns no cell (an empty piece).
+    Works on a rank that owns no cell (an empty piece). The cells of a degree-2 mesh are
+    VTK's Lagrange cells of its geometry nodes (curved in ParaView), or with ``linear`` those
+    of their vertices.
 
     Attributes:
         mesh: the mesh.
@@ -120,13 +133,13 @@ class MeshPiece:
         cell_type: VTK cell type.
     """
 
-    def __init__(self, msh: dmesh.Mesh):
-        if msh.geometry.cmap.degree != 1:
-            raise ValueError("MeshPiece: the mesh must have degree 1")
+    def __init__(self, msh: dmesh.Mesh, linear: bool = False):
         self.mesh = msh
         tdim = msh.topology.dim
         n_cells = msh.topology.index_map(tdim).size_local
-        dofmap = msh.geometry.dofmap
+        dofmap = msh.geometry.dofmap  # a cell's vertices first, in both element layouts
+        if linear:
+            dofmap = dofmap[:, :cell_num_vertices(msh.topology.cell_type)]
         vtk_order = np.argsort(perm_vtk(msh.topology.cell_type, dofmap.shape[1]))
         cell_nodes = dofmap[:n_cells][:, vtk_order]
         self.nodes, cells = np.unique(cell_nodes.ravel(), return_inverse=True)
@@ -144,10 +157,14 @@ class MeshPiece:
         V = f.function_space
         if V.mesh is not self.mesh or not _is_nodal(V):
             raise ValueError(f"MeshPiece: {f.name!r} is not a P1/Q1 function on the mesh")
-        node_block = np.empty(self.mesh.geometry.x.shape[0], dtype=np.int32)
-        node_block[self.mesh.geometry.dofmap.ravel()] = V.dofmap.list.ravel()  # same vertex order in both
         bs = V.dofmap.index_map_bs
-        return _vtk_components(f.x.array.reshape(-1, bs)[node_block[self.nodes]], bs, self.mesh.geometry.dim)
+        at_cells = f.x.array.reshape(-1, bs)[V.dofmap.list]  # a cell's vertices in the geometry's order
+        dofmap = self.mesh.geometry.dofmap
+        if dofmap.shape[1] > V.dofmap.list.shape[1]:  # a curved mesh: also at the other nodes of its cells
+            at_cells = np.einsum("gv,cvb->cgb", _vertex_weights(self.mesh), at_cells)
+        at_nodes = np.empty((self.mesh.geometry.x.shape[0], bs))
+        at_nodes[dofmap[:, :at_cells.shape[1]].ravel()] = at_cells.reshape(-1, bs)
+        return _vtk_components(at_nodes[self.nodes], bs, self.mesh.geometry.dim)
 
     def cell_values(self, f: fem.Function) -> np.ndarray:
         """Values of a DG0 function of the mesh on the owned cells, (C,) or (C, c)."""

@@ -174,10 +174,10 @@ def gather_vertex_values(u: fem.Function) -> tuple[np.ndarray, np.ndarray] | tup
 
 def _input_index(V: fem.FunctionSpace) -> np.ndarray:
     """Index in the mesh input of the node of each owned dof of a P1/Q1 space (the geometry's
-    nodes, with the same cell-local order)."""
+    vertex nodes, a cell's first, with the same cell-local order)."""
     msh = V.mesh
     node = np.empty(V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts, dtype=np.int64)
-    node[V.dofmap.list.ravel()] = msh.geometry.dofmap.ravel()
+    node[V.dofmap.list.ravel()] = msh.geometry.dofmap[:, :V.dofmap.list.shape[1]].ravel()
     return np.asarray(msh.geometry.input_global_indices, dtype=np.int64)[node[: V.dofmap.index_map.size_local]]
 
 

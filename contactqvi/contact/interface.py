@@ -430,8 +430,9 @@ def _check_interference(comm: MPI.Comm, V: fem.FunctionSpace, gap: np.ndarray, p
              f"{pair.name}: the surfaces overlap by {mean:.4e} m on average as meshed, "
              f"{100.0 * (mean / expected - 1.0):+.1f} % of the declared interference {expected:.4e} m"
              f"{'' if interference.uniform else ' (its mean over the surface)'}; the fit solved is the meshed one "
-             "(chords lie inside a curved surface by h^2 / (8 R)): mesh both surfaces in equal segments "
-             "(docs/press_fit.md)", mean_overlap=mean, declared=expected, relative_difference=mean / expected - 1.0)
+             "(chords lie inside a curved surface by h^2 / (8 R)): mesh in second-order tetrahedra "
+             "(Mesh.ElementOrder = 2: curved surfaces) or both surfaces in equal segments (docs/press_fit.md)",
+             mean_overlap=mean, declared=expected, relative_difference=mean / expected - 1.0)
     return MeshedFit(mean, expected)
 
 

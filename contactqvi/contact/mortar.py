@@ -50,7 +50,7 @@ from dolfinx import fem
 from contactqvi.contact.facets import facet_areas, nodal_integrals, unit_normals
 from contactqvi.contact.linearisation import CouplingDerivatives, coupling_derivatives
 from contactqvi.contact.owners import fetch_rows, owner_ranges, sum_to_owners
-from contactqvi.contact.segments import diameters, segment_integrals
+from contactqvi.contact.segments import curvature_integrals, diameters, segment_integrals
 from contactqvi.parameters import require
 
 __all__ = ["MortarCoupling", "MortarLayout", "coupling_on_layout", "mortar_coupling", "surface_facets"]
@@ -76,11 +76,15 @@ class SurfaceFacets:
         x: (f, n, 3) vertex coordinates.
         normal: (f, 3) outward unit normals (away from the body; of a quadrilateral's mean
             plane, the cross product of its diagonals).
+        sagitta: (f, 3, 3) on a curved (second-order) tetrahedral mesh, each edge's midside node
+            less the mean of its ends (edge k opposite vertex k), in the reference configuration;
+            None on a mesh of degree 1.
     """
 
     blk: np.ndarray
     x: np.ndarray
     normal: np.ndarray
+    sagitta: np.ndarray | None = None
 
     @property
     def area(self) -> np.ndarray:
@@ -105,6 +109,10 @@ def surface_facets(V: fem.FunctionSpace, facets: np.ndarray, coords: np.ndarray 
     cell_name = msh.topology.cell_name()
     require(cell_name in _CELL_FACETS, "mesh",
             f"mortar contact needs tetrahedral or hexahedral meshes, got {cell_name} cells")
+    degree = msh.geometry.cmap.degree
+    require(degree == 1 or (degree == 2 and cell_name == "tetrahedron"), "mesh",
+            f"curved contact surfaces are read from second-order tetrahedra (10 nodes); got {cell_name} cells "
+            f"of degree {degree}")
     per_cell = _CELL_FACETS[cell_name]
     msh.topology.create_connectivity(tdim - 1, tdim)
     msh.topology.create_connectivity(tdim, tdim - 1)
@@ -121,7 +129,18 @@ def surface_facets(V: fem.FunctionSpace, facets: np.ndarray, coords: np.ndarray 
     normal = unit_normals(x)
     outward = np.einsum("ij,ij->i", normal, x.mean(axis=1) - coords[cell_blk].mean(axis=1)) > 0.0
     normal[~outward] *= -1.0
-    return SurfaceFacets(blk.astype(np.int32), x, normal)
+    return SurfaceFacets(blk.astype(np.int32), x, normal, None if degree == 1 else _sagittas(msh, cells, local))
+
+
+def _sagittas(msh, cells: np.ndarray, local: np.ndarray) -> np.ndarray:
+    """(f, 3, 3) :attr:`SurfaceFacets.sagitta` of the facets ``local`` (local index in the cell) of
+    ``cells`` of a second-order tetrahedral mesh. A facet's closure in the coordinate element lists
+    its vertices as the P1 space does, then the midside node of the edge opposite each."""
+    layout = msh.geometry.cmap.create_dof_layout()
+    closure = np.array([layout.entity_closure_dofs(2, i) for i in range(_CELL_FACETS["tetrahedron"])])
+    nodes = msh.geometry.x[np.take_along_axis(msh.geometry.dofmap[cells], closure[local], axis=1)]
+    ends = nodes[:, [1, 2, 0]] + nodes[:, [2, 0, 1]]
+    return nodes[:, 3:] - 0.5 * ends[:, :3]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -205,21 +224,23 @@ class MortarCoupling:
 
 
 def _exchange_master(comm: MPI.Comm, slave: SurfaceFacets, master: SurfaceFacets,
-                     master_glob: np.ndarray, padding: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Master facets (coordinates, global node indices, normals) within ``padding`` of
-    this rank's slave facets' bounding box, gathered from the ranks that own them."""
+                     master_glob: np.ndarray, padding: float) -> tuple[np.ndarray, ...]:
+    """Master facets (coordinates, global node indices, normals and, on a curved mesh, sagittas)
+    within ``padding`` of this rank's slave facets' bounding box, gathered from the ranks that own
+    them."""
     if len(slave.x):
         box = np.concatenate([slave.x.min(axis=(0, 1)) - padding, slave.x.max(axis=(0, 1)) + padding])
     else:
         box = np.array([np.inf] * 3 + [-np.inf] * 3)
     boxes = np.asarray(comm.allgather(box))  # one box per rank
     lo, hi = master.x.min(axis=1), master.x.max(axis=1)
+    fields = (master.x, master_glob, master.normal) + (() if master.sagitta is None else (master.sagitta,))
     send = []
     for r in range(comm.size):
         near = np.all((hi >= boxes[r, :3]) & (lo <= boxes[r, 3:]), axis=1)
-        send.append((master.x[near], master_glob[near], master.normal[near]))
+        send.append(tuple(field[near] for field in fields))
     received = comm.alltoall(send)
-    return tuple(np.concatenate([part[i] for part in received]) for i in range(3))
+    return tuple(np.concatenate([part[i] for part in received]) for i in range(len(fields)))
 
 
 def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facets: np.ndarray,
@@ -254,7 +275,7 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
     master_glob = index_map.local_to_global(master.blk.ravel()).reshape(master.blk.shape)
     diameter = max(_max_edge(slave.x, comm), _max_edge(master.x, comm))
     reach = 2.0 * diameter + (diameter if search_distance is None else search_distance)
-    mx, mglob, mnormal = _exchange_master(comm, slave, master, master_glob, reach)
+    mx, mglob, mnormal, *msagitta = _exchange_master(comm, slave, master, master_glob, reach)
 
     # candidate pairs: centroids within reach, bounding boxes within search_distance, facing normals
     pairs_s, pairs_m = _candidate_pairs(slave.x, slave.normal, mx, search_distance)
@@ -262,8 +283,9 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
     pairs_s, pairs_m, D_pair, M_pair = _overlapping(slave, mx, pairs_s[facing], pairs_m[facing])
     layout = MortarLayout(np.asarray(slave_facets), pairs_s, mglob[pairs_m],
                           D_pair.sum(axis=1) / slave.area[pairs_s], np.empty(0, dtype=np.int32))
+    bulge = None if slave.sagitta is None else _bulge(slave, pairs_s, mx[pairs_m], msagitta[0][pairs_m])
     coupling, lumped_area, gap = _integrated(V, layout, slave, mx[pairs_m], current, None, excluded_blk,
-                                             (D_pair, M_pair), linearised, kept_blk)
+                                             (D_pair, M_pair), linearised, kept_blk, bulge)
     # a node farther than the search distance (default: its own size) cannot touch in this step
     reach = np.sqrt(2.0 * lumped_area[coupling.slave_blk]) if search_distance is None else search_distance
     return coupling.restricted(gap <= reach)
@@ -288,12 +310,14 @@ def coupling_on_layout(V: fem.FunctionSpace, layout: MortarLayout, displacement:
 def _integrated(V: fem.FunctionSpace, layout: MortarLayout, slave: SurfaceFacets, master_x: np.ndarray,
                 current: np.ndarray, rows: np.ndarray | None, excluded_blk: np.ndarray | None,
                 integrals: tuple[np.ndarray, np.ndarray] | None, linearised: bool,
-                kept_blk: np.ndarray | None = None) -> tuple[MortarCoupling, np.ndarray, np.ndarray]:
+                kept_blk: np.ndarray | None = None,
+                bulge: np.ndarray | None = None) -> tuple[MortarCoupling, np.ndarray, np.ndarray]:
     """The coupling of the owned slave nodes ``rows`` by the facet pairs of ``layout`` (their
     master facets at ``master_x``, their :func:`segment_integrals` ``integrals`` if known), the
     lumped slave areas of the owned nodes and the rows' weighted gaps at the positions
     ``current``. ``rows`` None: the nodes the pairs cover for at least :data:`MIN_COVERAGE` of
-    their lumped area (:data:`KEPT_COVERAGE` for ``kept_blk``), less ``excluded_blk``."""
+    their lumped area (:data:`KEPT_COVERAGE` for ``kept_blk``), less ``excluded_blk``. ``bulge``:
+    the pairs' :func:`_bulge` on a curved mesh, added to every separation."""
     comm, index_map, x = V.mesh.comm, V.dofmap.index_map, V.tabulate_dof_coordinates()
     pairs_s = layout.pairs_s
     if integrals is None:
@@ -317,6 +341,9 @@ def _integrated(V: fem.FunctionSpace, layout: MortarLayout, slave: SurfaceFacets
     projected = np.zeros((len(slave_blk), 6))
     np.add.at(projected, position, values[:, None] * fetch_rows(comm, index_map, positions, cols))
     separation = positions[slave_blk] - projected
+    if bulge is not None:
+        separation += np.tile(_owned_bulge(comm, index_map, slave, pairs_s, bulge)[slave_blk]
+                              / weight[slave_blk, None], 2)
     derivatives = None
     if linearised:
         slave_glob = index_map.local_to_global(slave.blk.ravel()).reshape(slave.blk.shape)
@@ -327,6 +354,30 @@ def _integrated(V: fem.FunctionSpace, layout: MortarLayout, slave: SurfaceFacets
     coupling = MortarCoupling(slave_blk, weight[slave_blk], indptr, cols.astype(np.int64), values, n,
                               separation[:, :3], derivatives, layout)
     return coupling, lumped_area, np.einsum("ij,ij->i", n, separation[:, 3:])
+
+
+def _bulge(slave: SurfaceFacets, pairs_s: np.ndarray, master_x: np.ndarray, master_sagitta: np.ndarray) -> np.ndarray:
+    """(P, 3, 3) what the curvature of second-order facets adds to D_ii times the separation of
+    slave node i, per facet pair (slave facets ``pairs_s``, master facets at ``master_x`` with
+    their sagittas): int psi_i (sum_k b_k s_k - sum_k (b_k^m o pi) s_k^m)
+    (:func:`~contactqvi.contact.segments.curvature_integrals`). The separation of the flat facets,
+    x_i - sum_j C_ij x_j, plus this over D_ii is the weighted separation of the curved surfaces:
+    the mesh's chords lie inside a cylinder of radius R by up to h^2 / (8 R), which this restores
+    (docs/press_fit.md)."""
+    Bs, Bm = curvature_integrals(slave.x[pairs_s], -slave.normal[pairs_s], master_x)
+    return (np.einsum("pik,pkd->pid", Bs, slave.sagitta[pairs_s])
+            - np.einsum("pik,pkd->pid", Bm, master_sagitta))
+
+
+def _owned_bulge(comm: MPI.Comm, index_map, slave: SurfaceFacets, pairs_s: np.ndarray,
+                 bulge: np.ndarray) -> np.ndarray:
+    """(owned nodes, 3) the pairs' :func:`_bulge` summed on the owners of the slave nodes."""
+    slave_glob = index_map.local_to_global(slave.blk.ravel()).reshape(slave.blk.shape)
+    rows = slave_glob[pairs_s].ravel()
+    summed = sum_to_owners(comm, owner_ranges(comm, index_map), rows, np.zeros_like(rows), bulge.reshape(-1, 3))
+    owned = np.zeros((index_map.size_local, 3))
+    owned[summed[0] - index_map.local_range[0]] = summed[2]
+    return owned
 
 
 def _rows_of_C(M: tuple, start: int, coupled: np.ndarray, slave_blk: np.ndarray,

@@ -170,7 +170,8 @@ def warn_solved_fits(problem: ContactProblem, u: PETSc.Vec) -> None:
                  f"{100.0 * error:+.1f} % of the declared interference {fit['declared']:.4e} m (the overlap as "
                  f"meshed {fit['overlap']:.4e} m plus {fit['opening']:.4e} m of slave nodes left open where they "
                  f"cannot follow the master's facets): the contact pressures are about {100.0 * error:+.1f} % off "
-                 "those of the declared fit; mesh both surfaces in equal segments (docs/press_fit.md)", **fit)
+                 "those of the declared fit; mesh in second-order tetrahedra (Mesh.ElementOrder = 2: curved "
+                 "surfaces) or both surfaces in equal segments (docs/press_fit.md)", **fit)
 
 
 def _state_counts(problem: ContactProblem, states: np.ndarray) -> dict[str, int]:

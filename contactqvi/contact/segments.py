@@ -28,6 +28,8 @@ derivatives are those of the branch the values take.
 
 from __future__ import annotations
 
+import typing
+
 import numpy as np
 
 from contactqvi.contact.dual import primal
@@ -43,8 +45,8 @@ from contactqvi.contact.facets import (
     triangle_rule,
 )
 
-__all__ = ["AFFINE_DEGREE", "QUADRILATERAL_DEGREE", "clip_polygons", "diameters", "edge_ties", "planar_integrals",
-           "plane_coordinates", "segment_integrals"]
+__all__ = ["AFFINE_DEGREE", "QUADRILATERAL_DEGREE", "clip_polygons", "curvature_integrals", "diameters", "edge_ties",
+           "planar_integrals", "plane_coordinates", "segment_integrals"]
 
 #: Degree-2 rule on a triangle (barycentric points, weights summing to 1): exact for
 #: psi_i phi_j^m on a flat pair of linear triangles.
@@ -258,12 +260,52 @@ def planar_integrals(slave: np.ndarray, s2: np.ndarray, master: np.ndarray, m2: 
     and m2 (P, m, 2). The facets' vertices serve a slave quadrilateral's area element and dual
     basis (unchanged by a rigid motion of the facet) and the choice of the rule."""
     P, ns, nm = len(slave), slave.shape[1], master.shape[1]
+    D, M = np.zeros((P, ns), like=m2), np.zeros((P, ns, nm), like=m2)
+    for rows, weights, psi, points in _segment_points(slave, s2, master, m2, degree):
+        phi_m = _shape_values(m2[rows], points)
+        D[rows] += np.einsum("pq,pqi->pi", weights, psi)
+        M[rows] += np.einsum("pq,pqi,pqj->pij", weights, psi, phi_m)
+    return D, M
+
+
+def curvature_integrals(slave: np.ndarray, normal: np.ndarray, master: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The integrals that carry the curvature of quadratic (6-node) triangles into the mortar gap.
+
+    A 6-node triangle is its vertices' flat triangle plus an edge bubble per edge,
+    x(L) = sum_i x_i L_i + sum_k b_k(L) s_k with b_k = 4 L_(k+1) L_(k+2) and s_k the sagitta of
+    edge k (its midside node less its ends' mean; edge k opposite vertex k). Over the segments
+    of :func:`segment_integrals` (the flat triangles' clipped shadows), these are
+
+        B_s[i, k] = int psi_i b_k,    B_m[i, k] = int psi_i (b_k^m o pi),
+
+    pi the projection along ``normal`` onto the master's flat triangle. psi_i b_k is cubic on a
+    flat pair; the rule is exact to degree 4. Triangles only: (P, 3, 3) vertices each.
+    """
+    s2, m2, _ = plane_coordinates(slave, normal, master)
+    Bs, Bm = np.zeros((len(slave), 3, 3)), np.zeros((len(slave), 3, 3))
+    for rows, weights, psi, points in _segment_points(slave, s2, master, m2, 4):
+        Bs[rows] += np.einsum("pq,pqi,pqk->pik", weights, psi, _edge_bubbles(_barycentric(s2[rows], points)))
+        Bm[rows] += np.einsum("pq,pqi,pqk->pik", weights, psi, _edge_bubbles(_barycentric(m2[rows], points)))
+    return Bs, Bm
+
+
+def _edge_bubbles(L: np.ndarray) -> np.ndarray:
+    """(..., 3) b_k = 4 L_(k+1) L_(k+2) at barycentric coordinates L (..., 3)."""
+    return 4.0 * L[..., [1, 2, 0]] * L[..., [2, 0, 1]]
+
+
+def _segment_points(slave: np.ndarray, s2: np.ndarray, master: np.ndarray, m2: np.ndarray,
+                    degree: int | None) -> typing.Iterator[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    """The quadrature of the segments of facet pairs in the slave's plane (:func:`planar_integrals`):
+    per triangle of the clipped polygons' fans, the pairs that have one (indices), the weights
+    (p, Q) (a slave quadrilateral's true area element included), the slave's dual basis psi
+    (p, Q, n) and the points (p, Q, 2)."""
+    ns, nm = slave.shape[1], master.shape[1]
     s_ccw, m_ccw, pairs = _overlapping_shadows(s2, m2)
     polygon = np.zeros((len(pairs), ns + nm, 2), like=m_ccw)  # clipping adds at most one vertex per clipping edge
     polygon[:, :nm] = m_ccw[pairs]
     polygon, count = clip_polygons(polygon, np.full(len(pairs), nm), s_ccw[pairs])
     dual = dual_coefficients(slave[pairs]) if ns == 4 else None
-    D, M = np.zeros((P, ns), like=polygon), np.zeros((P, ns, nm), like=polygon)
     for group, rule in _rules(slave[pairs], master[pairs], degree):
         for k in range(1, polygon.shape[1] - 1):  # fan (v0, v_k, v_k+1)
             has = group & (count >= k + 2)
@@ -273,13 +315,10 @@ def planar_integrals(slave: np.ndarray, s2: np.ndarray, master: np.ndarray, m2: 
             area = magnitude(_signed_area(tri))
             points = np.einsum("qi,pij->pqj", rule[0], tri)
             psi, ratio = _slave_values(slave[pairs[has]], s2[pairs[has]], None if dual is None else dual[has], points)
-            phi_m = _shape_values(m2[pairs[has]], points)
             weights = area[:, None] * rule[1][None, :]
             if ratio is not None:
                 weights = weights * ratio
-            D[pairs[has]] += np.einsum("pq,pqi->pi", weights, psi)
-            M[pairs[has]] += np.einsum("pq,pqi,pqj->pij", weights, psi, phi_m)
-    return D, M
+            yield pairs[has], weights, psi, points
 
 
 def diameters(x: np.ndarray) -> np.ndarray:

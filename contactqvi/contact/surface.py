@@ -28,6 +28,7 @@ import ufl
 
 from dolfinx import fem, la
 from dolfinx import mesh as dmesh
+from dolfinx.cpp.mesh import cell_num_vertices
 
 from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
@@ -446,7 +447,9 @@ def _edges_owned_elsewhere(piece: MeshPiece, edges: np.ndarray) -> np.ndarray:
     msh.topology.create_connectivity(1, 0)
     msh.topology.create_connectivity(tdim, 0)
     vertex_of_node = np.empty(msh.geometry.x.shape[0], dtype=np.int64)
-    vertex_of_node[msh.geometry.dofmap.ravel()] = msh.topology.connectivity(tdim, 0).array  # degree 1: same order
+    cell_vertices = msh.topology.connectivity(tdim, 0).array.reshape(len(msh.geometry.dofmap),
+                                                                     cell_num_vertices(msh.topology.cell_type))
+    vertex_of_node[msh.geometry.dofmap[:, :cell_vertices.shape[1]].ravel()] = cell_vertices.ravel()  # same order
     n_vertices = msh.topology.index_map(0).size_local + msh.topology.index_map(0).num_ghosts
 
     def key(pairs: np.ndarray) -> np.ndarray:
@@ -490,7 +493,7 @@ class ContactSurface:
                 ("displacement", "displacement", True))},
             nodal_area=nodal_area,
         )
-        self._piece = MeshPiece(self.mesh)
+        self._piece = MeshPiece(self.mesh, linear=True)
         self._patches = TributaryPatches.of_mesh(self._piece)
 
     @property

@@ -1,0 +1,174 @@
+"""A press fit meshed the ordinary way, on flat and on curved (second-order) tetrahedra, against Lamé (issue 43).
+
+The fit of the user's case (``../shared/repro/turn5/press_fit/``): a steel pin of radius b + δ in a
+ring with hole radius b = 20 mm and outer radius c = 40 mm, a quarter slice t = 2 mm thick with
+rollers on the symmetry planes and both flat faces (plane strain), frictionless, meshed in
+unstructured tetrahedra by ``meshes/press_fit.geo``: h_pin on the pin's face, h_ring on the bore.
+``order = 1`` gives the flat facets whose chords cut inside the cylinders by up to h²/(8R), about δ
+itself; ``order = 2`` 10-node tetrahedra whose midside nodes lie on them (docs/press_fit.md,
+"Curved contact surfaces"). Each row is one run of :func:`contactqvi.runner.run_case`, as a user
+runs the case, with default settings:
+
+* ``p(F)``: the pressure from the pair force, (|F_x| + |F_y|) / (2 b t), against Lamé's p;
+* ``u ring b``, ``u ring c``, ``u pin``: the mean radial displacement of the nodes of ``body.bp``
+  on the bore, the ring's outer face and the pin's face more than 10° from the symmetry planes,
+  against Lamé's;
+* ``open``: slave nodes not in contact; ``nodal p``: the smallest and largest nodal contact
+  pressure λ_i / D_ii over the slave nodes in contact (``contact_surface.bp``), against Lamé's p.
+
+    .venv/bin/python benchmarks/press_fit_curved.py                  # the table of the issue
+    .venv/bin/python benchmarks/press_fit_curved.py --fits coarse    # the coarse meshes only
+
+Results: ``benchmarks/results/press_fit_curved.{json,md}``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import pathlib
+import shutil
+import time
+
+from mpi4py import MPI
+
+import numpy as np
+
+from contactqvi.case import parse_case
+from contactqvi.paraview import read_vtx
+from contactqvi.problems import press_fit
+from contactqvi.runner import run_case
+from contactqvi.tables import write_table
+from rows import cell, failed_row
+
+HERE = pathlib.Path(__file__).resolve().parent
+GEO = HERE.parent / "meshes" / "press_fit.geo"
+B, C, T = 0.020, 0.040, 0.002
+STEEL, ALUMINIUM = (210e9, 0.3), (70e9, 0.33)
+#: Element sizes (m) on the pin's face and on the bore: the user's two meshes.
+SIZES = {"1.0 / 1.5": (1.0e-3, 1.5e-3), "0.5 / 0.75": (0.5e-3, 0.75e-3)}
+#: Nodes compared lie between these angles (degrees) from the x axis.
+AWAY = (10.0, 80.0)
+
+
+def fits(which: str) -> list[dict]:
+    """The runs: both meshes, slaves and orders at the user's 15 µm; on the coarse curved mesh also
+    0.01 % and 0.5 % of b, and a steel pin in an aluminium ring."""
+    sizes = list(SIZES) if which == "all" else ["1.0 / 1.5"]
+    runs = [{"mesh": mesh, "slave": slave, "order": order, "delta": 15e-6, "ring": "steel"}
+            for mesh, order, slave in itertools.product(sizes, (1, 2), ("ring", "pin"))]
+    runs += [{"mesh": "1.0 / 1.5", "slave": slave, "order": 2, "delta": delta, "ring": "steel"}
+             for delta, slave in itertools.product((1e-4 * B, 5e-3 * B), ("ring", "pin"))]
+    runs += [{"mesh": "1.0 / 1.5", "slave": slave, "order": 2, "delta": 15e-6, "ring": "aluminium"}
+             for slave in ("ring", "pin")]
+    return runs
+
+
+def case(fit: dict, work: pathlib.Path, comm: MPI.Comm) -> dict:
+    """The case file of ``fit`` (as ``tomllib`` reads it), its mesh a variant of :data:`GEO`."""
+    h_pin, h_ring = SIZES[fit["mesh"]]
+    values = {"delta": fit["delta"], "h_pin": h_pin, "h_ring": h_ring, "order": fit["order"]}
+    geo = work / ("fit_" + "_".join(f"{key}{value:g}" for key, value in values.items()) + ".geo")
+    if comm.rank == 0:
+        geo.write_text("".join(f"{key} = {value!r}; " for key, value in values.items()) + f'\nInclude "{GEO}";\n')
+    comm.Barrier()
+    rollers = {"symmetry_x": {"x": 0.0}, "symmetry_y": {"y": 0.0}, "flat": {"z": 0.0}}
+    ring = STEEL if fit["ring"] == "steel" else ALUMINIUM
+    bodies = [{"name": name, "material": {"young": E, "poisson": nu}, "boundary": {"displacement": rollers}}
+              for name, (E, nu) in (("pin", STEEL), ("ring", ring))]
+    surfaces = {"ring": "ring.ring_inner", "pin": "pin.pin_outer"}
+    master = "pin" if fit["slave"] == "ring" else "ring"
+    contact = {"slave": surfaces[fit["slave"]], "master": surfaces[master], "law": "frictionless",
+               "interference": fit["delta"]}
+    return {"mesh": {"file": str(geo)}, "bodies": bodies, "contacts": [contact]}
+
+
+def radial_means(out: pathlib.Path, delta: float) -> dict[str, float]:
+    """Mean radial displacement (m) of ``body.bp``'s points on the bore, the ring's outer face and the
+    pin's face, more than 10° from the symmetry planes."""
+    body = read_vtx(out / "body.bp", -1)
+    x, u = body.points, body.point_data["displacement [m]"]
+    r, angle = np.hypot(x[:, 0], x[:, 1]), np.degrees(np.arctan2(x[:, 1], x[:, 0]))
+    away = (angle > AWAY[0]) & (angle < AWAY[1])
+    radial = np.einsum("ij,ij->i", u[:, :2], x[:, :2]) / np.maximum(r, 1e-300)
+    return {name: float(radial[away & np.isclose(r, radius, rtol=0.0, atol=1e-9)].mean())
+            for name, radius in (("u_ring_b", B), ("u_ring_c", C), ("u_pin", B + delta))}
+
+
+def nodal_range(out: pathlib.Path) -> tuple[float, float]:
+    """The smallest and largest nodal contact pressure (Pa) of the slave nodes in contact: ``contact_surface.bp``'s
+    positive pressures (the master's nodes and open ones carry none)."""
+    pressure = read_vtx(out / "contact_surface.bp", -1).point_data["contact_pressure [Pa]"]
+    return float(pressure[pressure > 0.0].min()), float(pressure.max())
+
+
+def measure(fit: dict, work: pathlib.Path, comm: MPI.Comm) -> dict:
+    """One run's row (rank 0's; the others get it broadcast)."""
+    out = work / f"run_{len(list(work.glob('run_*')))}"
+    comm.Barrier()
+    start = time.perf_counter()
+    try:
+        summary, _ = run_case(parse_case(case(fit, work, comm)), out, comm, plot=False)
+    except Exception as exc:  # a mesh or input error: the table says so and the other runs go on
+        return failed_row(f"failed: {type(exc).__name__}: {exc}", time.perf_counter() - start, **fit)
+    seconds = time.perf_counter() - start
+    row = None
+    if comm.rank == 0:
+        (step,) = summary["steps"]
+        ring = STEEL if fit["ring"] == "steel" else ALUMINIUM
+        p = press_fit.contact_pressure(fit["delta"], B, C, STEEL, ring)
+        lame = {"u_ring_b": press_fit.ring_displacement(B, p, B, C, ring),
+                "u_ring_c": press_fit.ring_displacement(C, p, B, C, ring),
+                "u_pin": press_fit.pin_displacement(p, B, STEEL)}
+        (force,) = step["pair_forces"].values()
+        low, high = nodal_range(out)
+        row = {**fit, "status": step["status"], "newton": step["iterations"], "seconds": seconds,
+               "slave_nodes": summary["p"], "open": step["state_counts"]["no contact"], "p_lame": p,
+               "p_force": (abs(force[0]) + abs(force[1])) / (2.0 * B * T) / p - 1.0,
+               "nodal_low": low / p - 1.0, "nodal_high": high / p - 1.0,
+               **{name: value / lame[name] - 1.0 for name, value in radial_means(out, fit["delta"]).items()}}
+        shutil.rmtree(out)
+    return comm.bcast(row, root=0)
+
+
+def markdown(rows: list[dict]) -> str:
+    """One line per run: errors against Lamé in %."""
+    lines = ["| mesh pin / ring (mm) | order | slave | δ (µm) | ring | Lamé p (MPa) | p(F) | u ring b | u ring c "
+             "| u pin | open / slave nodes | nodal p | Newton | run s |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        def percent(name: str) -> str:
+            return f"{100.0 * r[name]:+.2f} %" if name in r else "\u2013"
+
+        nodal = f"{percent('nodal_low')} … {percent('nodal_high')}" if "nodal_low" in r else r.get("status", "")
+        p = f"{r['p_lame'] / 1e6:.2f}" if "p_lame" in r else "\u2013"
+        lines.append(f"| {r['mesh']} | {r['order']} | {r['slave']} | {1e6 * r['delta']:g} | {r['ring']} | {p} "
+                     f"| {percent('p_force')} | {percent('u_ring_b')} | {percent('u_ring_c')} | {percent('u_pin')} "
+                     f"| {cell(r, 'open')} / {cell(r, 'slave_nodes')} | {nodal} | {cell(r, 'newton')} "
+                     f"| {cell(r, 'seconds', '.1f')} |")
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--fits", choices=("all", "coarse"), default="all")
+    parser.add_argument("--output", type=pathlib.Path, default=HERE / "results")
+    args = parser.parse_args()
+    comm = MPI.COMM_WORLD
+    work = args.output / "press_fit_curved_work"
+    if comm.rank == 0:
+        work.mkdir(parents=True, exist_ok=True)
+    comm.Barrier()
+    rows = []
+    for fit in fits(args.fits):
+        rows.append(measure(fit, work, comm))
+        if comm.rank == 0:
+            print(markdown(rows[-1:]).splitlines()[-1], flush=True)
+    if comm.rank == 0:
+        shutil.rmtree(work)
+    write_table(comm, args.output / "press_fit_curved", {"mpi_size": comm.size, "rows": rows}, markdown(rows),
+                echo=False)
+
+
+if __name__ == "__main__":
+    main()
