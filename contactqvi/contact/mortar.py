@@ -46,6 +46,7 @@ import numpy as np
 import scipy.spatial
 
 from dolfinx import fem
+from dolfinx import mesh as dmesh
 
 from contactqvi.contact.facets import facet_areas, nodal_integrals, unit_normals
 from contactqvi.contact.linearisation import CouplingDerivatives, coupling_derivatives
@@ -132,15 +133,14 @@ def surface_facets(V: fem.FunctionSpace, facets: np.ndarray, coords: np.ndarray 
     return SurfaceFacets(blk.astype(np.int32), x, normal, None if degree == 1 else _sagittas(msh, cells, local))
 
 
-def _sagittas(msh, cells: np.ndarray, local: np.ndarray) -> np.ndarray:
+def _sagittas(msh: dmesh.Mesh, cells: np.ndarray, local: np.ndarray) -> np.ndarray:
     """(f, 3, 3) :attr:`SurfaceFacets.sagitta` of the facets ``local`` (local index in the cell) of
     ``cells`` of a second-order tetrahedral mesh. A facet's closure in the coordinate element lists
     its vertices as the P1 space does, then the midside node of the edge opposite each."""
     layout = msh.geometry.cmap.create_dof_layout()
     closure = np.array([layout.entity_closure_dofs(2, i) for i in range(_CELL_FACETS["tetrahedron"])])
     nodes = msh.geometry.x[np.take_along_axis(msh.geometry.dofmap[cells], closure[local], axis=1)]
-    ends = nodes[:, [1, 2, 0]] + nodes[:, [2, 0, 1]]
-    return nodes[:, 3:] - 0.5 * ends[:, :3]
+    return nodes[:, 3:] - 0.5 * (nodes[:, [1, 2, 0]] + nodes[:, [2, 0, 1]])
 
 
 @dataclasses.dataclass(frozen=True)
