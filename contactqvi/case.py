@@ -226,10 +226,14 @@ class MeshSource:
         file: a gmsh ``.geo`` or ``.msh`` file whose physical groups name the
             boundaries (in a case file: relative to the case file).
         box: the paper's body instead of a file.
+        order: of the elements' displacements: 1 (linear) or 2 (quadratic: 10-node
+            tetrahedra, curved where the mesh file is of second order; bodies against rigid
+            obstacles, :mod:`contactqvi.contact.quadratic`).
     """
 
     file: pathlib.Path | None = None
     box: PaperBody | None = None
+    order: int = 1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -710,6 +714,8 @@ def _instance(value: typing.Any, cls: type, name: str) -> None:
 def _check_mesh(mesh: MeshSource) -> MeshSource:
     _instance(mesh, MeshSource, "mesh")
     require((mesh.file is None) != (mesh.box is None), "mesh", "give exactly one of 'file' and 'box'")
+    require(mesh.order in (1, 2) and not isinstance(mesh.order, bool), "mesh.order",
+            f"must be 1 (linear elements) or 2 (quadratic), got {mesh.order!r}")
     if mesh.box is not None:
         _instance(mesh.box, PaperBody, "mesh.box")
         lev = mesh.box.lev

@@ -22,6 +22,7 @@ __all__ = [
     "body_forces",
     "body_materials",
     "cellwise",
+    "displacement_degree",
     "lame_parameters",
     "orthonormalize",
     "strain",
@@ -228,6 +229,11 @@ def _checked_vector(msh: dmesh.Mesh, value: tuple[float, ...], name: str) -> np.
 
 def _vector_constant(msh: dmesh.Mesh, value: tuple[float, ...], name: str) -> fem.Constant:
     return fem.Constant(msh, _checked_vector(msh, value, name))
+
+
+def displacement_degree(V: fem.FunctionSpace) -> int:
+    """The polynomial degree of the displacements of a Lagrange space V: 1 (linear) or 2 (quadratic)."""
+    return V.ufl_element().basix_element.degree
 
 
 def rigid_motions_nullspace(V: fem.FunctionSpace, node_body: np.ndarray | None = None) -> PETSc.NullSpace:

@@ -89,10 +89,14 @@ class Dataset:
 
 
 def _is_nodal(V: fem.FunctionSpace) -> bool:
-    """One dof (per block) at each vertex and nowhere else: P1/Q1 (on a mesh of any degree)."""
+    """One dof (per block) at each vertex and nowhere else (P1/Q1, on a mesh of any degree), or
+    the dofs of a quadratic Lagrange space: values at the mesh's nodes."""
     layout = V.dofmap.dof_layout
     vertices = cell_num_vertices(V.mesh.topology.cell_type)
-    return layout.num_dofs == vertices and layout.num_entity_dofs(0) == 1
+    linear = layout.num_dofs == vertices and layout.num_entity_dofs(0) == 1
+    element = V.ufl_element().basix_element
+    return linear or (element.family == basix.ElementFamily.P and element.degree == 2
+                      and V.mesh.topology.cell_name() == "tetrahedron")
 
 
 def _vertex_weights(msh: dmesh.Mesh) -> np.ndarray:
@@ -153,14 +157,16 @@ class MeshPiece:
         return self.mesh.geometry.x[self.nodes]
 
     def point_values(self, f: fem.Function) -> np.ndarray:
-        """Values of a P1/Q1 function of the mesh at the points, (N,) or (N, 3)."""
+        """Values of a P1/Q1 (or P2) function of the mesh at the points, (N,) or (N, 3): a P2
+        function on a mesh of degree 1 at its vertices."""
         V = f.function_space
         if V.mesh is not self.mesh or not _is_nodal(V):
-            raise ValueError(f"MeshPiece: {f.name!r} is not a P1/Q1 function on the mesh")
+            raise ValueError(f"MeshPiece: {f.name!r} is not a P1/Q1 or P2 function on the mesh")
         bs = V.dofmap.index_map_bs
-        at_cells = f.x.array.reshape(-1, bs)[V.dofmap.list]  # a cell's vertices in the geometry's order
         dofmap = self.mesh.geometry.dofmap
-        if dofmap.shape[1] > V.dofmap.list.shape[1]:  # a curved mesh: also at the other nodes of its cells
+        nodes = min(V.dofmap.list.shape[1], dofmap.shape[1])  # vertices first, then edges, in both layouts
+        at_cells = f.x.array.reshape(-1, bs)[V.dofmap.list[:, :nodes]]
+        if dofmap.shape[1] > nodes:  # a P1 function on a curved mesh: also at the other nodes of its cells
             at_cells = np.einsum("gv,cvb->cgb", _vertex_weights(self.mesh), at_cells)
         at_nodes = np.empty((self.mesh.geometry.x.shape[0], bs))
         at_nodes[dofmap[:, :at_cells.shape[1]].ravel()] = at_cells.reshape(-1, bs)

@@ -31,7 +31,8 @@ import ufl
 from dolfinx import fem, la
 from dolfinx import mesh as dmesh
 
-from contactqvi.elasticity import BodyForce, body_force_form, lame_parameters, pressure_form, strain, stress
+from contactqvi.elasticity import (BodyForce, body_force_form, displacement_degree, lame_parameters, pressure_form,
+                                   strain, stress)
 from contactqvi.materials import Material
 from contactqvi.meshes import boundary_facets, tag_of
 from contactqvi.nodal_pressure import averaged_stress, internal_work
@@ -118,7 +119,8 @@ class StressFields:
         elif material is None:
             integral = ufl.inner(stress(u, mu, lmbda), ufl.TestFunction(W)) * ufl.dx
         else:
-            integral = ufl.inner(material.cauchy_stress(u, mu, lmbda), ufl.TestFunction(W)) * material.dx()
+            integral = (ufl.inner(material.cauchy_stress(u, mu, lmbda), ufl.TestFunction(W))
+                        * material.dx(displacement_degree(u.function_space)))
         self._integral = fem.form(integral)
         self.stress = fem.Function(W, name="stress")
         self.von_mises = fem.Function(Q, name="von_mises")
@@ -241,7 +243,8 @@ def internal_force_form(u: fem.Function, v: ufl.core.expr.Expr, body: ElasticBod
         return internal, averaged.update
     if body.material is None:
         return ufl.inner(stress(u, mu, lmbda), strain(v)) * ufl.dx, lambda: None
-    return ufl.inner(body.material.first_piola(u, mu, lmbda), ufl.grad(v)) * body.material.dx(), lambda: None
+    dx = body.material.dx(displacement_degree(u.function_space))
+    return ufl.inner(body.material.first_piola(u, mu, lmbda), ufl.grad(v)) * dx, lambda: None
 
 
 def _support_nodes(V: fem.FunctionSpace, body: ElasticBody) -> np.ndarray:

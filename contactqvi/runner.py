@@ -81,19 +81,21 @@ def read_mesh(case: ContactCase, comm: MPI.Comm) -> tuple[dmesh.Mesh, dmesh.Mesh
 
 
 def _check_curved(case: ContactCase, msh: dmesh.Mesh) -> None:
-    """A second-order (curved) mesh takes linear-elastic bodies on tetrahedra: their displacements
-    stay linear on its curved cells (docs/press_fit.md, "Curved contact surfaces")."""
+    """A second-order (curved) mesh with linear elements (``mesh.order = 1``) takes linear-elastic
+    bodies on tetrahedra: their displacements stay linear on its curved cells (docs/press_fit.md,
+    "Curved contact surfaces")."""
     degree, cells = msh.geometry.cmap.degree, msh.topology.cell_name()
-    if degree == 1:
+    if degree == 1 or case.mesh.order == 2:
         return
     require(cells == "tetrahedron" and degree == 2, "mesh.file",
             f"curved contact surfaces are read from second-order tetrahedra (10 nodes); got {cells} cells of "
             f"degree {degree}")
     models = [body.material.model for body in case.bodies] if case.bodies else [case.material.model]
     require(all(model is None for model in models), "mesh.file",
-            "a second-order (curved) mesh takes linear-elastic bodies: its displacements stay linear on the "
-            "curved cells, and the contact geometry of a hyperelastic body, which follows the deformed "
-            "surfaces, needs quadratic ones (not yet); mesh with Mesh.ElementOrder = 1 for a hyperelastic body")
+            "a second-order (curved) mesh with linear elements takes linear-elastic bodies: their displacements "
+            "stay linear on the curved cells, and the contact geometry of a hyperelastic body, which follows "
+            "the deformed surfaces, needs quadratic ones: give mesh.order = 2 (bodies against rigid obstacles), "
+            "or mesh with Mesh.ElementOrder = 1")
 
 
 def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
@@ -111,7 +113,7 @@ def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
         obstacle=case.obstacle.create(), body_force=b.body_force,
         displacements={name: d.components() for name, d in b.displacement.items()}, moved=b.moved,
         material=_material(case.material.model), pressures=dict(b.pressure), rotations=_rotations(case),
-        formulation=case.material.formulation,
+        formulation=case.material.formulation, degree=case.mesh.order,
     )
 
 
@@ -141,7 +143,8 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
                                     displacements=displacements, cell_tags=cell_tags, moved=moved,
                                     material=_material(case.bodies[0].material.model), pressures=pressures,
                                     rotations=_rotations(case), inertia=case.dynamics is not None,
-                                    formulation={b.name: b.material.formulation for b in case.bodies})
+                                    formulation={b.name: b.material.formulation for b in case.bodies},
+                                    degree=case.mesh.order)
 
 
 def _largest_prescribed(case: ContactCase) -> float:

@@ -150,7 +150,7 @@ def write_table(
 
 
 def gather_vertex_values(u: fem.Function) -> tuple[np.ndarray, np.ndarray] | tuple[None, None]:
-    """Owned dof coordinates (N, 3) and values (N, bs) of a P1/Q1 function, gathered on rank 0.
+    """Owned dof coordinates (N, 3) and values (N, bs) of a Lagrange function, gathered on rank 0.
 
     Rows are sorted lexicographically by coordinate, nodes at one point (two bodies
     touching there) by their index in the mesh input, so serial and parallel runs give
@@ -173,12 +173,15 @@ def gather_vertex_values(u: fem.Function) -> tuple[np.ndarray, np.ndarray] | tup
 
 
 def _input_index(V: fem.FunctionSpace) -> np.ndarray:
-    """Index in the mesh input of the node of each owned dof of a P1/Q1 space (the geometry's
-    vertex nodes, a cell's first, with the same cell-local order)."""
+    """Index in the mesh input of the node of each owned dof of a Lagrange space (the geometry's
+    nodes, a cell's vertices first, with the same cell-local order); -1 at a dof with no node of
+    its own (the edges of a quadratic space on a mesh of degree 1, which only one body holds)."""
     msh = V.mesh
-    node = np.empty(V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts, dtype=np.int64)
-    node[V.dofmap.list.ravel()] = msh.geometry.dofmap[:, :V.dofmap.list.shape[1]].ravel()
-    return np.asarray(msh.geometry.input_global_indices, dtype=np.int64)[node[: V.dofmap.index_map.size_local]]
+    nodes = min(V.dofmap.list.shape[1], msh.geometry.dofmap.shape[1])
+    inputs = np.asarray(msh.geometry.input_global_indices, dtype=np.int64)
+    index = np.full(V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts, -1, dtype=np.int64)
+    index[V.dofmap.list[:, :nodes].ravel()] = inputs[msh.geometry.dofmap[:, :nodes].ravel()]
+    return index[: V.dofmap.index_map.size_local]
 
 
 def write_solution_npz(

@@ -50,7 +50,7 @@ from contactqvi.contact.hyperelastic import HyperelasticSystem
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult, SCDNewtonSolver
 from contactqvi.time_scheme import TimeScheme
-from contactqvi.elasticity import lame_parameters
+from contactqvi.elasticity import displacement_degree, lame_parameters
 from contactqvi.laws import Frictionless
 from contactqvi.lifetime import PETScOwner, VectorSet
 from contactqvi.linalg import default_options
@@ -227,7 +227,8 @@ class PhysicalEnergy(PETScOwner):
         if body.material is not None:  # psi(F) of a hyperelastic body (the linear one: 1/2 u . K u)
             mu, lmbda = lame_parameters(body.young, body.poisson)
             F = ufl.Identity(3) + ufl.grad(self.field)
-            self._stored = fem.form(body.material.strain_energy(F, mu, lmbda) * body.material.dx())
+            dx = body.material.dx(displacement_degree(V))
+            self._stored = fem.form(body.material.strain_energy(F, mu, lmbda) * dx)
         self.internal_force = dolfinx.fem.petsc.create_vector(self._internal)
         self.load = dolfinx.fem.petsc.assemble_vector(fem.form(load_form(V.mesh, v, body, 1.0)))
         self.load.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)

@@ -44,7 +44,7 @@ import dolfinx.la
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 
-from contactqvi.elasticity import Modulus, lame_parameters, pressure_form
+from contactqvi.elasticity import Modulus, displacement_degree, lame_parameters, pressure_form
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import reassemble_matrix
 from contactqvi.materials import Material
@@ -183,7 +183,7 @@ def create_hyperelastic_system(
     u, v = fem.Function(V, name="displacement"), ufl.TestFunction(V)
     volumetric = None
     if nodal is None:
-        residual = ufl.inner(material.first_piola(u, mu, lmbda), ufl.grad(v)) * material.dx()
+        residual = ufl.inner(material.first_piola(u, mu, lmbda), ufl.grad(v)) * material.dx(displacement_degree(V))
     else:  # (1)-(2) of contactqvi.nodal_pressure
         residual, averaged = internal_work(u, v, material, mu, lmbda, nodal)
     load_factor = fem.Constant(V.mesh, PETSc.ScalarType(1.0))
@@ -211,7 +211,8 @@ def create_hyperelastic_system(
 
 def _force_scale(V: fem.FunctionSpace, mu: typing.Any, material: Material) -> float:
     """||int mu div v dX|| (N) over the owned dofs (:attr:`HyperelasticSystem.force_scale`)."""
-    scale = dolfinx.fem.petsc.assemble_vector(fem.form(mu * ufl.div(ufl.TestFunction(V)) * material.dx()))
+    dx = material.dx(displacement_degree(V))
+    scale = dolfinx.fem.petsc.assemble_vector(fem.form(mu * ufl.div(ufl.TestFunction(V)) * dx))
     scale.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     norm = scale.norm()
     scale.destroy()

@@ -33,6 +33,8 @@ from dolfinx import mesh as dmesh
 
 from contactqvi.contact.kinematics import pair_frames
 from contactqvi.contact.mortar import MortarCoupling, coupling_on_layout, mortar_coupling
+from contactqvi.contact.quadratic import ModifiedBasis
+from contactqvi.elasticity import displacement_degree
 from contactqvi.interference import Interference, as_interference
 from contactqvi.laws import ContactLaw, Frictionless
 from contactqvi.load_steps import SEARCHES, Rotation, placed, rigid_increment
@@ -146,6 +148,9 @@ class Interface:
         coupling: the mortar rows C of a body pair; None for an obstacle.
         initial_gap: (m,) gap of the reference positions (m): to an obstacle before
             any translation of it; for a body pair weighted with the C of the last search.
+        position: (m, 3) reference positions of the slave nodes (m): the nodes', or on the
+            surface of quadratic elements those of the modified basis
+            (:mod:`contactqvi.contact.quadratic`), whose gaps are the weighted ones.
         searched_at: (m, 3) displacement of the slave nodes in the configuration an obstacle
             pair was searched in (its gap is linearised about it), or None: the reference.
         meshed_fit: a body pair that declares an interference: its mean overlap as meshed
@@ -159,6 +164,7 @@ class Interface:
     area: np.ndarray
     coupling: MortarCoupling | None
     initial_gap: np.ndarray
+    position: np.ndarray
     searched_at: np.ndarray | None = None
     meshed_fit: MeshedFit | None = None
 
@@ -227,15 +233,17 @@ class Interface:
 
 def build_interfaces(
     V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typing.Sequence[Pair], constrained: np.ndarray,
+    modified: ModifiedBasis | None = None,
 ) -> list[Interface]:
     """The interfaces of ``pairs`` (collective).
 
     Args:
-        V: vector P1 space of all bodies.
+        V: vector P1 (or P2) space of all bodies.
         facet_tags: named facet groups.
         pairs: the contact pairs.
         constrained: (local nodes, 3) mask of prescribed components; nodes with all
             three prescribed cannot be slave nodes.
+        modified: the slave surfaces' modified basis of a P2 space (obstacle pairs).
 
     Raises:
         ParameterError: a bad contact law, a node on two slave surfaces or on a
@@ -249,7 +257,7 @@ def build_interfaces(
                 f"must be a contact law of contactqvi.laws, got {pair.law!r}")
         pair.law.checked(pair.name)
         if isinstance(pair, ObstaclePair):
-            interfaces.append(_obstacle_interface(V, facet_tags, pair, constrained))
+            interfaces.append(_obstacle_interface(V, facet_tags, pair, constrained, modified=modified))
         else:
             interfaces.append(_body_interface(V, facet_tags, pair, constrained))
     _check_disjoint(V, facet_tags, pairs, interfaces)
@@ -259,7 +267,7 @@ def build_interfaces(
 def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: typing.Sequence[Interface],
                  constrained: np.ndarray, displacement: fem.Function, translation: np.ndarray,
                  finite_strain: bool = False, rotation: Rotation | None = None,
-                 linearised: bool = True) -> list[Interface]:
+                 linearised: bool = True, modified: ModifiedBasis | None = None) -> list[Interface]:
     """The interfaces with the pairs searched each step found again in the configuration
     x + ``displacement``, the obstacles rotated by ``rotation`` (None: not) and translated by
     ``translation`` (m; :func:`~contactqvi.load_steps.placed`; the others as they are;
@@ -269,14 +277,15 @@ def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: t
     obstacle's nodal areas: the deformed ones with ``finite_strain``, the reference ones of
     small-strain theory otherwise); a pair may find fewer nodes or none (the bodies moved
     apart), and a small overlap left by the last step's discrete conditions is no error. The
-    couplings of pairs searched ``"newton"`` carry their derivatives if ``linearised``.
+    couplings of pairs searched ``"newton"`` carry their derivatives if ``linearised``. ``modified``:
+    as for :func:`build_interfaces`.
     """
     x = displacement.x.array.reshape(-1, 3)
 
     def again(interface: Interface) -> Interface:
         if isinstance(interface.pair, ObstaclePair):
             return _obstacle_interface(V, facet_tags, interface.pair, constrained, x,
-                                       displacement if finite_strain else None, translation, rotation)
+                                       displacement if finite_strain else None, translation, rotation, modified)
         kept = interface.coupling.slave_blk if interface.follows else None
         return dataclasses.replace(_body_interface(V, facet_tags, interface.pair, constrained, x,
                                                    interface.follows and linearised, kept),
@@ -306,12 +315,13 @@ def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: 
                         constrained: np.ndarray, displacement: np.ndarray | None = None,
                         deformed: fem.Function | None = None,
                         translation: typing.Sequence[float] = (0.0, 0.0, 0.0),
-                        rotation: Rotation | None = None) -> Interface:
+                        rotation: Rotation | None = None, modified: ModifiedBasis | None = None) -> Interface:
     """An obstacle pair's interface in the reference configuration, the obstacle at rest
     (checked: no node inside it), or in x + ``displacement`` (local nodes, 3), the obstacle
     rotated by ``rotation`` and translated by ``translation``: its normals there; :meth:`Interface.gap` measures the gap
     to the obstacle of each step. The nodal areas are those of the surface deformed by
-    ``deformed`` if given, else of the reference one."""
+    ``deformed`` if given, else of the reference one. On quadratic elements the positions,
+    displacements and areas are those of the ``modified`` basis (:mod:`contactqvi.contact.quadratic`)."""
     require(pair.search in SEARCHES, error_key(pair, "search"),
             f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
     require(pair.search != "newton", error_key(pair, "search"), "'newton' (the geometry inside the Newton iteration) "
@@ -320,8 +330,12 @@ def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: 
     excluded_blk = np.flatnonzero(constrained.all(axis=1))
     blk = fem.locate_dofs_topological(V, V.mesh.topology.dim - 1, boundary_facets(facet_tags, pair.surface))
     blk = np.setdiff1d(blk[blk < n_owned], excluded_blk).astype(np.int32)
+    positions = V.tabulate_dof_coordinates()
+    if modified is not None:
+        positions = modified.positions(positions)
+        displacement = None if displacement is None else modified.positions(displacement)
     searched_at = None if displacement is None else displacement[blk]
-    x = V.tabulate_dof_coordinates()[blk]
+    x = positions[blk]
     if searched_at is None:
         gap, normal = pair.obstacle.distance(x)
     else:
@@ -334,8 +348,9 @@ def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: 
         _check_overlap(comm, V, gap, error_key(pair, "obstacle"), f"contact nodes of {pair.surface!r} lie inside "
                        "the obstacle", hint="; the body must start outside it (check its position and, for a plane, "
                        "that the normal points into the body's side)")
-    area = _lumped_area(V, facet_tags, pair.surface, deformed)[blk]
-    return Interface(pair, blk, tangent_frames(normal), area, None, gap, searched_at)
+    area = _lumped_area(V, facet_tags, pair.surface, deformed)
+    area = (area if modified is None else modified.areas(area))[blk]
+    return Interface(pair, blk, tangent_frames(normal), area, None, gap, x, searched_at)
 
 
 #: Initial penetrations of a slave node into a master body up to this fraction of the node's
@@ -373,7 +388,8 @@ def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: Body
     if displacement is None:
         fit = _check_interference(comm, V, gap, pair, coupling.weight,
                                   V.tabulate_dof_coordinates()[coupling.slave_blk])
-    return Interface(pair, coupling.slave_blk, frames, coupling.weight, coupling, gap, meshed_fit=fit)
+    return Interface(pair, coupling.slave_blk, frames, coupling.weight, coupling, gap,
+                     V.tabulate_dof_coordinates()[coupling.slave_blk], meshed_fit=fit)
 
 
 #: A declared interference is reported (a warning) when the surfaces as meshed overlap by more
@@ -484,10 +500,11 @@ def _check_disjoint(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typ
 
 def _lumped_area(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, surface: str,
                  deformed: fem.Function | None = None) -> np.ndarray:
-    """Lumped area of ``surface`` at each node (local, ghosts included; m^2), of the surface
-    deformed by the displacement ``deformed`` if given: da = J |F^-T N| dA (Nanson)."""
+    """Lumped area int N_i of ``surface`` at each node of V (local, ghosts included; m^2; owned
+    entries complete), of the surface deformed by the displacement ``deformed`` if given:
+    da = J |F^-T N| dA (Nanson)."""
     msh = V.mesh
-    Q = fem.functionspace(msh, ("Lagrange", 1))
+    Q = fem.functionspace(msh, ("Lagrange", displacement_degree(V)))
     ds = ufl.Measure("ds", domain=msh, subdomain_data=facet_tags)
     stretch = 1.0
     if deformed is not None:

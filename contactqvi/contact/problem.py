@@ -62,7 +62,9 @@ from contactqvi.contact.current_geometry import CurrentGeometry, following_shift
 from contactqvi.contact.interface import (BodyPair, Interface, ObstaclePair, Pair, build_interfaces, error_key,
                                           followed, search_again)
 from contactqvi.contact.kinematics import roller_aligned
-from contactqvi.elasticity import BodyForce, elasticity_forms, lame_parameters, orthonormalize, rigid_motions_nullspace
+from contactqvi.contact.quadratic import ModifiedBasis, modified_basis
+from contactqvi.elasticity import (BodyForce, displacement_degree, elasticity_forms, lame_parameters,
+                                   orthonormalize, rigid_motions_nullspace)
 from contactqvi.laws import ContactLaw, Frictionless, NodalLaw, StackedLaw
 from contactqvi.lifetime import PETScOwner
 from contactqvi.materials import Material
@@ -131,7 +133,7 @@ class ContactProblem(PETScOwner):
         rotation: R (frame components to global), or None where every frame is (e1, e2, e3)
             and there is no body pair.
         coupling: N of the mortar rows (global components), or None without body pairs.
-        transform: T = (I + N) R, or None (then T = R).
+        transform: T = (I + N) R, or None (then T = R); on quadratic elements T = S (I + N) R.
         offset: c = N g, the slave displacement due to prescribed master dofs at load
             factor 1, or None.
         translated: loads l~_c of a unit translation e_c (c = x, y, z) of the moved
@@ -157,6 +159,9 @@ class ContactProblem(PETScOwner):
         current: where the geometry of the pairs searched ``"newton"`` was taken and their
             slip's reference (:mod:`contactqvi.contact.current_geometry`); None without such pairs
             until the first search.
+        modified: S of the slave surfaces' modified basis on quadratic elements
+            (:mod:`contactqvi.contact.quadratic`: the contact variables are the coefficients ũ of
+            u = S ũ), or None on linear ones.
     """
 
     V: fem.FunctionSpace
@@ -191,6 +196,7 @@ class ContactProblem(PETScOwner):
     elastic: ElasticSystem | None = None
     hyperelastic: HyperelasticSystem | None = None
     current: CurrentGeometry | None = None
+    modified: ModifiedBasis | None = None
 
     @property
     def comm(self) -> MPI.Comm:
@@ -203,7 +209,7 @@ class ContactProblem(PETScOwner):
 
     def petsc_objects(self) -> list[typing.Any]:
         """A, the load vectors, R, N, T and c (copies by ``dataclasses.replace`` share them)."""
-        objects = (self.A, self.applied, self.load, self.shift, self.elastic, self.hyperelastic,
+        objects = (self.A, self.applied, self.load, self.shift, self.elastic, self.hyperelastic, self.modified,
                    *self._variables_objects())
         return [obj for obj in objects if obj is not None]
 
@@ -258,11 +264,11 @@ class ContactProblem(PETScOwner):
         require(self.elastic is not None, "search", "no contact pair of this problem is searched each step")
         interfaces, search_seconds = _timed(self.comm, search_again, self.V, self.body.facet_tags, self.interfaces,
                                             self.elastic.constrained, displacement, self.translation,
-                                            self.hyperelastic is not None, self.step_rotation)
+                                            self.hyperelastic is not None, self.step_rotation, True, self.modified)
         for obj in (self.applied, *self._variables_objects()):
             if all(obj is not b for b in self.elastic.loads):  # without frames (T = I) the loads are l~_K themselves
                 obj.destroy()
-        fields, variables_seconds = _timed(self.comm, _contact_fields, self.elastic, interfaces, True)
+        fields, variables_seconds = _timed(self.comm, _contact_fields, self.elastic, interfaces, True, self.modified)
         searched = fields.pop("A")
         # PETSc 3.22's MatAXPY with a different pattern drops A's near-nullspace without
         # releasing it (a leak of one null space per search): release it first
@@ -398,12 +404,14 @@ class ContactProblem(PETScOwner):
         return out
 
     def from_global(self, x: PETSc.Vec, out: PETSc.Vec) -> PETSc.Vec:
-        """T^-1 x = R^T (I - N) x of a vector x in global components (a velocity, an acceleration:
-        no offsets), written into ``out``."""
+        """T^-1 x = R^T (I - N) S^-1 x of a vector x in global components (a velocity, an
+        acceleration: no offsets; S = I on linear elements), written into ``out``."""
         local = x.copy()
+        if self.modified is not None:
+            self.modified.inverse_free.mult(x, local)
         if self.coupling is not None:
             coupled = local.duplicate()
-            self.coupling.mult(x, coupled)
+            self.coupling.mult(local, coupled)
             local.axpy(-1.0, coupled)
             coupled.destroy()
         if self.rotation is None:
@@ -434,7 +442,7 @@ class ContactProblem(PETScOwner):
         return out
 
     def force_to_global(self, x: PETSc.Vec, out: PETSc.Vec) -> PETSc.Vec:
-        """T^-T x = (I - N)^T R x of a force x in the solver's variables (T^T f = x): the force
+        """T^-T x = S^-T (I - N)^T R x of a force x in the solver's variables (T^T f = x): the force
         in global components, written into ``out``."""
         local = out if self.rotation is None else x.duplicate()
         if self.rotation is None:
@@ -449,6 +457,10 @@ class ContactProblem(PETScOwner):
         if local is not out:
             local.copy(out)
             local.destroy()
+        if self.modified is not None:
+            modified = out.copy()
+            self.modified.inverse_free.multTranspose(modified, out)
+            modified.destroy()
         return out
 
     def force_scale(self) -> float:
@@ -494,8 +506,7 @@ class ContactProblem(PETScOwner):
         """Gap of each owned contact node (m), obstacles rotated by ``rotation`` about its centre
         and translated by ``translation`` (:func:`~contactqvi.load_steps.placed`), the fraction
         ``fit`` of the declared interferences resolved (:meth:`Interface.gap`)."""
-        x = self.V.tabulate_dof_coordinates()[self.contact_blk]
-        return self._per_node(lambda i, nodes: i.gap(x[nodes], np.asarray(translation, dtype=float), rotation, fit),
+        return self._per_node(lambda i, nodes: i.gap(i.position, np.asarray(translation, dtype=float), rotation, fit),
                               1)
 
     def _per_node(self, value: typing.Callable[[Interface, np.ndarray], np.ndarray], width: int) -> np.ndarray:
@@ -570,9 +581,8 @@ class ContactProblem(PETScOwner):
         """(m, 2) tangential components (t1, t2) of each contact node's obstacle surface displacement
         since the step before (:meth:`~contactqvi.contact.interface.Interface.obstacle_increment`;
         zero on body pairs), checked to vanish along components prescribed on contact nodes."""
-        x = self.V.tabulate_dof_coordinates()[self.contact_blk]
         increment = self._per_node(lambda i, nodes: i.obstacle_increment(
-            x[nodes], translation, rotation, previous_translation, previous_rotation), 3)
+            i.position, translation, rotation, previous_translation, previous_rotation), 3)
         moved = np.einsum("nij,nj->ni", self.frames[:, :2, :], increment)
         along = self.comm.allreduce(float(np.abs(moved[self.rollers, 0]).max(initial=0.0)), op=MPI.MAX)
         size = self.comm.allreduce(float(np.abs(increment).max(initial=0.0)), op=MPI.MAX)
@@ -660,22 +670,16 @@ class ContactProblem(PETScOwner):
         return {"pc_gamg_agg_nsmooths": 0, "pc_gamg_coarse_eq_limit": 3000} if bodies > 1 else {}
 
     def near_nullspace(self) -> PETSc.NullSpace:
-        """Rigid-body modes of each body in the solver's variables, T^-1 = R^T (I - N) of
-        the global ones, for AMG (six per body)."""
+        """Rigid-body modes of each body in the solver's variables, T^-1 of the global ones
+        (:meth:`from_global`), for AMG (six per body)."""
         modes = rigid_motions_nullspace(self.V, self.node_body)
         if self.rotation is None:
             return modes
         global_modes = modes.getVecs()
         vectors = [self.A.createVecRight() for _ in global_modes]
         for mode, vector in zip(global_modes, vectors):
-            if self.coupling is not None:
-                mode = mode.copy()
-                self.coupling.mult(mode, vector)
-                mode.axpy(-1.0, vector)
-            self.rotation.multTranspose(mode, vector)
-            if self.coupling is not None:
-                mode.destroy()
-        if self.coupling is not None:
+            self.from_global(mode, vector)
+        if self.coupling is not None or self.modified is not None:
             orthonormalize(vectors)
         rotated = PETSc.NullSpace().create(vectors=vectors, comm=self.comm)
         for vector in [*global_modes, *vectors]:  # the null spaces hold their own references
@@ -701,7 +705,7 @@ def build_contact_problem(
     search: str = "once",
     pressures: dict[str, float] | None = None,
     rotations: bool = False,
-    formulation: Formulation = "displacement",
+    formulation: Formulation = "displacement", degree: int = 1,
 ) -> ContactProblem:
     """Assemble the GE (6.3) for a body against a rigid obstacle, at load factor 1.
 
@@ -731,6 +735,7 @@ def build_contact_problem(
         formulation: ``"displacement"`` (plain P1) or ``"nodal_pressure"`` (the volume change
             averaged at the nodes, :mod:`contactqvi.nodal_pressure`), or one per body (several
             bodies, ``{body: name}``).
+        degree: of the displacements, 1 or 2 (10-node tetrahedra, :mod:`contactqvi.contact.quadratic`).
 
     Raises:
         ParameterError: bad values, unknown boundary names, or a contact node inside
@@ -742,7 +747,7 @@ def build_contact_problem(
     pair = ObstaclePair(contact, obstacle, law, search)
     return assemble_contact_problem(msh, facet_tags, young, poisson, tractions, [pair], clamped, body_force,
                                     displacements, moved=moved, material=material,
-                                    pressures=pressures, rotations=rotations, formulation=formulation)
+                                    pressures=pressures, rotations=rotations, formulation=formulation, degree=degree)
 
 
 def assemble_contact_problem(
@@ -758,7 +763,7 @@ def assemble_contact_problem(
     cell_tags: dmesh.MeshTags | None = None,
     moved: typing.Sequence[str] = (), formulation: Formulation = "displacement",
     material: Material | None = None, pressures: dict[str, float] | None = None, rotations: bool = False,
-    inertia: bool = False,
+    inertia: bool = False, degree: int = 1,
 ) -> ContactProblem:
     """Assemble the GE (6.3) of one or several bodies with contact pairs, at load factor 1.
 
@@ -767,27 +772,26 @@ def assemble_contact_problem(
     ``cell_tags`` one named cell group per body (each gets its own rigid-body modes);
     ``body_force`` one vector (N/m^3) for all bodies or one per body, ``{body: f}``
     (:func:`~contactqvi.elasticity.body_forces`; each body's weight enters its balance);
-    ``moved``, ``material``, ``pressures``, ``rotations``, ``formulation`` as in :func:`build_contact_problem`;
+    ``moved``, ``material``, ``pressures``, ``rotations``, ``formulation``, ``degree`` as in
+    :func:`build_contact_problem`;
     ``inertia``: the bodies have mass (a time step, :mod:`contactqvi.contact.dynamics`): none need be held.
 
     Raises ``ParameterError`` as :func:`~contactqvi.contact.interface.build_interfaces`,
     and for nonzero prescribed components on contact nodes or a body nothing holds.
     """
-    require(msh.geometry.dim == 3, "mesh", "the contact problem is three-dimensional")
-    V = fem.functionspace(msh, ("Lagrange", 1, (3,)))
+    V = _displacement_space(msh, degree, pairs, formulation)
     nodal = formulation_indicator(msh, formulation, cell_tags, poisson)
     a, L = elasticity_forms(V, young, poisson, facet_tags, tractions, body_force, cell_tags, pressures, nodal)
     msh.topology.create_connectivity(msh.topology.dim - 1, msh.topology.dim)  # for the facet dofs
     bcs, moved_bc = _dirichlet_conditions(V, facet_tags, clamped, displacements or {}, moved)
     dirichlet_dofs_loc = np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs] + [np.empty(0, np.int32)]))
     A, loads = _stiffness(V, a, L, bcs, moved_bc, dirichlet_dofs_loc, rotations, young, poisson, nodal)
-    index_map = V.dofmap.index_map
-    constrained = np.isin(np.arange(3 * (index_map.size_local + index_map.num_ghosts)), dirichlet_dofs_loc).reshape(-1, 3)
-    owned_dirichlet = dirichlet_dofs_loc[dirichlet_dofs_loc < 3 * index_map.size_local]
-    interfaces, search_seconds = _timed(msh.comm, build_interfaces, V, facet_tags, pairs, constrained)
+    constrained, owned_dirichlet = _prescribed(V, dirichlet_dofs_loc)
+    modified = _slave_basis(V, facet_tags, pairs, constrained)
+    interfaces, search_seconds = _timed(msh.comm, build_interfaces, V, facet_tags, pairs, constrained, modified)
     elastic = ElasticSystem(A, loads, constrained, owned_dirichlet)
     searched = any(i.searched_each_step for i in interfaces)
-    fields, variables_seconds = _timed(msh.comm, _contact_fields, elastic, interfaces, searched)
+    fields, variables_seconds = _timed(msh.comm, _contact_fields, elastic, interfaces, searched, modified)
     node_body = _bodies(V, facet_tags, cell_tags, constrained, interfaces, held=not inertia)
     supports, comm = tuple(dict.fromkeys([*clamped, *(displacements or {}), *moved])), msh.comm
     problem = ContactProblem(
@@ -798,13 +802,54 @@ def assemble_contact_problem(
                          _prescribed_components(clamped, displacements or {}, moved), cell_tags,
                          pressures=dict(pressures or {}), nodal=nodal),
         dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32), node_body=node_body,
-        n_free=comm.allreduce(3 * index_map.size_local - len(owned_dirichlet), op=MPI.SUM),
+        n_free=comm.allreduce(3 * V.dofmap.index_map.size_local - len(owned_dirichlet), op=MPI.SUM),
         setup_seconds={"contact_search": search_seconds, "change_of_variables": variables_seconds},
-        elastic=elastic if searched else None, **fields,
+        elastic=elastic if searched else None, modified=modified, **fields,
     )
     problem.set_step()
     _make_hyperelastic(problem, material, young, poisson, L, bcs, facet_tags, nodal)
     return problem
+
+
+def _displacement_space(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair],
+                        formulation: Formulation) -> fem.FunctionSpace:
+    """The vector Lagrange space of the displacements of ``degree`` (:func:`_check_degree`)."""
+    require(msh.geometry.dim == 3, "mesh", "the contact problem is three-dimensional")
+    _check_degree(msh, degree, pairs, formulation)
+    return fem.functionspace(msh, ("Lagrange", degree, (3,)))
+
+
+def _prescribed(V: fem.FunctionSpace, dirichlet_dofs_loc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The (local nodes, 3) mask of the prescribed components, and the owned prescribed dofs."""
+    index_map = V.dofmap.index_map
+    constrained = np.isin(np.arange(3 * (index_map.size_local + index_map.num_ghosts)), dirichlet_dofs_loc)
+    return constrained.reshape(-1, 3), dirichlet_dofs_loc[dirichlet_dofs_loc < 3 * index_map.size_local]
+
+
+def _slave_basis(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typing.Sequence[Pair],
+                 constrained: np.ndarray) -> ModifiedBasis | None:
+    """The modified basis of the pairs' slave surfaces on quadratic elements (obstacle pairs), else None."""
+    if displacement_degree(V) == 1:
+        return None
+    return modified_basis(V, np.unique(np.concatenate([boundary_facets(facet_tags, pair.surface)
+                                                       for pair in pairs])), constrained)
+
+
+def _check_degree(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair], formulation: Formulation) -> None:
+    """Quadratic displacements take tetrahedra, rigid obstacles and the plain formulation."""
+    require(degree in (1, 2), "mesh.order", f"must be 1 (linear elements) or 2 (quadratic), got {degree!r}")
+    if degree == 1:
+        return
+    cells = msh.topology.cell_name()
+    require(cells == "tetrahedron", "mesh.order", f"quadratic elements are 10-node tetrahedra; the mesh has {cells} "
+            "cells")
+    body = next((pair for pair in pairs if isinstance(pair, BodyPair)), None)
+    require(body is None, "mesh.order", f"quadratic elements take contact with rigid obstacles; the pair "
+            f"{body.name if body else ''} couples two meshed bodies, whose quadratic mortar coupling is not built "
+            "yet: use order = 1 (with a second-order mesh: curved surfaces, docs/press_fit.md)")
+    names = set(formulation.values()) if isinstance(formulation, dict) else {formulation}
+    require(names <= {"displacement"}, "mesh.order", "the nodally averaged volume change (formulation = "
+            "\"nodal_pressure\") is a formulation of linear tetrahedra; quadratic ones take \"displacement\"")
 
 
 def _rigid_coefficients(translation: np.ndarray, rotation: Rotation | None) -> np.ndarray:
@@ -894,18 +939,19 @@ def _nodal_law(interfaces: typing.Sequence[Interface], interface_of_node: np.nda
 
 
 def _contact_fields(elastic: ElasticSystem, interfaces: typing.Sequence[Interface],
-                    keep: bool) -> dict[str, typing.Any]:
+                    keep: bool, modified: ModifiedBasis | None = None) -> dict[str, typing.Any]:
     """The :class:`ContactProblem` fields that follow from the interfaces: the merged contact
     nodes with their frames, areas and laws, and the change of variables with A and the
     loads in the solver's variables (:func:`_solver_variables`). ``keep``: leave ``elastic``'s
-    matrix and loads alive (they are freed or reused as the new A otherwise)."""
+    matrix and loads alive (they are freed or reused as the new A otherwise); ``modified``: the
+    slave surfaces' modified basis of quadratic elements."""
     comm = elastic.stiffness.getComm().tompi4py()
     contact_blk, interface_of_node, frames, contact_area = _merged(interfaces)
     constrained = elastic.constrained[contact_blk]
     _check_prescribed_on_contact(elastic.loads, contact_blk, constrained, comm)
     frames = _align_frames(frames, constrained, comm)
     A, loads, rotation, coupling, transform, offsets = _solver_variables(elastic, interfaces, contact_blk, frames,
-                                                                         keep)
+                                                                         keep, modified)
     return {"A": A, "applied": loads[0], "translated": tuple(loads[1:]), "offset": offsets[0],
             "translated_offset": tuple(offsets[1:]), "contact_blk": contact_blk, "contact_area": contact_area,
             "law": _nodal_law(interfaces, interface_of_node, contact_area), "frames": frames,
@@ -916,20 +962,26 @@ def _contact_fields(elastic: ElasticSystem, interfaces: typing.Sequence[Interfac
 
 def _solver_variables(
     elastic: ElasticSystem, interfaces: typing.Sequence[Interface], contact_blk: np.ndarray, frames: np.ndarray,
-    keep: bool,
+    keep: bool, modified: ModifiedBasis | None = None,
 ) -> tuple[PETSc.Mat, list[PETSc.Vec], PETSc.Mat | None, PETSc.Mat | None, PETSc.Mat | None, list[PETSc.Vec | None]]:
     """A = T^T A_K T and l~ = T^T (l~_K - A_K c) for each load, with R, N, T and the offsets c
-    of the change of variables. Without a change (T = I) the loads themselves and A_K (a copy
-    if ``keep``); otherwise new objects, and A_K and the loads are freed unless ``keep``."""
+    of the change of variables (T = S (I + N) R with the ``modified`` basis S of quadratic slave
+    surfaces). Without a change (T = I) the loads themselves and A_K (a copy if ``keep``);
+    otherwise new objects, and A_K and the loads are freed unless ``keep``."""
     A_K, loads = elastic.stiffness, elastic.loads
     mortar = any(i.coupling is not None for i in interfaces)
-    rotation = _nodal_rotation(A_K, contact_blk, frames, always=mortar)
+    rotation = _nodal_rotation(A_K, contact_blk, frames, always=mortar or modified is not None)
     coupling = transform = None
     offsets: list[PETSc.Vec | None] = [None] * len(loads)
     if mortar:
         coupling = _mortar_rows(A_K, interfaces, elastic.constrained)
         offsets = [_prescribed_offset(coupling, b, elastic.owned_dirichlet) for b in loads]
         transform = _change_of_variables(coupling, rotation, elastic.owned_dirichlet)
+    if modified is not None:
+        unmodified = transform if transform is not None else rotation
+        transform = modified.S_free.matMult(unmodified)
+        if unmodified is not rotation:
+            unmodified.destroy()
     if rotation is None:  # T = I: A_K itself, a copy of it when A_K is kept (the searches change A, not A_K)
         return A_K.duplicate(copy=True) if keep else A_K, loads, rotation, coupling, transform, offsets
     T = transform if transform is not None else rotation

@@ -124,8 +124,7 @@ def _chord(step: LoadStep, radius: float) -> float:
 def _approach(problem: ContactProblem, steps: typing.Sequence[LoadStep], k: int) -> _Approach:
     """The smallest gap of the slave nodes of interface ``k`` over ``steps``, the bodies at rest."""
     interface = problem.interfaces[k]
-    x = problem.V.tabulate_dof_coordinates()[interface.blk]
-    gaps = [problem.comm.allreduce(float(interface.gap(x, np.asarray(step.translation, dtype=float), step.rotation,
+    gaps = [problem.comm.allreduce(float(interface.gap(interface.position, np.asarray(step.translation, dtype=float), step.rotation,
                                                        step.fit_fraction).min(initial=np.inf)), op=MPI.MIN)
             for step in steps]
     step = int(np.argmin(gaps))

@@ -349,17 +349,17 @@ class ContactSurfaceFields:
 
 
 def vertex_blocks(V: fem.FunctionSpace) -> np.ndarray:
-    """Local block (node) index of each local vertex, for a degree-1 Lagrange space.
+    """Local block (node) index of each local vertex, for a Lagrange space of degree 1 or 2.
 
-    The i-th dof of a cell of a degree-1 Lagrange space sits at the cell's i-th vertex.
+    The i-th dof of a cell sits at the cell's i-th vertex (a quadratic space's vertex dofs come first).
     """
     msh = V.mesh
     tdim = msh.topology.dim
     msh.topology.create_connectivity(tdim, 0)
-    cell_vertices = msh.topology.connectivity(tdim, 0).array
+    cell_vertices = msh.topology.connectivity(tdim, 0).array.reshape(-1, cell_num_vertices(msh.topology.cell_type))
     index_map = msh.topology.index_map(0)
     blocks = np.empty(index_map.size_local + index_map.num_ghosts, dtype=np.int32)
-    blocks[cell_vertices] = V.dofmap.list.ravel()
+    blocks[cell_vertices.ravel()] = V.dofmap.list[:, :cell_vertices.shape[1]].ravel()
     return blocks
 
 
