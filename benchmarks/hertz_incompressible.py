@@ -36,6 +36,7 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 CASES = {"rigid": (ROOT / "cases" / "hertz.toml", "hertz_{}.geo"),
          "bodies": (ROOT / "cases" / "hertz_bodies.toml", "hertz_bodies_{}.geo")}
 FORMULATIONS = ("displacement", "nodal_pressure")
+MESHES = ("coarse", "medium", "fine")
 KEY = ("case", "poisson", "formulation", "mesh", "pc")
 
 
@@ -120,7 +121,7 @@ def markdown(rows: list[dict]) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", nargs="+", choices=tuple(CASES), default=list(CASES))
-    parser.add_argument("--meshes", nargs="+", choices=("coarse", "medium", "fine"), default=["coarse", "medium", "fine"])
+    parser.add_argument("--meshes", nargs="+", choices=MESHES, default=list(MESHES))
     parser.add_argument("--formulations", nargs="+", choices=FORMULATIONS, default=list(FORMULATIONS))
     parser.add_argument("--poisson", type=float, default=0.4999)
     parser.add_argument("--pc", default=None, help="the Newton-step solver ([solver] pc); default: the case's")
@@ -135,7 +136,7 @@ def main() -> None:
                 rows.append(run(name, mesh, args.poisson, formulation, args.pc, comm))
                 if comm.rank == 0:
                     print(markdown(rows[-1:]).splitlines()[-1], flush=True)
-                all_rows = sorted(merge_rows(path, rows, KEY), key=order(*KEY))
+                all_rows = sorted(merge_rows(path, rows, KEY), key=lambda r: (order(*KEY[:3])(r), MESHES.index(r["mesh"])))
                 tables.write_table(comm, args.output / "hertz_incompressible", {"rows": all_rows}, markdown(all_rows),
                                    echo=False)
 

@@ -1,0 +1,141 @@
+"""Quadratic against linear tetrahedra on the cases of issue 43 that meet a rigid obstacle.
+
+Each row is one run of :func:`contactqvi.runner.run_case` with default settings and ``[mesh]
+order`` 1 (P1) or 2 (P2 displacements, the contact in the modified basis of
+:mod:`contactqvi.contact.quadratic`):
+
+* ``oring``: the new user's O-ring cord (``benchmarks/data/oring/oring.toml``: d = 5 mm,
+  neo-Hookean, E = 5 MPa, squeezed 30 % between frictionless plates in 20 steps, a plane-strain
+  slice) at Poisson's ratio ``--poisson`` on the meshes of h = 0.25 and 0.125 mm: the plate's
+  force at 30 %, its ratio to the same mesh and order at nu = 0.45, the contact area.
+* ``hertz``: ``cases/hertz.toml`` (a rigid sphere, R = 1 m, pressed 1 mm into a block, E = 70 GPa,
+  nu = 0.3) on its coarse and medium meshes: P, a and p0 against Hertz.
+
+Per row the dofs, Newton steps per load step, Krylov iterations per Newton step and seconds::
+
+    .venv/bin/python benchmarks/quadratic_elements.py [--cases oring hertz] [--poisson 0.45 0.499]
+
+Results: ``benchmarks/results/quadratic_elements.{json,md}``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import pathlib
+import shutil
+import time
+import tomllib
+
+from mpi4py import MPI
+
+from contactqvi.case import load_case, parse_case
+from contactqvi.problems import hertz
+from contactqvi.runner import run_case
+from contactqvi.tables import write_table
+from rows import cell, failed_row
+
+HERE = pathlib.Path(__file__).resolve().parent
+ROOT = HERE.parent
+ORING = HERE / "data" / "oring"
+MESHES = {"oring": ("h0.25", "h0.125"), "hertz": ("coarse", "medium")}
+
+
+def oring(order: int, mesh: str, poisson: float):
+    """The O-ring case on ``mesh`` at ``poisson`` with elements of ``order``."""
+    data = tomllib.loads((ORING / "oring.toml").read_text())
+    data["mesh"].update(file=f"oring_{mesh}.msh", order=order)
+    data["material"]["poisson"] = poisson
+    return parse_case(data, ORING)
+
+
+def hertz_case(order: int, mesh: str, poisson: float):
+    """``cases/hertz.toml`` on ``meshes/hertz_{mesh}.geo`` with elements of ``order``."""
+    case = load_case(ROOT / "cases" / "hertz.toml")
+    return dataclasses.replace(case, mesh=dataclasses.replace(case.mesh, file=ROOT / "meshes" / f"hertz_{mesh}.geo",
+                                                              order=order))
+
+
+def measure(name: str, order: int, mesh: str, poisson: float, work: pathlib.Path, comm: MPI.Comm) -> dict:
+    """One run's row."""
+    key = {"case": name, "order": order, "mesh": mesh, "poisson": poisson}
+    case = oring(order, mesh, poisson) if name == "oring" else hertz_case(order, mesh, poisson)
+    out = work / f"{name}_{order}_{mesh}_{poisson}"
+    start = time.perf_counter()
+    try:
+        summary, code = run_case(case, out, comm, plot=False)
+    except Exception as exc:  # an input or mesh error: the table says so and the other runs go on
+        return failed_row(f"failed: {type(exc).__name__}: {exc}", time.perf_counter() - start, **key)
+    steps = summary["steps"]
+    newton = sum(s["iterations"] for s in steps)
+    krylov = sum(h.get("krylov_iterations") or 0 for s in steps for h in s["history"])
+    last = steps[-1]
+    row = {**key, "status": summary["status"], "dofs": summary["n"], "newton_per_step": newton / len(steps),
+           "krylov_per_newton": krylov / max(newton, 1), "seconds": time.perf_counter() - start,
+           "failed": code != 0}
+    if name == "oring":
+        row.update(force=abs(last["contact_force"][2]), area=last["contact_area"])
+    else:
+        E, nu, depth = case.material.young, case.material.poisson, -case.steps[-1].translation[2]
+        row.update(P=4.0 * abs(last["contact_force"][2]) / hertz.contact_force(E, nu, 1.0, depth) - 1.0,
+                   a=(4.0 * last["contact_area"] / 3.141592653589793) ** 0.5 / hertz.contact_radius(1.0, depth) - 1.0,
+                   p0=last["max_nodal_contact_pressure"] / hertz.peak_pressure(E, nu, 1.0, depth) - 1.0)
+    if comm.rank == 0:
+        shutil.rmtree(out, ignore_errors=True)
+    return row
+
+
+def markdown(rows: list[dict]) -> str:
+    """The O-ring table and the Hertz table."""
+    reference = {(r["order"], r["mesh"]): r["force"] for r in rows if r["case"] == "oring" and r["poisson"] == 0.45
+                 and "force" in r}
+    lines = ["## Quadratic (P2) against linear (P1) tetrahedra with a rigid obstacle", "",
+             "Default settings, one run each (`benchmarks/quadratic_elements.py`). O-ring: the plate's force at 30 % "
+             "squeeze (N, the quarter slice), its ratio to the same mesh and order at ν = 0.45, the contact area.", "",
+             "| O-ring | ν | order | dofs | force (N) | / ν = 0.45 | area (mm²) | Newton / step | Krylov / Newton | run s |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in (r for r in rows if r["case"] == "oring"):
+        ratio = reference.get((r["order"], r["mesh"]))
+        ratio = f"{100.0 * (r['force'] / ratio - 1.0):+.1f} %" if ratio and "force" in r else "\u2013"
+        force = f"{r['force']:.4f}" if "force" in r else r.get("status", "")
+        area = f"{1e6 * r['area']:.3f}" if "area" in r else "\u2013"
+        lines.append(f"| {r['mesh']} | {r['poisson']:g} | {r['order']} | {cell(r, 'dofs')} | {force} | {ratio} | {area} "
+                     f"| {cell(r, 'newton_per_step', '.1f')} | {cell(r, 'krylov_per_newton', '.1f')} "
+                     f"| {cell(r, 'seconds', '.0f')} |")
+    lines += ["", "Hertz, a rigid sphere (R = 1 m) 1 mm into a block (E = 70 GPa, ν = 0.3): errors against Hertz.", "",
+              "| Hertz mesh | order | dofs | P | a | p0 | Newton / step | Krylov / Newton | run s |",
+              "|---|---|---|---|---|---|---|---|---|"]
+    for r in (r for r in rows if r["case"] == "hertz"):
+        def percent(name: str) -> str:
+            return f"{100.0 * r[name]:+.2f} %" if name in r else r.get("status", "\u2013")
+
+        lines.append(f"| {r['mesh']} | {r['order']} | {cell(r, 'dofs')} | {percent('P')} | {percent('a')} "
+                     f"| {percent('p0')} | {cell(r, 'newton_per_step', '.1f')} | {cell(r, 'krylov_per_newton', '.1f')} "
+                     f"| {cell(r, 'seconds', '.0f')} |")
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cases", nargs="+", choices=tuple(MESHES), default=list(MESHES))
+    parser.add_argument("--poisson", nargs="+", type=float, default=[0.45, 0.499])
+    parser.add_argument("--output", type=pathlib.Path, default=HERE / "results")
+    args = parser.parse_args()
+    comm = MPI.COMM_WORLD
+    work = args.output / "quadratic_elements_work"
+    rows = []
+    for name in args.cases:
+        for poisson in args.poisson if name == "oring" else [0.3]:
+            for mesh in MESHES[name]:
+                for order in (1, 2):
+                    rows.append(measure(name, order, mesh, poisson, work, comm))
+                    if comm.rank == 0:
+                        print(rows[-1], flush=True)
+                    write_table(comm, args.output / "quadratic_elements", {"mpi_size": comm.size, "rows": rows},
+                                markdown(rows), echo=False)
+    if comm.rank == 0:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
