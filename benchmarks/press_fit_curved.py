@@ -133,15 +133,16 @@ def measure(fit: dict, work: pathlib.Path, comm: MPI.Comm) -> dict:
 
 def markdown(rows: list[dict]) -> str:
     """One line per run: errors against Lamé in %."""
-    lines = ["## A press fit meshed the ordinary way, in flat (order 1) and curved (order 2) tetrahedra, "
+    lines = ["## A press fit meshed the ordinary way, in flat (gmsh order 1) and curved (gmsh order 2) tetrahedra, "
              "against Lamé", "",
              "Steel pin of radius b + δ (b = 20 mm) in a ring (c = 40 mm), quarter slice 2 mm thick in plane strain, "
-             "frictionless, unstructured tetrahedra of `meshes/press_fit.geo` (h on the pin's face / on the bore), "
+             "frictionless, unstructured tetrahedra of `meshes/press_fit.geo` (h on the pin's face / on the bore; linear "
+             "displacements, `[mesh] order = 1`), "
              "default settings, one load step. Errors against Lamé: p(F) the pressure from the pair force, u the mean "
              "radial displacements of the bore (b), the ring's outer face (c) and the pin's face, 10°–80° from the "
              "symmetry planes; open: slave nodes not in contact; nodal p: the smallest and largest λ_i / D_ii of the "
              "slave nodes in contact (docs/press_fit.md, \"Curved contact surfaces\").", "",
-             "| mesh pin / ring (mm) | order | slave | δ (µm) | ring | Lamé p (MPa) | p(F) | u ring b | u ring c "
+             "| mesh pin / ring (mm) | gmsh order | slave | δ (µm) | ring | Lamé p (MPa) | p(F) | u ring b | u ring c "
              "| u pin | open / slave nodes | nodal p | Newton | run s |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
