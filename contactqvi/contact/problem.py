@@ -133,7 +133,8 @@ class ContactProblem(PETScOwner):
         rotation: R (frame components to global), or None where every frame is (e1, e2, e3)
             and there is no body pair.
         coupling: N of the mortar rows (global components), or None without body pairs.
-        transform: T = (I + N) R, or None (then T = R); on quadratic elements T = S (I + N) R.
+        transform: T = (I + N) R, or None (then T = R); on quadratic elements T = S_free (I + N) R
+            (:attr:`modified`).
         offset: c = N g, the slave displacement due to prescribed master dofs at load
             factor 1, or None.
         translated: loads l~_c of a unit translation e_c (c = x, y, z) of the moved
@@ -208,7 +209,7 @@ class ContactProblem(PETScOwner):
         return self.interfaces[0].obstacle if len(self.interfaces) == 1 else None
 
     def petsc_objects(self) -> list[typing.Any]:
-        """A, the load vectors, R, N, T and c (copies by ``dataclasses.replace`` share them)."""
+        """A, the load vectors, S, R, N, T and c (copies by ``dataclasses.replace`` share them)."""
         objects = (self.A, self.applied, self.load, self.shift, self.elastic, self.hyperelastic, self.modified,
                    *self._variables_objects())
         return [obj for obj in objects if obj is not None]
