@@ -18,6 +18,8 @@ import typing
 from mpi4py import MPI
 from petsc4py import PETSc
 
+import numpy as np
+
 from contactqvi import tables
 from rows import merge_rows  # noqa: F401 (the scripts call benchlib.merge_rows)
 from contactqvi.cli import parse_args
@@ -130,6 +132,17 @@ def run_coulomb_case(
            "peak_rss_mib": peak_rss_mib(comm), "peak_rss_total_mib": peak_rss_mib(comm, MPI.SUM)}
     release(comm, *solutions)
     return row
+
+
+def hertz_measures(problem, result) -> tuple[float, float, float]:
+    """Hertz's P (N), a (m) and p0 (Pa) of a quarter model's contact ``result``: four times its total
+    contact force, a = sqrt(A / pi) with A four times the summed D_ii of the nodes in contact, and
+    the largest nodal pressure lambda_i / D_ii. Collective."""
+    comm, touching = problem.comm, result.normal_force > 0.0
+    force = 4.0 * comm.allreduce(float(result.normal_force.sum()), op=MPI.SUM)
+    area = 4.0 * comm.allreduce(float(problem.contact_area[touching].sum()), op=MPI.SUM)
+    p0 = comm.allreduce(float((result.normal_force / problem.contact_area).max(initial=0.0)), op=MPI.MAX)
+    return force, float(np.sqrt(area / np.pi)), p0
 
 
 def elastic_solve(problem, prefix: str) -> dict[str, float]:

@@ -64,11 +64,7 @@ def run(mesh: str, comm: MPI.Comm) -> dict:
         u.destroy()
         elastic = min((benchlib.elastic_solve(problem, "hertz_bodies_elastic_") for _ in range(2)),
                       key=lambda e: e["seconds"])
-        last = results[-1]
-        touching = last.normal_force > 0.0
-        force = 4.0 * comm.allreduce(float(last.normal_force.sum()), op=MPI.SUM)
-        area = 4.0 * comm.allreduce(float(problem.contact_area[touching].sum()), op=MPI.SUM)
-        p0 = comm.allreduce(float((last.normal_force / problem.contact_area).max(initial=0.0)), op=MPI.MAX)
+        force, a, p0 = benchlib.hertz_measures(problem, results[-1])
         dofs = problem.A.getSize()[0]
     return {
         "mesh": mesh, "h": f"a/{MESHES[mesh]}", "dofs": dofs, "ranks": comm.size,
@@ -76,7 +72,7 @@ def run(mesh: str, comm: MPI.Comm) -> dict:
         "krylov": [r.inner_iterations for r in results], "assembly_s": built - start, "solve_s": solved - built,
         "elastic_s": elastic["seconds"], "elastic_krylov": elastic["krylov"], **problem_seconds,
         "step_search_s": float(np.mean(searches)) if searches else 0.0,
-        "P": force, "a": float(np.sqrt(area / np.pi)), "p0": p0, "peak_rss_mib": benchlib.peak_rss_mib(comm, MPI.SUM),
+        "P": force, "a": a, "p0": p0, "peak_rss_mib": benchlib.peak_rss_mib(comm, MPI.SUM),
     }
 
 

@@ -30,7 +30,8 @@ from contactqvi.case import ContactCase, load_case
 from contactqvi.contact.load_path import solve_load_path
 from contactqvi.problems import hertz
 from contactqvi.runner import build_problem
-from rows import cell, failed_row, merge_rows, order
+from benchlib import hertz_measures
+from rows import cell, failed_row, merge_rows, order, percent
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 CASES = {"rigid": (ROOT / "cases" / "hertz.toml", "hertz_{}.geo"),
@@ -83,18 +84,14 @@ def run(name: str, mesh: str, poisson: float, formulation: str, pc: str | None, 
                 results = solve_load_path(problem, case.steps, u, dict(case.solver), "hertz_nu_", from_rest=True)
             finally:
                 u.destroy()
-            last = results[-1]
-            touching = last.normal_force > 0.0
-            force = 4.0 * comm.allreduce(float(last.normal_force.sum()), op=MPI.SUM)
-            area = 4.0 * comm.allreduce(float(problem.contact_area[touching].sum()), op=MPI.SUM)
-            p0 = comm.allreduce(float((last.normal_force / problem.contact_area).max(initial=0.0)), op=MPI.MAX)
+            force, a, p0 = hertz_measures(problem, results[-1])
             dofs = problem.A.getSize()[0]
     except Exception as exc:  # a step that failed: the table says so and the other runs go on
         return failed_row(f"failed: {type(exc).__name__}: {exc}", time.perf_counter() - start, **key)
     exact = closed_form(case)
     return {**key, "dofs": dofs, "status": [str(r.status) for r in results], "newton": [r.iterations for r in results],
             "krylov": [r.inner_iterations for r in results], "seconds": time.perf_counter() - start,
-            "P": force / exact["P"] - 1.0, "a": (area / 3.141592653589793) ** 0.5 / exact["a"] - 1.0,
+            "P": force / exact["P"] - 1.0, "a": a / exact["a"] - 1.0,
             "p0": p0 / exact["p0"] - 1.0, "failed": not all(r.converged for r in results)}
 
 
@@ -108,12 +105,9 @@ def markdown(rows: list[dict]) -> str:
              "", "| case | ν | formulation | mesh | pc | dofs | P | a | p0 | Newton | Krylov | run s |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        def percent(name: str) -> str:
-            return f"{100.0 * r[name]:+.2f} %" if name in r else "\u2013"
-
         counts = (" ".join(map(str, r[k])) if k in r else r.get("status", "") for k in ("newton", "krylov"))
         lines.append(f"| {r['case']} | {r['poisson']:g} | {r['formulation']} | {r['mesh']} | {r['pc']} "
-                     f"| {cell(r, 'dofs')} | {percent('P')} | {percent('a')} | {percent('p0')} | "
+                     f"| {cell(r, 'dofs')} | {percent(r, 'P')} | {percent(r, 'a')} | {percent(r, 'p0')} | "
                      + " | ".join(counts) + f" | {cell(r, 'seconds', '.0f')} |")
     return "\n".join(lines) + "\n"
 

@@ -39,7 +39,7 @@ from contactqvi.paraview import read_vtx
 from contactqvi.problems import press_fit
 from contactqvi.runner import run_case
 from contactqvi.tables import write_table
-from rows import cell, failed_row
+from rows import cell, failed_row, percent
 
 HERE = pathlib.Path(__file__).resolve().parent
 GEO = HERE.parent / "meshes" / "press_fit.geo"
@@ -146,13 +146,11 @@ def markdown(rows: list[dict]) -> str:
              "| u pin | open / slave nodes | nodal p | Newton | run s |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        def percent(name: str) -> str:
-            return f"{100.0 * r[name]:+.2f} %" if name in r else "\u2013"
-
-        nodal = f"{percent('nodal_low')} … {percent('nodal_high')}" if "nodal_low" in r else r.get("status", "")
+        nodal = f"{percent(r, 'nodal_low')} … {percent(r, 'nodal_high')}" if "nodal_low" in r else r.get("status", "")
         p = f"{r['p_lame'] / 1e6:.2f}" if "p_lame" in r else "\u2013"
         lines.append(f"| {r['mesh']} | {r['order']} | {r['slave']} | {1e6 * r['delta']:g} | {r['ring']} | {p} "
-                     f"| {percent('p_force')} | {percent('u_ring_b')} | {percent('u_ring_c')} | {percent('u_pin')} "
+                     f"| {percent(r, 'p_force')} | {percent(r, 'u_ring_b')} | {percent(r, 'u_ring_c')} "
+                     f"| {percent(r, 'u_pin')} "
                      f"| {cell(r, 'open')} / {cell(r, 'slave_nodes')} | {nodal} | {cell(r, 'newton')} "
                      f"| {cell(r, 'seconds', '.1f')} |")
     return "\n".join(lines) + "\n"

@@ -22,7 +22,7 @@ import pathlib
 import sys
 import typing
 
-__all__ = ["cell", "failed", "failed_row", "merge_rows", "order", "read_table", "write_text"]
+__all__ = ["cell", "failed", "failed_row", "merge_rows", "order", "percent", "read_table", "write_text"]
 
 
 def failed_row(status: str, seconds: float, **key: typing.Any) -> dict[str, typing.Any]:
@@ -66,6 +66,12 @@ def order(*names: str) -> typing.Callable[[dict[str, typing.Any]], tuple]:
     def key(row: dict[str, typing.Any]) -> tuple:
         return tuple((row.get(name) is None, row.get(name) if row.get(name) is not None else 0) for name in names)
     return key
+
+
+def percent(row: dict[str, typing.Any], name: str, missing: str = "\u2013") -> str:
+    """``row[name]``, a relative difference, as a signed percentage for a markdown table; ``missing``
+    (an en dash) where there is none."""
+    return f"{100.0 * row[name]:+.2f} %" if row.get(name) is not None else missing
 
 
 def cell(row: dict[str, typing.Any], name: str, spec: str = ".3g") -> str:

@@ -75,27 +75,8 @@ def read_mesh(case: ContactCase, comm: MPI.Comm) -> tuple[dmesh.Mesh, dmesh.Mesh
         msh, tags = create_contact_body(comm, case.mesh.box.lev, gap_function(case.mesh.box.geometry))
     else:
         msh, tags, _ = read_gmsh(case.mesh.file, comm)
-        _check_curved(case, msh)
     check_groups(case, tags.names)
     return msh, tags
-
-
-def _check_curved(case: ContactCase, msh: dmesh.Mesh) -> None:
-    """A second-order (curved) mesh with linear elements (``mesh.order = 1``) takes linear-elastic
-    bodies on tetrahedra: their displacements stay linear on its curved cells (docs/press_fit.md,
-    "Curved contact surfaces")."""
-    degree, cells = msh.geometry.cmap.degree, msh.topology.cell_name()
-    if degree == 1 or case.mesh.order == 2:
-        return
-    require(cells == "tetrahedron" and degree == 2, "mesh.file",
-            f"curved contact surfaces are read from second-order tetrahedra (10 nodes); got {cells} cells of "
-            f"degree {degree}")
-    models = [body.material.model for body in case.bodies] if case.bodies else [case.material.model]
-    require(all(model is None for model in models), "mesh.file",
-            "a second-order (curved) mesh with linear elements takes linear-elastic bodies: their displacements "
-            "stay linear on the curved cells, and the contact geometry of a hyperelastic body, which follows "
-            "the deformed surfaces, needs quadratic ones: give mesh.order = 2 (bodies against rigid obstacles), "
-            "or mesh with Mesh.ElementOrder = 1")
 
 
 def build_problem(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
@@ -121,7 +102,6 @@ def _build_bodies(case: ContactCase, comm: MPI.Comm) -> ContactProblem:
     """The contact problem of a case with ``[[bodies]]`` and ``[[contacts]]``; each body's
     ``boundary.body_force`` (N/m^3) acts on its own cells."""
     msh, facet_tags, cell_tags = read_gmsh(case.mesh.file, comm)
-    _check_curved(case, msh)
     check_bodies(case, cell_tags.names)
     tags = split_by_body(msh, facet_tags, cell_tags)
     check_groups(case, tags.names)

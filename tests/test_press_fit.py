@@ -254,6 +254,17 @@ def test_curved_surfaces_overlap_by_the_interference_as_meshed(mpi_tmp_path, sla
     assert ratios[1][1] > 1.4, ratios
 
 
+def test_a_hyperelastic_body_on_a_curved_mesh_with_linear_elements_is_refused(mpi_tmp_path):
+    """Its contact geometry follows the deformed surfaces, which linear displacements on curved cells
+    cannot carry: a ParameterError named mesh.file that names mesh.order = 2, before any assembly."""
+    case = _case(_unstructured(mpi_tmp_path, 2), STEEL, STEEL, USER_FIT)
+    for body in case["bodies"]:
+        body["material"]["model"] = "neo_hookean"
+    with pytest.raises(ParameterError, match=r"^mesh\.file: a second-order \(curved\) mesh with linear elements "
+                       r"takes linear-elastic bodies.*give mesh\.order = 2"):
+        build_problem(parse_case(case), MPI.COMM_WORLD)
+
+
 @pytest.mark.parametrize("slave", ["ring", "pin"])
 def test_a_fit_on_second_order_tetrahedra_meets_lame(mpi_tmp_path, caplog, slave):
     """The user's fit on 10-node tetrahedra, either body the slave: the pressure from the pair force

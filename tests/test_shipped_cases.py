@@ -228,18 +228,24 @@ def test_hertz_case_meets_the_closed_form(shipped_runs):
     assert np.allclose(forces / forces[-1], (depths / delta) ** 1.5, rtol=0.04)
 
 
+def _fit_force(shipped_runs, name: str) -> tuple[dict, list[float], float]:
+    """The one step of the fit ``name`` (the quarter slice of b = 20 mm, c = 40 mm, t = 2 mm), the
+    pin's force on the ring (N) and Lamé's p b t."""
+    case = load_case(ROOT / "cases" / f"{name}.toml")
+    (pin, ring), pair = case.bodies, case.contacts[0]
+    materials = [(body.material.young, body.material.poisson) for body in (pin, ring)]
+    b, c, t = 0.02, 0.04, 0.002
+    (step,) = shipped_runs.steps(name)
+    return step, step["pair_forces"][f"{pair.slave}/{pair.master}"], press_fit.contact_pressure(
+        pair.interference, b, c, *materials) * b * t
+
+
 @group("shrink_fit")
 def test_shrink_fit_case_meets_lame(shipped_runs):
     """The steel pin 0.1 mm oversize in the aluminium ring: the pin's force on the quarter ring
     is p b t along x and along y, p Lamé's pressure, within 1 % (measured +0.02 %)."""
-    case = load_case(ROOT / "cases" / "shrink_fit.toml")
-    (pin, ring), pair = case.bodies, case.contacts[0]
-    materials = [(body.material.young, body.material.poisson) for body in (pin, ring)]
-    b, c, t = 0.02, 0.04, 0.002  # meshes/shrink_fit.geo
-    p = press_fit.contact_pressure(pair.interference, b, c, *materials)
-    (step,) = shipped_runs.steps("shrink_fit")
-    force = step["pair_forces"][f"{pair.slave}/{pair.master}"]
-    assert force[:2] == pytest.approx([p * b * t, p * b * t], rel=0.01)
+    _, force, expected = _fit_force(shipped_runs, "shrink_fit")
+    assert force[:2] == pytest.approx([expected, expected], rel=0.01)
 
 
 @group("press_fit")
@@ -248,14 +254,8 @@ def test_press_fit_case_on_curved_tetrahedra_meets_lame(shipped_runs):
     tetrahedra: the pin's force on the quarter ring is p b t along x and along y within 1 % of
     Lamé's p (measured +0.19 %; the same mesh in first order: +26 %), no slave node is open and
     no warning says the fit is off (docs/press_fit.md, "Curved contact surfaces")."""
-    case = load_case(ROOT / "cases" / "press_fit.toml")
-    (pin, ring), pair = case.bodies, case.contacts[0]
-    materials = [(body.material.young, body.material.poisson) for body in (pin, ring)]
-    b, c, t = 0.02, 0.04, 0.002  # meshes/press_fit.geo
-    p = press_fit.contact_pressure(pair.interference, b, c, *materials)
-    (step,) = shipped_runs.steps("press_fit")
-    force = step["pair_forces"][f"{pair.slave}/{pair.master}"]
-    assert force[:2] == pytest.approx([p * b * t, p * b * t], rel=0.01)
+    step, force, expected = _fit_force(shipped_runs, "press_fit")
+    assert force[:2] == pytest.approx([expected, expected], rel=0.01)
     assert step["state_counts"]["no contact"] == 0
     assert not shipped_runs["press_fit"]["summary"]["warnings"]
 

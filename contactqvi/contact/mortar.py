@@ -54,7 +54,8 @@ from contactqvi.contact.owners import fetch_rows, owner_ranges, sum_to_owners
 from contactqvi.contact.segments import curvature_integrals, diameters, segment_integrals
 from contactqvi.parameters import require
 
-__all__ = ["MortarCoupling", "MortarLayout", "coupling_on_layout", "mortar_coupling", "surface_facets"]
+__all__ = ["MortarCoupling", "MortarLayout", "coupling_on_layout", "exterior_facet_cells", "facet_closures",
+           "mortar_coupling", "surface_facets"]
 
 #: A facet pair a search finds that overlaps by no more than this fraction of its slave facet's
 #: area is no reason to search again (:meth:`MortarLayout.covers`).
@@ -110,21 +111,11 @@ def surface_facets(V: fem.FunctionSpace, facets: np.ndarray, coords: np.ndarray 
     cell_name = msh.topology.cell_name()
     require(cell_name in _CELL_FACETS, "mesh",
             f"mortar contact needs tetrahedral or hexahedral meshes, got {cell_name} cells")
-    degree = msh.geometry.cmap.degree
-    require(degree == 1 or (degree == 2 and cell_name == "tetrahedron"), "mesh",
-            f"curved contact surfaces are read from second-order tetrahedra (10 nodes); got {cell_name} cells "
-            f"of degree {degree}")
-    per_cell = _CELL_FACETS[cell_name]
-    msh.topology.create_connectivity(tdim - 1, tdim)
-    msh.topology.create_connectivity(tdim, tdim - 1)
+    degree = msh.geometry.cmap.degree  # 2: second-order tetrahedra (the problem's builder checks it)
     facets = np.asarray(facets, dtype=np.int32)
-    facets = facets[facets < msh.topology.index_map(tdim - 1).size_local]
-    f2c, c2f = msh.topology.connectivity(tdim - 1, tdim), msh.topology.connectivity(tdim, tdim - 1)
-    cells = f2c.array[f2c.offsets[facets]]
-    local = np.argmax(c2f.array.reshape(-1, per_cell)[cells] == facets[:, None], axis=1)
-    closure = np.array([V.dofmap.dof_layout.entity_closure_dofs(tdim - 1, i) for i in range(per_cell)])
+    cells, local = exterior_facet_cells(msh, facets[facets < msh.topology.index_map(tdim - 1).size_local])
     cell_blk = V.dofmap.list[cells]
-    blk = np.take_along_axis(cell_blk, closure[local], axis=1)
+    blk = np.take_along_axis(cell_blk, facet_closures(V.dofmap.dof_layout, msh)[local], axis=1)
     coords = V.tabulate_dof_coordinates() if coords is None else coords
     x = coords[blk]
     normal = unit_normals(x)
@@ -133,12 +124,30 @@ def surface_facets(V: fem.FunctionSpace, facets: np.ndarray, coords: np.ndarray 
     return SurfaceFacets(blk.astype(np.int32), x, normal, None if degree == 1 else _sagittas(msh, cells, local))
 
 
+def exterior_facet_cells(msh: dmesh.Mesh, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The cell of each exterior facet ``facets`` (local indices) and the facet's index in it."""
+    tdim = msh.topology.dim
+    msh.topology.create_connectivity(tdim - 1, tdim)
+    msh.topology.create_connectivity(tdim, tdim - 1)
+    f2c, c2f = msh.topology.connectivity(tdim - 1, tdim), msh.topology.connectivity(tdim, tdim - 1)
+    cells = f2c.array[f2c.offsets[facets]]
+    per_cell = _CELL_FACETS[msh.topology.cell_name()]
+    return cells, np.argmax(c2f.array.reshape(-1, per_cell)[cells] == facets[:, None], axis=1)
+
+
+def facet_closures(layout, msh: dmesh.Mesh) -> np.ndarray:
+    """(facets per cell, k) the dofs of each facet's closure in a cell of the element ``layout``
+    (a dof layout of ``msh``'s cells): its vertices first, then on quadratic triangles the
+    midside nodes of the edges opposite each."""
+    facets = range(_CELL_FACETS[msh.topology.cell_name()])
+    return np.array([layout.entity_closure_dofs(msh.topology.dim - 1, i) for i in facets])
+
+
 def _sagittas(msh: dmesh.Mesh, cells: np.ndarray, local: np.ndarray) -> np.ndarray:
     """(f, 3, 3) :attr:`SurfaceFacets.sagitta` of the facets ``local`` (local index in the cell) of
     ``cells`` of a second-order tetrahedral mesh. A facet's closure in the coordinate element lists
     its vertices as the P1 space does, then the midside node of the edge opposite each."""
-    layout = msh.geometry.cmap.create_dof_layout()
-    closure = np.array([layout.entity_closure_dofs(2, i) for i in range(_CELL_FACETS["tetrahedron"])])
+    closure = facet_closures(msh.geometry.cmap.create_dof_layout(), msh)
     nodes = msh.geometry.x[np.take_along_axis(msh.geometry.dofmap[cells], closure[local], axis=1)]
     return nodes[:, 3:] - 0.5 * (nodes[:, [1, 2, 0]] + nodes[:, [2, 0, 1]])
 

@@ -780,7 +780,7 @@ def assemble_contact_problem(
     Raises ``ParameterError`` as :func:`~contactqvi.contact.interface.build_interfaces`,
     and for nonzero prescribed components on contact nodes or a body nothing holds.
     """
-    V = _displacement_space(msh, degree, pairs, formulation)
+    V = _displacement_space(msh, degree, pairs, formulation, material)
     nodal = formulation_indicator(msh, formulation, cell_tags, poisson)
     a, L = elasticity_forms(V, young, poisson, facet_tags, tractions, body_force, cell_tags, pressures, nodal)
     msh.topology.create_connectivity(msh.topology.dim - 1, msh.topology.dim)  # for the facet dofs
@@ -812,11 +812,11 @@ def assemble_contact_problem(
     return problem
 
 
-def _displacement_space(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair],
-                        formulation: Formulation) -> fem.FunctionSpace:
+def _displacement_space(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair], formulation: Formulation,
+                        material: Material | None) -> fem.FunctionSpace:
     """The vector Lagrange space of the displacements of ``degree`` (:func:`_check_degree`)."""
     require(msh.geometry.dim == 3, "mesh", "the contact problem is three-dimensional")
-    _check_degree(msh, degree, pairs, formulation)
+    _check_degree(msh, degree, pairs, formulation, material)
     return fem.functionspace(msh, ("Lagrange", degree, (3,)))
 
 
@@ -836,12 +836,23 @@ def _slave_basis(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typing
                                                        for pair in pairs])), constrained)
 
 
-def _check_degree(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair], formulation: Formulation) -> None:
-    """Quadratic displacements take tetrahedra, rigid obstacles and the plain formulation."""
+def _check_degree(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair], formulation: Formulation,
+                  material: Material | None) -> None:
+    """Quadratic displacements take tetrahedra, rigid obstacles and the plain formulation; linear ones
+    on a second-order (curved) mesh take tetrahedra and linear-elastic bodies, their displacements
+    staying linear on the curved cells (docs/press_fit.md, "Curved contact surfaces")."""
     require(degree in (1, 2), "mesh.order", f"must be 1 (linear elements) or 2 (quadratic), got {degree!r}")
+    cells, geometry = msh.topology.cell_name(), msh.geometry.cmap.degree
     if degree == 1:
+        require(geometry == 1 or (cells == "tetrahedron" and geometry == 2), "mesh.file",
+                f"curved contact surfaces are read from second-order tetrahedra (10 nodes); got {cells} cells of "
+                f"degree {geometry}")
+        require(geometry == 1 or material is None, "mesh.file",
+                "a second-order (curved) mesh with linear elements takes linear-elastic bodies: their "
+                "displacements stay linear on the curved cells, and the contact geometry of a hyperelastic body, "
+                "which follows the deformed surfaces, needs quadratic ones: give mesh.order = 2 (bodies against "
+                "rigid obstacles), or mesh with Mesh.ElementOrder = 1")
         return
-    cells = msh.topology.cell_name()
     require(cells == "tetrahedron", "mesh.order", f"quadratic elements are 10-node tetrahedra; the mesh has {cells} "
             "cells")
     body = next((pair for pair in pairs if isinstance(pair, BodyPair)), None)

@@ -43,6 +43,7 @@ import numpy as np
 import dolfinx.la
 from dolfinx import fem
 
+from contactqvi.contact.mortar import exterior_facet_cells, facet_closures
 from contactqvi.contact.owners import owner_ranges, sum_to_owners
 from contactqvi.elasticity import displacement_degree
 from contactqvi.lifetime import PETScOwner
@@ -114,16 +115,8 @@ def modified_basis(V: fem.FunctionSpace, facets: np.ndarray, constrained: np.nda
     if displacement_degree(V) == 1:
         return None
     msh = V.mesh
-    tdim = msh.topology.dim
-    msh.topology.create_connectivity(tdim - 1, tdim)
-    msh.topology.create_connectivity(tdim, tdim - 1)
-    f2c, c2f = msh.topology.connectivity(tdim - 1, tdim), msh.topology.connectivity(tdim, tdim - 1)
-    facets = np.asarray(facets, dtype=np.int32)
-    cells = f2c.array[f2c.offsets[facets]]
-    local = np.argmax(c2f.array.reshape(-1, 4)[cells] == facets[:, None], axis=1)
-    layout = V.dofmap.dof_layout
-    closure = np.array([layout.entity_closure_dofs(tdim - 1, i) for i in range(4)])  # vertices, then edge k opp. k
-    blk = np.take_along_axis(V.dofmap.list[cells], closure[local], axis=1)
+    cells, local = exterior_facet_cells(msh, np.asarray(facets, dtype=np.int32))
+    blk = np.take_along_axis(V.dofmap.list[cells], facet_closures(V.dofmap.dof_layout, msh)[local], axis=1)
     index_map = V.dofmap.index_map
     edge = np.repeat(blk[:, 3:].ravel(), 2)
     ends = np.stack([blk[:, [1, 2, 0]].ravel(), blk[:, [2, 0, 1]].ravel()], axis=1).ravel()
@@ -139,7 +132,8 @@ def modified_basis(V: fem.FunctionSpace, facets: np.ndarray, constrained: np.nda
     # of a roller): the identity there, and no prescribed end in a free component's row
     diagonal = np.where(constrained[edges], 1.0, diagonal)
     end = np.where(held | constrained[edges][:, None, :], 0.0, end)
-    variables = (_matrix(V, edges, ends, diagonal, end), _matrix(V, edges, ends, 1.0 / diagonal, -end / diagonal[:, None]))
+    variables = (_matrix(V, edges, ends, diagonal, end),
+                 _matrix(V, edges, ends, 1.0 / diagonal, -end / diagonal[:, None]))
     return ModifiedBasis(V, *geometric, *variables, edges.astype(np.int32))
 
 
