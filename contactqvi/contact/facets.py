@@ -17,6 +17,12 @@ onto which both facets are projected), and on a slave facet the dual basis psi.
   warped by 0.3 of its size, whose area element is no polynomial, to 1e-15), so that
   int psi_i phi_k = delta_ik int phi_k. On a parallelogram A is the tensor product of the
   1D duals 2 phi_0 - phi_1: psi_0 = 4 phi_0 - 2 phi_1 - 2 phi_2 + phi_3.
+* Quadratic triangles (facets of 10-node tetrahedra, vertices v0 v1 v2, then the midside
+  node of the edge opposite each): the Lagrange functions N_v = L_v (2 L_v - 1),
+  N_(3+k) = 4 L_(k+1) L_(k+2) of the barycentric coordinates L, and on a slave facet the
+  modified basis Ñ of Popp, Wohlmuth, Gee and Wall (2012, Sect. 3; docs/quadratic.md (1)),
+  Ñ_v = N_v + alpha sum_(k != v) N_(3+k), Ñ_(3+k) = (1 - 2 alpha) N_(3+k), whose dual basis
+  Φ = A Ñ, A = D_e M_e^{-1}, is one matrix on every flat facet (:data:`MODIFIED_DUAL`).
 """
 
 from __future__ import annotations
@@ -27,8 +33,8 @@ import numpy as np
 from contactqvi.contact.dual import Dual, primal
 from contactqvi.parameters import ParameterError
 
-__all__ = ["POLYGON_ORDER", "area_elements", "dual_coefficients", "facet_areas", "length", "magnitude", "nodal_integrals",
-           "planar_jacobians", "quadrilateral_shapes", "reference_coordinates", "triangle_rule", "unit_normals"]
+__all__ = ["ALPHA", "MODIFIED_AREAS", "MODIFIED_DUAL", "POLYGON_ORDER", "area_elements", "dual_coefficients", "facet_areas", "length", "magnitude", "modified_shapes",
+           "nodal_integrals", "planar_jacobians", "quadratic_shapes", "quadrilateral_shapes", "reference_coordinates", "triangle_rule", "unit_normals"]
 
 #: The vertices of a facet with n vertices in the order round its polygon.
 POLYGON_ORDER = {3: [0, 1, 2], 4: [0, 1, 3, 2]}
@@ -186,3 +192,38 @@ def dual_coefficients(x: np.ndarray) -> np.ndarray:
         return np.broadcast_to(4.0 * np.eye(3) - 1.0, (len(x), 3, 3))
     lumped, mass = _facet_mass(x)
     return np.swapaxes(np.linalg.solve(mass, lumped[:, :, None] * np.eye(n)), 1, 2)
+
+
+#: alpha of the modified basis of 6-node triangles (Popp, Wohlmuth, Gee and Wall 2012).
+ALPHA = 0.2
+
+
+def quadratic_shapes(L: np.ndarray) -> np.ndarray:
+    """(..., 6) the Lagrange functions of a 6-node triangle at barycentric coordinates L (..., 3):
+    the vertices' L_v (2 L_v - 1), then the edges' 4 L_(k+1) L_(k+2) (edge k opposite vertex k)."""
+    return np.concatenate([L * (2.0 * L - 1.0), 4.0 * L[..., [1, 2, 0]] * L[..., [2, 0, 1]]], axis=-1)
+
+
+#: Ñ = B N of the modified basis: the vertices' rows take alpha of the two edges at the vertex.
+_MODIFIED = np.block([[np.eye(3), ALPHA * (1.0 - np.eye(3))], [np.zeros((3, 3)), (1.0 - 2.0 * ALPHA) * np.eye(3)]])
+
+
+def modified_shapes(L: np.ndarray) -> np.ndarray:
+    """(..., 6) the modified basis Ñ of a 6-node slave triangle at barycentric coordinates L (..., 3)."""
+    return np.einsum("ij,...j->...i", _MODIFIED, quadratic_shapes(L))
+
+
+def _modified_dual() -> tuple[np.ndarray, np.ndarray]:
+    """A = D_e M_e^{-1} of the modified basis on a flat triangle, and int Ñ_k / area (a rule of
+    degree 4 is exact for Ñ_j Ñ_k)."""
+    points, weights = triangle_rule(4)
+    shapes = modified_shapes(points)
+    mass = np.einsum("q,qj,qk->jk", weights, shapes, shapes)
+    lumped = mass.sum(axis=1)
+    return np.linalg.solve(mass, np.diag(lumped)).T, lumped
+
+
+#: (6, 6) Φ_i = sum_k A_ik Ñ_k: the dual basis of the modified basis on a flat triangle,
+#: int Φ_i Ñ_k = delta_ik int Ñ_k; and the areas int Ñ_k over the facet's area, 2/15 at the
+#: vertices and 1/5 at the edges.
+MODIFIED_DUAL, MODIFIED_AREAS = _modified_dual()

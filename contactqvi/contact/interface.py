@@ -243,7 +243,7 @@ def build_interfaces(
         pairs: the contact pairs.
         constrained: (local nodes, 3) mask of prescribed components; nodes with all
             three prescribed cannot be slave nodes.
-        modified: the slave surfaces' modified basis of a P2 space (obstacle pairs).
+        modified: the slave surfaces' modified basis of a P2 space.
 
     Raises:
         ParameterError: a bad contact law, a node on two slave surfaces or on a
@@ -259,7 +259,7 @@ def build_interfaces(
         if isinstance(pair, ObstaclePair):
             interfaces.append(_obstacle_interface(V, facet_tags, pair, constrained, modified=modified))
         else:
-            interfaces.append(_body_interface(V, facet_tags, pair, constrained))
+            interfaces.append(_body_interface(V, facet_tags, pair, constrained, modified=modified))
     _check_disjoint(V, facet_tags, pairs, interfaces)
     return interfaces
 
@@ -288,7 +288,7 @@ def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: t
                                        displacement if finite_strain else None, translation, rotation, modified)
         kept = interface.coupling.slave_blk if interface.follows else None
         return dataclasses.replace(_body_interface(V, facet_tags, interface.pair, constrained, x,
-                                                   interface.follows and linearised, kept),
+                                                   interface.follows and linearised, kept, modified),
                                    meshed_fit=interface.meshed_fit)
 
     return [again(i) if i.searched_each_step else i for i in interfaces]
@@ -363,18 +363,20 @@ FACETING = 0.02
 
 def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: BodyPair,
                     constrained: np.ndarray, displacement: np.ndarray | None = None,
-                    linearised: bool = False, kept_blk: np.ndarray | None = None) -> Interface:
+                    linearised: bool = False, kept_blk: np.ndarray | None = None,
+                    modified: ModifiedBasis | None = None) -> Interface:
     """A body pair's interface searched in the reference configuration (checked: it finds
     nodes, and they do not overlap) or in x + ``displacement`` (local nodes, 3); its coupling
     with its derivatives if ``linearised``, the nodes ``kept_blk`` of the last search kept as
-    long as they are covered at all (:func:`~contactqvi.contact.mortar.mortar_coupling`)."""
+    long as they are covered at all (:func:`~contactqvi.contact.mortar.mortar_coupling`), the
+    slave's positions those of the ``modified`` basis of a P2 space."""
     slave, master = boundary_facets(facet_tags, pair.slave), boundary_facets(facet_tags, pair.master)
     distance = pair.search_distance
     require(distance is None or distance > 0.0, error_key(pair, "search_distance"), f"must be > 0, got {distance!r}")
     require(pair.search in SEARCHES, error_key(pair, "search"),
             f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
     coupling = mortar_coupling(V, slave, master, distance, np.flatnonzero(constrained.all(axis=1)), displacement,
-                               linearised, kept_blk)
+                               linearised, kept_blk, modified)
     comm = V.mesh.comm
     if displacement is None:
         found = comm.allreduce(len(coupling.slave_blk), op=MPI.SUM)

@@ -5,7 +5,9 @@ Gamma_m are imposed weakly, tested with the dual (biorthogonal) basis psi_i of t
 slave nodes (Wohlmuth): on a linear triangle psi_i = 4 phi_i - 1, so that
 int_T psi_i phi_k = delta_ik int_T phi_k; on a bilinear quadrilateral (hexahedral
 meshes) psi = A phi with A = D_e M_e^{-1} from the facet's mass matrix
-(:mod:`contactqvi.contact.facets`). The mortar matrices
+(:mod:`contactqvi.contact.facets`); on the 6-node triangles of quadratic displacements, the dual
+basis Φ of the slave's modified basis Ñ (:mod:`contactqvi.contact.quadratic`), whose
+coefficients ũ = S^-1 u are the slave's unknowns (docs/quadratic.md, Sect. 5). The mortar matrices
 
     D_ii = int_{Gamma_s} psi_i,        M_ij = int_{Gamma_s} psi_i (phi_j^m o pi),
 
@@ -42,17 +44,22 @@ import dataclasses
 
 from mpi4py import MPI
 
+import typing
+
 import numpy as np
 import scipy.spatial
 
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 
-from contactqvi.contact.facets import facet_areas, nodal_integrals, unit_normals
+from contactqvi.contact.facets import MODIFIED_AREAS, facet_areas, nodal_integrals, unit_normals
 from contactqvi.contact.linearisation import CouplingDerivatives, coupling_derivatives
 from contactqvi.contact.owners import fetch_rows, owner_ranges, sum_to_owners
-from contactqvi.contact.segments import curvature_integrals, diameters, segment_integrals
+from contactqvi.contact.segments import curvature_integrals, diameters, quadratic_segment_integrals, segment_integrals
 from contactqvi.parameters import require
+
+if typing.TYPE_CHECKING:
+    from contactqvi.contact.quadratic import ModifiedBasis
 
 __all__ = ["MortarCoupling", "MortarLayout", "coupling_on_layout", "exterior_facet_cells", "facet_closures",
            "mortar_coupling", "surface_facets"]
@@ -71,11 +78,13 @@ MIN_COVERAGE = 0.5
 @dataclasses.dataclass(frozen=True)
 class SurfaceFacets:
     """Facets of a boundary surface, owned by this rank: linear triangles (tetrahedral
-    meshes) or bilinear quadrilaterals (hexahedral meshes, vertices in tensor-product order).
+    meshes), bilinear quadrilaterals (hexahedral meshes, vertices in tensor-product order) or
+    the 6-node triangles of quadratic displacements on tetrahedra.
 
     Attributes:
-        blk: (f, n) local node (block) indices of the vertices (ghosts included), n = 3 or 4.
-        x: (f, n, 3) vertex coordinates.
+        blk: (f, n) local node (block) indices (ghosts included) of the vertices, n = 3 or 4, or
+            of a 6-node triangle's vertices and then the midside node of the edge opposite each.
+        x: (f, 3 or 4, 3) vertex coordinates.
         normal: (f, 3) outward unit normals (away from the body; of a quadrilateral's mean
             plane, the cross product of its diagonals).
         sagitta: (f, 3, 3) on a curved (second-order) tetrahedral mesh, each edge's midside node
@@ -93,8 +102,16 @@ class SurfaceFacets:
         return facet_areas(self.x)
 
     @property
+    def quadratic(self) -> bool:
+        """Whether these are 6-node triangles (quadratic displacements)."""
+        return self.blk.shape[1] == 6
+
+    @property
     def lumped(self) -> np.ndarray:
-        """(f, n) int phi_k: each vertex's lumped area."""
+        """(f, n) each node's lumped area: int phi_k, or int Ñ_k of the modified basis of 6-node
+        triangles (over their vertex triangles)."""
+        if self.quadratic:
+            return self.area[:, None] * MODIFIED_AREAS
         return nodal_integrals(self.x)
 
 
@@ -103,8 +120,8 @@ _CELL_FACETS = {"tetrahedron": 4, "hexahedron": 6}
 
 
 def surface_facets(V: fem.FunctionSpace, facets: np.ndarray, coords: np.ndarray | None = None) -> SurfaceFacets:
-    """The owned exterior facets ``facets`` (local indices) of a P1 space on tetrahedra or a Q1
-    space on hexahedra, with the node positions ``coords`` (local nodes, ghosts included;
+    """The owned exterior facets ``facets`` (local indices) of a P1 or P2 space on tetrahedra or a
+    Q1 space on hexahedra, with the node positions ``coords`` (local nodes, ghosts included;
     default the mesh's)."""
     msh = V.mesh
     tdim = msh.topology.dim
@@ -117,11 +134,13 @@ def surface_facets(V: fem.FunctionSpace, facets: np.ndarray, coords: np.ndarray 
     cell_blk = V.dofmap.list[cells]
     blk = np.take_along_axis(cell_blk, facet_closures(V.dofmap.dof_layout, msh)[local], axis=1)
     coords = V.tabulate_dof_coordinates() if coords is None else coords
-    x = coords[blk]
+    quadratic = blk.shape[1] == 6
+    x = coords[blk[:, :3] if quadratic else blk]
     normal = unit_normals(x)
     outward = np.einsum("ij,ij->i", normal, x.mean(axis=1) - coords[cell_blk].mean(axis=1)) > 0.0
     normal[~outward] *= -1.0
-    return SurfaceFacets(blk.astype(np.int32), x, normal, None if degree == 1 else _sagittas(msh, cells, local))
+    curved = degree == 2 and not quadratic  # P2 displacements carry the curved positions themselves
+    return SurfaceFacets(blk.astype(np.int32), x, normal, _sagittas(msh, cells, local) if curved else None)
 
 
 def exterior_facet_cells(msh: dmesh.Mesh, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -255,11 +274,11 @@ def _exchange_master(comm: MPI.Comm, slave: SurfaceFacets, master: SurfaceFacets
 def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facets: np.ndarray,
                     search_distance: float | None = None, excluded_blk: np.ndarray | None = None,
                     displacement: np.ndarray | None = None, linearised: bool = False,
-                    kept_blk: np.ndarray | None = None) -> MortarCoupling:
+                    kept_blk: np.ndarray | None = None, modified: ModifiedBasis | None = None) -> MortarCoupling:
     """C = D^{-1} M, nodal normals and weighted gaps of a slave and a master surface.
 
     Args:
-        V: vector P1 (tetrahedra) or Q1 (hexahedra) space on the mesh holding both bodies.
+        V: vector P1 or P2 (tetrahedra) or Q1 (hexahedra) space on the mesh holding both bodies.
         slave_facets, master_facets: local facet indices of the two surfaces.
         search_distance: master facets farther than this from a slave facet
             (between bounding boxes, m) are not paired with it; None: the slave
@@ -272,6 +291,8 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
         kept_blk: owned local nodes coupled by the last search, which stay coupled down to
             :data:`KEPT_COVERAGE` (a geometry that follows the Newton iterate: a node at the rim
             of the master's shadow does not come and go from one iterate to the next).
+        modified: the modified basis of the slave surface of a P2 space (its positions x̃ = S^-1 x
+            are the slave's in the weighted gap); required there.
 
     Collective. Slave nodes with less than :data:`MIN_COVERAGE` of their lumped area
     in the master's shadow (:data:`KEPT_COVERAGE` for ``kept_blk``) are left out, and so are
@@ -281,6 +302,8 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
     comm, index_map, x = V.mesh.comm, V.dofmap.index_map, V.tabulate_dof_coordinates()
     current = x if displacement is None else x + displacement
     slave, master = surface_facets(V, slave_facets, current), surface_facets(V, master_facets, current)
+    require(not (slave.quadratic and linearised), "mesh.order", "quadratic elements take body pairs searched "
+            "once or every step; the linearised geometry (search = \"newton\") is built for linear ones")
     master_glob = index_map.local_to_global(master.blk.ravel()).reshape(master.blk.shape)
     diameter = max(_max_edge(slave.x, comm), _max_edge(master.x, comm))
     reach = 2.0 * diameter + (diameter if search_distance is None else search_distance)
@@ -294,7 +317,7 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
                           D_pair.sum(axis=1) / slave.area[pairs_s], np.empty(0, dtype=np.int32))
     bulge = None if slave.sagitta is None else _bulge(slave, pairs_s, mx[pairs_m], msagitta[0][pairs_m])
     coupling, lumped_area, gap = _integrated(V, layout, slave, mx[pairs_m], current, None, excluded_blk,
-                                             (D_pair, M_pair), linearised, kept_blk, bulge)
+                                             (D_pair, M_pair), linearised, kept_blk, bulge, modified)
     # a node farther than the search distance (default: its own size) cannot touch in this step
     reach = np.sqrt(2.0 * lumped_area[coupling.slave_blk]) if search_distance is None else search_distance
     return coupling.restricted(gap <= reach)
@@ -319,14 +342,15 @@ def coupling_on_layout(V: fem.FunctionSpace, layout: MortarLayout, displacement:
 def _integrated(V: fem.FunctionSpace, layout: MortarLayout, slave: SurfaceFacets, master_x: np.ndarray,
                 current: np.ndarray, rows: np.ndarray | None, excluded_blk: np.ndarray | None,
                 integrals: tuple[np.ndarray, np.ndarray] | None, linearised: bool,
-                kept_blk: np.ndarray | None = None,
-                bulge: np.ndarray | None = None) -> tuple[MortarCoupling, np.ndarray, np.ndarray]:
+                kept_blk: np.ndarray | None = None, bulge: np.ndarray | None = None,
+                modified: ModifiedBasis | None = None) -> tuple[MortarCoupling, np.ndarray, np.ndarray]:
     """The coupling of the owned slave nodes ``rows`` by the facet pairs of ``layout`` (their
     master facets at ``master_x``, their :func:`segment_integrals` ``integrals`` if known), the
     lumped slave areas of the owned nodes and the rows' weighted gaps at the positions
     ``current``. ``rows`` None: the nodes the pairs cover for at least :data:`MIN_COVERAGE` of
     their lumped area (:data:`KEPT_COVERAGE` for ``kept_blk``), less ``excluded_blk``. ``bulge``:
-    the pairs' :func:`_bulge` on a curved mesh, added to every separation."""
+    the pairs' :func:`_bulge` on a curved mesh, added to every separation; ``modified``: the slave's
+    modified basis (6-node triangles), whose positions x̃ = S^-1 x the slave nodes take."""
     comm, index_map, x = V.mesh.comm, V.dofmap.index_map, V.tabulate_dof_coordinates()
     pairs_s = layout.pairs_s
     if integrals is None:
@@ -349,6 +373,8 @@ def _integrated(V: fem.FunctionSpace, layout: MortarLayout, slave: SurfaceFacets
     positions = np.hstack([x, current])  # reference and current positions, fetched together
     projected = np.zeros((len(slave_blk), 6))
     np.add.at(projected, position, values[:, None] * fetch_rows(comm, index_map, positions, cols))
+    if slave.quadratic:
+        positions = np.hstack([modified.positions(x), modified.positions(current)])
     separation = positions[slave_blk] - projected
     if bulge is not None:
         separation += np.tile(_owned_bulge(comm, index_map, slave, pairs_s, bulge)[slave_blk]
@@ -428,19 +454,22 @@ def _overlapping(slave: SurfaceFacets, master_x: np.ndarray, pairs_s: np.ndarray
 
 def _chunk(slave: SurfaceFacets, master_x: np.ndarray) -> int:
     """Pairs integrated at a time (:data:`_CHUNK`, :data:`_QUADRILATERAL_CHUNK`)."""
-    return _CHUNK if slave.x.shape[1] == master_x.shape[1] == 3 else _QUADRILATERAL_CHUNK
+    return _CHUNK if slave.blk.shape[1] == master_x.shape[1] == 3 else _QUADRILATERAL_CHUNK
 
 
 def _pair_integrals(slave: SurfaceFacets, master_x: np.ndarray, pairs_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """:func:`segment_integrals` (D, M) of the pairs of slave facets ``pairs_s`` with the master
     facets ``master_x`` (P, n_m, 3), in chunks, so the work arrays stay bounded (all at once
-    they took 390 MB on the two-body Hertz fine mesh)."""
-    ns, nm = slave.x.shape[1], master_x.shape[1]
+    they took 390 MB on the two-body Hertz fine mesh); :func:`quadratic_segment_integrals` of
+    6-node triangles."""
+    ns = slave.blk.shape[1]
+    nm = ns if slave.quadratic else master_x.shape[1]
     parts = [(np.empty((0, ns)), np.empty((0, ns, nm)))]
     chunk = _chunk(slave, master_x)
+    integrals = quadratic_segment_integrals if slave.quadratic else segment_integrals
     for start in range(0, len(pairs_s), chunk):
         s = pairs_s[start:start + chunk]
-        parts.append(segment_integrals(slave.x[s], -slave.normal[s], master_x[start:start + chunk]))
+        parts.append(integrals(slave.x[s], -slave.normal[s], master_x[start:start + chunk]))
     return tuple(np.concatenate(part) for part in zip(*parts))
 
 

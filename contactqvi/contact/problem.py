@@ -829,16 +829,17 @@ def _prescribed(V: fem.FunctionSpace, dirichlet_dofs_loc: np.ndarray) -> tuple[n
 
 def _slave_basis(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typing.Sequence[Pair],
                  constrained: np.ndarray) -> ModifiedBasis | None:
-    """The modified basis of the pairs' slave surfaces on quadratic elements (obstacle pairs), else None."""
+    """The modified basis of the pairs' slave surfaces on quadratic elements, else None."""
     if displacement_degree(V) == 1:
         return None
-    return modified_basis(V, np.unique(np.concatenate([boundary_facets(facet_tags, pair.surface)
-                                                       for pair in pairs])), constrained)
+    surfaces = [pair.surface if isinstance(pair, ObstaclePair) else pair.slave for pair in pairs]
+    return modified_basis(V, np.unique(np.concatenate([boundary_facets(facet_tags, s) for s in surfaces])),
+                          constrained)
 
 
 def _check_degree(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair], formulation: Formulation,
                   material: Material | None) -> None:
-    """Quadratic displacements take tetrahedra, rigid obstacles and the plain formulation; linear ones
+    """Quadratic displacements take tetrahedra, pairs searched once or each step and the plain formulation; linear ones
     on a second-order (curved) mesh take tetrahedra and linear-elastic bodies, their displacements
     staying linear on the curved cells (docs/press_fit.md, "Curved contact surfaces")."""
     require(degree in (1, 2), "mesh.order", f"must be 1 (linear elements) or 2 (quadratic), got {degree!r}")
@@ -855,10 +856,10 @@ def _check_degree(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair], fo
         return
     require(cells == "tetrahedron", "mesh.order", f"quadratic elements are 10-node tetrahedra; the mesh has {cells} "
             "cells")
-    body = next((pair for pair in pairs if isinstance(pair, BodyPair)), None)
-    require(body is None, "mesh.order", f"quadratic elements take contact with rigid obstacles; the pair "
-            f"{body.name if body else ''} couples two meshed bodies, whose quadratic mortar coupling is not built "
-            "yet: use order = 1 (with a second-order mesh: curved surfaces, docs/press_fit.md)")
+    for pair in pairs:
+        require(pair.search != "newton", error_key(pair, "search"), "quadratic elements take pairs searched once "
+                "or each step ('once', 'every_step', 'until_settled'); the geometry inside the Newton iteration "
+                "('newton') is built for linear elements")
     names = set(formulation.values()) if isinstance(formulation, dict) else {formulation}
     require(names <= {"displacement"}, "mesh.order", "the nodally averaged volume change (formulation = "
             "\"nodal_pressure\") is a formulation of linear tetrahedra; quadratic ones take \"displacement\"")

@@ -43,16 +43,13 @@ import numpy as np
 import dolfinx.la
 from dolfinx import fem
 
+from contactqvi.contact.facets import ALPHA
 from contactqvi.contact.mortar import exterior_facet_cells, facet_closures
 from contactqvi.contact.owners import owner_ranges, sum_to_owners
 from contactqvi.elasticity import displacement_degree
 from contactqvi.lifetime import PETScOwner
 
 __all__ = ["ALPHA", "ModifiedBasis", "modified_basis"]
-
-#: alpha of (1) for 6-node triangles (Popp, Wohlmuth, Gee and Wall 2012).
-ALPHA = 0.2
-
 
 @dataclasses.dataclass(eq=False)
 class ModifiedBasis(PETScOwner):

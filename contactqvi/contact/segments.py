@@ -34,19 +34,22 @@ import numpy as np
 
 from contactqvi.contact.dual import primal
 from contactqvi.contact.facets import (
+    MODIFIED_DUAL,
     POLYGON_ORDER,
     area_elements,
     dual_coefficients,
     length,
     magnitude,
+    modified_shapes,
     planar_jacobians,
+    quadratic_shapes,
     quadrilateral_shapes,
     reference_coordinates,
     triangle_rule,
 )
 
 __all__ = ["AFFINE_DEGREE", "QUADRILATERAL_DEGREE", "clip_polygons", "curvature_integrals", "diameters", "edge_ties",
-           "planar_integrals", "plane_coordinates", "segment_integrals"]
+           "planar_integrals", "plane_coordinates", "quadratic_segment_integrals", "segment_integrals"]
 
 #: Degree-2 rule on a triangle (barycentric points, weights summing to 1): exact for
 #: psi_i phi_j^m on a flat pair of linear triangles.
@@ -287,6 +290,27 @@ def curvature_integrals(slave: np.ndarray, normal: np.ndarray, master: np.ndarra
         Bs[rows] += np.einsum("pq,pqi,pqk->pik", weights, psi, _edge_bubbles(_barycentric(s2[rows], points)))
         Bm[rows] += np.einsum("pq,pqi,pqk->pik", weights, psi, _edge_bubbles(_barycentric(m2[rows], points)))
     return Bs, Bm
+
+
+def quadratic_segment_integrals(slave: np.ndarray, normal: np.ndarray,
+                                master: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The mortar integrals of pairs of 6-node triangles (quadratic displacements):
+
+        D[i] = int Φ_i,    M[i, j] = int Φ_i (N_j^m o pi),
+
+    Φ the dual basis of the slave's modified basis (:data:`~contactqvi.contact.facets.MODIFIED_DUAL`),
+    N^m the master's quadratic Lagrange functions (vertices, then the edge opposite each), over
+    the segments of the facets' vertex triangles (``slave``, ``master``: (P, 3, 3) vertices,
+    ``normal`` the slave's), pi the projection along ``normal`` onto the master's. Φ_i N_j^m is
+    of degree 4 on a flat pair: the rule is exact there. Curved facets enter through the
+    positions of their nodes, which the weighted gap takes (docs/quadratic.md, Sect. 5)."""
+    s2, m2, _ = plane_coordinates(slave, normal, master)
+    D, M = np.zeros((len(slave), 6)), np.zeros((len(slave), 6, 6))
+    for rows, weights, _, points in _segment_points(slave, s2, master, m2, 4):
+        dual = np.einsum("ik,pqk->pqi", MODIFIED_DUAL, modified_shapes(_barycentric(s2[rows], points)))
+        D[rows] += np.einsum("pq,pqi->pi", weights, dual)
+        M[rows] += np.einsum("pq,pqi,pqj->pij", weights, dual, quadratic_shapes(_barycentric(m2[rows], points)))
+    return D, M
 
 
 def _edge_bubbles(L: np.ndarray) -> np.ndarray:
