@@ -1,4 +1,5 @@
-"""Quadratic elements (10-node tetrahedra, P2 displacements) against rigid obstacles (issue 43).
+"""Quadratic elements (10-node tetrahedra, P2 displacements) against rigid obstacles (issue 43;
+between meshed bodies: tests/test_quadratic_mortar.py).
 
 The slave surface's displacement is taken in the modified basis of
 :mod:`contactqvi.contact.quadratic` (u = S ũ, Ñ_v = N_v + alpha (N_e + N_e'), Ñ_e = (1 - 2 alpha) N_e):
@@ -12,8 +13,8 @@ The slave surface's displacement is taken in the modified basis of
   vertices would take no force). On any number of ranks;
 * the tangent of the transformed problem is the derivative of its residual, also in the rows
   of the rollers on the slave surface;
-* bad input: quadratic elements with a body pair, hexahedra, the nodally averaged formulation,
-  and an order other than 1 or 2, each named ``mesh.order``.
+* bad input: quadratic elements on hexahedra, with the nodally averaged formulation, and an order
+  other than 1 or 2, each named ``mesh.order``.
 """
 
 from __future__ import annotations
@@ -28,8 +29,6 @@ from dolfinx import fem, la
 
 from contactqvi.case import parse_case
 from contactqvi.contact import LoadStep, build_contact_problem, solve_load_path
-from contactqvi.contact.interface import BodyPair
-from contactqvi.contact.problem import assemble_contact_problem
 from contactqvi.contact.quadratic import ALPHA, modified_basis
 from contactqvi.laws import Frictionless
 from contactqvi.materials import NeoHookean
@@ -169,12 +168,9 @@ def test_quadratic_tangent_is_the_derivative_of_the_residual():
 
 
 def test_quadratic_elements_refuse_what_they_do_not_support():
-    """A body pair, hexahedra and the nodally averaged volume change are each a ParameterError named
-    mesh.order before any assembly; so is an order other than 1 or 2 in a case file."""
+    """Hexahedra and the nodally averaged volume change are each a ParameterError named mesh.order
+    before any assembly; so is an order other than 1 or 2 in a case file."""
     msh, tags = _block()
-    pair = BodyPair("contact", "top", Frictionless())
-    with pytest.raises(ParameterError, match=r"^mesh\.order: quadratic elements take contact with rigid obstacles"):
-        assemble_contact_problem(msh, tags, YOUNG, POISSON, {}, [pair], degree=2)
     with pytest.raises(ParameterError, match=r"^mesh\.order: the nodally averaged volume change"):
         build_contact_problem(msh, tags, YOUNG, POISSON, {}, Frictionless(), clamped=(), contact="contact",
                               displacements=ROLLERS, formulation="nodal_pressure", degree=2)

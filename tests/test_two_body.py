@@ -112,12 +112,13 @@ def test_flat_non_matching_interface_is_integrated_exactly(blocks, slave, master
     assert np.allclose(coupling.normal, [0.0, 0.0, 1.0 if slave == "upper" else -1.0], atol=1e-14)
 
 
-def _patch_problem(blocks, young_upper: float, friction: float):
+def _patch_problem(blocks, young_upper: float, friction: float, degree: int = 1):
+    """The patch test's blocks with displacements of ``degree`` (P1 or P2)."""
     msh, tags, cell_tags = blocks
     young, poisson = body_materials(msh, cell_tags, {"lower": (1e9, NU), "upper": (young_upper, NU)})
     return assemble_contact_problem(msh, tags, young, poisson, {"upper.top": (0.0, 0.0, -P)},
                                     [BodyPair("upper.interface", "lower.interface", Coulomb(friction))],
-                                    displacements=ROLLERS, cell_tags=cell_tags)
+                                    displacements=ROLLERS, cell_tags=cell_tags, degree=degree)
 
 
 def _solve(problem, pc: str = "gamg"):
@@ -220,14 +221,15 @@ def test_a_body_nothing_holds_is_named(blocks):
                                  cell_tags=cell_tags)
 
 
-def _stack_problem(msh, tags, cell_tags, rotation: np.ndarray):
+def _stack_problem(msh, tags, cell_tags, rotation: np.ndarray, degree: int = 1):
     """The blocks without rollers: the lower one clamped at the bottom, the upper one held
-    by friction (F = 0.5) under a pressure with a small shear, all rotated by ``rotation``."""
+    by friction (F = 0.5) under a pressure with a small shear, all rotated by ``rotation``;
+    displacements of ``degree``."""
     young, poisson = body_materials(msh, cell_tags, {"lower": (1e9, NU), "upper": (3e9, 0.2)})
     traction = rotation @ np.array([0.1 * P, 0.05 * P, -P])
     return assemble_contact_problem(msh, tags, young, poisson, {"upper.top": tuple(traction)},
                                     [BodyPair("upper.interface", "lower.interface", Coulomb(0.5))],
-                                    clamped=["lower.bottom"], cell_tags=cell_tags)
+                                    clamped=["lower.bottom"], cell_tags=cell_tags, degree=degree)
 
 
 def test_two_body_solution_is_frame_invariant(blocks):
