@@ -4,17 +4,19 @@ The fit of the user's case (``../shared/repro/turn5/press_fit/``): a steel pin o
 ring with hole radius b = 20 mm and outer radius c = 40 mm, a quarter slice t = 2 mm thick with
 rollers on the symmetry planes and both flat faces (plane strain), frictionless, meshed in
 unstructured tetrahedra by ``meshes/press_fit.geo``: h_pin on the pin's face, h_ring on the bore.
-``order = 1`` gives the flat facets whose chords cut inside the cylinders by up to h²/(8R), about δ
-itself; ``order = 2`` 10-node tetrahedra whose midside nodes lie on them (docs/press_fit.md,
-"Curved contact surfaces"). Each row is one run of :func:`contactqvi.runner.run_case`, as a user
-runs the case, with default settings:
+gmsh's ``order = 1`` gives the flat facets whose chords cut inside the cylinders by up to h²/(8R), about
+δ itself; ``order = 2`` 10-node tetrahedra whose midside nodes lie on them (docs/press_fit.md,
+"Curved contact surfaces"), with linear displacements (P1) or quadratic ones (P2, ``[mesh] order = 2``,
+the quadratic dual mortar of docs/quadratic.md). Each row is one run of
+:func:`contactqvi.runner.run_case`, as a user runs the case, with default settings:
 
 * ``p(F)``: the pressure from the pair force, (|F_x| + |F_y|) / (2 b t), against Lamé's p;
 * ``u ring b``, ``u ring c``, ``u pin``: the mean radial displacement of the nodes of ``body.bp``
   on the bore, the ring's outer face and the pin's face more than 10° from the symmetry planes,
   against Lamé's;
 * ``open``: slave nodes not in contact; ``nodal p``: the smallest and largest nodal contact
-  pressure λ_i / D_ii over the slave nodes in contact (``contact_surface.bp``), against Lamé's p.
+  pressure λ_i / D_ii over the slave nodes in contact (``summary.json``'s ``min_nodal_contact_pressure``
+  and ``max_nodal_contact_pressure``; the edge nodes of P2 too), against Lamé's p.
 
     .venv/bin/python benchmarks/press_fit_curved.py                  # the table of the issue
     .venv/bin/python benchmarks/press_fit_curved.py --fits coarse    # the coarse meshes only
@@ -52,15 +54,17 @@ AWAY = (10.0, 80.0)
 
 
 def fits(which: str) -> list[dict]:
-    """The runs: both meshes, slaves and orders at the user's 15 µm; on the coarse curved mesh also
-    0.01 % and 0.5 % of b, and a steel pin in an aluminium ring."""
+    """The runs: both meshes, slaves and (gmsh order, displacement degree) (1, P1), (2, P1) and
+    (2, P2) at the user's 15 µm; on the coarse curved mesh also 0.01 % and 0.5 % of b, and a steel
+    pin in an aluminium ring, with P1 and P2."""
     sizes = list(SIZES) if which == "all" else ["1.0 / 1.5"]
-    runs = [{"mesh": mesh, "slave": slave, "order": order, "delta": 15e-6, "ring": "steel"}
-            for mesh, order, slave in itertools.product(sizes, (1, 2), ("ring", "pin"))]
-    runs += [{"mesh": "1.0 / 1.5", "slave": slave, "order": 2, "delta": delta, "ring": "steel"}
-             for delta, slave in itertools.product((1e-4 * B, 5e-3 * B), ("ring", "pin"))]
-    runs += [{"mesh": "1.0 / 1.5", "slave": slave, "order": 2, "delta": 15e-6, "ring": "aluminium"}
-             for slave in ("ring", "pin")]
+    kinds = ((1, 1), (2, 1), (2, 2))
+    runs = [{"mesh": mesh, "slave": slave, "order": order, "degree": degree, "delta": 15e-6, "ring": "steel"}
+            for mesh, (order, degree), slave in itertools.product(sizes, kinds, ("ring", "pin"))]
+    runs += [{"mesh": "1.0 / 1.5", "slave": slave, "order": 2, "degree": degree, "delta": delta, "ring": "steel"}
+             for degree, delta, slave in itertools.product((1, 2), (1e-4 * B, 5e-3 * B), ("ring", "pin"))]
+    runs += [{"mesh": "1.0 / 1.5", "slave": slave, "order": 2, "degree": degree, "delta": 15e-6, "ring": "aluminium"}
+             for degree, slave in itertools.product((1, 2), ("ring", "pin"))]
     return runs
 
 
@@ -80,7 +84,7 @@ def case(fit: dict, work: pathlib.Path, comm: MPI.Comm) -> dict:
     master = "pin" if fit["slave"] == "ring" else "ring"
     contact = {"slave": surfaces[fit["slave"]], "master": surfaces[master], "law": "frictionless",
                "interference": fit["delta"]}
-    return {"mesh": {"file": str(geo)}, "bodies": bodies, "contacts": [contact]}
+    return {"mesh": {"file": str(geo), "order": fit["degree"]}, "bodies": bodies, "contacts": [contact]}
 
 
 def radial_means(out: pathlib.Path, delta: float) -> dict[str, float]:
@@ -93,13 +97,6 @@ def radial_means(out: pathlib.Path, delta: float) -> dict[str, float]:
     radial = np.einsum("ij,ij->i", u[:, :2], x[:, :2]) / np.maximum(r, 1e-300)
     return {name: float(radial[away & np.isclose(r, radius, rtol=0.0, atol=1e-9)].mean())
             for name, radius in (("u_ring_b", B), ("u_ring_c", C), ("u_pin", B + delta))}
-
-
-def nodal_range(out: pathlib.Path) -> tuple[float, float]:
-    """The smallest and largest nodal contact pressure (Pa) of the slave nodes in contact: ``contact_surface.bp``'s
-    positive pressures (the master's nodes and open ones carry none)."""
-    pressure = read_vtx(out / "contact_surface.bp", -1).point_data["contact_pressure [Pa]"]
-    return float(pressure[pressure > 0.0].min()), float(pressure.max())
 
 
 def measure(fit: dict, work: pathlib.Path, comm: MPI.Comm) -> dict:
@@ -121,7 +118,7 @@ def measure(fit: dict, work: pathlib.Path, comm: MPI.Comm) -> dict:
                 "u_ring_c": press_fit.ring_displacement(C, p, B, C, ring),
                 "u_pin": press_fit.pin_displacement(p, B, STEEL)}
         (force,) = step["pair_forces"].values()
-        low, high = nodal_range(out)
+        low, high = step["min_nodal_contact_pressure"], step["max_nodal_contact_pressure"]
         row = {**fit, "status": step["status"], "newton": step["iterations"], "seconds": seconds,
                "slave_nodes": summary["p"], "open": step["state_counts"]["no contact"], "p_lame": p,
                "p_force": (abs(force[0]) + abs(force[1])) / (2.0 * B * T) / p - 1.0,
@@ -136,19 +133,18 @@ def markdown(rows: list[dict]) -> str:
     lines = ["## A press fit meshed the ordinary way, in flat (gmsh order 1) and curved (gmsh order 2) tetrahedra, "
              "against Lamé", "",
              "Steel pin of radius b + δ (b = 20 mm) in a ring (c = 40 mm), quarter slice 2 mm thick in plane strain, "
-             "frictionless, unstructured tetrahedra of `meshes/press_fit.geo` (h on the pin's face / on the bore; linear "
-             "displacements, `[mesh] order = 1`), "
-             "default settings, one load step. Errors against Lamé: p(F) the pressure from the pair force, u the mean "
+             "frictionless, unstructured tetrahedra of `meshes/press_fit.geo` (h on the pin's face / on the bore), u: "
+             "linear (P1) or quadratic (P2, `[mesh] order = 2`, docs/quadratic.md Sect. 5) displacements, default settings, one load step. Errors against Lamé: p(F) the pressure from the pair force, u the mean "
              "radial displacements of the bore (b), the ring's outer face (c) and the pin's face, 10°–80° from the "
              "symmetry planes; open: slave nodes not in contact; nodal p: the smallest and largest λ_i / D_ii of the "
-             "slave nodes in contact (docs/press_fit.md, \"Curved contact surfaces\").", "",
-             "| mesh pin / ring (mm) | gmsh order | slave | δ (µm) | ring | Lamé p (MPa) | p(F) | u ring b | u ring c "
-             "| u pin | open / slave nodes | nodal p | Newton | run s |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "slave nodes in contact, edge nodes of P2 included (docs/press_fit.md, \"Curved contact surfaces\").", "",
+             "| mesh pin / ring (mm) | gmsh order | u | slave | δ (µm) | ring | Lamé p (MPa) | p(F) | u ring b "
+             "| u ring c | u pin | open / slave nodes | nodal p | Newton | run s |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         nodal = f"{percent(r, 'nodal_low')} … {percent(r, 'nodal_high')}" if "nodal_low" in r else r.get("status", "")
         p = f"{r['p_lame'] / 1e6:.2f}" if "p_lame" in r else "\u2013"
-        lines.append(f"| {r['mesh']} | {r['order']} | {r['slave']} | {1e6 * r['delta']:g} | {r['ring']} | {p} "
+        lines.append(f"| {r['mesh']} | {r['order']} | P{r.get('degree', 1)} | {r['slave']} | {1e6 * r['delta']:g} | {r['ring']} | {p} "
                      f"| {percent(r, 'p_force')} | {percent(r, 'u_ring_b')} | {percent(r, 'u_ring_c')} "
                      f"| {percent(r, 'u_pin')} "
                      f"| {cell(r, 'open')} / {cell(r, 'slave_nodes')} | {nodal} | {cell(r, 'newton')} "

@@ -137,6 +137,7 @@ UNITS = {
     "max_contact_pressure": "Pa",
     "max_nodal_contact_pressure": "Pa",
     "max_nodal_contact_pressure_at": "m",
+    "min_nodal_contact_pressure": "Pa",
     "contact_pressure_range": "Pa",
     "deformed_contact_area": "m^2",
     "max_von_mises": "Pa",
@@ -267,7 +268,9 @@ def pressure_summary(problem: ContactProblem, result: SCDNewtonResult) -> dict[s
     the facet's nodal values, so one node (a corner where the nodal areas are cut) moves it by
     a third (a quarter on quadrilaterals) of its excess only; ``max_nodal_contact_pressure``
     and ``max_nodal_contact_pressure_at``: the largest p_j and its node's reference position (m);
-    ``contact_pressure_range``: the robust range, :func:`pressure_range`; ``contact_pressure_measure``:
+    ``min_nodal_contact_pressure``: the smallest p_j > 0, of the nodes that carry a normal force (0
+    if none), with the largest the spread of a pressure that should be uniform (every slave node,
+    the edge nodes of quadratic elements too); ``contact_pressure_range``: the robust range, :func:`pressure_range`; ``contact_pressure_measure``:
     :func:`pressure_measure`.
     """
     comm = problem.comm
@@ -282,8 +285,10 @@ def pressure_summary(problem: ContactProblem, result: SCDNewtonResult) -> dict[s
     value, at = max(comm.allgather((float(pressure[top]), x[top].tolist()) if top >= 0 else (-np.inf, None)),
                     key=lambda item: item[0])
     gathered = np.concatenate(comm.allgather(pressure))
+    loaded = gathered[gathered > 0.0]
     return {"max_contact_pressure": comm.allreduce(float(facet_mean.max(initial=0.0)), op=MPI.MAX),
             "max_nodal_contact_pressure": max(value, 0.0), "max_nodal_contact_pressure_at": at,
+            "min_nodal_contact_pressure": float(loaded.min()) if len(loaded) else 0.0,
             "contact_pressure_range": pressure_range(gathered),
             "contact_pressure_measure": pressure_measure(problem)}
 
