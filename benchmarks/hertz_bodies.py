@@ -6,7 +6,9 @@ contact radius a and the peak pressure p0 of the last step beside Hertz's formul
 with 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 (:mod:`contactqvi.problems.hertz`). P is
 the total contact force (four times the quarter model's), a = sqrt(4 A / pi) from the
 contact area A (the sum of the D_ii of the nodes in contact), p0 the largest nodal
-pressure lambda_i / D_ii. Writes ``hertz_bodies.{json,md}``.
+pressure lambda_i / D_ii. Writes ``hertz_bodies.{json,md}``. ``--order 2``: quadratic elements on
+second-order meshes of the same sizes (the sphere curved; the quadratic dual mortar of
+docs/quadratic.md), into ``hertz_bodies_p2.{json,md}`` by default.
 
 ``--tables mindlin``: ``cases/cattaneo_mindlin_bodies.toml`` (one material, Dundurs'
 beta = 0) on ``--mindlin-mesh``; per step Q/(mu P) beside Mindlin's law at the
@@ -14,7 +16,7 @@ ball's displacement s (two identical bodies: twice a rigid ball's compliance) an
 the stick radius beside Cattaneo's c = a (1 - Q/(mu P))^(1/3). Writes
 ``mindlin_bodies.{json,md}``::
 
-    python benchmarks/hertz_bodies.py [--tables hertz mindlin] [--meshes coarse medium fine xfine]
+    python benchmarks/hertz_bodies.py [--tables hertz mindlin] [--meshes coarse medium fine xfine] [--order 2]
     mpirun -n 2 python benchmarks/hertz_bodies.py --tables hertz --meshes xxfine --name hertz_bodies_xxfine
 """
 
@@ -23,6 +25,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import pathlib
+import shutil
 import time
 
 from mpi4py import MPI
@@ -31,10 +34,11 @@ import numpy as np
 
 import benchlib
 from contactqvi import tables
-from contactqvi.case import load_case
+from contactqvi.case import MeshSource, load_case
 from contactqvi.contact.load_path import solve_load_path
 from contactqvi.contact.nodal import State
 from contactqvi.problems import hertz
+from contactqvi.parameters import require
 from contactqvi.runner import build_problem
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
@@ -44,10 +48,24 @@ MESHES = {"coarse": 6, "medium": 10, "fine": 16, "xfine": 21, "xxfine": 35,  # h
           "hex_coarse": 6, "hex_medium": 10}  # hexahedra: tetrahedra of twice that h split into four each
 
 
-def run(mesh: str, comm: MPI.Comm) -> dict:
-    """One load path on ``meshes/hertz_bodies_{mesh}.geo``: counts, times and the last step's P, a, p0."""
-    case = load_case(CASE)
-    case = dataclasses.replace(case, mesh=dataclasses.replace(case.mesh, file=ROOT / "meshes" / f"hertz_bodies_{mesh}.geo"))
+def mesh_source(mesh: str, order: int, work: pathlib.Path, comm: MPI.Comm) -> MeshSource:
+    """``meshes/hertz_bodies_{mesh}.geo``, or with ``order`` 2 the same sizes in 10-node tetrahedra
+    (a wrapper written into ``work``) with quadratic displacements."""
+    if order == 1:
+        return MeshSource(file=ROOT / "meshes" / f"hertz_bodies_{mesh}.geo")
+    require(not mesh.startswith("hex"), "--order", "quadratic elements are 10-node tetrahedra: not the hexahedral meshes")
+    geo = work / f"hertz_bodies_{mesh}_order2.geo"
+    if comm.rank == 0:
+        work.mkdir(parents=True, exist_ok=True)
+        geo.write_text(f'refinement = {MESHES[mesh]};\norder = 2;\nInclude "{ROOT / "meshes" / "hertz_bodies.geo"}";\n')
+    comm.Barrier()
+    return MeshSource(file=geo, order=2)
+
+
+def run(mesh: str, comm: MPI.Comm, order: int = 1, work: pathlib.Path | None = None) -> dict:
+    """One load path on ``meshes/hertz_bodies_{mesh}.geo`` (elements of ``order``; wrappers in ``work``):
+    counts, times and the last step's P, a, p0."""
+    case = dataclasses.replace(load_case(CASE), mesh=mesh_source(mesh, order, work, comm))
     start = time.perf_counter()
     with build_problem(case, comm) as problem:
         built = time.perf_counter()
@@ -141,20 +159,26 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--meshes", nargs="+", choices=tuple(MESHES), default=["coarse", "medium", "fine", "xfine"])
     parser.add_argument("--mindlin-mesh", choices=("coarse", "medium"), default="coarse")
     parser.add_argument("--output", type=pathlib.Path, default=ROOT / "benchmarks" / "results")
-    parser.add_argument("--name", default="hertz_bodies", help="file name of the Hertz table (without suffix)")
+    parser.add_argument("--name", default=None,
+                        help="file name of the Hertz table (without suffix); default hertz_bodies (_p2 for --order 2)")
+    parser.add_argument("--order", type=int, choices=(1, 2), default=1, help="1: linear, 2: quadratic elements")
     args, _ = parser.parse_known_args(argv)
     comm = MPI.COMM_WORLD
     args.output.mkdir(parents=True, exist_ok=True)
     if "mindlin" in args.tables:
         _mindlin_table(mindlin(args.mindlin_mesh, comm), args.mindlin_mesh, comm, args.output)
     if "hertz" in args.tables:
-        _hertz_table(args.meshes, comm, args.output / args.name)
+        name = args.name or ("hertz_bodies" if args.order == 1 else "hertz_bodies_p2")
+        _hertz_table(args.meshes, comm, args.output / name, args.order)
 
 
-def _hertz_table(meshes: list[str], comm: MPI.Comm, output: pathlib.Path) -> None:
-    """The Hertz table of ``meshes``, written to ``output``.{json,md}."""
+def _hertz_table(meshes: list[str], comm: MPI.Comm, output: pathlib.Path, order: int = 1) -> None:
+    """The Hertz table of ``meshes`` with elements of ``order``, written to ``output``.{json,md}."""
     reference = closed_form()
-    rows = [run(mesh, comm) for mesh in meshes]
+    work = output.parent / f"{output.name}_work"
+    rows = [run(mesh, comm, order, work) for mesh in meshes]
+    if comm.rank == 0:
+        shutil.rmtree(work, ignore_errors=True)
     header = ["mesh (h at contact)", "dofs", "Newton per step", "Krylov per step", "P (MN) / Hertz", "error P",
               "a (mm) / Hertz", "|a - a_H| / h", "p0 (GPa) / Hertz", "error p0", "solve (s)",
               "elastic solve (s)", "solve per step / elastic", "search + mortar (s)", "/ solve per step",
@@ -173,8 +197,9 @@ def _hertz_table(meshes: list[str], comm: MPI.Comm, output: pathlib.Path) -> Non
                       f"{row['contact_search_s']:.2f}", f"{row['contact_search_s'] * len(row['newton']) / row['solve_s']:.1%}",
                       f"{row['step_search_s']:.2f}", f"{row['step_search_s'] * len(row['newton']) / row['solve_s']:.1%}",
                       f"{row['peak_rss_mib'] / 1024:.1f}", f"{row['peak_rss_mib'] * 1024 / row['dofs']:.1f}"])
+    elements = "linear tetrahedra" if order == 1 else "quadratic elements (10-node tetrahedra, P2; docs/quadratic.md)"
     title = ("## Hertz between two elastic bodies: steel ball (R = 1 m, E = 210 GPa) pressed 1 mm into an "
-             "aluminium block (E = 70 GPa), nu = 0.3, non-matching meshes, mortar contact\n\n"
+             f"aluminium block (E = 70 GPa), nu = 0.3, non-matching meshes, mortar contact, {elements}\n\n"
              f"E* = {reference['E_star'] / 1e9:.2f} GPa; quarter model, four steps of 0.25 mm on "
              f"{comm.size} rank(s); P the total contact force, a from the contact area (pi a^2 = sum of D_ii in "
              "contact), p0 the largest nodal pressure lambda_i / D_ii on the block (the slave: the softer body). "

@@ -13,15 +13,18 @@
 // ball's curved surface), "load" (the ball's flat face z = R), "symmetry_x"
 // (x = 0, both bodies; quarter model), "symmetry_y" (y = 0, both bodies), "sides"
 // (block, x = +-L, y = L).
-// Wrappers set `refinement` and include this file (hertz_bodies_*.geo).
+// Wrappers set `refinement` and include this file (hertz_bodies_*.geo); order = 2 gives 10-node
+// tetrahedra whose midside nodes lie on the sphere (quadratic elements, docs/quadratic.md).
 SetFactory("OpenCASCADE");
 DefineConstant[
   R = {1.0, Name "ball radius R (m)"},
   a = {0.0316, Name "contact radius the mesh is made for (m)"},
   refinement = {6, Name "a / h at the contact (block)"},
   extent = {160, Name "block size / a"},
-  symmetry_planes = {2, Name "2: quarter model, 1: half model"}
+  symmetry_planes = {2, Name "2: quarter model, 1: half model"},
+  order = {1, Name "element order (1: 4-node, 2: 10-node tetrahedra)"}
 ];
+Mesh.ElementOrder = order;
 L = extent * a;
 h = a / refinement;
 grade = 2 / refinement;

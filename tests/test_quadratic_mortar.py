@@ -12,10 +12,12 @@ coupling (docs/quadratic.md, Sect. 5; issue 43).
   different moduli, where the interface slips): a uniform pressure at every slave node, vertices
   and edges alike, and the homogeneous solution, to 1e-8.
 * The frictional stack rotated by Q gives Q u(Q^T x) to 1e-8; 1, 2 and 3 ranks the same
-  displacements to 1e-9.
+  displacements to 1e-9; a frictional path stopped and restarted continues as the uninterrupted one.
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 from mpi4py import MPI
 
@@ -25,6 +27,7 @@ import scipy.spatial
 
 from dolfinx import fem
 
+from contactqvi.case import Step, load_case
 from contactqvi.contact.facets import MODIFIED_AREAS, modified_shapes
 from contactqvi.contact.interface import BodyPair
 from contactqvi.contact.mortar import mortar_coupling
@@ -34,8 +37,9 @@ from contactqvi.contact.segments import quadratic_segment_integrals, segment_int
 from contactqvi.laws import Frictionless
 from contactqvi.meshes import boundary_facets, read_gmsh, split_by_body
 from contactqvi.parameters import ParameterError
+from contactqvi.runner import run_case
 from mortar_checks import frame_invariance_error, linear_field_errors, rotation
-from test_two_body import MESH, NU, P, _homogeneous, _patch_problem, _solve, _stack_problem
+from test_two_body import MESH, NU, P, ROOT, _homogeneous, _patch_problem, _solve, _stack_problem
 
 #: barycentric coordinates of a 6-node triangle's nodes: the vertices, then the midside node of
 #: the edge opposite each
@@ -160,3 +164,30 @@ def test_quadratic_pairs_refuse_the_geometry_inside_newton(blocks):
     pair = BodyPair("upper.interface", "lower.interface", Frictionless(), search="newton")
     with pytest.raises(ParameterError, match=r"search: quadratic elements take pairs searched once or each step"):
         assemble_contact_problem(msh, tags, 1e9, NU, {}, [pair], cell_tags=cell_tags, degree=2)
+
+
+def _patch_case(order: int = 2):
+    """cases/patch_test.toml with elements of ``order``, the upper block three times stiffer (the
+    interface slips) and the pressure in two steps."""
+    case = load_case(ROOT / "cases" / "patch_test.toml")
+    upper = case.bodies[1]
+    stiffer = dataclasses.replace(upper, material=dataclasses.replace(upper.material, young=3e9))
+    return dataclasses.replace(case, mesh=dataclasses.replace(case.mesh, order=order),
+                               bodies=(case.bodies[0], stiffer), steps=(Step(load=0.5), Step(load=1.0)))
+
+
+def test_a_quadratic_pair_restarts_exactly(mpi_tmp_path):
+    """The frictional patch case with P2 (searched before each step), stopped after step 1 and
+    restarted: step 2 equals the uninterrupted run's, pair force and Newton count, to 1e-12."""
+    case = _patch_case()
+    whole, code = run_case(case, mpi_tmp_path / "whole", plot=False)
+    assert code == 0
+    _, code = run_case(case, mpi_tmp_path / "cut", plot=False, stop_after=1)
+    assert code == 3
+    resumed, code = run_case(case, mpi_tmp_path / "cut", plot=False, restart=True)
+    assert code == 0
+    a, b = whole["steps"][1], resumed["steps"][1]
+    assert b["iterations"] == a["iterations"]
+    (force,), (again,) = a["pair_forces"].values(), b["pair_forces"].values()
+    assert again == pytest.approx(force, rel=1e-12, abs=1e-12 * np.abs(force).max())
+    assert abs(force[2]) == pytest.approx(P, rel=1e-10)  # the whole load through the interface
