@@ -85,6 +85,8 @@ slave surface with a master surface (``"body.group"``) or with a rigid obstacle
     # interference = 1e-4               # m: the surfaces overlap by this as meshed (a press fit), or
     #                                   # linear in x (a taper): {value = 1e-4, at = [0, 0, 0],
     #                                   # slope = [0, 0, 2e-3]}, delta(x) = value + slope . (x - at)
+    # cylinder = {axis = [0, 0, 1], point = [0, 0, 0]}  # both surfaces coaxial cylinders: the gap
+    #                                   # between the exact ones, not the facets (linear elasticity)
 
 Time (implicit dynamics, docs/dynamics.md): a ``[dynamics]`` table makes the case a
 time integration instead of a quasi-static load path; every body needs its density, and
@@ -152,6 +154,7 @@ import tomllib
 import typing
 
 from contactqvi import obstacles
+from contactqvi.exact_surfaces import CoaxialCylinders, check_cylinders
 from contactqvi.interference import Interference, check_interference
 from contactqvi.laws import LAWS, ContactLaw, create_law, parameter_names
 from contactqvi.load_steps import SEARCHES, Rotation, check_fit, check_rotation, check_steps, rotates
@@ -432,6 +435,9 @@ class ContactPair:
             linear in position (a taper); resolved in the first load step, or over the
             steps' ``fit`` fractions; body pairs only
             (:class:`~contactqvi.contact.interface.BodyPair`, docs/press_fit.md). None: 0.
+        cylinder: the slave and master surfaces are coaxial cylinders about this axis
+            (:class:`~contactqvi.exact_surfaces.CoaxialCylinders`): the weighted gap is taken between
+            the exact cylinders, not the facets (a press fit; linear elasticity, body pairs only).
     """
 
     slave: str
@@ -441,6 +447,7 @@ class ContactPair:
     search_distance: float | None = None
     search: str | None = None
     interference: float | Interference | None = None
+    cylinder: CoaxialCylinders | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -634,6 +641,8 @@ def _parse_pair(value: typing.Any, path: str) -> ContactPair:
         pair["obstacle"] = ObstacleShape(**_table(pair["obstacle"], f"{path}.obstacle", ObstacleShape))
     if isinstance(pair.get("interference"), collections.abc.Mapping):
         pair["interference"] = Interference(**_table(pair["interference"], f"{path}.interference", Interference))
+    if "cylinder" in pair:
+        pair["cylinder"] = CoaxialCylinders(**_table(pair["cylinder"], f"{path}.cylinder", CoaxialCylinders))
     return ContactPair(**pair)
 
 
@@ -851,8 +860,21 @@ def _check_contacts(contacts: typing.Sequence[ContactPair]) -> tuple[ContactPair
         search = pair.search if pair.search is not None else ("once" if obstacle is not None else "every_step")
         require_choice(f"{path}.search", search, SEARCHES)
         checked.append(ContactPair(pair.slave, pair.master, obstacle, law, distance, search,
-                                   _check_interference(pair, path)))
+                                   _check_interference(pair, path), _check_cylinder(pair, search, path)))
     return tuple(checked)
+
+
+def _check_cylinder(pair: ContactPair, search: str, path: str) -> CoaxialCylinders | None:
+    """A pair's ``cylinder``: between meshed bodies, searched once or before each step (its gap is
+    the reference configuration's)."""
+    if pair.cylinder is None:
+        return None
+    _instance(pair.cylinder, CoaxialCylinders, f"{path}.cylinder")
+    require(pair.obstacle is None, f"{path}.cylinder", "declares the surfaces of two meshed bodies exact cylinders; "
+            "a rigid obstacle is exact already")
+    require(search != "newton", f"{path}.cylinder", "takes the gap of the reference configuration (linear "
+            "elasticity): search the pair 'once', 'every_step' or 'until_settled', not 'newton'")
+    return check_cylinders(pair.cylinder, f"{path}.cylinder")
 
 
 def _check_interference(pair: ContactPair, path: str) -> float | Interference | None:
@@ -921,11 +943,17 @@ def _check_rotations(case: ContactCase) -> None:
 
 
 def _check_fits(case: ContactCase) -> None:
-    """A step's ``fit`` takes up declared interferences: some pair must declare one."""
+    """A step's ``fit`` takes up declared interferences: some pair must declare one; exact cylinders
+    (``cylinder``) take linear-elastic bodies."""
     declared = any(pair.interference is not None for pair in case.contacts)
     for i, step in enumerate(case.steps):
         require(step.fit is None or declared, f"steps[{i}].fit", "resolves the declared interferences of "
                 "[[contacts]], and no pair declares one")
+    models = {body.material.model for body in case.bodies}
+    for i, pair in enumerate(case.contacts):
+        require(pair.cylinder is None or models == {None}, f"contacts[{i}].cylinder", "takes the gap between the "
+                "cylinders of the reference configuration, which is linear elasticity's; the bodies are of "
+                f"{', '.join(sorted(str(m) for m in models))}")
 
 
 #: Initial guesses of the first step (``solver.start``): the body at rest (u~ = 0), or

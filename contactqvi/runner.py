@@ -174,7 +174,7 @@ def _pair(pair: ContactPair, key: str) -> ObstaclePair | BodyPair:
     if pair.obstacle is not None:
         return ObstaclePair(pair.slave, pair.obstacle.create(), pair.law, pair.search, key)
     return BodyPair(pair.slave, pair.master, pair.law, pair.search_distance, pair.search, pair.interference or 0.0,
-                    key)
+                    key, pair.cylinder)
 
 
 def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,

@@ -32,7 +32,6 @@ from contactqvi.contact.facets import MODIFIED_AREAS, modified_shapes
 from contactqvi.contact.interface import BodyPair
 from contactqvi.contact.mortar import mortar_coupling
 from contactqvi.contact.problem import assemble_contact_problem
-from contactqvi.contact.quadratic import modified_basis
 from contactqvi.contact.segments import quadratic_segment_integrals, segment_integrals
 from contactqvi.laws import Frictionless
 from contactqvi.meshes import boundary_facets, read_gmsh, split_by_body
@@ -59,7 +58,7 @@ def test_a_master_equal_to_the_slave_gives_the_dual_weights():
     D = area x (2/15, 2/15, 2/15, 1/5, 1/5, 1/5)."""
     slave = np.array([[[0.0, 0.0, 0.0], [2.0, 0.1, 0.0], [0.3, 1.5, 0.0]]])
     area = 0.5 * np.linalg.norm(np.cross(slave[0, 1] - slave[0, 0], slave[0, 2] - slave[0, 0]))
-    D, M = quadratic_segment_integrals(slave, np.array([[0.0, 0.0, 1.0]]), slave[:, [1, 2, 0]] - [0.0, 0.0, 0.1])
+    D, M, S = quadratic_segment_integrals(slave, np.array([[0.0, 0.0, 1.0]]), slave[:, [1, 2, 0]] - [0.0, 0.0, 0.1])
     assert D[0] == pytest.approx(area * MODIFIED_AREAS, rel=1e-14)
     # master node j is slave node permutation[j]
     permutation = np.array([1, 2, 0, 4, 5, 3])
@@ -79,7 +78,7 @@ def test_quadratic_segments_are_those_of_the_vertex_triangles():
     master = np.concatenate([rng.uniform(-1.0, 1.0, (count, 3, 2)) + rng.uniform(-1.0, 1.0, (count, 1, 2)),
                              np.full((count, 3, 1), -0.1)], axis=2)
     normal = np.tile([0.0, 0.0, 1.0], (count, 1))
-    D, M = quadratic_segment_integrals(slave, normal, master)
+    D, M, S = quadratic_segment_integrals(slave, normal, master)
     linear, _ = segment_integrals(slave, normal, master)
     assert np.count_nonzero(linear.sum(axis=1)) > count // 5
     assert np.allclose(M.sum(axis=2), D, atol=1e-13)
@@ -94,8 +93,7 @@ def test_flat_non_matching_quadratic_interface_is_integrated_exactly(blocks, sla
     V = fem.functionspace(msh, ("Lagrange", 2, (3,)))
     index_map = V.dofmap.index_map
     surface = boundary_facets(tags, f"{slave}.interface")
-    with modified_basis(V, surface, np.zeros((index_map.size_local + index_map.num_ghosts, 3), dtype=bool)) as S:
-        coupling = mortar_coupling(V, surface, boundary_facets(tags, f"{master}.interface"), 0.1, modified=S)
+    coupling = mortar_coupling(V, surface, boundary_facets(tags, f"{master}.interface"), 0.1)
     comm = msh.comm
     assert max(linear_field_errors(V, coupling)) < 1e-14
     assert comm.allreduce(float(coupling.weight.sum()), op=MPI.SUM) == pytest.approx(1.0, rel=1e-13)

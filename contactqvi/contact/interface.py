@@ -32,14 +32,15 @@ from dolfinx import fem, la
 from dolfinx import mesh as dmesh
 
 from contactqvi.contact.kinematics import pair_frames
-from contactqvi.contact.mortar import MortarCoupling, coupling_on_layout, mortar_coupling
+from contactqvi.contact.mortar import MortarCoupling, coupling_on_layout, mortar_coupling, surface_facets
 from contactqvi.contact.quadratic import ModifiedBasis
 from contactqvi.elasticity import displacement_degree
+from contactqvi.exact_surfaces import CoaxialCylinders
 from contactqvi.interference import Interference, as_interference
 from contactqvi.laws import ContactLaw, Frictionless
 from contactqvi.load_steps import SEARCHES, Rotation, placed, rigid_increment
 from contactqvi.meshes import boundary_facets
-from contactqvi.obstacles import Obstacle, tangent_frames
+from contactqvi.obstacles import Cylinder, Obstacle, tangent_frames
 from contactqvi.parameters import require
 from contactqvi.records import warn
 
@@ -106,6 +107,8 @@ class BodyPair:
             once the fit is resolved: in the first load step, or over the steps' ``fit``
             fractions (:meth:`Interface.gap`; docs/press_fit.md).
         key: as for :class:`ObstaclePair`.
+        cylinder: both surfaces are coaxial cylinders about this axis: the weighted gap is taken
+            between the exact cylinders (:mod:`contactqvi.exact_surfaces`); None: between the facets.
     """
 
     slave: str
@@ -115,6 +118,7 @@ class BodyPair:
     search: str = "every_step"
     interference: float | Interference = 0.0
     key: str | None = dataclasses.field(default=None, compare=False)
+    cylinder: CoaxialCylinders | None = None
 
     @property
     def name(self) -> str:
@@ -243,7 +247,8 @@ def build_interfaces(
         pairs: the contact pairs.
         constrained: (local nodes, 3) mask of prescribed components; nodes with all
             three prescribed cannot be slave nodes.
-        modified: the slave surfaces' modified basis of a P2 space.
+        modified: the slave surfaces' modified basis of a P2 space (obstacle pairs; a body pair's
+            mortar integrals take it themselves).
 
     Raises:
         ParameterError: a bad contact law, a node on two slave surfaces or on a
@@ -259,7 +264,7 @@ def build_interfaces(
         if isinstance(pair, ObstaclePair):
             interfaces.append(_obstacle_interface(V, facet_tags, pair, constrained, modified=modified))
         else:
-            interfaces.append(_body_interface(V, facet_tags, pair, constrained, modified=modified))
+            interfaces.append(_body_interface(V, facet_tags, pair, constrained))
     _check_disjoint(V, facet_tags, pairs, interfaces)
     return interfaces
 
@@ -288,7 +293,7 @@ def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: t
                                        displacement if finite_strain else None, translation, rotation, modified)
         kept = interface.coupling.slave_blk if interface.follows else None
         return dataclasses.replace(_body_interface(V, facet_tags, interface.pair, constrained, x,
-                                                   interface.follows and linearised, kept, modified),
+                                                   interface.follows and linearised, kept),
                                    meshed_fit=interface.meshed_fit)
 
     return [again(i) if i.searched_each_step else i for i in interfaces]
@@ -363,21 +368,20 @@ FACETING = 0.02
 
 def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: BodyPair,
                     constrained: np.ndarray, displacement: np.ndarray | None = None,
-                    linearised: bool = False, kept_blk: np.ndarray | None = None,
-                    modified: ModifiedBasis | None = None) -> Interface:
+                    linearised: bool = False, kept_blk: np.ndarray | None = None) -> Interface:
     """A body pair's interface searched in the reference configuration (checked: it finds
     nodes, and they do not overlap) or in x + ``displacement`` (local nodes, 3); its coupling
     with its derivatives if ``linearised``, the nodes ``kept_blk`` of the last search kept as
-    long as they are covered at all (:func:`~contactqvi.contact.mortar.mortar_coupling`), the
-    slave's positions those of the ``modified`` basis of a P2 space."""
+    long as they are covered at all (:func:`~contactqvi.contact.mortar.mortar_coupling`)."""
     slave, master = boundary_facets(facet_tags, pair.slave), boundary_facets(facet_tags, pair.master)
     distance = pair.search_distance
     require(distance is None or distance > 0.0, error_key(pair, "search_distance"), f"must be > 0, got {distance!r}")
     require(pair.search in SEARCHES, error_key(pair, "search"),
             f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
-    coupling = mortar_coupling(V, slave, master, distance, np.flatnonzero(constrained.all(axis=1)), displacement,
-                               linearised, kept_blk, modified)
     comm = V.mesh.comm
+    exact = None if pair.cylinder is None else _exact_cylinders(V, slave, master, pair)
+    coupling = mortar_coupling(V, slave, master, distance, np.flatnonzero(constrained.all(axis=1)), displacement,
+                               linearised, kept_blk, exact)
     if displacement is None:
         found = comm.allreduce(len(coupling.slave_blk), op=MPI.SUM)
         reach = "one facet size" if distance is None else f"{distance:.3g} m"
@@ -392,6 +396,17 @@ def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: Body
                                   V.tabulate_dof_coordinates()[coupling.slave_blk])
     return Interface(pair, coupling.slave_blk, frames, coupling.weight, coupling, gap,
                      V.tabulate_dof_coordinates()[coupling.slave_blk], meshed_fit=fit)
+
+
+def _exact_cylinders(V: fem.FunctionSpace, slave: np.ndarray, master: np.ndarray,
+                     pair: BodyPair) -> tuple[Cylinder, Cylinder]:
+    """The exact cylinders of the slave and master facets ``slave``, ``master`` of ``pair``
+    (:meth:`~contactqvi.exact_surfaces.CoaxialCylinders.surfaces`, from their vertices). Collective."""
+    surfaces = [surface_facets(V, facets) for facets in (slave, master)]
+    require(all(s.x.shape[1] == 3 for s in surfaces), error_key(pair, "cylinder"),
+            "exact cylinders take tetrahedral meshes (triangular facets)")
+    return pair.cylinder.surfaces(V.mesh.comm, *(s.x for s in surfaces), (pair.slave, pair.master),
+                                  error_key(pair, "cylinder"))
 
 
 #: A declared interference is reported (a warning) when the surfaces as meshed overlap by more

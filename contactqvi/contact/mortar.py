@@ -7,7 +7,8 @@ int_T psi_i phi_k = delta_ik int_T phi_k; on a bilinear quadrilateral (hexahedra
 meshes) psi = A phi with A = D_e M_e^{-1} from the facet's mass matrix
 (:mod:`contactqvi.contact.facets`); on the 6-node triangles of quadratic displacements, the dual
 basis Φ of the slave's modified basis Ñ (:mod:`contactqvi.contact.quadratic`), whose
-coefficients ũ = S^-1 u are the slave's unknowns (docs/quadratic.md, Sect. 5). The mortar matrices
+coefficients ũ = S^-1 u are the slave's unknowns, the slave's part of the weighted separation being
+int Φ_i x over the segments (docs/quadratic.md, Sect. 5). The mortar matrices
 
     D_ii = int_{Gamma_s} psi_i,        M_ij = int_{Gamma_s} psi_i (phi_j^m o pi),
 
@@ -55,11 +56,9 @@ from dolfinx import mesh as dmesh
 from contactqvi.contact.facets import MODIFIED_AREAS, facet_areas, nodal_integrals, unit_normals
 from contactqvi.contact.linearisation import CouplingDerivatives, coupling_derivatives
 from contactqvi.contact.owners import fetch_rows, owner_ranges, sum_to_owners
-from contactqvi.contact.segments import curvature_integrals, diameters, quadratic_segment_integrals, segment_integrals
+from contactqvi.contact.segments import (Surface, curvature_integrals, diameters, exact_surface_integrals,
+                                         quadratic_segment_integrals, segment_integrals, slave_moments)
 from contactqvi.parameters import require
-
-if typing.TYPE_CHECKING:
-    from contactqvi.contact.quadratic import ModifiedBasis
 
 __all__ = ["MortarCoupling", "MortarLayout", "coupling_on_layout", "exterior_facet_cells", "facet_closures",
            "mortar_coupling", "surface_facets"]
@@ -167,8 +166,7 @@ def _sagittas(msh: dmesh.Mesh, cells: np.ndarray, local: np.ndarray) -> np.ndarr
     ``cells`` of a second-order tetrahedral mesh. A facet's closure in the coordinate element lists
     its vertices as the P1 space does, then the midside node of the edge opposite each."""
     closure = facet_closures(msh.geometry.cmap.create_dof_layout(), msh)
-    nodes = msh.geometry.x[np.take_along_axis(msh.geometry.dofmap[cells], closure[local], axis=1)]
-    return nodes[:, 3:] - 0.5 * (nodes[:, [1, 2, 0]] + nodes[:, [2, 0, 1]])
+    return _midside_offsets(msh.geometry.x[np.take_along_axis(msh.geometry.dofmap[cells], closure[local], axis=1)])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -274,7 +272,7 @@ def _exchange_master(comm: MPI.Comm, slave: SurfaceFacets, master: SurfaceFacets
 def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facets: np.ndarray,
                     search_distance: float | None = None, excluded_blk: np.ndarray | None = None,
                     displacement: np.ndarray | None = None, linearised: bool = False,
-                    kept_blk: np.ndarray | None = None, modified: ModifiedBasis | None = None) -> MortarCoupling:
+                    kept_blk: np.ndarray | None = None, exact: tuple[Surface, Surface] | None = None) -> MortarCoupling:
     """C = D^{-1} M, nodal normals and weighted gaps of a slave and a master surface.
 
     Args:
@@ -291,8 +289,9 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
         kept_blk: owned local nodes coupled by the last search, which stay coupled down to
             :data:`KEPT_COVERAGE` (a geometry that follows the Newton iterate: a node at the rim
             of the master's shadow does not come and go from one iterate to the next).
-        modified: the modified basis of the slave surface of a P2 space (its positions x̃ = S^-1 x
-            are the slave's in the weighted gap); required there.
+        exact: the exact slave and master surfaces of the reference configuration (e.g. the
+            cylinders of a press fit), between which the weighted gap is then measured
+            (:func:`_exact_correction`); None: between the discrete ones.
 
     Collective. Slave nodes with less than :data:`MIN_COVERAGE` of their lumped area
     in the master's shadow (:data:`KEPT_COVERAGE` for ``kept_blk``) are left out, and so are
@@ -312,12 +311,16 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
     # candidate pairs: centroids within reach, bounding boxes within search_distance, facing normals
     pairs_s, pairs_m = _candidate_pairs(slave.x, slave.normal, mx, search_distance)
     facing = np.einsum("ij,ij->i", slave.normal[pairs_s], mnormal[pairs_m]) < 0.0
-    pairs_s, pairs_m, D_pair, M_pair = _overlapping(slave, mx, pairs_s[facing], pairs_m[facing])
+    pairs_s, pairs_m, integrals = _overlapping(slave, mx, pairs_s[facing], pairs_m[facing], exact is not None)
     layout = MortarLayout(np.asarray(slave_facets), pairs_s, mglob[pairs_m],
-                          D_pair.sum(axis=1) / slave.area[pairs_s], np.empty(0, dtype=np.int32))
+                          integrals[0].sum(axis=1) / slave.area[pairs_s], np.empty(0, dtype=np.int32))
     bulge = None if slave.sagitta is None else _bulge(slave, pairs_s, mx[pairs_m], msagitta[0][pairs_m])
+    if exact is not None:
+        correction = _exact_correction(V, slave_facets, pairs_s, mglob[pairs_m],
+                                       None if slave.sagitta is None else msagitta[0][pairs_m], exact)
+        bulge = correction if bulge is None else bulge + correction
     coupling, lumped_area, gap = _integrated(V, layout, slave, mx[pairs_m], current, None, excluded_blk,
-                                             (D_pair, M_pair), linearised, kept_blk, bulge, modified)
+                                             integrals, linearised, kept_blk, bulge)
     # a node farther than the search distance (default: its own size) cannot touch in this step
     reach = np.sqrt(2.0 * lumped_area[coupling.slave_blk]) if search_distance is None else search_distance
     return coupling.restricted(gap <= reach)
@@ -341,21 +344,23 @@ def coupling_on_layout(V: fem.FunctionSpace, layout: MortarLayout, displacement:
 
 def _integrated(V: fem.FunctionSpace, layout: MortarLayout, slave: SurfaceFacets, master_x: np.ndarray,
                 current: np.ndarray, rows: np.ndarray | None, excluded_blk: np.ndarray | None,
-                integrals: tuple[np.ndarray, np.ndarray] | None, linearised: bool,
-                kept_blk: np.ndarray | None = None, bulge: np.ndarray | None = None,
-                modified: ModifiedBasis | None = None) -> tuple[MortarCoupling, np.ndarray, np.ndarray]:
+                integrals: tuple[np.ndarray, ...] | None, linearised: bool,
+                kept_blk: np.ndarray | None = None,
+                bulge: np.ndarray | None = None) -> tuple[MortarCoupling, np.ndarray, np.ndarray]:
     """The coupling of the owned slave nodes ``rows`` by the facet pairs of ``layout`` (their
     master facets at ``master_x``, their :func:`segment_integrals` ``integrals`` if known), the
     lumped slave areas of the owned nodes and the rows' weighted gaps at the positions
     ``current``. ``rows`` None: the nodes the pairs cover for at least :data:`MIN_COVERAGE` of
     their lumped area (:data:`KEPT_COVERAGE` for ``kept_blk``), less ``excluded_blk``. ``bulge``:
-    the pairs' :func:`_bulge` on a curved mesh, added to every separation; ``modified``: the slave's
-    modified basis (6-node triangles), whose positions x̃ = S^-1 x the slave nodes take."""
+    per pair, what the curvature of a second-order mesh with linear displacements (:func:`_bulge`)
+    and exact surfaces (:func:`_exact_correction`) add to D_ii times the separation. 6-node triangles
+    take the slave's part of the separation from their integrals' third array,
+    int Φ_i x = sum_k S_ik x_k (:func:`~contactqvi.contact.segments.quadratic_segment_integrals`)."""
     comm, index_map, x = V.mesh.comm, V.dofmap.index_map, V.tabulate_dof_coordinates()
     pairs_s = layout.pairs_s
     if integrals is None:
         integrals = _pair_integrals(slave, master_x, pairs_s)
-    weight, lumped_area, normal, M = _owned_sums(comm, index_map, slave, pairs_s, layout.master_glob, *integrals)
+    weight, lumped_area, normal, M = _owned_sums(comm, index_map, slave, pairs_s, layout.master_glob, *integrals[:2])
     coupled = np.zeros(index_map.size_local, dtype=bool)
     if rows is None:
         coverage = np.full(index_map.size_local, MIN_COVERAGE)
@@ -373,11 +378,14 @@ def _integrated(V: fem.FunctionSpace, layout: MortarLayout, slave: SurfaceFacets
     positions = np.hstack([x, current])  # reference and current positions, fetched together
     projected = np.zeros((len(slave_blk), 6))
     np.add.at(projected, position, values[:, None] * fetch_rows(comm, index_map, positions, cols))
-    if slave.quadratic:
-        positions = np.hstack([modified.positions(x), modified.positions(current)])
-    separation = positions[slave_blk] - projected
+    if len(integrals) == 3:  # int psi_i x over the segments, of the reference and the current positions
+        moments = np.einsum("pik,pkc->pic", integrals[2], positions[slave.blk[pairs_s]])
+        separation = _owned_vectors(comm, index_map, slave, pairs_s, moments)[slave_blk] / weight[slave_blk, None]
+        separation -= projected
+    else:
+        separation = positions[slave_blk] - projected
     if bulge is not None:
-        separation += np.tile(_owned_bulge(comm, index_map, slave, pairs_s, bulge)[slave_blk]
+        separation += np.tile(_owned_vectors(comm, index_map, slave, pairs_s, bulge)[slave_blk]
                               / weight[slave_blk, None], 2)
     derivatives = None
     if linearised:
@@ -404,13 +412,42 @@ def _bulge(slave: SurfaceFacets, pairs_s: np.ndarray, master_x: np.ndarray, mast
             - np.einsum("pik,pkd->pid", Bm, master_sagitta))
 
 
-def _owned_bulge(comm: MPI.Comm, index_map, slave: SurfaceFacets, pairs_s: np.ndarray,
-                 bulge: np.ndarray) -> np.ndarray:
-    """(owned nodes, 3) the pairs' :func:`_bulge` summed on the owners of the slave nodes."""
+def _exact_correction(V: fem.FunctionSpace, slave_facets: np.ndarray, pairs_s: np.ndarray, master_glob: np.ndarray,
+                      master_sagitta: np.ndarray | None, exact: tuple[Surface, Surface]) -> np.ndarray:
+    """(P, n, 3) what the exact surfaces ``exact`` add to D_ii times the separation of slave node i
+    (:func:`~contactqvi.contact.segments.exact_surface_integrals`), per facet pair (the slave
+    facets ``pairs_s``, the master facets' global nodes ``master_glob`` and, on a curved mesh with
+    linear displacements, their sagittas), in the reference configuration: a small-strain gap is
+    taken between reference positions, whichever configuration the pairs were found in. The
+    points of the discrete surfaces are those of the vertex triangles, curved by the sagittas of
+    a second-order mesh or the midside nodes of quadratic elements. Collective."""
+    comm, index_map = V.mesh.comm, V.dofmap.index_map
+    reference = V.tabulate_dof_coordinates()
+    slave = surface_facets(V, slave_facets)
+    master = fetch_rows(comm, index_map, reference[:index_map.size_local], master_glob.ravel())
+    master = master.reshape(*master_glob.shape, 3)
+    slave_x, slave_sagitta = slave.x[pairs_s], None if slave.sagitta is None else slave.sagitta[pairs_s]
+    if slave.quadratic:  # the curved facets of quadratic displacements: their midside nodes
+        slave_sagitta = _midside_offsets(reference[slave.blk[pairs_s]])
+        master_sagitta = _midside_offsets(master)
+    return exact_surface_integrals(slave_x, -slave.normal[pairs_s], master[:, :3], slave_sagitta, master_sagitta,
+                                   exact, slave.quadratic)
+
+
+def _midside_offsets(nodes: np.ndarray) -> np.ndarray:
+    """(f, 3, 3) each edge's midside node less the mean of its ends, of 6-node triangles (f, 6, 3)."""
+    return nodes[:, 3:] - 0.5 * (nodes[:, [1, 2, 0]] + nodes[:, [2, 0, 1]])
+
+
+def _owned_vectors(comm: MPI.Comm, index_map, slave: SurfaceFacets, pairs_s: np.ndarray,
+                   values: np.ndarray) -> np.ndarray:
+    """(owned nodes, w) the pairs' vectors ``values`` (P, n, w) of their slave facets' nodes, summed on
+    the owners of the nodes."""
     slave_glob = index_map.local_to_global(slave.blk.ravel()).reshape(slave.blk.shape)
     rows = slave_glob[pairs_s].ravel()
-    summed = sum_to_owners(comm, owner_ranges(comm, index_map), rows, np.zeros_like(rows), bulge.reshape(-1, 3))
-    owned = np.zeros((index_map.size_local, 3))
+    width = values.shape[2]
+    summed = sum_to_owners(comm, owner_ranges(comm, index_map), rows, np.zeros_like(rows), values.reshape(-1, width))
+    owned = np.zeros((index_map.size_local, width))
     owned[summed[0] - index_map.local_range[0]] = summed[2]
     return owned
 
@@ -437,9 +474,9 @@ _CHUNK = 1 << 16
 _QUADRILATERAL_CHUNK = 1 << 11
 
 
-def _overlapping(slave: SurfaceFacets, master_x: np.ndarray, pairs_s: np.ndarray,
-                 pairs_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The candidate pairs whose facets overlap, with their :func:`segment_integrals`.
+def _overlapping(slave: SurfaceFacets, master_x: np.ndarray, pairs_s: np.ndarray, pairs_m: np.ndarray,
+                 moments: bool = False) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, ...]]:
+    """The candidate pairs whose facets overlap, with their integrals (:func:`_pair_integrals`).
 
     The candidates are the pairs within the search distance; most do not overlap
     (two-body Hertz medium mesh, search distance 5 mm: 20 000 of the 26 448 entries of
@@ -447,9 +484,9 @@ def _overlapping(slave: SurfaceFacets, master_x: np.ndarray, pairs_s: np.ndarray
     nonzeros (4.1 M entries, 2.0 M nonzero): dense mortar rows of zeros that GAMG
     aggregated across and every product carried.
     """
-    D, M = _pair_integrals(slave, master_x[pairs_m], pairs_s)
-    overlap = np.any(M != 0.0, axis=(1, 2))
-    return pairs_s[overlap], pairs_m[overlap], D[overlap], M[overlap]
+    integrals = _pair_integrals(slave, master_x[pairs_m], pairs_s, moments)
+    overlap = np.any(integrals[1] != 0.0, axis=(1, 2))
+    return pairs_s[overlap], pairs_m[overlap], tuple(values[overlap] for values in integrals)
 
 
 def _chunk(slave: SurfaceFacets, master_x: np.ndarray) -> int:
@@ -457,19 +494,25 @@ def _chunk(slave: SurfaceFacets, master_x: np.ndarray) -> int:
     return _CHUNK if slave.blk.shape[1] == master_x.shape[1] == 3 else _QUADRILATERAL_CHUNK
 
 
-def _pair_integrals(slave: SurfaceFacets, master_x: np.ndarray, pairs_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _pair_integrals(slave: SurfaceFacets, master_x: np.ndarray, pairs_s: np.ndarray,
+                    moments: bool = False) -> tuple[np.ndarray, ...]:
     """:func:`segment_integrals` (D, M) of the pairs of slave facets ``pairs_s`` with the master
     facets ``master_x`` (P, n_m, 3), in chunks, so the work arrays stay bounded (all at once
     they took 390 MB on the two-body Hertz fine mesh); :func:`quadratic_segment_integrals` of
-    6-node triangles."""
+    6-node triangles, which bring the slave's moments S (its part of the separation, int psi_i x
+    over the segments); with ``moments`` linear triangles bring theirs too (:func:`slave_moments`)."""
     ns = slave.blk.shape[1]
     nm = ns if slave.quadratic else master_x.shape[1]
-    parts = [(np.empty((0, ns)), np.empty((0, ns, nm)))]
+    moments = moments or slave.quadratic
+    parts = [(np.empty((0, ns)), np.empty((0, ns, nm))) + ((np.empty((0, ns, ns)),) if moments else ())]
     chunk = _chunk(slave, master_x)
-    integrals = quadratic_segment_integrals if slave.quadratic else segment_integrals
     for start in range(0, len(pairs_s), chunk):
-        s = pairs_s[start:start + chunk]
-        parts.append(integrals(slave.x[s], -slave.normal[s], master_x[start:start + chunk]))
+        s, m = pairs_s[start:start + chunk], master_x[start:start + chunk]
+        if slave.quadratic:
+            parts.append(quadratic_segment_integrals(slave.x[s], -slave.normal[s], m))
+        else:
+            parts.append(segment_integrals(slave.x[s], -slave.normal[s], m)
+                         + ((slave_moments(slave.x[s], -slave.normal[s], m),) if moments else ()))
     return tuple(np.concatenate(part) for part in zip(*parts))
 
 

@@ -48,8 +48,16 @@ from contactqvi.contact.facets import (
     triangle_rule,
 )
 
-__all__ = ["AFFINE_DEGREE", "QUADRILATERAL_DEGREE", "clip_polygons", "curvature_integrals", "diameters", "edge_ties",
-           "planar_integrals", "plane_coordinates", "quadratic_segment_integrals", "segment_integrals"]
+__all__ = ["AFFINE_DEGREE", "QUADRILATERAL_DEGREE", "Surface", "clip_polygons", "curvature_integrals", "diameters",
+           "edge_ties", "exact_surface_integrals", "planar_integrals", "plane_coordinates", "quadratic_segment_integrals",
+           "segment_integrals", "slave_moments"]
+
+class Surface(typing.Protocol):
+    """An exact surface: the signed distance of points (n, 3) and the unit direction away from it
+    (as :meth:`contactqvi.obstacles.Obstacle.distance`)."""
+
+    def distance(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+
 
 #: Degree-2 rule on a triangle (barycentric points, weights summing to 1): exact for
 #: psi_i phi_j^m on a flat pair of linear triangles.
@@ -292,25 +300,83 @@ def curvature_integrals(slave: np.ndarray, normal: np.ndarray, master: np.ndarra
     return Bs, Bm
 
 
+def slave_moments(slave: np.ndarray, normal: np.ndarray, master: np.ndarray) -> np.ndarray:
+    """(P, 3, 3) S[i, k] = int psi_i phi_k over the segments of pairs of linear triangles (as
+    :func:`segment_integrals`): the slave part of the weighted separation, int psi_i x = sum_k S_ik x_k,
+    over the part of the slave facet the master covers (D_ii delta_ik where it covers it all). Exact
+    (a rule of degree 2)."""
+    s2, m2, _ = plane_coordinates(slave, normal, master)
+    S = np.zeros((len(slave), 3, 3))
+    for rows, weights, psi, points in _segment_points(slave, s2, master, m2, None):
+        S[rows] += np.einsum("pq,pqi,pqk->pik", weights, psi, _barycentric(s2[rows], points))
+    return S
+
+
 def quadratic_segment_integrals(slave: np.ndarray, normal: np.ndarray,
-                                master: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                                master: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The mortar integrals of pairs of 6-node triangles (quadratic displacements):
 
-        D[i] = int Φ_i,    M[i, j] = int Φ_i (N_j^m o pi),
+        D[i] = int Φ_i,    M[i, j] = int Φ_i (N_j^m o pi),    S[i, k] = int Φ_i N_k,
 
     Φ the dual basis of the slave's modified basis (:data:`~contactqvi.contact.facets.MODIFIED_DUAL`),
     N^m the master's quadratic Lagrange functions (vertices, then the edge opposite each), over
     the segments of the facets' vertex triangles (``slave``, ``master``: (P, 3, 3) vertices,
     ``normal`` the slave's), pi the projection along ``normal`` onto the master's. Φ_i N_j^m is
     of degree 4 on a flat pair: the rule is exact there. Curved facets enter through the
-    positions of their nodes, which the weighted gap takes (docs/quadratic.md, Sect. 5)."""
+    positions of their nodes, which the weighted gap takes: S x (N the slave's own quadratic
+    Lagrange functions) is its slave part, int Φ_i x_s, over the segments only; it is D_ii x̃_i
+    where the master covers the slave facet (biorthogonality), and where it does not (a sliver at
+    the rim of a surface, where the projection along a facet's tilted normal reaches a little past
+    the master's edge), it stays the integral of the positions that are there, while x̃_i lies 2/3
+    of the edges' sagittas off the surface (docs/quadratic.md, Sect. 5)."""
     s2, m2, _ = plane_coordinates(slave, normal, master)
-    D, M = np.zeros((len(slave), 6)), np.zeros((len(slave), 6, 6))
+    D, M, S = np.zeros((len(slave), 6)), np.zeros((len(slave), 6, 6)), np.zeros((len(slave), 6, 6))
     for rows, weights, _, points in _segment_points(slave, s2, master, m2, 4):
-        dual = np.einsum("ik,pqk->pqi", MODIFIED_DUAL, modified_shapes(_barycentric(s2[rows], points)))
+        Ls = _barycentric(s2[rows], points)
+        dual = np.einsum("ik,pqk->pqi", MODIFIED_DUAL, modified_shapes(Ls))
         D[rows] += np.einsum("pq,pqi->pi", weights, dual)
         M[rows] += np.einsum("pq,pqi,pqj->pij", weights, dual, quadratic_shapes(_barycentric(m2[rows], points)))
-    return D, M
+        S[rows] += np.einsum("pq,pqi,pqk->pik", weights, dual, quadratic_shapes(Ls))
+    return D, M, S
+
+
+def exact_surface_integrals(slave: np.ndarray, normal: np.ndarray, master: np.ndarray,
+                            slave_sagitta: np.ndarray | None, master_sagitta: np.ndarray | None,
+                            surfaces: tuple[Surface, Surface], quadratic: bool) -> np.ndarray:
+    """What the exact surfaces add to D_ii times the separation of slave node i, per facet pair:
+
+        E[i] = int psi_i (nu (nu . (P_s x_s - P_m x_m)) - (x_s - x_m)),
+
+    x_s and x_m the points of the slave facet and of its projection pi on the master facet as the
+    discretisation has them (the vertex triangles, plus their edge bubbles b_k s_k where the
+    sagittas s_k are given: curved facets), P_s and P_m the closest points of the exact slave and
+    master surfaces ``surfaces`` (shapes with :meth:`~contactqvi.obstacles.Obstacle.distance`), nu
+    the exact slave surface's unit normal at P_s x_s, psi the dual basis (the modified quadratic
+    one's, Φ, if ``quadratic``). Added to the weighted separation of the discrete surfaces, it
+    gives that of the exact ones along their normal: the two projections lie apart along the
+    surfaces too, by up to the facets' tilt times their sagittas (0.5 µm on the press fit's 1.5 mm
+    facets), which a nodal normal would take a part of (docs/press_fit.md, "Exact cylindrical
+    surfaces"). Triangles (P, 3, 3); a rule of degree 4.
+    """
+    s2, m2, _ = plane_coordinates(slave, normal, master)
+    E = np.zeros((len(slave), 6 if quadratic else 3, 3))
+    for rows, weights, psi, points in _segment_points(slave, s2, master, m2, 4):
+        Ls, Lm = _barycentric(s2[rows], points), _barycentric(m2[rows], points)
+        discrete, exact = [], []
+        for L, x, sagitta, surface in ((Ls, slave, slave_sagitta, surfaces[0]), (Lm, master, master_sagitta, surfaces[1])):
+            point = np.einsum("pqk,pkd->pqd", L, x[rows])
+            if sagitta is not None:
+                point += np.einsum("pqk,pkd->pqd", _edge_bubbles(L), sagitta[rows])
+            distance, direction = surface.distance(point.reshape(-1, 3))
+            discrete.append(point)
+            exact.append((point.reshape(-1, 3) - distance[:, None] * direction, direction))
+        nu = exact[0][1]
+        along = np.einsum("qd,qd->q", nu, exact[0][0] - exact[1][0])[:, None] * nu
+        if quadratic:
+            psi = np.einsum("ik,pqk->pqi", MODIFIED_DUAL, modified_shapes(Ls))
+        integrand = along.reshape(discrete[0].shape) - (discrete[0] - discrete[1])
+        E[rows] += np.einsum("pq,pqi,pqd->pid", weights, psi, integrand)
+    return E
 
 
 def _edge_bubbles(L: np.ndarray) -> np.ndarray:
