@@ -7,8 +7,10 @@ unstructured tetrahedra by ``meshes/press_fit.geo``: h_pin on the pin's face, h_
 gmsh's ``order = 1`` gives the flat facets whose chords cut inside the cylinders by up to h²/(8R), about
 δ itself; ``order = 2`` 10-node tetrahedra whose midside nodes lie on them (docs/press_fit.md,
 "Curved contact surfaces"), with linear displacements (P1) or quadratic ones (P2, ``[mesh] order = 2``,
-the quadratic dual mortar of docs/quadratic.md). Each row is one run of
-:func:`contactqvi.runner.run_case`, as a user runs the case, with default settings:
+the quadratic dual mortar of docs/quadratic.md); ``exact``: the surfaces declared coaxial cylinders
+(``[[contacts]] cylinder``, the gap between the exact cylinders: docs/press_fit.md, "Exact cylindrical
+surfaces"). Each row is one run of :func:`contactqvi.runner.run_case`, as a user runs the case, with
+default settings:
 
 * ``p(F)``: the pressure from the pair force, (|F_x| + |F_y|) / (2 b t), against Lamé's p;
 * ``u ring b``, ``u ring c``, ``u pin``: the mean radial displacement of the nodes of ``body.bp``
@@ -54,17 +56,17 @@ AWAY = (10.0, 80.0)
 
 
 def fits(which: str) -> list[dict]:
-    """The runs: both meshes, slaves and (gmsh order, displacement degree) (1, P1), (2, P1) and
-    (2, P2) at the user's 15 µm; on the coarse curved mesh also 0.01 % and 0.5 % of b, and a steel
-    pin in an aluminium ring, with P1 and P2."""
+    """The runs: both meshes, slaves and (gmsh order, displacement degree, exact cylinders) (1, P1),
+    (1, P1, exact), (2, P1), (2, P2) and (2, P2, exact) at the user's 15 µm; on the coarse meshes also
+    0.01 % and 0.5 % of b, and a steel pin in an aluminium ring, with all but the first."""
     sizes = list(SIZES) if which == "all" else ["1.0 / 1.5"]
-    kinds = ((1, 1), (2, 1), (2, 2))
-    runs = [{"mesh": mesh, "slave": slave, "order": order, "degree": degree, "delta": 15e-6, "ring": "steel"}
-            for mesh, (order, degree), slave in itertools.product(sizes, kinds, ("ring", "pin"))]
-    runs += [{"mesh": "1.0 / 1.5", "slave": slave, "order": 2, "degree": degree, "delta": delta, "ring": "steel"}
-             for degree, delta, slave in itertools.product((1, 2), (1e-4 * B, 5e-3 * B), ("ring", "pin"))]
-    runs += [{"mesh": "1.0 / 1.5", "slave": slave, "order": 2, "degree": degree, "delta": 15e-6, "ring": "aluminium"}
-             for degree, slave in itertools.product((1, 2), ("ring", "pin"))]
+    kinds = ((1, 1, False), (1, 1, True), (2, 1, False), (2, 2, False), (2, 2, True))
+    runs = [{"mesh": mesh, "slave": slave, "order": order, "degree": degree, "exact": exact, "delta": 15e-6,
+             "ring": "steel"} for mesh, (order, degree, exact), slave in itertools.product(sizes, kinds, ("ring", "pin"))]
+    variants = [(delta, "steel") for delta in (1e-4 * B, 5e-3 * B)] + [(15e-6, "aluminium")]
+    runs += [{"mesh": "1.0 / 1.5", "slave": slave, "order": order, "degree": degree, "exact": exact, "delta": delta,
+              "ring": ring} for (delta, ring), (order, degree, exact), slave in itertools.product(variants, kinds[1:],
+                                                                                                ("ring", "pin"))]
     return runs
 
 
@@ -84,6 +86,8 @@ def case(fit: dict, work: pathlib.Path, comm: MPI.Comm) -> dict:
     master = "pin" if fit["slave"] == "ring" else "ring"
     contact = {"slave": surfaces[fit["slave"]], "master": surfaces[master], "law": "frictionless",
                "interference": fit["delta"]}
+    if fit["exact"]:
+        contact["cylinder"] = {"axis": [0.0, 0.0, 1.0], "point": [0.0, 0.0, 0.0]}
     return {"mesh": {"file": str(geo), "order": fit["degree"]}, "bodies": bodies, "contacts": [contact]}
 
 
@@ -134,17 +138,19 @@ def markdown(rows: list[dict]) -> str:
              "against Lamé", "",
              "Steel pin of radius b + δ (b = 20 mm) in a ring (c = 40 mm), quarter slice 2 mm thick in plane strain, "
              "frictionless, unstructured tetrahedra of `meshes/press_fit.geo` (h on the pin's face / on the bore), u: "
-             "linear (P1) or quadratic (P2, `[mesh] order = 2`, docs/quadratic.md Sect. 5) displacements, default settings, one load step. Errors against Lamé: p(F) the pressure from the pair force, u the mean "
+             "linear (P1) or quadratic (P2, `[mesh] order = 2`, docs/quadratic.md Sect. 5) displacements; exact: the "
+             "surfaces declared coaxial cylinders (`cylinder`, docs/press_fit.md \"Exact cylindrical surfaces\"); "
+             "default settings, one load step. Errors against Lamé: p(F) the pressure from the pair force, u the mean "
              "radial displacements of the bore (b), the ring's outer face (c) and the pin's face, 10°–80° from the "
              "symmetry planes; open: slave nodes not in contact; nodal p: the smallest and largest λ_i / D_ii of the "
              "slave nodes in contact, edge nodes of P2 included (docs/press_fit.md, \"Curved contact surfaces\").", "",
-             "| mesh pin / ring (mm) | gmsh order | u | slave | δ (µm) | ring | Lamé p (MPa) | p(F) | u ring b "
-             "| u ring c | u pin | open / slave nodes | nodal p | Newton | run s |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| mesh pin / ring (mm) | gmsh order | u | exact | slave | δ (µm) | ring | Lamé p (MPa) | p(F) "
+             "| u ring b | u ring c | u pin | open / slave nodes | nodal p | Newton | run s |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         nodal = f"{percent(r, 'nodal_low')} … {percent(r, 'nodal_high')}" if "nodal_low" in r else r.get("status", "")
         p = f"{r['p_lame'] / 1e6:.2f}" if "p_lame" in r else "\u2013"
-        lines.append(f"| {r['mesh']} | {r['order']} | P{r.get('degree', 1)} | {r['slave']} | {1e6 * r['delta']:g} | {r['ring']} | {p} "
+        lines.append(f"| {r['mesh']} | {r['order']} | P{r['degree']} | {'yes' if r['exact'] else 'no'} | {r['slave']} | {1e6 * r['delta']:g} | {r['ring']} | {p} "
                      f"| {percent(r, 'p_force')} | {percent(r, 'u_ring_b')} | {percent(r, 'u_ring_c')} "
                      f"| {percent(r, 'u_pin')} "
                      f"| {cell(r, 'open')} / {cell(r, 'slave_nodes')} | {nodal} | {cell(r, 'newton')} "

@@ -32,7 +32,7 @@ from contactqvi.contact.facets import MODIFIED_AREAS, modified_shapes
 from contactqvi.contact.interface import BodyPair
 from contactqvi.contact.mortar import mortar_coupling
 from contactqvi.contact.problem import assemble_contact_problem
-from contactqvi.contact.segments import quadratic_segment_integrals, segment_integrals
+from contactqvi.contact.segments import quadratic_segment_integrals, segment_integrals, slave_moments
 from contactqvi.laws import Frictionless
 from contactqvi.meshes import boundary_facets, read_gmsh, split_by_body
 from contactqvi.parameters import ParameterError
@@ -66,12 +66,14 @@ def test_a_master_equal_to_the_slave_gives_the_dual_weights():
     in_slave_order[:, permutation] = M[0]
     nodal = modified_shapes(NODES)  # nodal[j, k]: the value of Ñ_k at node j
     assert in_slave_order @ nodal == pytest.approx(np.diag(D[0]), abs=1e-14 * area)
+    assert S[0] == pytest.approx(in_slave_order, abs=1e-14 * area)  # the slave's moments: its own M
 
 
 @pytest.mark.one_rank(reason="segment integrals of given triangles (numpy), no search")
 def test_quadratic_segments_are_those_of_the_vertex_triangles():
-    """Random pairs of triangles in parallel planes: sum_j M_ij = D_i, and sum_i D_i equals the
-    linear elements' (the overlap's area)."""
+    """Random pairs of triangles in parallel planes: sum_j M_ij = D_i and sum_k S_ik = D_i (the
+    functions sum to one), and sum_i D_i equals the linear elements' (the overlap's area), whose
+    slave moments also sum to their D."""
     rng = np.random.default_rng(11)
     count = 2000
     slave = np.concatenate([rng.uniform(-1.0, 1.0, (count, 3, 2)), np.zeros((count, 3, 1))], axis=2)
@@ -82,6 +84,8 @@ def test_quadratic_segments_are_those_of_the_vertex_triangles():
     linear, _ = segment_integrals(slave, normal, master)
     assert np.count_nonzero(linear.sum(axis=1)) > count // 5
     assert np.allclose(M.sum(axis=2), D, atol=1e-13)
+    assert np.allclose(S.sum(axis=2), D, atol=1e-13)
+    assert np.allclose(slave_moments(slave, normal, master).sum(axis=2), linear, atol=1e-13)
     assert np.allclose(D.sum(axis=1), linear.sum(axis=1), atol=1e-13)
 
 
