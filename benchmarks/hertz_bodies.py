@@ -53,7 +53,7 @@ def mesh_source(mesh: str, order: int, work: pathlib.Path, comm: MPI.Comm) -> Me
     (a wrapper written into ``work``) with quadratic displacements."""
     if order == 1:
         return MeshSource(file=ROOT / "meshes" / f"hertz_bodies_{mesh}.geo")
-    require(not mesh.startswith("hex"), "--order", "quadratic elements are 10-node tetrahedra: not the hexahedral meshes")
+    require(not mesh.startswith("hex"), "--order", "quadratic elements are 10-node tetrahedra, not hexahedra")
     geo = work / f"hertz_bodies_{mesh}_order2.geo"
     if comm.rank == 0:
         work.mkdir(parents=True, exist_ok=True)

@@ -3,7 +3,9 @@
 A rigid sphere (``cases/hertz.toml``, R = 1 m, E = 70 GPa) and a steel ball on an aluminium block
 (``cases/hertz_bodies.toml``, both bodies meshed, mortar contact) pressed 1 mm (a/R = 0.03), every
 body at Poisson's ratio ``--poisson`` (default 0.4999), frictionless, on three meshes each, with
-``formulation = "displacement"`` (plain P1) and ``"nodal_pressure"`` (docs/nearly_incompressible.md).
+``formulation = "displacement"`` (plain P1), ``"nodal_pressure"`` (docs/nearly_incompressible.md) and,
+as ``--formulations quadratic``, quadratic elements (P2, ``[mesh] order = 2``; the two bodies on
+second-order meshes of the same sizes, docs/quadratic.md).
 The last step's total force P (four times the quarter model's), contact radius a = sqrt(A / pi) (A
 the summed D_ii of the nodes in contact) and peak nodal pressure p0 beside Hertz's with
 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 (:mod:`contactqvi.problems.hertz`); the two-body case keeps
@@ -21,6 +23,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import pathlib
+import shutil
 import time
 
 from mpi4py import MPI
@@ -31,25 +34,34 @@ from contactqvi.contact.load_path import solve_load_path
 from contactqvi.problems import hertz
 from contactqvi.runner import build_problem
 from benchlib import hertz_measures
+from hertz_bodies import mesh_source
 from rows import cell, failed_row, merge_rows, order, percent
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 CASES = {"rigid": (ROOT / "cases" / "hertz.toml", "hertz_{}.geo"),
          "bodies": (ROOT / "cases" / "hertz_bodies.toml", "hertz_bodies_{}.geo")}
-FORMULATIONS = ("displacement", "nodal_pressure")
+FORMULATIONS = ("displacement", "nodal_pressure", "quadratic")
 MESHES = ("coarse", "medium", "fine")
 KEY = ("case", "poisson", "formulation", "mesh", "pc")
+#: Where the second-order meshes of quadratic rows are written (removed at the end).
+WORK = ROOT / "benchmarks" / "results" / "hertz_incompressible_work"
 
 
-def configured(name: str, mesh: str, poisson: float, formulation: str, pc: str | None) -> ContactCase:
-    """The case ``name`` on ``mesh`` with every body at ``poisson`` in ``formulation``."""
+def configured(name: str, mesh: str, poisson: float, formulation: str, pc: str | None,
+               work: pathlib.Path, comm: MPI.Comm) -> ContactCase:
+    """The case ``name`` on ``mesh`` with every body at ``poisson`` in ``formulation`` (``"quadratic"``:
+    P2 displacements, the bodies' second-order meshes written into ``work``)."""
     path, geo = CASES[name]
     case = load_case(path)
 
     def material(m):
-        return dataclasses.replace(m, poisson=poisson, formulation=formulation)
+        return dataclasses.replace(m, poisson=poisson,
+                                   formulation="displacement" if formulation == "quadratic" else formulation)
 
     changes = {"mesh": dataclasses.replace(case.mesh, file=ROOT / "meshes" / geo.format(mesh))}
+    if formulation == "quadratic":
+        changes["mesh"] = (mesh_source(mesh, 2, work, comm) if name == "bodies"
+                           else dataclasses.replace(changes["mesh"], order=2))
     if case.bodies:
         changes["bodies"] = [dataclasses.replace(b, material=material(b.material)) for b in case.bodies]
     else:
@@ -75,7 +87,7 @@ def closed_form(case: ContactCase) -> dict[str, float]:
 def run(name: str, mesh: str, poisson: float, formulation: str, pc: str | None, comm: MPI.Comm) -> dict:
     """One load path: its last step's P, a, p0 against Hertz's, its counts and seconds."""
     key = {"case": name, "poisson": poisson, "formulation": formulation, "mesh": mesh, "pc": pc or "default"}
-    case = configured(name, mesh, poisson, formulation, pc)
+    case = configured(name, mesh, poisson, formulation, pc, WORK, comm)
     start = time.perf_counter()
     try:
         with build_problem(case, comm) as problem:
@@ -97,7 +109,8 @@ def run(name: str, mesh: str, poisson: float, formulation: str, pc: str | None, 
 
 def markdown(rows: list[dict]) -> str:
     """One line per run: errors against Hertz in %."""
-    lines = ["## Hertz at a Poisson's ratio near 0.5: plain P1 against the nodally averaged volume change", "",
+    lines = ["## Hertz at a Poisson's ratio near 0.5: plain P1, the nodally averaged volume change and quadratic "
+             "elements", "",
              "Every body at the row's ν, pressed 1 mm by a sphere of R = 1 m (rigid, or a steel ball on an aluminium "
              "block), frictionless, default solver unless `pc` says; errors of the last step's P, a and p0 against "
              "Hertz's (E* = E/(1 − ν²) per body); the two-body rows include the ball's own compliance, which the "
@@ -133,6 +146,8 @@ def main() -> None:
                 all_rows = sorted(merge_rows(path, rows, KEY), key=lambda r: (order(*KEY[:3])(r), MESHES.index(r["mesh"])))
                 tables.write_table(comm, args.output / "hertz_incompressible", {"rows": all_rows}, markdown(all_rows),
                                    echo=False)
+    if comm.rank == 0:
+        shutil.rmtree(WORK, ignore_errors=True)
 
 
 if __name__ == "__main__":

@@ -33,8 +33,9 @@ import numpy as np
 from contactqvi.contact.dual import Dual, primal
 from contactqvi.parameters import ParameterError
 
-__all__ = ["ALPHA", "MODIFIED_AREAS", "MODIFIED_DUAL", "POLYGON_ORDER", "area_elements", "dual_coefficients", "facet_areas", "length", "magnitude", "modified_shapes",
-           "nodal_integrals", "planar_jacobians", "quadratic_shapes", "quadrilateral_shapes", "reference_coordinates", "triangle_rule", "unit_normals"]
+__all__ = ["ALPHA", "MODIFIED_AREAS", "MODIFIED_DUAL", "POLYGON_ORDER", "area_elements", "dual_coefficients",
+           "facet_areas", "length", "magnitude", "modified_shapes", "nodal_integrals", "planar_jacobians",
+           "quadratic_shapes", "quadrilateral_shapes", "reference_coordinates", "triangle_rule", "unit_normals"]
 
 #: The vertices of a facet with n vertices in the order round its polygon.
 POLYGON_ORDER = {3: [0, 1, 2], 4: [0, 1, 3, 2]}

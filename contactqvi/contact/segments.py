@@ -363,7 +363,8 @@ def exact_surface_integrals(slave: np.ndarray, normal: np.ndarray, master: np.nd
     for rows, weights, psi, points in _segment_points(slave, s2, master, m2, 4):
         Ls, Lm = _barycentric(s2[rows], points), _barycentric(m2[rows], points)
         discrete, exact = [], []
-        for L, x, sagitta, surface in ((Ls, slave, slave_sagitta, surfaces[0]), (Lm, master, master_sagitta, surfaces[1])):
+        sides = ((Ls, slave, slave_sagitta, surfaces[0]), (Lm, master, master_sagitta, surfaces[1]))
+        for L, x, sagitta, surface in sides:
             point = np.einsum("pqk,pkd->pqd", L, x[rows])
             if sagitta is not None:
                 point += np.einsum("pqk,pkd->pqd", _edge_bubbles(L), sagitta[rows])

@@ -270,7 +270,8 @@ def pressure_summary(problem: ContactProblem, result: SCDNewtonResult) -> dict[s
     and ``max_nodal_contact_pressure_at``: the largest p_j and its node's reference position (m);
     ``min_nodal_contact_pressure``: the smallest p_j > 0, of the nodes that carry a normal force (0
     if none), with the largest the spread of a pressure that should be uniform (every slave node,
-    the edge nodes of quadratic elements too); ``contact_pressure_range``: the robust range, :func:`pressure_range`; ``contact_pressure_measure``:
+    the edge nodes of quadratic elements too);
+    ``contact_pressure_range``: the robust range, :func:`pressure_range`; ``contact_pressure_measure``:
     :func:`pressure_measure`.
     """
     comm = problem.comm
