@@ -34,6 +34,7 @@ from contactqvi.laws import Frictionless
 from contactqvi.materials import NeoHookean
 from contactqvi.meshes import boundary_facets, create_contact_body
 from contactqvi.parameters import ParameterError
+from contactqvi.records import Recorder
 from contactqvi.problems.uniaxial import uniaxial_stress
 
 YOUNG, POISSON = 10e6, 0.3  # Pa, -
@@ -184,3 +185,14 @@ def test_quadratic_elements_refuse_what_they_do_not_support():
     with pytest.raises(ParameterError, match=r"^mesh\.order: must be 1 \(linear elements\) or 2 \(quadratic\), "
                        r"got 3"):
         parse_case(case)
+
+
+@pytest.mark.parametrize("degree, warned", [(1, ["volumetric_locking"]), (2, [])])
+def test_the_locking_warning_is_for_linear_elements(degree, warned):
+    """nu = 0.499 with the displacement formulation: linear tetrahedra are warned of volumetric locking,
+    quadratic ones are not (they keep their contact area: docs/quadratic.md, Sect. 3)."""
+    msh, tags = _block()
+    with Recorder() as recorder, build_contact_problem(msh, tags, YOUNG, 0.499, {}, Frictionless(), clamped=(),
+                                                       contact="contact", displacements=ROLLERS, degree=degree):
+        pass
+    assert [r["key"] for r in recorder.records] == warned

@@ -781,7 +781,8 @@ def assemble_contact_problem(
     and for nonzero prescribed components on contact nodes or a body nothing holds.
     """
     V = _displacement_space(msh, degree, pairs, formulation, material)
-    nodal = formulation_indicator(msh, formulation, cell_tags, poisson)
+    # the locking warning is about linear tetrahedra; quadratic ones keep their contact area (docs/quadratic.md)
+    nodal = formulation_indicator(msh, formulation, cell_tags, poisson if degree == 1 else None)
     a, L = elasticity_forms(V, young, poisson, facet_tags, tractions, body_force, cell_tags, pressures, nodal)
     msh.topology.create_connectivity(msh.topology.dim - 1, msh.topology.dim)  # for the facet dofs
     bcs, moved_bc = _dirichlet_conditions(V, facet_tags, clamped, displacements or {}, moved)
