@@ -379,7 +379,6 @@ def test_a_bad_interference_is_named_before_the_mesh_is_read(value, message):
         parse_case(case)
 
 
-@pytest.mark.one_rank(reason="case-file parsing, no mesh")
 @pytest.mark.parametrize("order, degree, slave, bound", [(1, 1, "ring", 0.06), (1, 1, "pin", 0.06), (2, 2, "ring", 0.01),
                                                           (2, 2, "pin", 0.01)])
 def test_exact_cylinders_make_the_nodal_pressure_uniform(mpi_tmp_path, order, degree, slave, bound):
@@ -430,6 +429,7 @@ def test_exact_cylinders_are_checked_against_the_mesh(mpi_tmp_path):
         parse_case(case)
 
 
+@pytest.mark.one_rank(reason="case-file parsing, no mesh")
 def test_an_interference_with_an_obstacle_is_named():
     case = _case(MESH, STEEL, STEEL, 1e-4)
     del case["contacts"][0]["master"]
