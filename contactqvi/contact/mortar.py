@@ -45,8 +45,6 @@ import dataclasses
 
 from mpi4py import MPI
 
-import typing
-
 import numpy as np
 import scipy.spatial
 
@@ -314,13 +312,13 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
     pairs_s, pairs_m, integrals = _overlapping(slave, mx, pairs_s[facing], pairs_m[facing], exact is not None)
     layout = MortarLayout(np.asarray(slave_facets), pairs_s, mglob[pairs_m],
                           integrals[0].sum(axis=1) / slave.area[pairs_s], np.empty(0, dtype=np.int32))
-    bulge = None if slave.sagitta is None else _bulge(slave, pairs_s, mx[pairs_m], msagitta[0][pairs_m])
+    added = None if slave.sagitta is None else _bulge(slave, pairs_s, mx[pairs_m], msagitta[0][pairs_m])
     if exact is not None:
         correction = _exact_correction(V, slave_facets, pairs_s, mglob[pairs_m],
                                        None if slave.sagitta is None else msagitta[0][pairs_m], exact)
-        bulge = correction if bulge is None else bulge + correction
+        added = correction if added is None else added + correction
     coupling, lumped_area, gap = _integrated(V, layout, slave, mx[pairs_m], current, None, excluded_blk,
-                                             integrals, linearised, kept_blk, bulge)
+                                             integrals, linearised, kept_blk, added)
     # a node farther than the search distance (default: its own size) cannot touch in this step
     reach = np.sqrt(2.0 * lumped_area[coupling.slave_blk]) if search_distance is None else search_distance
     return coupling.restricted(gap <= reach)
@@ -346,12 +344,12 @@ def _integrated(V: fem.FunctionSpace, layout: MortarLayout, slave: SurfaceFacets
                 current: np.ndarray, rows: np.ndarray | None, excluded_blk: np.ndarray | None,
                 integrals: tuple[np.ndarray, ...] | None, linearised: bool,
                 kept_blk: np.ndarray | None = None,
-                bulge: np.ndarray | None = None) -> tuple[MortarCoupling, np.ndarray, np.ndarray]:
+                added: np.ndarray | None = None) -> tuple[MortarCoupling, np.ndarray, np.ndarray]:
     """The coupling of the owned slave nodes ``rows`` by the facet pairs of ``layout`` (their
     master facets at ``master_x``, their :func:`segment_integrals` ``integrals`` if known), the
     lumped slave areas of the owned nodes and the rows' weighted gaps at the positions
     ``current``. ``rows`` None: the nodes the pairs cover for at least :data:`MIN_COVERAGE` of
-    their lumped area (:data:`KEPT_COVERAGE` for ``kept_blk``), less ``excluded_blk``. ``bulge``:
+    their lumped area (:data:`KEPT_COVERAGE` for ``kept_blk``), less ``excluded_blk``. ``added``:
     per pair, what the curvature of a second-order mesh with linear displacements (:func:`_bulge`)
     and exact surfaces (:func:`_exact_correction`) add to D_ii times the separation. 6-node triangles
     take the slave's part of the separation from their integrals' third array,
@@ -384,8 +382,8 @@ def _integrated(V: fem.FunctionSpace, layout: MortarLayout, slave: SurfaceFacets
         separation -= projected
     else:
         separation = positions[slave_blk] - projected
-    if bulge is not None:
-        separation += np.tile(_owned_vectors(comm, index_map, slave, pairs_s, bulge)[slave_blk]
+    if added is not None:
+        separation += np.tile(_owned_vectors(comm, index_map, slave, pairs_s, added)[slave_blk]
                               / weight[slave_blk, None], 2)
     derivatives = None
     if linearised:
