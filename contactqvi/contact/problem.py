@@ -840,9 +840,10 @@ def _slave_basis(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typing
 
 def _check_degree(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair], formulation: Formulation,
                   material: Material | None) -> None:
-    """Quadratic displacements take tetrahedra, pairs searched once or each step and the plain formulation; linear ones
-    on a second-order (curved) mesh take tetrahedra and linear-elastic bodies, their displacements
-    staying linear on the curved cells (docs/press_fit.md, "Curved contact surfaces")."""
+    """Quadratic displacements take tetrahedra, pairs searched once or each step (a hyperelastic body's
+    pairs of bodies: once) and the plain formulation; linear ones on a second-order (curved) mesh take
+    tetrahedra and linear-elastic bodies, their displacements staying linear on the curved cells
+    (docs/press_fit.md, "Curved contact surfaces")."""
     require(degree in (1, 2), "mesh.order", f"must be 1 (linear elements) or 2 (quadratic), got {degree!r}")
     cells, geometry = msh.topology.cell_name(), msh.geometry.cmap.degree
     if degree == 1:
@@ -861,6 +862,10 @@ def _check_degree(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair], fo
         require(pair.search != "newton", error_key(pair, "search"), "quadratic elements take pairs searched once "
                 "or each step ('once', 'every_step', 'until_settled'); the geometry inside the Newton iteration "
                 "('newton') is built for linear elements")
+        require(material is None or not isinstance(pair, BodyPair) or pair.search == "once", error_key(pair, "search"),
+                "quadratic elements with a hyperelastic body take pairs of meshed bodies searched 'once' (the "
+                "reference configuration's coupling); searched again at finite strain they do not converge yet "
+                "(docs/quadratic.md, Sect. 4)")
     names = set(formulation.values()) if isinstance(formulation, dict) else {formulation}
     require(names <= {"displacement"}, "mesh.order", "the nodally averaged volume change (formulation = "
             "\"nodal_pressure\") is a formulation of linear tetrahedra; quadratic ones take \"displacement\"")

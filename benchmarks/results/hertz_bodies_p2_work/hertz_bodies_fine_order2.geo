@@ -1,3 +1,0 @@
-refinement = 16;
-order = 2;
-Include "/work/main/meshes/hertz_bodies.geo";

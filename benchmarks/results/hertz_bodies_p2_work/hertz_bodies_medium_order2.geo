@@ -1,3 +1,0 @@
-refinement = 10;
-order = 2;
-Include "/work/main/meshes/hertz_bodies.geo";
