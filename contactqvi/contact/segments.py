@@ -354,8 +354,8 @@ def exact_surface_integrals(slave: np.ndarray, normal: np.ndarray, master: np.nd
     the exact slave surface's unit normal at P_s x_s, psi the dual basis (the modified quadratic
     one's, Φ, if ``quadratic``). Added to the weighted separation of the discrete surfaces, it
     gives that of the exact ones along their normal: the two projections lie apart along the
-    surfaces too, by up to the facets' tilt times their sagittas (0.5 µm on the press fit's 1.5 mm
-    facets), which a nodal normal would take a part of (docs/press_fit.md, "Exact cylindrical
+    surfaces too, by about the facets' tilt times their sagittas (about 0.5 µm on the press fit's
+    1.5 mm facets), which a nodal normal would take a part of (docs/press_fit.md, "Exact cylindrical
     surfaces"). Triangles (P, 3, 3); a rule of degree 4.
     """
     s2, m2, _ = plane_coordinates(slave, normal, master)
