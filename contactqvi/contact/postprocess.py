@@ -8,7 +8,8 @@ owned cells, ParaView appends them into the dataset a serial run writes):
   (cell average of the Cauchy stress, 3 x 3) and ``von_mises [Pa]`` (of it).
 * ``contact_surface.bp`` (VTX): the contact surface cut into tributary patches
   (:class:`~contactqvi.contact.surface.ContactSurface`). Point data, the P1 fields
-  interpolated (exactly for bilinear/linear facets): ``displacement [m]``,
+  interpolated (exactly for bilinear/linear facets; with quadratic elements the edge points
+  take the midside nodes' own values): ``displacement [m]``,
   ``contact_pressure [Pa]``, ``friction_traction [Pa]``, ``slip [m]``,
   ``tangential_displacement [m]``, ``gap [m]``. Cell data, the value of the
   patch's node, so ParaView draws categories without blending them:

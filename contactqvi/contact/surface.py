@@ -33,6 +33,7 @@ from dolfinx.cpp.mesh import cell_num_vertices
 from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult
+from contactqvi.elasticity import displacement_degree
 from contactqvi.load_steps import placed
 from contactqvi.paraview import Dataset, MeshPiece
 
@@ -411,12 +412,15 @@ class TributaryPatches:
         patches.duplicate[n_points : n_points + len(patches.edges)] = _edges_owned_elsewhere(piece, patches.edges)
         return patches
 
-    def extend(self, values: np.ndarray) -> np.ndarray:
-        """Values at the vertices extended to the patches' points."""
-        return np.concatenate([values, values[self.edges].mean(axis=1), values[self._cells].mean(axis=1)])
+    def extend(self, values: np.ndarray, midpoints: np.ndarray | None = None) -> np.ndarray:
+        """Values at the vertices extended to the patches' points; at the edges' midpoints
+        ``midpoints`` where given (the midside nodes of quadratic elements), else the mean of the ends."""
+        at_edges = values[self.edges].mean(axis=1) if midpoints is None else midpoints
+        return np.concatenate([values, at_edges, values[self._cells].mean(axis=1)])
 
-    def dataset(self, point_data: dict[str, np.ndarray], state: np.ndarray, pair: np.ndarray) -> Dataset:
-        """Point data (at the vertices) extended; cell data: ``state`` and ``pair`` of each patch's
+    def dataset(self, point_data: dict[str, np.ndarray], state: np.ndarray, pair: np.ndarray,
+                midpoints: dict[str, np.ndarray] | None = None) -> Dataset:
+        """Point data (at the vertices; ``midpoints``: at the edges' midpoints) extended; cell data: ``state`` and ``pair`` of each patch's
         vertex and the indicators ``is_open``, ``is_in_contact`` (sticking or sliding: the
         one that names a frictionless pair's contact), ``is_sliding``, ``is_sticking``: 0/1 by the
         vertex's state, and on the patch of a vertex without contact law (``pair`` -1, a
@@ -438,24 +442,29 @@ class TributaryPatches:
             points=self.points,
             cells=self.cells,
             cell_type=9,  # VTK_QUAD
-            point_data={name: self.extend(values) for name, values in point_data.items()},
+            point_data={name: self.extend(values, (midpoints or {}).get(name)) for name, values in point_data.items()},
             cell_data={"contact_state": state, "contact_pair": pair, **{
                 name: indicators[name] for name in ("is_open", "is_in_contact", "is_sliding", "is_sticking")}},
             duplicate=self.duplicate,
         )
 
 
-def _edges_owned_elsewhere(piece: MeshPiece, edges: np.ndarray) -> np.ndarray:
-    """For edges given by point index pairs of ``piece``, True where another rank owns the edge."""
-    msh = piece.mesh
+def _vertex_of_node(msh: dmesh.Mesh) -> np.ndarray:
+    """The topological vertex of each local geometry node of ``msh`` at a cell's vertex (the
+    vertices come first in a cell's geometry nodes, in the same order)."""
     tdim = msh.topology.dim
-    msh.topology.create_entities(1)
-    msh.topology.create_connectivity(1, 0)
     msh.topology.create_connectivity(tdim, 0)
     vertex_of_node = np.empty(msh.geometry.x.shape[0], dtype=np.int64)
     cell_vertices = msh.topology.connectivity(tdim, 0).array.reshape(len(msh.geometry.dofmap),
                                                                      cell_num_vertices(msh.topology.cell_type))
-    vertex_of_node[msh.geometry.dofmap[:, :cell_vertices.shape[1]].ravel()] = cell_vertices.ravel()  # same order
+    vertex_of_node[msh.geometry.dofmap[:, :cell_vertices.shape[1]].ravel()] = cell_vertices.ravel()
+    return vertex_of_node
+
+
+def _edges_of(msh: dmesh.Mesh, vertices: np.ndarray) -> np.ndarray:
+    """The local edge of ``msh`` between each pair of local vertices ``vertices`` (E, 2)."""
+    msh.topology.create_entities(1)
+    msh.topology.create_connectivity(1, 0)
     n_vertices = msh.topology.index_map(0).size_local + msh.topology.index_map(0).num_ghosts
 
     def key(pairs: np.ndarray) -> np.ndarray:
@@ -464,8 +473,30 @@ def _edges_owned_elsewhere(piece: MeshPiece, edges: np.ndarray) -> np.ndarray:
 
     edge_keys = key(msh.topology.connectivity(1, 0).array.reshape(-1, 2).astype(np.int64))
     order = np.argsort(edge_keys)
-    edge = order[np.searchsorted(edge_keys, key(vertex_of_node[piece.nodes[edges]]), sorter=order)]
+    return order[np.searchsorted(edge_keys, key(np.asarray(vertices, dtype=np.int64)), sorter=order)]
+
+
+def _edges_owned_elsewhere(piece: MeshPiece, edges: np.ndarray) -> np.ndarray:
+    """For edges given by point index pairs of ``piece``, True where another rank owns the edge."""
+    msh = piece.mesh
+    edge = _edges_of(msh, _vertex_of_node(msh)[piece.nodes[edges]])
     return edge >= msh.topology.index_map(1).size_local
+
+
+def _midside_blocks(V: fem.FunctionSpace, piece: MeshPiece, edges: np.ndarray, vertex_map: np.ndarray) -> np.ndarray:
+    """The block of the quadratic space ``V`` at the midside node of each edge of ``piece`` (point
+    index pairs; ``piece`` a submesh of V's mesh whose vertices are ``vertex_map`` of V's mesh)."""
+    msh = V.mesh
+    tdim = msh.topology.dim
+    edge = _edges_of(msh, vertex_map[_vertex_of_node(piece.mesh)[piece.nodes[edges]]])
+    msh.topology.create_connectivity(1, tdim)
+    msh.topology.create_connectivity(tdim, 1)
+    e2c, c2e = msh.topology.connectivity(1, tdim), msh.topology.connectivity(tdim, 1)
+    cells = e2c.array[e2c.offsets[edge]]
+    per_cell = c2e.offsets[1] - c2e.offsets[0]
+    local = np.argmax(c2e.array.reshape(-1, per_cell)[cells] == edge[:, None], axis=1)
+    edge_dof = np.array([V.dofmap.dof_layout.entity_dofs(1, i)[0] for i in range(per_cell)])
+    return V.dofmap.list[cells, edge_dof[local]]
 
 
 class ContactSurface:
@@ -501,6 +532,10 @@ class ContactSurface:
         )
         self._piece = MeshPiece(self.mesh, linear=True)
         self._patches = TributaryPatches.of_mesh(self._piece)
+        # quadratic elements: the values at the midside nodes go to the patches' edge midpoints
+        self._midside_blk = (None if displacement_degree(V) == 1 else
+                             _midside_blocks(V, self._piece, self._patches.edges, vertex_map))
+        self._midside_values: dict[str, np.ndarray] = {}
 
     @property
     def n_nodes(self) -> int:
@@ -557,28 +592,40 @@ class ContactSurface:
             :attr:`fields`, holding this step's values.
         """
         problem = self.problem
-        nodal = self._fill_table(u, result)[self._parent_blk]
+        table = self._fill_table(u, result)
         if displacement is None:
             displacement = problem.physical_displacement(u, fem.Function(problem.V))
-        u_tilde = displacement.x.array.reshape(-1, 3)[self._parent_blk]
-        contact = nodal[:, _COLUMNS["contact"]] > 0
-        if problem.obstacle is not None:  # the surface's other nodes: gap and normal to the obstacle
-            initial_gap, normal = placed(problem.obstacle, problem.translation, problem.step_rotation).distance(self._x)
-        else:  # a body pair: no gap where there is no contact law
-            initial_gap, normal = np.full(len(self._x), np.nan), np.zeros_like(self._x)
-        normal[contact] = nodal[contact, _COLUMNS["normal"]]  # the nodes' (reference) frames
-        gap = np.where(contact, nodal[:, _COLUMNS["gap"]], initial_gap + np.einsum("ij,ij->i", normal, u_tilde))
-        tangential = u_tilde - np.einsum("ij,ij->i", normal, u_tilde)[:, None] * normal
+        u_all = displacement.x.array.reshape(-1, 3)
         fields = self.fields
-        columns = {f: nodal[:, _COLUMNS[name]] for f, name in ((fields.state, "state"), (fields.pair, "pair"),
-                                                               (fields.pressure, "pressure"),
-                                                               (fields.traction, "traction"), (fields.slip, "slip"))}
-        computed = {fields.tangential_displacement: tangential, fields.gap: gap, fields.displacement: u_tilde}
-        for f, values in (columns | computed).items():
+        for name, values in self._values_at(table, u_all, self._parent_blk, self._x).items():
+            f = getattr(fields, name)
             blk = self._vector_blk if values.ndim == 2 else self._scalar_blk
             bs = f.function_space.dofmap.index_map_bs
             f.x.array.reshape(-1, bs)[blk] = values.reshape(-1, bs)
+        if self._midside_blk is not None:
+            x = problem.V.tabulate_dof_coordinates()[self._midside_blk]
+            self._midside_values = {labelled(getattr(fields, name).name): values for name, values in
+                                    self._values_at(table, u_all, self._midside_blk, x).items()
+                                    if name not in ("state", "pair")}  # cell data: the patches' vertices
         return fields
+
+    def _values_at(self, table: np.ndarray, displacement: np.ndarray, blocks: np.ndarray,
+                   x: np.ndarray) -> dict[str, np.ndarray]:
+        """The fields' values (by :class:`ContactSurfaceFields` name) at the nodes ``blocks`` of V at
+        reference positions ``x``, from the nodal ``table`` (:meth:`_fill_table`) and the physical
+        ``displacement`` (local nodes, 3)."""
+        problem = self.problem
+        nodal, u_tilde = table[blocks], displacement[blocks]
+        contact = nodal[:, _COLUMNS["contact"]] > 0
+        if problem.obstacle is not None:  # the surface's other nodes: gap and normal to the obstacle
+            initial_gap, normal = placed(problem.obstacle, problem.translation, problem.step_rotation).distance(x)
+        else:  # a body pair: no gap where there is no contact law
+            initial_gap, normal = np.full(len(x), np.nan), np.zeros_like(x)
+        normal[contact] = nodal[contact, _COLUMNS["normal"]]  # the nodes' (reference) frames
+        gap = np.where(contact, nodal[:, _COLUMNS["gap"]], initial_gap + np.einsum("ij,ij->i", normal, u_tilde))
+        tangential = u_tilde - np.einsum("ij,ij->i", normal, u_tilde)[:, None] * normal
+        return {**{name: nodal[:, _COLUMNS[name]] for name in ("state", "pair", "pressure", "traction", "slip")},
+                "tangential_displacement": tangential, "gap": gap, "displacement": u_tilde}
 
     def dataset(self) -> Dataset:
         """This rank's piece of the tributary patches with the current fields. Not collective.
@@ -592,4 +639,4 @@ class ContactSurface:
         point_data = {labelled(f.name): piece.point_values(f) for f in self.fields.functions
                       if f.name not in ("contact_state", "contact_pair", "nodal_area")}
         return self._patches.dataset(point_data, piece.point_values(self.fields.state),
-                                     piece.point_values(self.fields.pair))
+                                     piece.point_values(self.fields.pair), self._midside_values)
