@@ -150,7 +150,9 @@ def markdown(rows: list[dict]) -> str:
     for r in rows:
         nodal = f"{percent(r, 'nodal_low')} … {percent(r, 'nodal_high')}" if "nodal_low" in r else r.get("status", "")
         p = f"{r['p_lame'] / 1e6:.2f}" if "p_lame" in r else "\u2013"
-        lines.append(f"| {r['mesh']} | {r['order']} | P{r['degree']} | {'yes' if r['exact'] else 'no'} | {r['slave']} | {1e6 * r['delta']:g} | {r['ring']} | {p} "
+        exact = "yes" if r["exact"] else "no"
+        lines.append(f"| {r['mesh']} | {r['order']} | P{r['degree']} | {exact} | {r['slave']} | {1e6 * r['delta']:g} "
+                     f"| {r['ring']} | {p} "
                      f"| {percent(r, 'p_force')} | {percent(r, 'u_ring_b')} | {percent(r, 'u_ring_c')} "
                      f"| {percent(r, 'u_pin')} "
                      f"| {cell(r, 'open')} / {cell(r, 'slave_nodes')} | {nodal} | {cell(r, 'newton')} "

@@ -53,10 +53,10 @@ class CoaxialCylinders:
         surfaces ``names``: each radius the mean distance of its vertices from the axis. Raises a
         ParameterError named ``key`` if a vertex lies off it by more than :data:`RADIUS_TOL` of it.
         Collective."""
+        axis = np.asarray(self.axis) / np.linalg.norm(self.axis)
         cylinders = []
         for x, name in zip((slave, master), names):
             offset = np.asarray(x, dtype=float).reshape(-1, 3) - np.asarray(self.point)
-            axis = np.asarray(self.axis) / np.linalg.norm(self.axis)
             radius = np.linalg.norm(offset - np.outer(offset @ axis, axis), axis=1)
             count = comm.allreduce(len(radius), op=MPI.SUM)
             require(count > 0, key, f"the surface {name!r} has no vertices")

@@ -24,7 +24,6 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-import scipy.spatial
 
 from dolfinx import fem
 
@@ -35,24 +34,19 @@ from contactqvi.contact.mortar import mortar_coupling
 from contactqvi.contact.problem import assemble_contact_problem
 from contactqvi.contact.segments import quadratic_segment_integrals, segment_integrals, slave_moments
 from contactqvi.laws import Frictionless
-from contactqvi.meshes import boundary_facets, read_gmsh, split_by_body
+from contactqvi.meshes import boundary_facets
 from contactqvi.parameters import ParameterError
 from contactqvi.paraview import read_vtx
 from contactqvi.problems.uniaxial import stacked_compression
 from contactqvi.runner import build_problem, run_case
 from mortar_checks import frame_invariance_error, linear_field_errors, rotation
 from test_homogeneous_compression import DATA as STACK, HEIGHTS, _blocks as stack_blocks
-from test_two_body import MESH, NU, P, ROOT, _homogeneous, _patch_problem, _solve, _stack_problem
+from test_two_body import (NU, P, ROOT, _homogeneous, _patch_problem, _solve, _stack_problem, blocks,  # noqa: F401
+                           on_all_ranks_and_alone)
 
 #: barycentric coordinates of a 6-node triangle's nodes: the vertices, then the midside node of
 #: the edge opposite each
 NODES = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0.5, 0.5], [0.5, 0, 0.5], [0.5, 0.5, 0]])
-
-
-@pytest.fixture(scope="module")
-def blocks():
-    msh, facet_tags, cell_tags = read_gmsh(MESH, MPI.COMM_WORLD)
-    return msh, split_by_body(msh, facet_tags, cell_tags), cell_tags
 
 
 @pytest.mark.one_rank(reason="segment integrals of given triangles (numpy), no search")
@@ -146,22 +140,9 @@ def test_quadratic_two_body_parallel_equals_serial():
     """The patch blocks with slip (F = 0.3, different moduli), P2, on all ranks and on each rank
     alone (exact Newton-step solves): Newton counts within 1 (2 on 1 and 2 ranks, 3 on 3: the last step
     meets the stopping test on one partition only) and the same displacement at every node to 1e-9."""
-    runs = {}
-    for name, comm in (("parallel", MPI.COMM_WORLD), ("serial", MPI.COMM_SELF)):
-        msh, facet_tags, cell_tags = read_gmsh(MESH, comm)
-        with _patch_problem((msh, split_by_body(msh, facet_tags, cell_tags), cell_tags), 3e9, 0.3, 2) as problem:
-            result, displacement = _solve(problem, "lu")
-            assert result.converged
-            n = problem.V.dofmap.index_map.size_local
-            x = np.column_stack([problem.V.tabulate_dof_coordinates()[:n], problem.node_body[:n]])
-            runs[name] = (result.iterations, x, displacement.x.array.reshape(-1, 3)[:n].copy())
-    iterations, x, u = runs["serial"]
-    assert abs(runs["parallel"][0] - iterations) <= 1
-    x_par, u_par = runs["parallel"][1:]
-    distance, position = scipy.spatial.cKDTree(x).query(x_par)  # the midside nodes' positions carry round-off
-    assert distance.max(initial=0.0) < 1e-12
-    assert MPI.COMM_WORLD.allreduce(float(np.abs(u_par - u[position]).max(initial=0.0)), op=MPI.MAX) < 1e-9 * np.abs(
-        u).max()
+    (parallel, serial), error = on_all_ranks_and_alone("lu", degree=2)
+    assert abs(parallel - serial) <= 1
+    assert error < 1e-9
 
 
 def test_quadratic_pairs_refuse_the_geometry_inside_newton(blocks):

@@ -18,6 +18,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+import scipy.spatial
 
 from dolfinx import fem
 
@@ -253,10 +254,19 @@ def test_two_body_parallel_equals_serial(pc):
     alone: the same displacement at every node to 1e-10 and Newton counts within 1, with
     exact and with GAMG Newton-step solves (the inexact ones depend on the partition through
     the aggregates: 6 and 7 on 1 and 2 ranks, measured)."""
+    (parallel, serial), error = on_all_ranks_and_alone(pc)
+    assert abs(parallel - serial) <= 1
+    assert error < 1e-10
+
+
+def on_all_ranks_and_alone(pc: str, degree: int = 1) -> tuple[tuple[int, int], float]:
+    """The patch blocks with slip (F = 0.3, moduli 1 and 3 GPa), displacements of ``degree``, solved on
+    all ranks and on each rank alone: the Newton counts (all, alone) and the largest difference of the
+    displacements at a node over the largest displacement. Collective."""
     runs = {}
     for name, comm in (("parallel", MPI.COMM_WORLD), ("serial", MPI.COMM_SELF)):
         msh, facet_tags, cell_tags = read_gmsh(MESH, comm)
-        problem = _patch_problem((msh, split_by_body(msh, facet_tags, cell_tags), cell_tags), 3e9, 0.3)
+        problem = _patch_problem((msh, split_by_body(msh, facet_tags, cell_tags), cell_tags), 3e9, 0.3, degree)
         with problem:
             result, displacement = _solve(problem, pc)
             assert result.converged
@@ -265,12 +275,11 @@ def test_two_body_parallel_equals_serial(pc):
             x = np.column_stack([problem.V.tabulate_dof_coordinates()[:n], problem.node_body[:n]])
             runs[name] = (result.iterations, x, displacement.x.array.reshape(-1, 3)[:n].copy())
     iterations, x, u = runs["serial"]
-    assert abs(runs["parallel"][0] - iterations) <= 1
     x_par, u_par = runs["parallel"][1:]
-    lookup = {tuple(p): k for k, p in enumerate(np.round(x, 12))}
-    position = np.array([lookup[tuple(p)] for p in np.round(x_par, 12)], dtype=np.int64)
-    scale = np.abs(u).max()
-    assert MPI.COMM_WORLD.allreduce(float(np.abs(u_par - u[position]).max(initial=0.0)), op=MPI.MAX) < 1e-10 * scale
+    distance, position = scipy.spatial.cKDTree(x).query(x_par)  # a quadratic space's midside nodes carry round-off
+    assert distance.max(initial=0.0) < 1e-12
+    error = MPI.COMM_WORLD.allreduce(float(np.abs(u_par - u[position]).max(initial=0.0)), op=MPI.MAX)
+    return (runs["parallel"][0], iterations), error / np.abs(u).max()
 
 
 def test_patch_case_file_reports_each_body_in_balance(mpi_tmp_path):

@@ -34,8 +34,9 @@ from contactqvi.contact.dual import Dual, primal
 from contactqvi.parameters import ParameterError
 
 __all__ = ["ALPHA", "MODIFIED_AREAS", "MODIFIED_DUAL", "POLYGON_ORDER", "area_elements", "dual_coefficients",
-           "facet_areas", "length", "magnitude", "modified_shapes", "nodal_integrals", "planar_jacobians",
-           "quadratic_shapes", "quadrilateral_shapes", "reference_coordinates", "triangle_rule", "unit_normals"]
+           "facet_areas", "length", "magnitude", "modified_dual", "modified_shapes", "nodal_integrals",
+           "planar_jacobians", "quadratic_shapes", "quadrilateral_shapes", "reference_coordinates", "triangle_rule",
+           "unit_normals"]
 
 #: The vertices of a facet with n vertices in the order round its polygon.
 POLYGON_ORDER = {3: [0, 1, 2], 4: [0, 1, 3, 2]}
@@ -228,3 +229,9 @@ def _modified_dual() -> tuple[np.ndarray, np.ndarray]:
 #: int Φ_i Ñ_k = delta_ik int Ñ_k; and the areas int Ñ_k over the facet's area, 2/15 at the
 #: vertices and 1/5 at the edges.
 MODIFIED_DUAL, MODIFIED_AREAS = _modified_dual()
+
+
+def modified_dual(L: np.ndarray) -> np.ndarray:
+    """(..., 6) the dual basis Φ of the modified basis of a flat 6-node triangle at barycentric
+    coordinates L (..., 3)."""
+    return np.einsum("ik,...k->...i", MODIFIED_DUAL, modified_shapes(L))

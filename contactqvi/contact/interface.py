@@ -78,6 +78,11 @@ class ObstaclePair:
     def name(self) -> str:
         return f"{self.surface}/obstacle"
 
+    @property
+    def slave_surface(self) -> str:
+        """The facet group of the slave nodes."""
+        return self.surface
+
 
 @dataclasses.dataclass(frozen=True)
 class BodyPair:
@@ -123,6 +128,11 @@ class BodyPair:
     @property
     def name(self) -> str:
         return f"{self.slave}/{self.master}"
+
+    @property
+    def slave_surface(self) -> str:
+        """The facet group of the slave nodes."""
+        return self.slave
 
 
 Pair = ObstaclePair | BodyPair
@@ -194,7 +204,7 @@ class Interface:
     @property
     def slave_surface(self) -> str:
         """The facet group of the slave nodes."""
-        return self.pair.surface if isinstance(self.pair, ObstaclePair) else self.pair.slave
+        return self.pair.slave_surface
 
     def gap(self, x: np.ndarray, translation: np.ndarray, rotation: Rotation | None = None,
             fit: float = 1.0) -> np.ndarray:

@@ -833,9 +833,8 @@ def _slave_basis(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typing
     """The modified basis of the pairs' slave surfaces on quadratic elements, else None."""
     if displacement_degree(V) == 1:
         return None
-    surfaces = [pair.surface if isinstance(pair, ObstaclePair) else pair.slave for pair in pairs]
-    return modified_basis(V, np.unique(np.concatenate([boundary_facets(facet_tags, s) for s in surfaces])),
-                          constrained)
+    return modified_basis(V, np.unique(np.concatenate([boundary_facets(facet_tags, pair.slave_surface)
+                                                       for pair in pairs])), constrained)
 
 
 def _check_degree(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair], formulation: Formulation,

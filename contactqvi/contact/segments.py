@@ -34,13 +34,12 @@ import numpy as np
 
 from contactqvi.contact.dual import primal
 from contactqvi.contact.facets import (
-    MODIFIED_DUAL,
     POLYGON_ORDER,
     area_elements,
     dual_coefficients,
     length,
     magnitude,
-    modified_shapes,
+    modified_dual,
     planar_jacobians,
     quadratic_shapes,
     quadrilateral_shapes,
@@ -333,7 +332,7 @@ def quadratic_segment_integrals(slave: np.ndarray, normal: np.ndarray,
     D, M, S = np.zeros((len(slave), 6)), np.zeros((len(slave), 6, 6)), np.zeros((len(slave), 6, 6))
     for rows, weights, _, points in _segment_points(slave, s2, master, m2, 4):
         Ls = _barycentric(s2[rows], points)
-        dual = np.einsum("ik,pqk->pqi", MODIFIED_DUAL, modified_shapes(Ls))
+        dual = modified_dual(Ls)
         D[rows] += np.einsum("pq,pqi->pi", weights, dual)
         M[rows] += np.einsum("pq,pqi,pqj->pij", weights, dual, quadratic_shapes(_barycentric(m2[rows], points)))
         S[rows] += np.einsum("pq,pqi,pqk->pik", weights, dual, quadratic_shapes(Ls))
@@ -374,7 +373,7 @@ def exact_surface_integrals(slave: np.ndarray, normal: np.ndarray, master: np.nd
         nu = exact[0][1]
         along = np.einsum("qd,qd->q", nu, exact[0][0] - exact[1][0])[:, None] * nu
         if quadratic:
-            psi = np.einsum("ik,pqk->pqi", MODIFIED_DUAL, modified_shapes(Ls))
+            psi = modified_dual(Ls)
         integrand = along.reshape(discrete[0].shape) - (discrete[0] - discrete[1])
         E[rows] += np.einsum("pq,pqi,pqd->pid", weights, psi, integrand)
     return E

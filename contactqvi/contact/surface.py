@@ -535,6 +535,7 @@ class ContactSurface:
         # quadratic elements: the values at the midside nodes go to the patches' edge midpoints
         self._midside_blk = (None if displacement_degree(V) == 1 else
                              _midside_blocks(V, self._piece, self._patches.edges, vertex_map))
+        self._midside_x = None if self._midside_blk is None else V.tabulate_dof_coordinates()[self._midside_blk]
         self._midside_values: dict[str, np.ndarray] = {}
 
     @property
@@ -603,9 +604,8 @@ class ContactSurface:
             bs = f.function_space.dofmap.index_map_bs
             f.x.array.reshape(-1, bs)[blk] = values.reshape(-1, bs)
         if self._midside_blk is not None:
-            x = problem.V.tabulate_dof_coordinates()[self._midside_blk]
             self._midside_values = {labelled(getattr(fields, name).name): values for name, values in
-                                    self._values_at(table, u_all, self._midside_blk, x).items()
+                                    self._values_at(table, u_all, self._midside_blk, self._midside_x).items()
                                     if name not in ("state", "pair")}  # cell data: the patches' vertices
         return fields
 
