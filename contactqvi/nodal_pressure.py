@@ -34,7 +34,6 @@ iterations grow with lambda.
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import logging
 import typing
@@ -50,7 +49,7 @@ import dolfinx.fem.petsc
 import dolfinx.la
 from dolfinx import fem
 
-from contactqvi.elasticity import strain, stress
+from contactqvi.elasticity import displacement_degree, strain, stress
 from contactqvi.lifetime import PETScOwner
 from contactqvi.materials import FORMULATIONS, Material
 from contactqvi.parameters import require, require_choice
@@ -111,6 +110,12 @@ def _volume_change(u: ufl.core.expr.Expr, finite: bool) -> tuple[ufl.core.expr.E
     return J, lambda v: J * ufl.inner(ufl.inv(F).T, ufl.grad(v))
 
 
+def _nodal_degree(V: fem.FunctionSpace, finite: bool) -> int:
+    """The quadrature degree that integrates phi_a J of (1) exactly: 2 on linear elements; on
+    quadratic ones 2 (small strain: div u linear) or 4 (det F cubic)."""
+    return 4 if finite and displacement_degree(V) == 2 else 2
+
+
 def remainder_piola(material: Material, u: ufl.core.expr.Expr, mu: typing.Any, lmbda: typing.Any,
                     chi: fem.Function) -> ufl.core.expr.Expr:
     """d (psi - chi U(J)) / dF at F = I + grad u: the cell-wise part of the stress of (1)."""
@@ -128,7 +133,8 @@ def internal_work(u: fem.Function, v: ufl.core.expr.Expr, material: Material | N
     if material is None:
         cellwise = ufl.inner(stress(u, mu, lmbda * (1 - chi)), strain(v)) * ufl.dx
     else:
-        cellwise = ufl.inner(remainder_piola(material, u, mu, lmbda, chi), ufl.grad(v)) * material.dx()
+        dx = material.dx(displacement_degree(u.function_space))
+        cellwise = ufl.inner(remainder_piola(material, u, mu, lmbda, chi), ufl.grad(v)) * dx
     return cellwise + averaged.term(v), averaged
 
 
@@ -160,7 +166,7 @@ class NodalPressure:
         msh = u.function_space.mesh
         self.Q = fem.functionspace(msh, ("Lagrange", 1))
         q = ufl.TestFunction(self.Q)
-        self.dx = ufl.dx(metadata={"quadrature_degree": 2})
+        self.dx = ufl.dx(metadata={"quadrature_degree": _nodal_degree(u.function_space, material is not None)})
         J, self.dJ = _volume_change(u, material is not None)
         self.volume = self._nodal(chi * q * self.dx, None, "nodal_volume")
         self.lame = self._nodal(chi * lmbda * q * self.dx, self.volume, "nodal_lambda")
@@ -284,12 +290,11 @@ class VolumetricTangent(PETScOwner):
 
 
 def small_strain_stiffness(V: fem.FunctionSpace, lmbda: typing.Any, chi: fem.Function | None,
-                           bcs: list[fem.DirichletBC]) -> VolumetricTangent | contextlib.nullcontext:
+                           bcs: list[fem.DirichletBC]) -> VolumetricTangent | None:
     """The small-strain lambda B^T M_L^-1 B of the cells ``chi`` marks ((3) at u = 0; call
-    :meth:`VolumetricTangent.add_to` and :meth:`~VolumetricTangent.lift`), as a ``with``
-    context that frees it; without ``chi`` a context giving None."""
+    :meth:`VolumetricTangent.add_to` and :meth:`~VolumetricTangent.lift`), or None without ``chi``."""
     if chi is None:
-        return contextlib.nullcontext()
+        return None
     averaged = NodalPressure(fem.Function(V), chi, lmbda, None)
     averaged.update()
     return VolumetricTangent.create(averaged, bcs)

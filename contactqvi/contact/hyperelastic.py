@@ -80,7 +80,8 @@ class HyperelasticSystem(PETScOwner):
             whatever the strain: at 1e-6 strain the terms cancel to 1e-6 of their size and r_K
             cannot be driven below about 1e-10 of the first residual. Measured: Newton stalls
             at 0.5 eps (two-body Hertz at 1 um) and 1.2 eps (patch blocks at 1e-6 strain) of
-            it. The solver's ``floor`` (45 eps) is relative to this scale.
+            it. The solver's ``floor`` (45 eps) is relative to this scale. With the nodally
+            averaged volume change mu + chi lambda replaces mu (:func:`_force_scale`).
         volumetric: the nodally averaged volume change of the bodies that take it
             (:mod:`contactqvi.nodal_pressure`: its nodal pressure is updated before each
             assembly, and its B^T D B added to K_T, whose pattern then holds it), or None.
@@ -206,11 +207,15 @@ def create_hyperelastic_system(
     external.array[dirichlet_owned] = 0.0
     return HyperelasticSystem(material, u, residual_form, tangent_form, list(bcs), external, external.duplicate(),
                               None, dirichlet_owned, prescribed_rows(external, dirichlet_owned, rotation),
-                              load_factor, _force_scale(V, mu, material), volumetric=volumetric)
+                              load_factor, _force_scale(V, mu if nodal is None else mu + nodal * lmbda, material),
+                              volumetric=volumetric)
 
 
 def _force_scale(V: fem.FunctionSpace, mu: typing.Any, material: Material) -> float:
-    """||int mu div v dX|| (N) over the owned dofs (:attr:`HyperelasticSystem.force_scale`)."""
+    """||int mu div v dX|| (N) over the owned dofs (:attr:`HyperelasticSystem.force_scale`). With the
+    nodally averaged volume change ``mu`` is mu + chi lambda: its pressure U'(Jbar_a) is resolved to
+    eps U''(Jbar_a), about eps lambda (a quadratic O-ring at nu = 0.499 stalled at 1.6e-11 of its
+    start on a floor relative to mu alone)."""
     dx = material.dx(displacement_degree(V))
     scale = dolfinx.fem.petsc.assemble_vector(fem.form(mu * ufl.div(ufl.TestFunction(V)) * dx))
     scale.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)

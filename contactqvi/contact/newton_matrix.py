@@ -177,6 +177,16 @@ class NewtonMatrix(PETScOwner):
         _set_blocks(self._fixed_diagonal, self._contact_blk, gamma * fixed[:, :, None] * np.eye(3))
         self.rows.axpy(1.0, self._fixed_diagonal, _SUBSET)
 
+    def left_scaled(self, M: PETSc.Mat) -> PETSc.Mat:
+        """D M for the blocks of :meth:`set_blocks` (a new matrix; M of A's row layout)."""
+        out = self._D_minus_I.matMult(M)
+        out.axpy(1.0, M, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        return out
+
+    def left_scale(self, x: PETSc.Vec, y: PETSc.Vec) -> None:
+        """y = D x for the blocks of :meth:`set_blocks`."""
+        self._D_minus_I.multAdd(x, x, y)
+
     def mult_blocks(self, x: PETSc.Vec, y: PETSc.Vec, gamma: PETSc.Vec) -> None:
         """y = Gamma D x + U x for the blocks of :meth:`set_blocks`: the right-hand side operator of (5.4)
         with y1^ = Gamma x."""

@@ -15,6 +15,7 @@ from petsc4py import PETSc
 
 import numpy as np
 
+from contactqvi.contact.pressure_schur import PressureSchur
 from contactqvi.lifetime import PETScOwner
 from contactqvi.linalg import OptionsDict, create_ksp, default_options, ksp_converged_reason, preset
 from contactqvi.multigrid import GalerkinUpdate, is_multigrid, set_up
@@ -36,8 +37,10 @@ FALLBACK = "lu"
 #: GMRES + block-Jacobi/ILU(0) as in Sect. 7; ``hypre``: FGMRES + BoomerAMG; ``lu``:
 #: exact (MUMPS), the reference for the Newton counts. Measured in docs/coulomb.md.
 #: ``jacobi``: GMRES + point Jacobi for a mass-like problem (a dynamic step's projection).
+#: ``pressure_schur``: FGMRES + the block preconditioner of bodies with the nodally averaged
+#: volume change, robust in the bulk modulus (:mod:`contactqvi.contact.pressure_schur`).
 NEWTON_STEP_SOLVERS = {"gamg": "gmres_gamg", "paper": "gmres_ilu", "hypre": "gmres_hypre", "lu": "lu",
-                       "jacobi": "gmres_jacobi"}
+                       "jacobi": "gmres_jacobi", "pressure_schur": "gmres_pressure_schur"}
 
 
 class NewtonStepSolver(PETScOwner):
@@ -73,6 +76,9 @@ class NewtonStepSolver(PETScOwner):
             new set-up after a solve of more Krylov iterations than this.
         initial_guess: start the Krylov solve from ``du`` as given (it holds the
             exact values of the eliminated rows); direct solvers need none.
+        pressure: the block preconditioner of ``pc = "pressure_schur"`` (taken over, its
+            :meth:`~contactqvi.contact.pressure_schur.PressureSchur.update` the caller's before
+            each solve), else None.
 
     A Krylov solve that fails (a negative converged reason: out of iterations, a breakdown)
     is done again by a direct solve (:data:`FALLBACK`, MUMPS LU) for that Newton step alone:
@@ -92,12 +98,16 @@ class NewtonStepSolver(PETScOwner):
     """
 
     def __init__(self, comm: MPI.Comm, prefix: str, pc: str, multigrid_options: OptionsDict, *, rtol: float,
-                 reuse_pc: bool, rebuild_iterations: int, initial_guess: bool):  # fmt: skip
+                 reuse_pc: bool, rebuild_iterations: int, initial_guess: bool,
+                 pressure: PressureSchur | None = None):  # fmt: skip
         self.comm = comm
         self._options = preset(NEWTON_STEP_SOLVERS[pc])
         if self._options.get("pc_type") == "gamg":
             self._options.update(multigrid_options)
         self.ksp = create_ksp(comm, prefix, self._options, rtol=rtol)
+        self.pressure = pressure
+        if pressure is not None:
+            self.ksp.getPC().setPythonContext(pressure.context())
         self.reuse_pc, self.rebuild_iterations, self.initial_guess = reuse_pc, rebuild_iterations, initial_guess
         self._rebuilds = _smoothed_aggregation(prefix, self._options)
         self.galerkin: GalerkinUpdate | None = None
@@ -106,7 +116,7 @@ class NewtonStepSolver(PETScOwner):
         self.fallback: dict[str, str] = {}
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [self.galerkin, self.ksp, self._direct]
+        return [self.galerkin, self.ksp, self._direct, self.pressure]
 
     @property
     def iterations(self) -> int:

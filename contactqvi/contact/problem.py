@@ -163,6 +163,8 @@ class ContactProblem(PETScOwner):
         modified: S of the slave surfaces' modified basis on quadratic elements
             (:mod:`contactqvi.contact.quadratic`: the contact variables are the coefficients ũ of
             u = S ũ), or None on linear ones.
+        volumetric: lambda B^T M_L^-1 B of the small-strain stiffness of the bodies with the nodally
+            averaged volume change (:mod:`contactqvi.nodal_pressure`), or None.
     """
 
     V: fem.FunctionSpace
@@ -198,6 +200,7 @@ class ContactProblem(PETScOwner):
     hyperelastic: HyperelasticSystem | None = None
     current: CurrentGeometry | None = None
     modified: ModifiedBasis | None = None
+    volumetric: VolumetricTangent | None = None
 
     @property
     def comm(self) -> MPI.Comm:
@@ -211,7 +214,7 @@ class ContactProblem(PETScOwner):
     def petsc_objects(self) -> list[typing.Any]:
         """A, the load vectors, S, R, N, T and c (copies by ``dataclasses.replace`` share them)."""
         objects = (self.A, self.applied, self.load, self.shift, self.elastic, self.hyperelastic, self.modified,
-                   *self._variables_objects())
+                   self.volumetric, *self._variables_objects())
         return [obj for obj in objects if obj is not None]
 
     def _variables_objects(self) -> list[typing.Any]:
@@ -225,6 +228,12 @@ class ContactProblem(PETScOwner):
         """The map of the change of variables to global components: T with body pairs, R with
         nodal frames only, None without a change (the identity)."""
         return self.transform if self.transform is not None else self.rotation
+
+    @property
+    def averaged_volume(self) -> VolumetricTangent | None:
+        """The term B^T D B of the nodally averaged volume change at the last tangent (finite strain)
+        or of the stiffness (small strain), or None without such bodies."""
+        return self.volumetric if self.hyperelastic is None else self.hyperelastic.volumetric
 
     @property
     def searched_each_step(self) -> bool:
@@ -780,14 +789,14 @@ def assemble_contact_problem(
     Raises ``ParameterError`` as :func:`~contactqvi.contact.interface.build_interfaces`,
     and for nonzero prescribed components on contact nodes or a body nothing holds.
     """
-    V = _displacement_space(msh, degree, pairs, formulation, material)
+    V = _displacement_space(msh, degree, pairs, material)
     # the locking warning is about linear tetrahedra; quadratic ones keep their contact area (docs/quadratic.md)
     nodal = formulation_indicator(msh, formulation, cell_tags, poisson if degree == 1 else None)
     a, L = elasticity_forms(V, young, poisson, facet_tags, tractions, body_force, cell_tags, pressures, nodal)
     msh.topology.create_connectivity(msh.topology.dim - 1, msh.topology.dim)  # for the facet dofs
     bcs, moved_bc = _dirichlet_conditions(V, facet_tags, clamped, displacements or {}, moved)
     dirichlet_dofs_loc = np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs] + [np.empty(0, np.int32)]))
-    A, loads = _stiffness(V, a, L, bcs, moved_bc, dirichlet_dofs_loc, rotations, young, poisson, nodal)
+    A, loads, volumetric = _stiffness(V, a, L, bcs, moved_bc, dirichlet_dofs_loc, rotations, young, poisson, nodal)
     constrained, owned_dirichlet = _prescribed(V, dirichlet_dofs_loc)
     modified = _slave_basis(V, facet_tags, pairs, constrained)
     interfaces, search_seconds = _timed(msh.comm, build_interfaces, V, facet_tags, pairs, constrained, modified)
@@ -806,18 +815,18 @@ def assemble_contact_problem(
         dirichlet_dofs_loc=dirichlet_dofs_loc.astype(np.int32), node_body=node_body,
         n_free=comm.allreduce(3 * V.dofmap.index_map.size_local - len(owned_dirichlet), op=MPI.SUM),
         setup_seconds={"contact_search": search_seconds, "change_of_variables": variables_seconds},
-        elastic=elastic if searched else None, modified=modified, **fields,
+        elastic=elastic if searched else None, modified=modified, volumetric=volumetric, **fields,
     )
     problem.set_step()
     _make_hyperelastic(problem, material, young, poisson, L, bcs, facet_tags, nodal)
     return problem
 
 
-def _displacement_space(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair], formulation: Formulation,
+def _displacement_space(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair],
                         material: Material | None) -> fem.FunctionSpace:
     """The vector Lagrange space of the displacements of ``degree`` (:func:`_check_degree`)."""
     require(msh.geometry.dim == 3, "mesh", "the contact problem is three-dimensional")
-    _check_degree(msh, degree, pairs, formulation, material)
+    _check_degree(msh, degree, pairs, material)
     return fem.functionspace(msh, ("Lagrange", degree, (3,)))
 
 
@@ -837,10 +846,9 @@ def _slave_basis(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typing
                                                        for pair in pairs])), constrained)
 
 
-def _check_degree(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair], formulation: Formulation,
-                  material: Material | None) -> None:
+def _check_degree(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair], material: Material | None) -> None:
     """Quadratic displacements take tetrahedra, pairs searched once or each step (a hyperelastic body's
-    pairs of bodies: once) and the plain formulation; linear ones on a second-order (curved) mesh take
+    pairs of bodies: once); linear ones on a second-order (curved) mesh take
     tetrahedra and linear-elastic bodies, their displacements staying linear on the curved cells
     (docs/press_fit.md, "Curved contact surfaces")."""
     require(degree in (1, 2), "mesh.order", f"must be 1 (linear elements) or 2 (quadratic), got {degree!r}")
@@ -865,9 +873,6 @@ def _check_degree(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair], fo
                 "quadratic elements with a hyperelastic body take pairs of meshed bodies searched 'once' (the "
                 "reference configuration's coupling); searched again at finite strain they do not converge yet "
                 "(docs/quadratic.md, Sect. 4)")
-    names = set(formulation.values()) if isinstance(formulation, dict) else {formulation}
-    require(names <= {"displacement"}, "mesh.order", "the nodally averaged volume change (formulation = "
-            "\"nodal_pressure\") is a formulation of linear tetrahedra; quadratic ones take \"displacement\"")
 
 
 def _rigid_coefficients(translation: np.ndarray, rotation: Rotation | None) -> np.ndarray:
@@ -889,16 +894,16 @@ def _check_linear_pairs(problem: ContactProblem) -> None:
 def _stiffness(V: fem.FunctionSpace, a: fem.Form, L: fem.Form, bcs: list[fem.DirichletBC],
                moved_bc: fem.DirichletBC | None, dirichlet_dofs_loc: np.ndarray, rotations: bool,
                young: float | fem.Function, poisson: float | fem.Function,
-               nodal: fem.Function | None) -> tuple[PETSc.Mat, list[PETSc.Vec]]:
+               nodal: fem.Function | None) -> tuple[PETSc.Mat, list[PETSc.Vec], VolumetricTangent | None]:
     """A_K and the lifted loads of ``L`` and of the moved groups (:func:`_unit_translations`);
     with ``nodal`` (the cells of averaged bodies) A_K gains lambda B^T M_L^-1 B and every load
-    its lifting (:func:`~contactqvi.nodal_pressure.small_strain_stiffness`)."""
+    its lifting (:func:`~contactqvi.nodal_pressure.small_strain_stiffness`, returned, else None)."""
     A, applied = assemble_system(a, L, bcs)
-    with small_strain_stiffness(V, lame_parameters(young, poisson)[1], nodal, bcs) as volumetric:
-        if volumetric is not None:
-            volumetric.add_to(A, _DIFFERENT)
-            volumetric.lift(applied, bcs)
-        return A, [applied, *_unit_translations(V, a, moved_bc, dirichlet_dofs_loc, rotations, volumetric)]
+    volumetric = small_strain_stiffness(V, lame_parameters(young, poisson)[1], nodal, bcs)
+    if volumetric is not None:
+        volumetric.add_to(A, _DIFFERENT)
+        volumetric.lift(applied, bcs)
+    return A, [applied, *_unit_translations(V, a, moved_bc, dirichlet_dofs_loc, rotations, volumetric)], volumetric
 
 
 def _make_hyperelastic(problem: ContactProblem, material: Material | None, young: float | fem.Function,
@@ -910,6 +915,9 @@ def _make_hyperelastic(problem: ContactProblem, material: Material | None, young
     if material is None:
         _check_linear_pairs(problem)
         return
+    if problem.volumetric is not None:  # the tangent's own averaged term replaces the small-strain one
+        problem.volumetric.destroy()
+        problem.volumetric = None
     problem.hyperelastic = create_hyperelastic_system(problem.V, material, young, poisson, load, bcs,
                                                       problem.dirichlet_dofs_loc, problem.rotation,
                                                       problem.body.pressures, facet_tags, nodal)

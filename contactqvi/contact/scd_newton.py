@@ -42,10 +42,12 @@ import numpy as np
 from contactqvi.contact.nodal import State, classify, contact_states, resolvent, scd_adjoint_blocks, stick_reversed_slip
 from contactqvi.contact.newton_matrix import NewtonMatrix
 from contactqvi.contact.newton_step_solver import NEWTON_STEP_SOLVERS, NewtonStepSolver
+from contactqvi.contact.pressure_schur import PressureSchur
 from contactqvi.contact.problem import ContactProblem
+from contactqvi.elasticity import lame_parameters
 from contactqvi.lifetime import PETScOwner, VectorSet
 from contactqvi.linalg import power_iteration
-from contactqvi.parameters import Parameter, Parameters
+from contactqvi.parameters import Parameter, Parameters, require
 from contactqvi.result import Result, Status
 
 __all__ = [
@@ -253,6 +255,7 @@ class SCDNewtonSolver(PETScOwner):
         self._gamma_nodes: np.ndarray | None = None  # gamma_i per owned contact node
         self._gamma_dofs: GammaVectors | None = None  # made at the first use of gamma
         self._rhs_ratio = 1.0  # of the last Newton system: ||rhs of (5.4)|| / ||rhs with the rows eliminated||
+        self._eliminated = np.empty(0, dtype=np.int32)  # of the last Newton system: owned local rows
         self._work = WorkVectors.create(A)
 
     def petsc_objects(self) -> list[typing.Any]:
@@ -482,10 +485,11 @@ class SCDNewtonSolver(PETScOwner):
         w.rhs.scale(-1.0)
         w.du.set(0.0)
         self._rhs_ratio = 1.0
+        self._eliminated = np.empty(0, dtype=np.int32)
         if not self.parameters["eliminate_fixed_rows"]:
             return self._newton.assemble()
         fixed = ~np.any(Wt, axis=2)  # (m, 3): W*^T rows that vanish, pure (gamma-scaled) identity rows
-        fixed_loc = self._newton.fixed_dofs(fixed)
+        self._eliminated = fixed_loc = self._newton.fixed_dofs(fixed)
         gamma_fixed = self._gamma_dofs.gamma.array[fixed_loc]
         w.du.array[fixed_loc] = w.rhs.array[fixed_loc] / gamma_fixed
         J = self._newton.assemble(fixed, self.gamma, w.du, w.rhs)
@@ -521,6 +525,8 @@ class SCDNewtonSolver(PETScOwner):
         """Inexact solve J du = rhs of the last :meth:`newton_system` to ``tol`` (Sect. 7) by
         :attr:`step_solver`, from and into the work vector ``du``; returns the KSP's converged reason."""
         w = self._work
+        if self.step_solver.pressure is not None:
+            self.step_solver.pressure.update(J, self._newton, self.problem.to_global, self._eliminated)
         return self.step_solver.solve(J, self._newton.change, kinds, w.rhs, w.du, tol, self._rhs_ratio)
 
     # -- step 5: globalisation -----------------------------------------------------------
@@ -708,9 +714,16 @@ def newton_step_solver(problem: ContactProblem, parameters: dict, prefix: str) -
     """The Newton-step solver of the checked SCD ``parameters`` (``pc``, ``tol``, ``reuse_pc``, ...)
     for ``problem``, with options prefix ``prefix``."""
     p = parameters
+    pressure = None
+    if p["pc"] == "pressure_schur":
+        require(problem.averaged_volume is not None, "pc", "'pressure_schur' preconditions the averaged volume "
+                "change: give the nearly incompressible bodies formulation = \"nodal_pressure\"")
+        mu = lame_parameters(problem.body.young, problem.body.poisson)[0]
+        pressure = PressureSchur(problem.averaged_volume, mu, f"{prefix}pressure_",
+                                 {"pc_type": "hypre", "pc_hypre_type": "boomeramg"})
     return NewtonStepSolver(problem.comm, prefix, p["pc"], problem.multigrid_options, rtol=p["tol"],
                             reuse_pc=p["reuse_pc"], rebuild_iterations=p["pc_rebuild_iterations"],
-                            initial_guess=p["eliminate_fixed_rows"])
+                            initial_guess=p["eliminate_fixed_rows"], pressure=pressure)
 
 
 def _coordinate_noise(problem: ContactProblem) -> PETSc.Vec:

@@ -1,0 +1,156 @@
+"""A Newton-step preconditioner robust in the bulk modulus: one sweep of the block factorisation
+of the uncondensed displacement-pressure system (docs/nearly_incompressible.md, Sect. 5).
+
+With bodies of the averaged volume change (:mod:`contactqvi.nodal_pressure`) the Newton
+matrix of (5.4) (seed 000) is, in the solver's variables (T the change of variables),
+
+    J = J_r + L D P,   P = B T,   L = W P^T,   D = diag(U''(Jbar_a) / V_a),
+
+with J_r the Newton matrix of everything but the averaged term B^T D B and W the rows' left
+factor of (5.4) (the identity off the contact nodes, :class:`~contactqvi.contact.newton_matrix.NewtonMatrix`).
+J is the Schur complement of the uncondensed system
+
+    [ J_r   L    ] [du]   [r]
+    [ P    -D^-1 ] [ p] = [0],
+
+whose pressure block is what the bulk modulus makes large. One sweep of its block
+factorisation (Elman, Silvester & Wathen 2014, Ch. 9) applied to (r, 0),
+
+    y = G r,   p = S~^-1 P y,   du = G (r - L p),
+
+with G one AMG V-cycle (BoomerAMG) on J_r (no term of the bulk modulus) and S~ = D^-1 + M_L / mu the
+lumped approximation of the Schur complement D^-1 + P J_r^-1 L (M_L = diag(V_a), mu the nodal
+shear modulus, c = 2 measured best), is a preconditioner for J whose quality does not depend on lambda where the
+displacement-pressure pair is inf-sup stable: quadratic displacements with the nodal (P1)
+pressure are a Taylor-Hood pair with a lumped pressure mass. For linear ones (P1/P1) the
+pressure modes the pair does not control are left to the Krylov method.
+
+Eliminated rows (the SCD solver's identity rows, :meth:`NewtonMatrix.assemble`) have zero
+columns in J: P gets them too, so that J_r keeps J's identity rows and columns there.
+"""
+
+from __future__ import annotations
+
+import typing
+
+from petsc4py import PETSc
+
+import numpy as np
+import ufl
+
+import dolfinx.fem.petsc
+from dolfinx import fem
+
+from contactqvi.contact.newton_matrix import NewtonMatrix
+from contactqvi.lifetime import PETScOwner
+from contactqvi.linalg import OptionsDict, create_ksp, default_options
+from contactqvi.nodal_pressure import VolumetricTangent
+
+__all__ = ["PressureSchur"]
+
+_DIFFERENT = PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN
+
+#: c of S~ = D^-1 + c M_L / mu. Measured on the wavy block with quadratic displacements (linear
+#: elasticity, exact solves with J_r; Krylov iterations per Newton step at nu = 0.45 / 0.4999):
+#: c = 0.5: 17.3 / 27.4; 1: 9.4 / 14.1; 2: 4.8 / 10.7; 3: 5.7 / 12.3; 5: 6.5 / 14.2.
+SHEAR_FACTOR = 2.0
+
+
+class PressureSchur(PETScOwner):
+    """The block preconditioner of this module (:meth:`context`: as a petsc4py ``python`` PC).
+
+    Args:
+        volumetric: the averaged term's B and D, assembled at the tangent the Newton matrix
+            was built from (:class:`~contactqvi.nodal_pressure.VolumetricTangent`; not owned).
+        mu: the shear modulus (number or DG0 expression) of S~.
+        prefix: options prefix of the V-cycle on J_r (``{prefix}ksp_*``, ``{prefix}pc_*``).
+        options: its default PC options; its KSP is ``preonly``.
+    """
+
+    def __init__(self, volumetric: VolumetricTangent, mu: typing.Any, prefix: str, options: OptionsDict):
+        self.volumetric = volumetric
+        self._options = {**options, "ksp_type": "preonly"}
+        self.cycle = create_ksp(volumetric.B.getComm(), prefix, self._options)
+        nodal = volumetric.nodal
+        self._shear_volume = fem.Function(nodal.Q)  # int chi mu phi_a
+        vec = self._shear_volume.x.petsc_vec
+        dolfinx.fem.petsc.assemble_vector(vec, fem.form(nodal.chi * mu * ufl.TestFunction(nodal.Q) * nodal.dx))
+        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        self.P: PETSc.Mat | None = None
+        self.reduced: PETSc.Mat | None = None  # J_r
+        self._newton: NewtonMatrix | None = None
+        self._schur_inverse = vec.duplicate()
+        self._p = vec.duplicate()
+        self._y: PETSc.Vec | None = None
+        self._t: PETSc.Vec | None = None
+
+    def petsc_objects(self) -> list[typing.Any]:
+        return [self.cycle, self.P, self.reduced, self._shear_volume.x.petsc_vec, self._schur_inverse, self._p,
+                self._y, self._t]
+
+    def update(self, J: PETSc.Mat, newton: NewtonMatrix, transform: PETSc.Mat | None, eliminated: np.ndarray) -> None:
+        """J_r, P and S~^-1 for the Newton matrix J of ``newton`` (the averaged term at J's tangent),
+        the change of variables ``transform`` (None: the identity) and the owned local rows
+        ``eliminated`` by the SCD solver (collective)."""
+        self._newton = newton
+        B = self.volumetric.B
+        if self.P is not None:
+            self.P.destroy()
+        self.P = B.matMult(transform) if transform is not None else B.copy()
+        kept = J.createVecRight()
+        kept.set(1.0)
+        kept.array[eliminated] = 0.0
+        self.P.diagonalScale(R=kept)
+        averaged = self.volumetric.D.PtAP(self.P)  # P^T D P
+        scaled = newton.left_scaled(averaged)  # W P^T D P
+        if self.reduced is None:
+            self.reduced = J.duplicate(copy=True)
+            self.reduced.setNearNullSpace(J.getNearNullSpace())
+        else:
+            J.copy(self.reduced, PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        self.reduced.axpy(-1.0, scaled, _DIFFERENT)
+        self.cycle.setOperators(self.reduced)
+        with default_options(self.cycle.getOptionsPrefix(), self._options):
+            self.cycle.setUp()
+        self._set_schur_inverse()
+        if self._y is None:
+            self._y, self._t = J.createVecRight(), J.createVecRight()
+        for obj in (kept, averaged, scaled):
+            obj.destroy()
+
+    def _set_schur_inverse(self) -> None:
+        """1 / (V_a / U''_a + c V_a^2 / int chi mu phi_a) at the nodes of averaged cells, 0 elsewhere
+        (c = :data:`SHEAR_FACTOR`)."""
+        modulus = self.volumetric.D.getDiagonal()  # U''_a / V_a
+        volume = self.volumetric.nodal.volume.x.petsc_vec.array_r
+        shear = self._shear_volume.x.petsc_vec.array_r
+        inside = (volume > 0) & (modulus.array_r > 0)
+        schur = np.divide(1.0, modulus.array_r, out=np.zeros_like(volume), where=inside)
+        schur += SHEAR_FACTOR * np.divide(volume**2, shear, out=np.zeros_like(volume), where=inside)
+        self._schur_inverse.array[:] = np.divide(1.0, schur, out=np.zeros_like(volume), where=inside)
+        modulus.destroy()
+
+    def context(self) -> _Context:
+        """The context of a petsc4py ``python`` PC that applies :meth:`apply`."""
+        return _Context(self.apply)
+
+    def apply(self, r: PETSc.Vec, du: PETSc.Vec) -> None:
+        """du = G (r - L S~^-1 P G r)."""
+        y, t, p = self._y, self._t, self._p
+        self.cycle.solve(r, y)
+        self.P.mult(y, p)
+        p.pointwiseMult(p, self._schur_inverse)
+        self.P.multTranspose(p, y)
+        self._newton.left_scale(y, t)  # L p = W P^T p
+        t.aypx(-1.0, r)
+        self.cycle.solve(t, du)
+
+
+class _Context:
+    """A petsc4py ``python`` PC context: PCApply only (the PC's destruction leaves the owner alone)."""
+
+    def __init__(self, apply: typing.Callable[[PETSc.Vec, PETSc.Vec], None]):
+        self._apply = apply
+
+    def apply(self, pc: PETSc.PC, r: PETSc.Vec, du: PETSc.Vec) -> None:
+        self._apply(r, du)
