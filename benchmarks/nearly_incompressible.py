@@ -15,6 +15,8 @@ files run by ``python -m contactqvi run`` (docs/nearly_incompressible.md lists t
     python benchmarks/nearly_incompressible.py --lev 2 --poisson 0.45 0.49 0.499
     python benchmarks/nearly_incompressible.py --lev 1 --degree 2 --formulations nodal_pressure \
         --pc pressure_schur --poisson 0.45 0.499 0.4999
+    python benchmarks/nearly_incompressible.py --lev 1 --degree 2 --formulations nodal_pressure \
+        --pc pressure_schur --wavy --linear --steps 1 --compression 0.01 --poisson 0.45 0.4999
 """
 
 from __future__ import annotations
@@ -32,14 +34,20 @@ from contactqvi.meshes import create_contact_body
 
 
 def krylov_counts(lev: int, poisson: float, formulation: str, steps: int, compression: float,
-                  pc: str = "gamg", degree: int = 1) -> list[tuple[int, int]]:
-    """(Newton steps, Krylov iterations) of each load step of the block's compression."""
-    msh, tags = create_contact_body(MPI.COMM_WORLD, lev, lambda x, y: np.zeros_like(x), length=1.0, width=1.0,
-                                    height=1.0, cell_type="tetrahedron")
+                  pc: str = "gamg", degree: int = 1, wavy: bool = False,
+                  linear: bool = False) -> list[tuple[int, int]]:
+    """(Newton steps, Krylov iterations) of each load step of the block's compression, on a flat or
+    ``wavy`` foundation (that of tests/test_nearly_incompressible.py), neo-Hookean or ``linear``."""
+    def gap(x, y):
+        return 0.02 * (1.0 - np.cos(np.pi * x)) * (1.0 - np.cos(np.pi * y)) if wavy else np.zeros_like(x)
+
+    msh, tags = create_contact_body(MPI.COMM_WORLD, lev, gap, length=1.0, width=1.0, height=1.0,
+                                    cell_type="tetrahedron")
     problem = build_contact_problem(msh, tags, 10e6, poisson, {}, Frictionless(), clamped=(), contact="contact",
                                     displacements={"dirichlet": {0: 0.0}, "front": {1: 0.0},
                                                    "top": {2: -compression}},
-                                    material=NeoHookean(), formulation=formulation, degree=degree)
+                                    material=None if linear else NeoHookean(), formulation=formulation,
+                                    degree=degree)
     with problem:
         u = problem.A.createVecRight()
         results = solve_load_path(problem, [LoadStep((k + 1) / steps) for k in range(steps)], u, {"pc": pc},
@@ -57,6 +65,8 @@ def main() -> None:
     parser.add_argument("--compression", type=float, default=0.1, help="of the height")
     parser.add_argument("--pc", default="gamg", help="Newton-step solver (SCD parameter pc)")
     parser.add_argument("--degree", type=int, default=1, help="displacement degree (mesh.order)")
+    parser.add_argument("--wavy", action="store_true", help="the wavy foundation instead of the flat one")
+    parser.add_argument("--linear", action="store_true", help="linear elasticity instead of neo-Hookean")
     parser.add_argument("--formulations", nargs="+", default=["displacement", "nodal_pressure"],
                         help="formulations compared")
     args = parser.parse_args()
@@ -65,7 +75,7 @@ def main() -> None:
     for poisson in args.poisson:
         for formulation in args.formulations:
             counts = krylov_counts(args.lev, poisson, formulation, args.steps, args.compression, args.pc,
-                                   args.degree)
+                                   args.degree, args.wavy, args.linear)
             newton, krylov = (sum(c[i] for c in counts) for i in (0, 1))
             rows.append(f"| {poisson} | {formulation} | {' '.join(str(c[0]) for c in counts)} | "
                         f"{' '.join(str(c[1]) for c in counts)} | {krylov / max(newton, 1):.1f} |")
