@@ -270,7 +270,7 @@ def test_bad_input_raises_a_named_error(changes, text):
     [
         ({"tl": 0.1}, "solver.tl: unknown parameter; did you mean 'tol'?"),
         ({"tol": 2.0}, "solver.tol: must be in (0, 1), got 2.0"),
-        ({"pc": "lux"}, "solver.pc: must be one of gamg, paper, hypre, lu, jacobi, got 'lux' (did you mean 'lu'?)"),
+        ({"pc": "lux"}, "solver.pc: must be one of gamg, paper, hypre, lu, jacobi, pressure_schur, got 'lux' (did you mean 'lu'?)"),
         ({"max_iterations": 0}, "solver.max_iterations: must be >= 1, got 0"),
         ({"geometry_tol": -1e-3}, "solver.geometry_tol: must be in [0, 1], got -0.001"),
         ({"max_searches": 2.5}, "solver.max_searches: must be an integer, got 2.5"),
