@@ -68,7 +68,7 @@ _GMRES_RIGHT = {"ksp_type": "fgmres", "ksp_pc_side": "right", "ksp_norm_type": "
 #:   nodal/vector interpolation variants broke down on eliminated rows here).
 #: * ``gmres_pressure_schur``: as ``gmres_gamg`` with the block preconditioner of bodies with an
 #:   averaged volume change (:mod:`contactqvi.contact.pressure_schur`, a ``python`` PC whose context
-#:   the Newton-step solver sets): two GAMG V-cycles on the Newton matrix without the bulk term.
+#:   the Newton-step solver sets): two BoomerAMG V-cycles on the Newton matrix without the bulk term.
 #: * ``cg_jacobi``: CG + point Jacobi (cheap, for well-conditioned mass-like systems).
 #: * ``gmres_jacobi``: GMRES + point Jacobi, stopped at the left-preconditioned residual: the
 #:   Newton steps of a mass-like problem (the projection of a dynamic step's predictor,

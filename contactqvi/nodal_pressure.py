@@ -1,5 +1,7 @@
 """The nodally averaged volumetric tetrahedron: a locking-free P1 formulation for nearly
-incompressible bodies (Bonet & Burton 1998; Bonet, Marriott & Hassan 2001).
+incompressible bodies (Bonet & Burton 1998; Bonet, Marriott & Hassan 2001); with quadratic
+displacements the same averaging at the vertices is the Taylor-Hood P2/P1 pair with a lumped
+pressure mass, condensed (docs/nearly_incompressible.md, Sect. 6).
 
 Linear tetrahedra lock when the bulk modulus dominates: one volume constraint per cell
 against about one free node per five cells. Averaging the volume change at the vertices
