@@ -77,10 +77,11 @@ class PressureSchur(PETScOwner):
         self._options = {**options, "ksp_type": "preonly"}
         self.cycle = create_ksp(volumetric.B.getComm(), prefix, self._options)
         nodal = volumetric.nodal
-        self._shear_volume = fem.Function(nodal.Q)  # int chi mu phi_a
-        vec = self._shear_volume.x.petsc_vec
-        dolfinx.fem.petsc.assemble_vector(vec, fem.form(nodal.chi * mu * ufl.TestFunction(nodal.Q) * nodal.dx))
-        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        # int chi mu phi_a
+        self._shear_volume = dolfinx.fem.petsc.assemble_vector(
+            fem.form(nodal.chi * mu * ufl.TestFunction(nodal.Q) * nodal.dx))
+        self._shear_volume.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        vec = self._shear_volume
         self.P: PETSc.Mat | None = None
         self.reduced: PETSc.Mat | None = None  # J_r
         self._newton: NewtonMatrix | None = None
@@ -90,8 +91,8 @@ class PressureSchur(PETScOwner):
         self._t: PETSc.Vec | None = None
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [self.cycle, self.P, self.reduced, self._shear_volume.x.petsc_vec, self._schur_inverse, self._p,
-                self._y, self._t]
+        return [self.cycle, self.P, self.reduced, self._shear_volume, self._schur_inverse, self._p, self._y,
+                self._t]
 
     def update(self, J: PETSc.Mat, newton: NewtonMatrix, transform: PETSc.Mat | None, eliminated: np.ndarray) -> None:
         """J_r, P and S~^-1 for the Newton matrix J of ``newton`` (the averaged term at J's tangent),
@@ -128,7 +129,7 @@ class PressureSchur(PETScOwner):
         (c = :data:`SHEAR_FACTOR`)."""
         modulus = self.volumetric.D.getDiagonal()  # U''_a / V_a
         volume = self.volumetric.nodal.volume.x.petsc_vec.array_r
-        shear = self._shear_volume.x.petsc_vec.array_r
+        shear = self._shear_volume.array_r
         inside = (volume > 0) & (modulus.array_r > 0)
         schur = np.divide(1.0, modulus.array_r, out=np.zeros_like(volume), where=inside)
         schur += SHEAR_FACTOR * np.divide(volume**2, shear, out=np.zeros_like(volume), where=inside)
