@@ -119,8 +119,9 @@ def test_restart_mid_impact(scheme, mpi_tmp_path):
     for a, b in zip(whole["steps"][10:], resumed["steps"][10:]):
         for term in ("kinetic", "elastic", "contact_work"):
             assert b["energy"][term] == pytest.approx(a["energy"][term], rel=1e-12, abs=1e-12)
-        # the 1e-12: on 2 ranks of a loaded machine a component differed by up to 9e-13 m/s
-        # (of 1 m/s) between two runs of the same history, bit for bit equal on a calm one
+        # the 1e-12, relative to the field's scale: on 2 ranks of a loaded machine two runs of
+        # the same history differ in round-off (up to 9e-13 m/s of 1 m/s here; MUMPS schedules its
+        # parallel factorisation dynamically), bit for bit equal on a calm one
         assert b["body_velocity"].keys() == a["body_velocity"].keys()
         for name, expected in a["body_velocity"].items():
             assert b["body_velocity"][name] == pytest.approx(expected, rel=1e-12, abs=1e-12)
@@ -128,7 +129,8 @@ def test_restart_mid_impact(scheme, mpi_tmp_path):
         for step in (0, -1):
             a, b = (read_vtx(path / "body.bp", step) for path in (mpi_tmp_path / "whole", mpi_tmp_path / "cut"))
             for name in ("displacement [m]", "velocity [m/s]"):
-                assert b.point_data[name] == pytest.approx(a.point_data[name], rel=1e-12, abs=1e-15)
+                scale = np.abs(a.point_data[name]).max()
+                assert np.abs(b.point_data[name] - a.point_data[name]).max() <= 1e-12 * scale
 
 
 @pytest.mark.ranks(2)
@@ -354,9 +356,13 @@ def test_restart_mid_tilt(mpi_tmp_path):
     resumed, code = run_dynamics(case, mpi_tmp_path / "cut", plot=False, restart=True)
     assert code == 0 and len(resumed["steps"]) == len(whole["steps"]) == 60
     for a, b in zip(whole["steps"][20:], resumed["steps"][20:]):
-        assert b["body_displacement"]["body"] == pytest.approx(a["body_displacement"]["body"], rel=1e-12, abs=1e-15)
-        for term in ("kinetic", "elastic", "friction_dissipation", "contact_work"):
-            assert b["energy"][term] == pytest.approx(a["energy"][term], rel=1e-12, abs=1e-15)
+        # 1e-12 of each quantity's scale (the round-off of parallel runs, as in test_restart_mid_impact)
+        displacement = np.asarray(a["body_displacement"]["body"])
+        assert b["body_displacement"]["body"] == pytest.approx(displacement, abs=1e-12 * np.abs(displacement).max())
+        terms = ("kinetic", "elastic", "friction_dissipation", "contact_work")
+        energy = max(abs(a["energy"][term]) for term in terms)
+        for term in terms:
+            assert b["energy"][term] == pytest.approx(a["energy"][term], abs=1e-12 * energy)
 
 
 def test_block_turns_with_a_tilting_plane(mpi_tmp_path):
