@@ -5,7 +5,9 @@ A rigid sphere (``cases/hertz.toml``, R = 1 m, E = 70 GPa) and a steel ball on a
 body at Poisson's ratio ``--poisson`` (default 0.4999), frictionless, on three meshes each, with
 ``formulation = "displacement"`` (plain P1), ``"nodal_pressure"`` (docs/nearly_incompressible.md) and,
 as ``--formulations quadratic``, quadratic elements (P2, ``[mesh] order = 2``; the two bodies on
-second-order meshes of the same sizes, docs/quadratic.md).
+second-order meshes of the same sizes, docs/quadratic.md); ``taylor_hood`` is P2 with the nodal
+pressure, the condensed Taylor-Hood pair (docs/nearly_incompressible.md Sect. 5; with
+``--pc pressure_schur``, its block preconditioner).
 The last step's total force P (four times the quarter model's), contact radius a = sqrt(A / pi) (A
 the summed D_ii of the nodes in contact) and peak nodal pressure p0 beside Hertz's with
 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 (:mod:`contactqvi.problems.hertz`); the two-body case keeps
@@ -40,7 +42,9 @@ from rows import cell, failed_row, merge_rows, order, percent
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 CASES = {"rigid": (ROOT / "cases" / "hertz.toml", "hertz_{}.geo"),
          "bodies": (ROOT / "cases" / "hertz_bodies.toml", "hertz_bodies_{}.geo")}
-FORMULATIONS = ("displacement", "nodal_pressure", "quadratic")
+FORMULATIONS = ("displacement", "nodal_pressure", "quadratic", "taylor_hood")
+#: The material formulation of the rows on quadratic elements.
+QUADRATIC = {"quadratic": "displacement", "taylor_hood": "nodal_pressure"}
 MESHES = ("coarse", "medium", "fine")
 KEY = ("case", "poisson", "formulation", "mesh", "pc")
 #: Where the second-order meshes of quadratic rows are written (removed at the end).
@@ -50,16 +54,15 @@ WORK = ROOT / "benchmarks" / "results" / "hertz_incompressible_work"
 def configured(name: str, mesh: str, poisson: float, formulation: str, pc: str | None,
                work: pathlib.Path, comm: MPI.Comm) -> ContactCase:
     """The case ``name`` on ``mesh`` with every body at ``poisson`` in ``formulation`` (``"quadratic"``:
-    P2 displacements, the bodies' second-order meshes written into ``work``)."""
+    and ``"taylor_hood"``: P2 displacements, the bodies' second-order meshes written into ``work``)."""
     path, geo = CASES[name]
     case = load_case(path)
 
     def material(m):
-        return dataclasses.replace(m, poisson=poisson,
-                                   formulation="displacement" if formulation == "quadratic" else formulation)
+        return dataclasses.replace(m, poisson=poisson, formulation=QUADRATIC.get(formulation, formulation))
 
     changes = {"mesh": dataclasses.replace(case.mesh, file=ROOT / "meshes" / geo.format(mesh))}
-    if formulation == "quadratic":
+    if formulation in QUADRATIC:
         changes["mesh"] = (mesh_source(mesh, 2, work, comm) if name == "bodies"
                            else dataclasses.replace(changes["mesh"], order=2))
     if case.bodies:

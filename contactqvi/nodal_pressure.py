@@ -131,7 +131,7 @@ def internal_work(u: fem.Function, v: ufl.core.expr.Expr, material: Material | N
     """The internal virtual work of (1): the remainder psi - chi U cell-wise plus (2), UFL, with
     the :class:`NodalPressure` whose p_h it holds (update it before each assembly). Small strain
     (``material`` None): 2 mu eps : eps + lambda (1 - chi) tr eps tr eps plus (2)."""
-    averaged = NodalPressure(u, chi, lmbda, material)
+    averaged = NodalPressure(u, chi, lmbda, material, None if material is None else mu)
     if material is None:
         cellwise = ufl.inner(stress(u, mu, lmbda * (1 - chi)), strain(v)) * ufl.dx
     else:
@@ -151,19 +151,46 @@ def averaged_stress(averaged: NodalPressure, mu: typing.Any, lmbda: typing.Any) 
     return remainder_piola(material, u, mu, lmbda, chi) * F.T / ufl.det(F) + volumetric
 
 
+@dataclasses.dataclass
+class _Line:
+    """A line search of the mixed method (:meth:`NodalPressure.start_line`): u_k (``anchor``),
+    theta_k and Jbar_k - theta_k at its nodes, the trial step size, and the form of
+    dJbar_k[u - u_k] V_a with its work functions."""
+
+    anchor: fem.Function
+    change: fem.Function
+    form: fem.Form
+    linearised: fem.Function
+    theta: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0))
+    residual: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0))
+    alpha: float = 0.0
+
+
 class NodalPressure:
     """The nodal fields of (1)-(2) for a displacement ``u``: V_a, lambda_a, Jbar_a, p_a = U'(Jbar_a)
     and U''(Jbar_a), as P1 functions, with the compiled forms that make them (no PETSc
     objects kept). Nodes outside chi's cells have V_a = 0, Jbar_a = 1, p_a = U''_a = 0.
+
+    In a Newton solve of the mixed method (docs/nearly_incompressible.md, Sect. 7) the volume
+    ratio theta_a at which p and U'' are evaluated is a variable of its own (:attr:`carried`),
+    moved by the linearised constraint Jbar_a(u) = theta_a, and Jbar(u) is its residual.
 
     Args:
         u: the displacement (vector P1); its values are read at :meth:`update`.
         chi: the indicator of :func:`formulation_indicator`.
         lmbda: Lamé's lambda (number or DG0 expression).
         material: the hyperelastic material (finite strain), or None (small strain).
+        mu: the shear modulus (finite strain): the scale of the constraint's residual in the
+            mixed method's merit function (:meth:`constraint_norm`), or None.
+
+    Attributes:
+        ratio: Jbar_a(u) of the last :meth:`update`.
+        mean: theta_a, where p and U'' are evaluated: ``ratio`` unless :attr:`carried`.
+        carried: whether theta is the mixed method's variable (:meth:`carry`).
     """
 
-    def __init__(self, u: fem.Function, chi: fem.Function, lmbda: typing.Any, material: Material | None):
+    def __init__(self, u: fem.Function, chi: fem.Function, lmbda: typing.Any, material: Material | None,
+                 mu: typing.Any = None):
         self.u, self.chi, self.material = u, chi, material
         msh = u.function_space.mesh
         self.Q = fem.functionspace(msh, ("Lagrange", 1))
@@ -173,7 +200,14 @@ class NodalPressure:
         self.volume = self._nodal(chi * q * self.dx, None, "nodal_volume")
         self.lame = self._nodal(chi * lmbda * q * self.dx, self.volume, "nodal_lambda")
         self._mean_form = fem.form(chi * J * q * self.dx)
+        self.ratio = fem.Function(self.Q, name="nodal_volume_change")
         self.mean = fem.Function(self.Q, name="nodal_volume_ratio")
+        self.carried = False
+        self._starting = False  # the next update starts a carried theta: at _start, or at Jbar if None
+        self._start: np.ndarray | None = None
+        self._line: _Line | None = None  # made at the first line search
+        self._on_line = False
+        self._mu, self._weight = mu, None
         self.pressure = fem.Function(self.Q, name="nodal_pressure")
         self.modulus = fem.Function(self.Q, name="nodal_bulk_modulus")
         mean = ufl.variable(self.mean)
@@ -203,12 +237,88 @@ class NodalPressure:
         out.x.scatter_forward()
 
     def update(self) -> None:
-        """Jbar, p = U'(Jbar) and U''(Jbar) at the nodes for the current ``u`` (collective)."""
-        self._assemble(self._mean_form, self.mean, self.volume)
-        empty = self.volume.x.array <= 0
-        self.mean.x.array[empty] = 1.0
+        """Jbar at the nodes for the current ``u``, and p = U'(theta), U''(theta) at theta = Jbar, or,
+        while :attr:`carried`, at the mixed method's theta (on a line search: the trial point's,
+        :meth:`start_line`) (collective)."""
+        self._assemble(self._mean_form, self.ratio, self.volume)
+        self.ratio.x.array[self.volume.x.array <= 0] = 1.0
+        if not self.carried or (self._starting and self._start is None):
+            self.mean.x.array[:] = self.ratio.x.array
+        elif self._starting:
+            self.mean.x.array[:] = self._start
+        elif self._on_line:
+            self._move_along_line()
+        self._starting = False
         self.pressure.interpolate(self._derivatives[0])
         self.modulus.interpolate(self._derivatives[1])
+
+    # -- the mixed method (docs/nearly_incompressible.md, Sect. 7) ---------------------------
+    def _merit_weight(self) -> np.ndarray:
+        """w_a = mu_a V_a^(2/3) (N) of the owned nodes: the constraint's residual V_a (Jbar_a - theta_a)
+        times the shear stiffness mu / h_a of a node's cells (h_a = V_a^(1/3)), a force."""
+        shear = self._nodal(self.chi * self._mu * ufl.TestFunction(self.Q) * self.dx, self.volume, "nodal_mu")
+        n = self.Q.dofmap.index_map.size_local
+        return shear.x.array[:n] * np.cbrt(self.volume.x.array[:n]) ** 2
+
+    def carry(self, carried: bool, start: fem.Function | None = None) -> None:
+        """Begin (``True``; theta = Jbar of the displacement ``start``, or of ``u`` if None, at the next
+        :meth:`update`) or end the mixed method's carried theta; ending it makes the next
+        :meth:`update` the condensed one again (collective)."""
+        self.carried, self._starting, self._start, self._on_line = carried, carried, None, False
+        if carried and self._weight is None:
+            self._weight = self._merit_weight()
+        if carried and start is not None:  # u is overwritten by the solver's next evaluation anyway
+            self.u.x.array[:] = start.x.array
+            self._assemble(self._mean_form, self.ratio, self.volume)
+            self.ratio.x.array[self.volume.x.array <= 0] = 1.0
+            self._start = self.ratio.x.array.copy()
+
+    def constraint(self) -> np.ndarray:
+        """Jbar_a(u) - theta_a of the owned nodes at the last :meth:`update` (0 unless :attr:`carried`)."""
+        n = self.Q.dofmap.index_map.size_local
+        return self.ratio.x.array[:n] - self.mean.x.array[:n]
+
+    def constraint_norm(self) -> float:
+        """||w (Jbar - theta)|| (N; :meth:`_merit_weight`) over the ranks: the constraint's share of
+        the mixed method's merit function (collective)."""
+        return float(np.sqrt(self.Q.mesh.comm.allreduce(float(np.sum((self._weight * self.constraint()) ** 2)),
+                                                          op=MPI.SUM)))
+
+    def condense_constraint(self) -> None:
+        """p += U''(theta) (Jbar - theta) at the nodes (after :meth:`update`): with it the residual (2)
+        is r_u + B^T U''(theta) (Jbar - theta), the right-hand side of the Newton step with the
+        linearised constraint condensed (Sect. 7, (7.2))."""
+        self.pressure.x.array[:] += self.modulus.x.array * (self.ratio.x.array - self.mean.x.array)
+
+    def start_line(self) -> None:
+        """A line search from the current ``u`` (of the last :meth:`update`, the Newton step's
+        linearisation point u_k) begins: theta(alpha) = theta_k + alpha (Jbar_k - theta_k) +
+        dJbar_k[u - u_k] follows the trial points (:meth:`set_step`)."""
+        if self._line is None:
+            anchor = fem.Function(self.u.function_space)
+            change = fem.Function(self.u.function_space)
+            form = fem.form(self.chi * ufl.TestFunction(self.Q) * _volume_change(anchor, True)[1](change) * self.dx)
+            self._line = _Line(anchor, change, form, fem.Function(self.Q))
+        line = self._line
+        line.anchor.x.array[:] = self.u.x.array
+        line.theta = self.mean.x.array.copy()
+        line.residual = self.ratio.x.array - self.mean.x.array
+        line.alpha, self._on_line = 0.0, True
+
+    def set_step(self, alpha: float) -> None:
+        """The step size of the next trial point on the line (:meth:`start_line`)."""
+        self._line.alpha = alpha
+
+    def end_line(self) -> None:
+        """The line search ended: theta stays the accepted trial point's."""
+        self._on_line = False
+
+    def _move_along_line(self) -> None:
+        """theta = theta_k + alpha (Jbar_k - theta_k) + dJbar_k[u - u_k] at the current ``u``."""
+        line = self._line
+        line.change.x.array[:] = self.u.x.array - line.anchor.x.array
+        self._assemble(line.form, line.linearised, self.volume)
+        self.mean.x.array[:] = line.theta + line.alpha * line.residual + line.linearised.x.array
 
     def term(self, v: ufl.core.expr.Expr) -> ufl.Form:
         """(2): int chi p_h dJ[v] dX, UFL (p_h of the last :meth:`update`)."""

@@ -125,8 +125,8 @@ class InertialSystem(HyperelasticSystem):
     inertia: PETSc.Vec | None = None
     work: PETSc.Vec | None = None
 
-    def assemble_residual(self, load_factor: float) -> PETSc.Vec:
-        r = super().assemble_residual(load_factor)
+    def assemble_residual(self, load_factor: float, condensed: bool = False) -> PETSc.Vec:
+        r = super().assemble_residual(load_factor, condensed)
         self.mass.mult(self.displacement.x.petsc_vec, self.work)
         r.axpy(self.coefficient, self.work)
         r.axpy(1.0, self.inertia)

@@ -105,15 +105,19 @@ class HyperelasticSystem(PETScOwner):
     def petsc_objects(self) -> list[typing.Any]:
         return [self.transformed, self.stiffness, self.internal, self.external, self.volumetric]
 
-    def assemble_residual(self, load_factor: float) -> PETSc.Vec:
+    def assemble_residual(self, load_factor: float, condensed: bool = False) -> PETSc.Vec:
         """r_K at :attr:`displacement` (global components, zero on the prescribed rows) into
-        :attr:`internal`, which is returned."""
+        :attr:`internal`, which is returned. ``condensed``: in the mixed method's Newton solve (the
+        nodal volume ratio carried, :class:`~contactqvi.nodal_pressure.NodalPressure`), the residual
+        with the linearised constraint condensed, the Newton step's right-hand side."""
         r = self.internal
         self.load_factor.value = load_factor
         with r.localForm() as local:
             local.set(0.0)
         if self.volumetric is not None:
             self.volumetric.nodal.update()
+            if condensed and self.volumetric.nodal.carried:
+                self.volumetric.nodal.condense_constraint()
         dolfinx.fem.petsc.assemble_vector(r, self.residual_form)
         r.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         r.axpy(-load_factor, self.external)

@@ -266,9 +266,15 @@ class _StepSolver(PETScOwner):
         if problem.follows_geometry:
             self.solver, result = _follow(problem, step, u, state, self.solver, self.stop)
             return result
-        result = self.solver.solve(u, atol=state.target, stop=self.stop)
+        result = self.solver.solve(u, atol=state.target, stop=self.stop, volume_start=_volume_start(state))
         self.solver, result = _settle(problem, step, u, state, self.solver, result, self.stop, self.path)
         return result
+
+
+def _volume_start(state: PathState) -> fem.Function | None:
+    """The displacement whose nodal volume ratios start a step's mixed Newton method: the last
+    converged step's (in the checkpoint, so a restart starts alike), None before the first."""
+    return state.displacement if state.solved > 0 else None
 
 
 def _toward(state: PathState, step: LoadStep, cuts: int) -> LoadStep:
@@ -504,7 +510,7 @@ def _follow(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSt
         problem.physical_displacement(iterate, reached)
         return problem.layout_changed(reached)
 
-    result = solver.solve(u, atol=state.target, stop=stop, search=moved)
+    result = solver.solve(u, atol=state.target, stop=stop, search=moved, volume_start=_volume_start(state))
     solves, target = [result], result.target
     while result.status == Status.SEARCH_AGAIN or (result.converged and moved(u)):
         if sum(r.iterations for r in solves) >= budget:

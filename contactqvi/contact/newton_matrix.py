@@ -194,6 +194,11 @@ class NewtonMatrix(PETScOwner):
         y.pointwiseMult(y, gamma)  # D Gamma = Gamma D: gamma is constant on each node
         self._U.multAdd(x, y, y)
 
+    def mult_add_D(self, x: PETSc.Vec, y: PETSc.Vec) -> None:
+        """y += D x for the blocks of :meth:`set_blocks` (x is left unchanged)."""
+        self._D_minus_I.multAdd(x, y, y)
+        y.axpy(1.0, x)
+
 
 def _insert_rows(M: PETSc.Mat, rows: PETSc.Mat, changed: PETSc.Mat | None = None) -> None:
     """Overwrite M's values on the nonempty owned rows of ``rows`` (same layout, pattern within M's),

@@ -489,13 +489,14 @@ class ContactProblem(PETScOwner):
         x = self.V.tabulate_dof_coordinates() + self.current.displacement.x.array.reshape(-1, 3)
         return self.comm.allreduce(float(np.abs(x).max(initial=0.0)), op=MPI.MAX)
 
-    def residual(self, u: PETSc.Vec, out: PETSc.Vec) -> None:
+    def residual(self, u: PETSc.Vec, out: PETSc.Vec, condensed: bool = False) -> None:
         """f(u) of a hyperelastic problem into ``out``: T^T r_K(u~) at the current step (T = R
         without body pairs), the prescribed rows u_i - l_i as in the linear problem
-        (:mod:`contactqvi.contact.hyperelastic`)."""
+        (:mod:`contactqvi.contact.hyperelastic`; ``condensed``: its
+        :meth:`~contactqvi.contact.hyperelastic.HyperelasticSystem.assemble_residual`)."""
         system = self.hyperelastic
         self.physical_displacement(u, system.displacement)
-        self.force_from_global(system.assemble_residual(self.load_factor), out)
+        self.force_from_global(system.assemble_residual(self.load_factor, condensed), out)
         prescribed = system.prescribed
         out.array[prescribed] = u.array_r[prescribed] - self.load.array_r[prescribed]
 

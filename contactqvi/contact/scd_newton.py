@@ -39,6 +39,8 @@ from petsc4py import PETSc
 
 import numpy as np
 
+from dolfinx import fem
+
 from contactqvi.contact.nodal import State, classify, contact_states, resolvent, scd_adjoint_blocks, stick_reversed_slip
 from contactqvi.contact.newton_matrix import NewtonMatrix
 from contactqvi.contact.newton_step_solver import NEWTON_STEP_SOLVERS, NewtonStepSolver
@@ -47,6 +49,7 @@ from contactqvi.contact.problem import ContactProblem
 from contactqvi.elasticity import lame_parameters
 from contactqvi.lifetime import PETScOwner, VectorSet
 from contactqvi.linalg import power_iteration
+from contactqvi.nodal_pressure import NodalPressure
 from contactqvi.parameters import Parameter, Parameters, require
 from contactqvi.result import Result, Status
 
@@ -114,6 +117,9 @@ PARAMETERS = Parameters(
     eliminate_fixed_rows=Parameter(True, "solve the identity rows (sticking, normal contact rows) exactly", type=bool),
     max_line_search=Parameter(20, "step sizes tried by the line search before it fails", type=int, minimum=1),
     pc=Parameter("gamg", "Newton-step solver", type=str, choices=tuple(NEWTON_STEP_SOLVERS)),
+    mixed=Parameter(True, "hyperelastic bodies with the nodal pressure: Newton's method on the displacements and "
+                    "the nodal volume ratios, their constraint linearised (docs/nearly_incompressible.md, Sect. 7); "
+                    "false: on the displacements with the volume ratios condensed", type=bool),
     reuse_pc=Parameter(True, "multigrid: coarse operators updated by the contact rows' change instead of a new "
                        "set-up; other preconditioners: kept while no contact node changes its kind", type=bool),
     pc_rebuild_iterations=Parameter(10, "multigrid with reuse_pc and smoothed aggregation: a new set-up (new "
@@ -257,6 +263,7 @@ class SCDNewtonSolver(PETScOwner):
         self._rhs_ratio = 1.0  # of the last Newton system: ||rhs of (5.4)|| / ||rhs with the rows eliminated||
         self._eliminated = np.empty(0, dtype=np.int32)  # of the last Newton system: owned local rows
         self._work = WorkVectors.create(A)
+        self._carried: NodalPressure | None = None  # the mixed method's nodal volume, during a solve
 
     def petsc_objects(self) -> list[typing.Any]:
         objects = [self.step_solver, self._newton, self._near_nullspace, self._work, self._gamma_dofs]
@@ -383,7 +390,10 @@ class SCDNewtonSolver(PETScOwner):
         diff = self._work.y2
         diff.waxpy(-1.0, dhat, u)
         diff.pointwiseMult(diff, self._gamma_dofs.weight)
-        return GraphPoint(float(np.sqrt(self.gamma**2 + 1.0) * diff.norm()), v, z)
+        norm = diff.norm()
+        if self._carried is not None and self._carried.carried:  # the constraint's rows, as r's off the contact
+            norm = float(np.hypot(norm, self._carried.constraint_norm() / self.gamma))
+        return GraphPoint(float(np.sqrt(self.gamma**2 + 1.0) * norm), v, z)
 
     def _graph_point(self, u: PETSc.Vec, r: PETSc.Vec, dhat: PETSc.Vec) -> GraphPoint:
         """r = f(u) into ``r``, then the approximation step at u (d^ into ``dhat``)."""
@@ -423,6 +433,23 @@ class SCDNewtonSolver(PETScOwner):
     def residual(self, u: PETSc.Vec) -> GraphPoint:
         """The graph point of (6.17) at u alone: ||y^|| is the accuracy measure."""
         return self._graph_point(u, self._work.r_trial, self._work.d_trial)
+
+    def _carried_volume(self) -> NodalPressure | None:
+        """The nodal volume ratios of the mixed method (parameter ``mixed``), or None."""
+        system = self.problem.hyperelastic
+        if not self.parameters["mixed"] or system is None or system.volumetric is None:
+            return None
+        return system.volumetric.nodal
+
+    def _constraint_force(self, u: PETSc.Vec) -> PETSc.Vec:
+        """The mixed method's g = B^T U''(theta) (Jbar - theta) at the iterate u, in the solver's
+        variables (the condensed residual's excess over r; into the scratch ``r_trial``): the
+        linearised constraint's share of the Newton step's right-hand side
+        (docs/nearly_incompressible.md, Sect. 7)."""
+        w = self._work
+        self.problem.residual(u, w.r_trial, condensed=True)
+        w.r_trial.axpy(-1.0, w.r)
+        return w.r_trial
 
     def classify(self, point: GraphPoint, v_previous: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, int]:
         """Normal and tangential kinds of the graph point (Table 1), in place on ``point``.
@@ -471,8 +498,11 @@ class SCDNewtonSolver(PETScOwner):
         return scd_adjoint_blocks(point.v, point.z, normal, tangential, self.gamma_nodes, self.problem.law)
 
     # -- step 3: reduced Newton system -----------------------------------------------
-    def newton_system(self, Wt: np.ndarray, Ut: np.ndarray, u: PETSc.Vec) -> PETSc.Mat:
-        """Matrix J = D A + U and right-hand side -(D y1^ + U y2^) of (5.4), fixed rows eliminated.
+    def newton_system(self, Wt: np.ndarray, Ut: np.ndarray, u: PETSc.Vec,
+                      constraint: PETSc.Vec | None = None) -> PETSc.Mat:
+        """Matrix J = D A + U and right-hand side -(D y1^ + U y2^) of (5.4), fixed rows eliminated;
+        -(D (y1^ + g) + U y2^) with the mixed method's ``constraint`` force g (its linearised
+        constraint condensed: docs/nearly_incompressible.md, Sect. 7).
 
         The right-hand side goes to the work vector ``rhs`` and the eliminated rows'
         exact values to ``du``; returns J. Keeps ||rhs of (5.4)|| / ||rhs|| for the
@@ -482,6 +512,8 @@ class SCDNewtonSolver(PETScOwner):
         self._newton.set_blocks(Wt, Ut)
         w.y2.waxpy(-1.0, w.dhat, u)  # y1^ = Gamma y2^ = Gamma (u - d^)
         self._newton.mult_blocks(w.y2, w.rhs, self._gamma_dofs.gamma)
+        if constraint is not None:
+            self._newton.mult_add_D(constraint, w.rhs)
         w.rhs.scale(-1.0)
         w.du.set(0.0)
         self._rhs_ratio = 1.0
@@ -545,7 +577,11 @@ class SCDNewtonSolver(PETScOwner):
         if follows:
             self.problem.set_search_line(u, w.du)
         bound = 1.0 + 0.1 / (k + 1)
+        if self._carried is not None:
+            self._carried.start_line()
         for alpha in self._steps:
+            if self._carried is not None:
+                self._carried.set_step(float(alpha))
             if follows:  # the geometry at the trial point, the solver's variables there (v at the contact)
                 self.problem.follow_line(float(alpha), w.u_trial)
             else:
@@ -556,6 +592,8 @@ class SCDNewtonSolver(PETScOwner):
                 self.smooth_part(w.u_trial, w.r_trial)
             point = self.approximation_step(w.r_trial, w.u_trial, w.d_trial)
             if point.norm <= (bound - 0.1 * alpha) * norm:
+                if self._carried is not None:
+                    self._carried.end_line()
                 return float(alpha), point
         return None, None
 
@@ -620,7 +658,8 @@ class SCDNewtonSolver(PETScOwner):
         return None
 
     def solve(self, u: PETSc.Vec, atol: float = 0.0, stop: typing.Callable[[], bool] | None = None,
-              search: typing.Callable[[PETSc.Vec], bool] | None = None) -> SCDNewtonResult:
+              search: typing.Callable[[PETSc.Vec], bool] | None = None,
+              volume_start: fem.Function | None = None) -> SCDNewtonResult:
         """Run Algorithm 1 from the initial guess ``u`` (shifted displacements), in place.
 
         Stops at ||y^|| <= max(rtol ||y^(0)||, floor ||l||, atol) (:meth:`stopping_target`),
@@ -633,20 +672,29 @@ class SCDNewtonSolver(PETScOwner):
         (collective) is asked before each Newton step after the first: whether the contact must
         be searched again at the iterate u (a geometry that follows the iterate,
         :mod:`contactqvi.contact.current_geometry`); then the solve ends with status ``search_again``.
+        With the mixed method (``mixed``) the nodal volume ratios start at those of the displacement
+        ``volume_start`` (global components: a load path's last converged step), or at u's.
         """
+        self._carried = self._carried_volume()
         try:
-            return self._algorithm_1(u, atol, stop, search)
+            return self._algorithm_1(u, atol, stop, search, volume_start)
         finally:
+            if self._carried is not None:
+                self._carried.carry(False)
+                self._carried = None
             self._newton.restore()
 
     def _algorithm_1(self, u: PETSc.Vec, atol: float, stop: typing.Callable[[], bool] | None,
-                     search: typing.Callable[[PETSc.Vec], bool] | None) -> SCDNewtonResult:
+                     search: typing.Callable[[PETSc.Vec], bool] | None,
+                     volume_start: fem.Function | None) -> SCDNewtonResult:
         """Algorithm 1 of Sect. 4 (the loop of :meth:`solve`), A's storage left holding J."""
         comm, w = self.problem.comm, self._work
         result = SCDNewtonResult(status=Status.DIVERGED_MAX_IT, iterations=0, gamma=0.0, target=0.0,
                                  states=np.empty(0, np.int8), normal_force=np.empty(0), friction_force=np.empty((0, 2)))
         with result.timings.phase("gamma"):
             result.gamma = self.gamma
+        if self._carried is not None:
+            self._carried.carry(True, volume_start)
         with result.timings.phase("residual"):
             point = self._graph_point(u, w.r, w.dhat)
         norm0 = point.norm
@@ -670,8 +718,9 @@ class SCDNewtonSolver(PETScOwner):
                 _log_iteration(entry)
                 break
             with result.timings.phase("newton_matrix"):
+                constraint = None if self._carried is None or k == 0 else self._constraint_force(u)
                 self.linearise(u, k)
-                J = self.newton_system(*self.generalized_derivative(point, normal, tangential), u)
+                J = self.newton_system(*self.generalized_derivative(point, normal, tangential), u, constraint)
             kinds = np.concatenate([normal, tangential])
             settled = alpha == 1.0 and comm.allreduce(np.array_equal(kinds, kinds_previous), op=MPI.LAND)
             entry["tol"] = self.forcing_term(point.norm, previous_norm, settled, own_target)
