@@ -112,8 +112,8 @@ def run(name: str, mesh: str, poisson: float, formulation: str, pc: str | None, 
 
 def markdown(rows: list[dict]) -> str:
     """One line per run: errors against Hertz in %."""
-    lines = ["## Hertz at a Poisson's ratio near 0.5: plain P1, the nodally averaged volume change and quadratic "
-             "elements", "",
+    lines = ["## Hertz at a Poisson's ratio near 0.5: plain P1, the nodally averaged volume change, quadratic "
+             "elements and the condensed Taylor-Hood pair (taylor_hood: P2 with the nodal pressure)", "",
              "Every body at the row's ν, pressed 1 mm by a sphere of R = 1 m (rigid, or a steel ball on an aluminium "
              "block), frictionless, default solver unless `pc` says; errors of the last step's P, a and p0 against "
              "Hertz's (E* = E/(1 − ν²) per body); the two-body rows include the ball's own compliance, which the "

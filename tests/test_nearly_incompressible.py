@@ -106,8 +106,8 @@ def _assert_uniaxial(rows: list[dict], poisson: float, compression: float) -> No
     "0.499", reason="another material constant"))], ids=["0.499", "0.4999"])
 def test_mixed_newton_reaches_the_closed_form(poisson, limit):
     """The mixed Newton method (the default; docs/nearly_incompressible.md, Sect. 7), 10 % in three
-    steps: the closed form, in at most ``limit`` Newton steps in all (measured 17 at 0.499 and 67 at
-    0.4999, the first step from rest 59 of them). The condensed iteration (``mixed = false``) on the
+    steps: the closed form, in at most ``limit`` Newton steps in all (measured 15 at 0.499 and 64 at
+    0.4999, the first step from rest 58 of them). The condensed iteration (``mixed = false``) on the
     same path (0.499) takes 88 (32, 28, 28): its steps crawl at alpha 1e-3 (regression guard: at
     least three times the mixed method's)."""
     mixed = _compressed(poisson, NeoHookean(), 0.1, 3)

@@ -498,11 +498,10 @@ class SCDNewtonSolver(PETScOwner):
         return scd_adjoint_blocks(point.v, point.z, normal, tangential, self.gamma_nodes, self.problem.law)
 
     # -- step 3: reduced Newton system -----------------------------------------------
-    def newton_system(self, Wt: np.ndarray, Ut: np.ndarray, u: PETSc.Vec,
-                      constraint: PETSc.Vec | None = None) -> PETSc.Mat:
+    def newton_system(self, Wt: np.ndarray, Ut: np.ndarray, u: PETSc.Vec) -> PETSc.Mat:
         """Matrix J = D A + U and right-hand side -(D y1^ + U y2^) of (5.4), fixed rows eliminated;
-        -(D (y1^ + g) + U y2^) with the mixed method's ``constraint`` force g (its linearised
-        constraint condensed: docs/nearly_incompressible.md, Sect. 7).
+        -(D (y1^ + g) + U y2^) in the mixed method, g its linearised constraint's force
+        (:meth:`_constraint_force`; docs/nearly_incompressible.md, Sect. 7).
 
         The right-hand side goes to the work vector ``rhs`` and the eliminated rows'
         exact values to ``du``; returns J. Keeps ||rhs of (5.4)|| / ||rhs|| for the
@@ -512,8 +511,8 @@ class SCDNewtonSolver(PETScOwner):
         self._newton.set_blocks(Wt, Ut)
         w.y2.waxpy(-1.0, w.dhat, u)  # y1^ = Gamma y2^ = Gamma (u - d^)
         self._newton.mult_blocks(w.y2, w.rhs, self._gamma_dofs.gamma)
-        if constraint is not None:
-            self._newton.mult_add_D(constraint, w.rhs)
+        if self._carried is not None:
+            self._newton.mult_add_D(self._constraint_force(u), w.rhs)
         w.rhs.scale(-1.0)
         w.du.set(0.0)
         self._rhs_ratio = 1.0
@@ -677,7 +676,9 @@ class SCDNewtonSolver(PETScOwner):
         """
         self._carried = self._carried_volume()
         try:
-            return self._algorithm_1(u, atol, stop, search, volume_start)
+            if self._carried is not None:
+                self._carried.carry(True, volume_start)
+            return self._algorithm_1(u, atol, stop, search)
         finally:
             if self._carried is not None:
                 self._carried.carry(False)
@@ -685,16 +686,13 @@ class SCDNewtonSolver(PETScOwner):
             self._newton.restore()
 
     def _algorithm_1(self, u: PETSc.Vec, atol: float, stop: typing.Callable[[], bool] | None,
-                     search: typing.Callable[[PETSc.Vec], bool] | None,
-                     volume_start: fem.Function | None) -> SCDNewtonResult:
+                     search: typing.Callable[[PETSc.Vec], bool] | None) -> SCDNewtonResult:
         """Algorithm 1 of Sect. 4 (the loop of :meth:`solve`), A's storage left holding J."""
         comm, w = self.problem.comm, self._work
         result = SCDNewtonResult(status=Status.DIVERGED_MAX_IT, iterations=0, gamma=0.0, target=0.0,
                                  states=np.empty(0, np.int8), normal_force=np.empty(0), friction_force=np.empty((0, 2)))
         with result.timings.phase("gamma"):
             result.gamma = self.gamma
-        if self._carried is not None:
-            self._carried.carry(True, volume_start)
         with result.timings.phase("residual"):
             point = self._graph_point(u, w.r, w.dhat)
         norm0 = point.norm
@@ -718,9 +716,8 @@ class SCDNewtonSolver(PETScOwner):
                 _log_iteration(entry)
                 break
             with result.timings.phase("newton_matrix"):
-                constraint = None if self._carried is None or k == 0 else self._constraint_force(u)
                 self.linearise(u, k)
-                J = self.newton_system(*self.generalized_derivative(point, normal, tangential), u, constraint)
+                J = self.newton_system(*self.generalized_derivative(point, normal, tangential), u)
             kinds = np.concatenate([normal, tangential])
             settled = alpha == 1.0 and comm.allreduce(np.array_equal(kinds, kinds_previous), op=MPI.LAND)
             entry["tol"] = self.forcing_term(point.norm, previous_norm, settled, own_target)
