@@ -240,8 +240,7 @@ class NodalPressure:
         """Jbar at the nodes for the current ``u``, and p = U'(theta), U''(theta) at theta = Jbar, or,
         while :attr:`carried`, at the mixed method's theta (on a line search: the trial point's,
         :meth:`start_line`) (collective)."""
-        self._assemble(self._mean_form, self.ratio, self.volume)
-        self.ratio.x.array[self.volume.x.array <= 0] = 1.0
+        self._assemble_ratio()
         if not self.carried or (self._starting and self._start is None):
             self.mean.x.array[:] = self.ratio.x.array
         elif self._starting:
@@ -251,6 +250,11 @@ class NodalPressure:
         self._starting = False
         self.pressure.interpolate(self._derivatives[0])
         self.modulus.interpolate(self._derivatives[1])
+
+    def _assemble_ratio(self) -> None:
+        """:attr:`ratio` = Jbar(u) (1 where V_a = 0)."""
+        self._assemble(self._mean_form, self.ratio, self.volume)
+        self.ratio.x.array[self.volume.x.array <= 0] = 1.0
 
     # -- the mixed method (docs/nearly_incompressible.md, Sect. 7) ---------------------------
     def _merit_weight(self) -> np.ndarray:
@@ -269,8 +273,7 @@ class NodalPressure:
             self._weight = self._merit_weight()
         if carried and start is not None:  # u is overwritten by the solver's next evaluation anyway
             self.u.x.array[:] = start.x.array
-            self._assemble(self._mean_form, self.ratio, self.volume)
-            self.ratio.x.array[self.volume.x.array <= 0] = 1.0
+            self._assemble_ratio()
             self._start = self.ratio.x.array.copy()
 
     def constraint(self) -> np.ndarray:
