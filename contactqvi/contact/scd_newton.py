@@ -391,7 +391,7 @@ class SCDNewtonSolver(PETScOwner):
         diff.waxpy(-1.0, dhat, u)
         diff.pointwiseMult(diff, self._gamma_dofs.weight)
         norm = diff.norm()
-        if self._carried is not None and self._carried.carried:  # the constraint's rows, as r's off the contact
+        if self._carried is not None:  # the mixed method's constraint rows, as r's off the contact
             norm = float(np.hypot(norm, self._carried.constraint_norm() / self.gamma))
         return GraphPoint(float(np.sqrt(self.gamma**2 + 1.0) * norm), v, z)
 
