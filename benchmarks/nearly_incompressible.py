@@ -17,6 +17,8 @@ files run by ``python -m contactqvi run`` (docs/nearly_incompressible.md lists t
         --pc pressure_schur --poisson 0.45 0.499 0.4999
     python benchmarks/nearly_incompressible.py --lev 1 --degree 2 --formulations nodal_pressure \
         --pc pressure_schur --wavy --linear --steps 1 --compression 0.01 --poisson 0.45 0.4999
+    python benchmarks/nearly_incompressible.py --lev 1 --pc lu --formulations nodal_pressure --condensed \
+        --poisson 0.45 0.49 0.499 0.4999
 """
 
 from __future__ import annotations
@@ -35,9 +37,11 @@ from contactqvi.meshes import create_contact_body
 
 def krylov_counts(lev: int, poisson: float, formulation: str, steps: int, compression: float,
                   pc: str = "gamg", degree: int = 1, wavy: bool = False,
-                  linear: bool = False) -> list[tuple[int, int]]:
+                  linear: bool = False, mixed: bool = True) -> list[tuple[int, int]]:
     """(Newton steps, Krylov iterations) of each load step of the block's compression, on a flat or
-    ``wavy`` foundation (that of tests/test_nearly_incompressible.py), neo-Hookean or ``linear``."""
+    ``wavy`` foundation (that of tests/test_nearly_incompressible.py), neo-Hookean or ``linear``,
+    by the ``mixed`` Newton method of the nodal pressure or the condensed one
+    (docs/nearly_incompressible.md Sect. 7)."""
     def gap(x, y):
         return 0.02 * (1.0 - np.cos(np.pi * x)) * (1.0 - np.cos(np.pi * y)) if wavy else np.zeros_like(x)
 
@@ -50,8 +54,8 @@ def krylov_counts(lev: int, poisson: float, formulation: str, steps: int, compre
                                     degree=degree)
     with problem:
         u = problem.A.createVecRight()
-        results = solve_load_path(problem, [LoadStep((k + 1) / steps) for k in range(steps)], u, {"pc": pc},
-                                  from_rest=True)
+        results = solve_load_path(problem, [LoadStep((k + 1) / steps) for k in range(steps)], u,
+                                  {"pc": pc, "mixed": mixed}, from_rest=True)
         u.destroy()
     return [(r.iterations, r.inner_iterations) for r in results]
 
@@ -69,13 +73,15 @@ def main() -> None:
     parser.add_argument("--linear", action="store_true", help="linear elasticity instead of neo-Hookean")
     parser.add_argument("--formulations", nargs="+", default=["displacement", "nodal_pressure"],
                         help="formulations compared")
+    parser.add_argument("--condensed", action="store_true",
+                        help="the nodal pressure by the condensed Newton method ([solver] mixed = false)")
     args = parser.parse_args()
     rows = [f"| nu | formulation | Newton steps per step | Krylov per step ({args.pc}) | Krylov per Newton step |",
             "|---|---|---|---|---|"]
     for poisson in args.poisson:
         for formulation in args.formulations:
             counts = krylov_counts(args.lev, poisson, formulation, args.steps, args.compression, args.pc,
-                                   args.degree, args.wavy, args.linear)
+                                   args.degree, args.wavy, args.linear, not args.condensed)
             newton, krylov = (sum(c[i] for c in counts) for i in (0, 1))
             rows.append(f"| {poisson} | {formulation} | {' '.join(str(c[0]) for c in counts)} | "
                         f"{' '.join(str(c[1]) for c in counts)} | {krylov / max(newton, 1):.1f} |")

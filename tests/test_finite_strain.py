@@ -54,9 +54,11 @@ CLOSED_FORMS = {"neo_hookean": (NeoHookean(), neo_hookean), "saint_venant_kirchh
 
 
 def _compressed_block(material, compression: float, steps: int, lev: int = 1,
-                      parameters: dict | None = None, search: str = "once") -> list[dict]:
-    """Solve the compression in ``steps`` equal load steps; per step the displacement, the
-    contact nodes' coordinates, pressures, the Newton count and the result (failed steps too)."""
+                      parameters: dict | None = None, search: str = "once",
+                      loads: list[float] | None = None) -> list[dict]:
+    """Solve the compression in ``steps`` equal load steps (or to the load factors ``loads``); per
+    step the displacement, the contact nodes' coordinates, pressures, the Newton count and the
+    result (failed steps too)."""
     comm = MPI.COMM_WORLD
     msh, tags = create_contact_body(comm, lev, lambda x, y: np.zeros_like(x), length=1.0, width=1.0, height=1.0)
     problem = build_contact_problem(msh, tags, YOUNG, POISSON, {}, Frictionless(), clamped=(), contact="contact",
@@ -72,7 +74,8 @@ def _compressed_block(material, compression: float, steps: int, lev: int = 1,
 
     with problem:
         u = problem.A.createVecRight()
-        solve_load_path(problem, [LoadStep((k + 1) / steps) for k in range(steps)], u,
+        loads = loads or [(k + 1) / steps for k in range(steps)]
+        solve_load_path(problem, [LoadStep(load) for load in loads], u,
                         {"pc": "lu", **(parameters or {})}, on_step=record, from_rest=True)
         u.destroy()
     return rows
@@ -188,11 +191,11 @@ def test_a_frictional_finite_strain_path_is_in_balance_and_restarts_exactly(mpi_
 
 
 def test_a_step_that_inverts_elements_is_cut_until_it_converges():
-    """Half the height in one step: the guess (the prescribed top moved at once) inverts the top
-    cells (diverged_function_domain), the step is halved and grows back; it ends at the
-    closed form. With one halving allowed the path stops, reported as not converged."""
+    """From 1 % to half the height in one step: the guess (the prescribed top moved at once) inverts
+    the top cells (diverged_function_domain), the step is halved and grows back; it ends at the
+    closed form. With no halving allowed (and no relaxation) the path stops, reported as not converged."""
     comm = MPI.COMM_WORLD
-    (row,) = _compressed_block(NeoHookean(), 0.5, 1, parameters={"max_iterations": 20})
+    _, row = _compressed_block(NeoHookean(), 0.5, 2, parameters={"max_iterations": 20}, loads=[0.02, 1.0])
     result = row["result"]
     assert result.converged, result.status
     attempts = {(entry["substep"], entry["substep_load"], entry["substep_status"]) for entry in result.history}
@@ -200,8 +203,22 @@ def test_a_step_that_inverts_elements_is_cut_until_it_converges():
     a, _ = neo_hookean(0.5)
     error = comm.allreduce(float(np.abs(row["u"] - row["x"] * np.array([a - 1.0, a - 1.0, -0.5])).max()), op=MPI.MAX)
     assert error <= 1e-8 * 0.5
-    (row,) = _compressed_block(NeoHookean(), 0.5, 1, parameters={"max_iterations": 20, "max_cuts": 1})
+    *_, row = _compressed_block(NeoHookean(), 0.5, 2, parameters={"max_iterations": 20, "max_cuts": 0,
+                                                                   "limit_points": "stop"}, loads=[0.02, 1.0])
     assert not row["result"].converged
+
+
+def test_half_the_height_from_rest_in_one_step():
+    """The first step from rest starts from the tangent's response at rest (load_path._predict_from_rest),
+    not from the prescribed top moved alone: half the height in one step converges uncut to the
+    closed form (with the top moved alone it inverted the top cells and was cut three times)."""
+    comm = MPI.COMM_WORLD
+    (row,) = _compressed_block(NeoHookean(), 0.5, 1, parameters={"max_iterations": 20, "max_cuts": 0})
+    assert row["result"].converged, row["result"].status
+    a, _ = neo_hookean(0.5)
+    error = comm.allreduce(float(np.abs(row["u"] - row["x"] * np.array([a - 1.0, a - 1.0, -0.5])).max()), op=MPI.MAX)
+    assert error <= 1e-8 * 0.5
+    assert row["iterations"] <= 8, row["iterations"]
 
 
 def _indented_by_a_sphere(search: str, parameters: dict) -> list[tuple[float, float]]:

@@ -68,19 +68,23 @@ def _gathered(problem, values: np.ndarray) -> np.ndarray:
 def test_a_block_turned_with_its_plane_is_objective():
     """Pressed in two steps (some nodes sliding, some sticking), then turned: the final contact
     force is Q f of the pressed block, the same nodes touch, and the contact states of the turn's
-    first and last steps agree node by node (a rigid turn slips nowhere: every node sticks).
+    first and last steps agree node by node (a rigid turn slips nowhere: every node sticks), but
+    where a node's friction force lies on the bound in both: with no slip, sticking and sliding
+    are one state there, told apart by round-off (2 ranks: 5 and 1 such nodes).
 
     Measured: 6.6e-12 (force, relative; 1 and 2 ranks); asserted 1e-6."""
     rows = []
     steps = [LoadStep(0.5), LoadStep(1.0)] + [
         LoadStep(1.0, rotation=Rotation(AXIS_X, 90.0 * (k + 1) / TURNS, TURN_CENTRE)) for k in range(TURNS)]
-    with _block(Coulomb(0.3), clamped=(), moved=["dirichlet"], material=NeoHookean(), search="until_settled",
+    mu = 0.3
+    with _block(Coulomb(mu), clamped=(), moved=["dirichlet"], material=NeoHookean(), search="until_settled",
                 pressures={"top": PRESSURE}, rotations=True) as problem:
 
         def record(index, step, u, result, state):
+            bound = np.linalg.norm(result.friction_force, axis=1) >= (1.0 - 1e-9) * mu * result.normal_force
             rows.append({"converged": result.converged,
                          "force": np.array(contact_resultants(problem, result)["contact_force"]),
-                         "states": _gathered(problem, result.states)})
+                         "states": _gathered(problem, result.states), "bound": _gathered(problem, bound)})
 
         u = problem.A.createVecRight()
         solve_load_path(problem, steps, u, {"pc": "lu", "geometry_tol": 1e-9}, on_step=record, from_rest=True)
@@ -94,7 +98,8 @@ def test_a_block_turned_with_its_plane_is_objective():
     assert error <= 1e-6, (error, pressed["force"], turned["force"])
     assert counts[0][State.SLIDING] > 0 and counts[0][State.STICKING] > 0, counts
     touching = [row["states"] != State.NO_CONTACT for row in (pressed, turned)]
-    assert np.array_equal(*touching) and np.array_equal(turned["states"], first["states"]), counts
+    alike = (turned["states"] == first["states"]) | (turned["bound"] & first["bound"])
+    assert np.array_equal(*touching) and alike.all(), counts
 
 
 SPIN_CENTRE = (-2.0, 0.5, 0.0)  # m: beside the block, 2 to 4 m from its nodes

@@ -69,7 +69,7 @@ from contactqvi.contact.relaxation import relax
 from contactqvi.contact.scd_newton import (PARAMETERS, SCDNewtonResult, SCDNewtonSolver, checked_parameters,
                                             newton_step_solver)
 from contactqvi.lifetime import PETScOwner
-from contactqvi.linalg import create_ksp, preset
+from contactqvi.linalg import create_ksp, ksp_converged_reason, preset
 from contactqvi.contact.surface import contact_facet_areas
 from contactqvi.load_steps import LoadStep, Rotation, check_steps, interpolated
 from contactqvi.parameters import Parameter, Parameters, require
@@ -257,9 +257,11 @@ class _StepSolver(PETScOwner):
         if state.solved == 0 and self.initial is not None:
             self.initial.copy(u)  # the given guess, also for a retry of the first step
         _start(problem, step, u, state, from_rest, self.carried)
+        pc = checked_parameters(problem, self.parameters)["pc"]
         if problem.follows_geometry and (state.solved > 0 or from_rest):
-            _predict(problem, step, u, state, self.carried, checked_parameters(problem, self.parameters)["pc"],
-                     self.prefix)
+            _predict(problem, step, u, state, self.carried, pc, self.prefix)
+        elif from_rest and state.solved == 0 and problem.hyperelastic is not None:
+            _predict_from_rest(problem, u, state, pc, self.prefix)
         if self.solver is None:
             self.solver = SCDNewtonSolver(problem, self.parameters, prefix=self.prefix, step_solver=self.carried)
             self.carried = None
@@ -391,28 +393,62 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
     _search_at(problem, step, u, state, predicted, step_solver, start=False)
 
 
+def _predict_from_rest(problem: ContactProblem, u: PETSc.Vec, state: PathState, pc: str, prefix: str) -> None:
+    """Add to ``u`` (u~ = 0, the body at rest) the response of the tangent at rest, the small-strain
+    stiffness, to the first step's loads and prescribed values, the nodes in contact at the start
+    held and the others free (:func:`_elastic_change`; Code_Aster's ``PREDICTION = 'TANGENTE'``):
+    the first iterate of a hyperelastic body searched once or every step (docs/finite_strain.md
+    Sect. 17). With the prescribed values moved alone, the layer of elements under a compressed
+    face took the whole compression, and at nu = 0.499 the first load step spent its Newton steps
+    undoing a pressure of the bulk modulus times that layer's strain (a block compressed by 3.3 %
+    with the nodal pressure, exact Newton steps: 30 on a flat foundation, 38 on a wavy one; 3 and 4
+    with this predictor). Later steps keep their predictor (:func:`_continue`): the small-strain
+    stiffness is not their tangent."""
+    change = _elastic_change(problem, state, pc, prefix)
+    u.axpy(1.0, change)
+    change.destroy()
+
+
 def _elastic_change(problem: ContactProblem, state: PathState, pc: str, prefix: str) -> PETSc.Vec:
     """The change of the solver's variables (a new vector) under the change of the loads and
     prescribed values from ``state`` to the step set in ``problem``, by the stiffness A of the last
-    search (the small-strain stiffness in the current variables) with the contact nodes' variables
-    held: all three at a node of a frictional pair (with the tangential ones free, a body held by
-    friction alone was free to move, and the predictor was A's null space), the normal one at a
-    node of a frictionless pair, whose tangential variables carry no force (held, they sheared an
-    ironing die by its whole slide step; :func:`_predict`)."""
+    search (the small-strain stiffness in the current variables) with the variables of the contact
+    nodes in contact held: all three at a node of a frictional pair (with the tangential ones free,
+    a body held by friction alone was free to move, and the predictor was A's null space), the
+    normal one at a node of a frictionless pair, whose tangential variables carry no force (held,
+    they sheared an ironing die by its whole slide step; :func:`_predict`). After a converged solve
+    every contact node is held; at the path's start (``state`` at rest) those whose gap at the step
+    is not positive, the others are free (held, a block on a wavy foundation was
+    pressed against it at every node, and its first step took 38 Newton steps instead of 4 at
+    nu = 0.499; docs/finite_strain.md Sect. 17). Zero where nothing changes, and where the solve
+    fails (logged; with the open nodes free, a body that only contact holds has no unique
+    response)."""
     change, before = problem.A.createVecRight(), problem.A.createVecRight()
     problem.step_load(problem.load_factor, problem.translation, problem.step_rotation, change)
     problem.step_load(state.load, state.translation, state.rotation, before)
     change.axpy(-1.0, before)
+    before.destroy()
+    if change.norm(PETSc.NormType.NORM_INFINITY) == 0.0:
+        return change
     frictional = np.array([i.pair.law.frictional for i in problem.interfaces], dtype=bool)[problem.interface_of_node]
     rows = np.where(frictional[:, None], [[True, True, True]], [[False, False, True]])
+    if state.solved == 0:
+        rows &= (problem.gap(problem.translation, problem.step_rotation, problem.fit) <= 0.0)[:, None]
     held = (3 * problem.contact_blk[:, None] + np.arange(3))[rows]
     A = problem.A.copy()
     A.zeroRows((A.getOwnershipRange()[0] + held).astype(PETSc.IntType), diag=1.0)
     change.array[held] = 0.0
-    ksp = create_ksp(problem.comm, f"{prefix}predictor_", preset(NEWTON_STEP_SOLVERS[pc]), A, rtol=PREDICTOR_RTOL)
+    # The block preconditioner belongs to a Newton-step solver's matrix. Where it is asked for, AMG
+    # does not solve A's bulk term (P2 block at nu = 0.4999: GAMG out of iterations, or a start
+    # whose first step stalled; factorised: 4 Newton steps, docs/finite_strain.md Sect. 17).
+    solver = NEWTON_STEP_SOLVERS["lu" if pc == "pressure_schur" else pc]
+    ksp = create_ksp(problem.comm, f"{prefix}predictor_", preset(solver), A, rtol=PREDICTOR_RTOL)
     solution = change.duplicate()
     ksp.solve(change, solution)
-    for obj in (ksp, A, before, change):
+    if ksp.getConvergedReason() < 0:
+        logger.info("the elastic predictor was not solved (%s): the step starts without it", ksp_converged_reason(ksp))
+        solution.zeroEntries()
+    for obj in (ksp, A, change):
         obj.destroy()
     return solution
 
