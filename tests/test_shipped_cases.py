@@ -62,7 +62,7 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 #: session 27) ends cattaneo_mindlin_nu045's second step one Newton step earlier, on round-off:
 #: [9, 7, 7, 6, 7, 6, 7, 6] became [9, 6, 7, 6, 7, 6, 7, 6]; every other count is unchanged.
 #: The first step from rest of a hyperelastic body starting from the tangent's response at rest
-#: (load_path._predict_from_rest, session 33) changed shallow_ironing [14] / [14] to [13] / [13]
+#: (load_path._add_elastic_change, session 33) changed shallow_ironing [14] / [14] to [13] / [13]
 #: and shallow_ironing_frictional [16] to [17]; the rubber pad, pressed by a moving obstacle
 #: alone, starts at rest as before.
 NEWTON_STEPS = {
