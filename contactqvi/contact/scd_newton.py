@@ -84,6 +84,14 @@ GRADED_RANGE = 8.0
 #: and 703, none stagnating; exact solves: 74).
 LINEAR_TOL, HYPERELASTIC_TOL = 0.1, 1e-3
 
+#: The V-cycle on J_r of ``pc = "pressure_schur"``: BoomerAMG with HMIS coarsening and extended
+#: interpolation (strong threshold 0.5, as for 3D elasticity). Against BoomerAMG's defaults, the
+#: same Newton and Krylov counts in 1.5-1.7x less time (P2 O-ring at nu = 0.4999: 506 s against
+#: 841 s; the neo-Hookean block, lev 2: 63 s against 95 s); aggressive coarsening was faster still
+#: but lost the robustness in nu (benchmarks/results/nearly_incompressible.md Sect. 9).
+PRESSURE_CYCLE = {"pc_type": "hypre", "pc_hypre_type": "boomeramg", "pc_hypre_boomeramg_strong_threshold": 0.5,
+                  "pc_hypre_boomeramg_coarsen_type": "HMIS", "pc_hypre_boomeramg_interp_type": "ext+i"}
+
 #: Parameters of :class:`SCDNewtonSolver` (also the ``[solver]`` table of a case file).
 PARAMETERS = Parameters(
     rtol=Parameter(1e-12, "stop when ||y^(k)|| <= rtol ||y^(0)|| (Sect. 7)", minimum=0.0, maximum=1.0, exclusive=True),
@@ -765,8 +773,7 @@ def newton_step_solver(problem: ContactProblem, parameters: dict, prefix: str) -
         require(problem.averaged_volume is not None, "pc", "'pressure_schur' preconditions the averaged volume "
                 "change: give the nearly incompressible bodies formulation = \"nodal_pressure\"")
         mu = lame_parameters(problem.body.young, problem.body.poisson)[0]
-        pressure = PressureSchur(problem.averaged_volume, mu, f"{prefix}pressure_",
-                                 {"pc_type": "hypre", "pc_hypre_type": "boomeramg"})
+        pressure = PressureSchur(problem.averaged_volume, mu, f"{prefix}pressure_", PRESSURE_CYCLE)
     return NewtonStepSolver(problem.comm, prefix, p["pc"], problem.multigrid_options, rtol=p["tol"],
                             reuse_pc=p["reuse_pc"], rebuild_iterations=p["pc_rebuild_iterations"],
                             initial_guess=p["eliminate_fixed_rows"], pressure=pressure)
