@@ -400,8 +400,8 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
 def _add_elastic_change(problem: ContactProblem, u: PETSc.Vec, state: PathState, pc: str, prefix: str) -> bool:
     """Add to the predictor ``u`` of a hyperelastic body searched once or every step the response of
     the small-strain stiffness to the step's change of loads and prescribed values
-    (:func:`_elastic_change`); whether it changed ``u`` (False where only obstacles move).
-    (docs/finite_strain.md Sect. 17.) Used where the predictor is not enough:
+    (:func:`_elastic_change`); whether it changed ``u`` (False where only obstacles move, or where
+    that solve failed). Used where the predictor is not enough (docs/finite_strain.md Sect. 17):
 
     * The first step from rest (u~ = 0): there the stiffness is the tangent, and this is Code_Aster's
       ``PREDICTION = 'TANGENTE'``. With the prescribed values moved alone, the layer under a moved
