@@ -30,6 +30,7 @@ __all__ = [
     "default_options",
     "create_ksp",
     "create_snes",
+    "significant",
     "assemble_system",
     "reassemble_matrix",
     "power_iteration",
@@ -250,9 +251,26 @@ def nonzero_row_indices(M: PETSc.Mat) -> np.ndarray:
     return (np.flatnonzero(nonzero) + low).astype(PETSc.IntType)
 
 
-def _nonzero_entries(M: PETSc.Mat) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per owned row of ``M`` its number of nonzero entries, and their columns and values."""
+def significant(M: PETSc.Mat, relative: float) -> PETSc.Mat:
+    """``M`` without its entries of at most ``relative`` times the largest of their row (a new
+    AIJ matrix of M's layout and block size): the cancelled terms of a difference of matrices,
+    whose explicit entries every product and sweep with M would still visit."""
+    per_row, indices, values = _nonzero_entries(M, relative)
+    out = PETSc.Mat().createAIJ(size=M.getSizes(), bsize=M.getBlockSize(), comm=M.getComm(), csr=(
+        np.concatenate([[0], np.cumsum(per_row)]).astype(PETSc.IntType), indices, values))
+    out.assemble()
+    return out
+
+
+def _nonzero_entries(M: PETSc.Mat, relative: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per owned row of ``M`` its number of entries larger than ``relative`` times the row's largest
+    (0: its nonzero entries), and their columns and values."""
     indptr, indices, values = M.getValuesCSR()
-    kept = np.flatnonzero(values)
-    per_row = np.bincount(np.searchsorted(indptr, kept, side="right") - 1, minlength=len(indptr) - 1)
+    lengths = np.diff(indptr)
+    row = np.repeat(np.arange(len(lengths)), lengths)
+    largest = np.zeros(len(lengths))
+    if relative > 0.0 and len(values):
+        largest[lengths > 0] = np.maximum.reduceat(np.abs(values), indptr[:-1][lengths > 0])
+    kept = np.flatnonzero(np.abs(values) > relative * largest[row])
+    per_row = np.bincount(row[kept], minlength=len(indptr) - 1)
     return per_row, indices[kept].astype(PETSc.IntType), values[kept]

@@ -339,6 +339,9 @@ class VolumetricTangent(PETScOwner):
         B: the coupling of (3) (P1 scalar rows, displacement columns).
         D: diag(U''(Jbar_a) / V_a).
         product: B^T D B of the last :meth:`add_to` (its symbolic part kept), or None.
+        initial_stress: the first term of (3) alone, int chi p_h d(J F^-T : grad v)[w] dX (zero rows
+            and columns at prescribed dofs), at the nodal fields of the last :meth:`add_to`, kept
+            there once :meth:`keep_initial_stress` asked for it (finite strain), else None.
     """
 
     nodal: NodalPressure
@@ -346,9 +349,21 @@ class VolumetricTangent(PETScOwner):
     B: PETSc.Mat
     D: PETSc.Mat
     product: PETSc.Mat | None = None
+    initial_stress: PETSc.Mat | None = None
+    _initial_stress_form: fem.Form | None = None
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [self.product, self.D, self.B]
+        return [self.product, self.D, self.B, self.initial_stress]
+
+    def keep_initial_stress(self) -> None:
+        """From the next :meth:`add_to` on, keep :attr:`initial_stress` (a finite-strain body's; the
+        pressure's share of (3) that a preconditioner may leave out, :mod:`contactqvi.contact.pressure_schur`)."""
+        if self.nodal.material is None or self._initial_stress_form is not None:
+            return
+        V = self.nodal.u.function_space
+        self._initial_stress_form = fem.form(ufl.derivative(self.nodal.term(ufl.TestFunction(V)), self.nodal.u,
+                                                            ufl.TrialFunction(V)))
+        self.initial_stress = dolfinx.fem.petsc.create_matrix(self._initial_stress_form)
 
     @classmethod
     def create(cls, nodal: NodalPressure, bcs: list[fem.DirichletBC]) -> VolumetricTangent:
@@ -382,8 +397,13 @@ class VolumetricTangent(PETScOwner):
 
     def add_to(self, K: PETSc.Mat, structure: PETSc.Mat.Structure = PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN,
                ) -> None:
-        """K += B^T D B (the second term of (3)); ``structure`` DIFFERENT the first time K gets it."""
+        """K += B^T D B (the second term of (3)); ``structure`` DIFFERENT the first time K gets it. The
+        first term of (3) goes into :attr:`initial_stress` if it is kept (at the same nodal fields)."""
         K.axpy(1.0, self.assemble(), structure)
+        if self.initial_stress is not None:
+            self.initial_stress.zeroEntries()
+            dolfinx.fem.petsc.assemble_matrix(self.initial_stress, self._initial_stress_form, bcs=self.bcs, diagonal=0.0)
+            self.initial_stress.assemble()
 
     def lift(self, b: PETSc.Vec, bcs: list[fem.DirichletBC]) -> None:
         """b -= (B^T D B) g at the free rows for the prescribed values g of ``bcs``: the lifting

@@ -15,7 +15,7 @@ import ufl
 import dolfinx.fem.petsc
 from dolfinx import fem, mesh
 
-from contactqvi.linalg import create_ksp, default_options, nonzero_row_indices, nonzero_rows, preset
+from contactqvi.linalg import create_ksp, default_options, nonzero_row_indices, nonzero_rows, preset, significant
 from contactqvi.multigrid import GalerkinUpdate, set_up
 
 
@@ -111,4 +111,25 @@ def test_nonzero_rows_of_a_change_with_no_zero_row():
     zeroed.zeroRows(np.arange(low, high, 2, dtype=PETSc.IntType), diag=0.0)  # explicit zeros on every other row
     assert np.array_equal(nonzero_row_indices(zeroed), np.arange(low + 1, high, 2))
     for obj in (rows, compact, zeroed, J):
+        obj.destroy()
+
+
+def test_significant_entries_drop_the_terms_a_difference_cancelled():
+    """J + E - (1 + 1e-14) E with E = 1e4 J^2 (a wider stencil, as B^T D B of the nodal pressure
+    against the cell-wise tangent; cancelled to about round-off of E): without its entries below
+    1e-9 of their row it is J again, on J's pattern (the rows' columns are J's), in J's layout."""
+    J, _space = _operator()
+    E = J.matMult(J)
+    E.scale(1e4)
+    wide = J.duplicate(copy=True)
+    wide.axpy(1.0, E, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    wide.axpy(-(1.0 + 1e-14), E, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+    assert wide.getInfo()["nz_used"] > 2 * J.getInfo()["nz_used"]
+    narrow = significant(wide, 1e-9)
+    assert narrow.getOwnershipRange() == J.getOwnershipRange() and narrow.getSize() == J.getSize()
+    for row in range(*J.getOwnershipRange()):
+        assert np.array_equal(narrow.getRow(row)[0], J.getRow(row)[0])
+    narrow.axpy(-1.0, J, PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+    assert narrow.norm(PETSc.NormType.INFINITY) <= 1e-13 * E.norm(PETSc.NormType.INFINITY)
+    for obj in (narrow, wide, E, J):
         obj.destroy()

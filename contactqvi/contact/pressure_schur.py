@@ -32,6 +32,16 @@ method, and the counts grow as with GAMG.
 
 Eliminated rows (the SCD solver's identity rows, :meth:`NewtonMatrix.assemble`) have zero
 columns in J: P gets them too, so that J_r keeps J's identity rows and columns there.
+
+The V-cycle takes J_r without two things of J (docs/nearly_incompressible.md, Sect. 5):
+
+* the nodal pressure's initial stress at finite strain, W T^T K_p T with K_p = int chi p_h
+  d(J F^-T : grad v)[w] dX (the first term of (3) of :mod:`contactqvi.nodal_pressure`): it is
+  indefinite, of the size of p_h, and an iterate whose volumes are off carries p_h of several
+  shear moduli; with it in J_r the V-cycle diverged (the first Newton step of a block at
+  nu = 0.4999: 2000 Krylov iterations and no convergence; without it 16);
+* the entries B^T D B leaves in J's pattern, cancelled to round-off in J_r (:data:`CANCELLED`):
+  a V-cycle on J's 2-ring stencil did 2.8 times the work.
 """
 
 from __future__ import annotations
@@ -48,7 +58,7 @@ from dolfinx import fem
 
 from contactqvi.contact.newton_matrix import NewtonMatrix
 from contactqvi.lifetime import PETScOwner
-from contactqvi.linalg import OptionsDict, create_ksp, default_options
+from contactqvi.linalg import OptionsDict, create_ksp, default_options, significant
 from contactqvi.nodal_pressure import VolumetricTangent
 
 __all__ = ["PressureSchur"]
@@ -59,6 +69,10 @@ _DIFFERENT = PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN
 #: elasticity, exact solves with J_r; Krylov iterations per Newton step at nu = 0.45 / 0.4999):
 #: c = 0.5: 17.3 / 27.4; 1: 9.4 / 14.1; 2: 4.8 / 10.7; 3: 5.7 / 12.3; 5: 6.5 / 14.2.
 SHEAR_FACTOR = 2.0
+#: J_r = J - W P^T D P keeps J's entries of B^T D B, which couples every displacement dof with
+#: the 2-ring of cells around it, as terms cancelled to round-off (bulk over shear modulus times
+#: eps of their row); the V-cycle takes J_r without its entries below this fraction of their row.
+CANCELLED = 1e-9
 
 
 class PressureSchur(PETScOwner):
@@ -74,6 +88,7 @@ class PressureSchur(PETScOwner):
 
     def __init__(self, volumetric: VolumetricTangent, mu: typing.Any, prefix: str, options: OptionsDict):
         self.volumetric = volumetric
+        volumetric.keep_initial_stress()
         self._options = {**options, "ksp_type": "preonly"}
         self.cycle = create_ksp(volumetric.B.getComm(), prefix, self._options)
         nodal = volumetric.nodal
@@ -108,20 +123,26 @@ class PressureSchur(PETScOwner):
         kept.array[eliminated] = 0.0
         self.P.diagonalScale(R=kept)
         averaged = self.volumetric.D.PtAP(self.P)  # P^T D P
-        scaled = newton.left_scaled(averaged)  # W P^T D P
-        if self.reduced is None:
-            self.reduced = J.duplicate(copy=True)
-            self.reduced.setNearNullSpace(J.getNearNullSpace())
-        else:
-            J.copy(self.reduced, PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
-        self.reduced.axpy(-1.0, scaled, _DIFFERENT)
+        stress = self.volumetric.initial_stress
+        if stress is not None:  # + T^T K_p T
+            moved = stress.PtAP(transform) if transform is not None else stress.copy()
+            moved.diagonalScale(L=kept, R=kept)
+            averaged.axpy(1.0, moved, _DIFFERENT)
+            moved.destroy()
+        scaled = newton.left_scaled(averaged)  # W (P^T D P + T^T K_p T)
+        wide = J.duplicate(copy=True)
+        wide.axpy(-1.0, scaled, _DIFFERENT)
+        if self.reduced is not None:
+            self.reduced.destroy()
+        self.reduced = significant(wide, CANCELLED)
+        self.reduced.setNearNullSpace(J.getNearNullSpace())
         self.cycle.setOperators(self.reduced)
         with default_options(self.cycle.getOptionsPrefix(), self._options):
             self.cycle.setUp()
         self._set_schur_inverse()
         if self._y is None:
             self._y, self._t = J.createVecRight(), J.createVecRight()
-        for obj in (kept, averaged, scaled):
+        for obj in (kept, averaged, scaled, wide):
             obj.destroy()
 
     def _set_schur_inverse(self) -> None:
