@@ -44,7 +44,7 @@ from contactqvi.runner import build_problem
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 CASE = ROOT / "cases" / "hertz_bodies.toml"
 MINDLIN_CASE = ROOT / "cases" / "cattaneo_mindlin_bodies.toml"
-MESHES = {"coarse": 6, "medium": 10, "fine": 16, "xfine": 21, "xxfine": 35,  # h at the contact = a / value (block; the ball 0.7 of it)
+MESHES = {"xcoarse": 4, "coarse": 6, "medium": 10, "fine": 16, "xfine": 21, "xxfine": 35,  # h at the contact = a / value (block; the ball 0.7 of it)
           "hex_coarse": 6, "hex_medium": 10}  # hexahedra: tetrahedra of twice that h split into four each
 
 

@@ -262,15 +262,27 @@ def significant(M: PETSc.Mat, relative: float) -> PETSc.Mat:
     return out
 
 
+#: Rows read at a time by :func:`_nonzero_entries`: its work arrays are of that many rows, not of
+#: the whole matrix (a 2-ring stencil of quadratic elements has about 1500 entries a row).
+_ROWS_AT_A_TIME = 4096
+
+
 def _nonzero_entries(M: PETSc.Mat, relative: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per owned row of ``M`` its number of entries larger than ``relative`` times the row's largest
     (0: its nonzero entries), and their columns and values."""
     indptr, indices, values = M.getValuesCSR()
-    lengths = np.diff(indptr)
-    row = np.repeat(np.arange(len(lengths)), lengths)
-    largest = np.zeros(len(lengths))
-    if relative > 0.0 and len(values):
-        largest[lengths > 0] = np.maximum.reduceat(np.abs(values), indptr[:-1][lengths > 0])
-    kept = np.flatnonzero(np.abs(values) > relative * largest[row])
-    per_row = np.bincount(row[kept], minlength=len(indptr) - 1)
-    return per_row, indices[kept].astype(PETSc.IntType), values[kept]
+    per_row, columns, kept = [], [], []
+    for first in range(0, len(indptr) - 1, _ROWS_AT_A_TIME):
+        bounds = indptr[first: first + _ROWS_AT_A_TIME + 1]
+        lengths = np.diff(bounds)
+        size = np.abs(values[bounds[0]: bounds[-1]])
+        largest = np.zeros(len(lengths))
+        if relative > 0.0 and size.size:
+            largest[lengths > 0] = np.maximum.reduceat(size, (bounds[:-1] - bounds[0])[lengths > 0])
+        keep = size > relative * np.repeat(largest, lengths)
+        per_row.append(np.diff(np.concatenate([[0], np.cumsum(keep)])[bounds - bounds[0]]))
+        columns.append(indices[bounds[0]: bounds[-1]][keep])
+        kept.append(values[bounds[0]: bounds[-1]][keep])
+    if not per_row:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=PETSc.IntType), np.zeros(0)
+    return np.concatenate(per_row), np.concatenate(columns).astype(PETSc.IntType), np.concatenate(kept)

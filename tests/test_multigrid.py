@@ -15,6 +15,7 @@ import ufl
 import dolfinx.fem.petsc
 from dolfinx import fem, mesh
 
+from contactqvi import linalg
 from contactqvi.linalg import create_ksp, default_options, nonzero_row_indices, nonzero_rows, preset, significant
 from contactqvi.multigrid import GalerkinUpdate, set_up
 
@@ -114,10 +115,12 @@ def test_nonzero_rows_of_a_change_with_no_zero_row():
         obj.destroy()
 
 
-def test_significant_entries_drop_the_terms_a_difference_cancelled():
+def test_significant_entries_drop_the_terms_a_difference_cancelled(monkeypatch):
     """J + E - (1 + 1e-14) E with E = 1e4 J^2 (a wider stencil, as B^T D B of the nodal pressure
     against the cell-wise tangent; cancelled to about round-off of E): without its entries below
-    1e-9 of their row it is J again, on J's pattern (the rows' columns are J's), in J's layout."""
+    1e-9 of their row it is J again, on J's pattern (the rows' columns are J's), in J's layout,
+    read 100 rows at a time."""
+    monkeypatch.setattr(linalg, "_ROWS_AT_A_TIME", 100)
     J, _space = _operator()
     E = J.matMult(J)
     E.scale(1e4)

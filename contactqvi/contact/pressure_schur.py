@@ -130,11 +130,14 @@ class PressureSchur(PETScOwner):
             averaged.axpy(1.0, moved, _DIFFERENT)
             moved.destroy()
         scaled = newton.left_scaled(averaged)  # W (P^T D P + T^T K_p T)
-        wide = J.duplicate(copy=True)
+        averaged.destroy()
+        wide = J.duplicate(copy=True)  # the matrices of J's 2-ring pattern go as soon as done with
         wide.axpy(-1.0, scaled, _DIFFERENT)
+        scaled.destroy()
         if self.reduced is not None:
             self.reduced.destroy()
         self.reduced = significant(wide, CANCELLED)
+        wide.destroy()
         self.reduced.setNearNullSpace(J.getNearNullSpace())
         self.cycle.setOperators(self.reduced)
         with default_options(self.cycle.getOptionsPrefix(), self._options):
@@ -142,8 +145,7 @@ class PressureSchur(PETScOwner):
         self._set_schur_inverse()
         if self._y is None:
             self._y, self._t = J.createVecRight(), J.createVecRight()
-        for obj in (kept, averaged, scaled, wide):
-            obj.destroy()
+        kept.destroy()
 
     def _set_schur_inverse(self) -> None:
         """1 / (V_a / U''_a + c V_a^2 / int chi mu phi_a) at the nodes of averaged cells, 0 elsewhere
