@@ -30,13 +30,13 @@ __all__ = [
     "default_options",
     "create_ksp",
     "create_snes",
-    "significant",
     "assemble_system",
     "reassemble_matrix",
     "power_iteration",
     "ksp_converged_reason",
     "nonzero_row_indices",
     "nonzero_rows",
+    "significant",
 ]
 
 OptionsDict = dict[str, typing.Any]

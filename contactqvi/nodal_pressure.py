@@ -402,7 +402,8 @@ class VolumetricTangent(PETScOwner):
         K.axpy(1.0, self.assemble(), structure)
         if self.initial_stress is not None:
             self.initial_stress.zeroEntries()
-            dolfinx.fem.petsc.assemble_matrix(self.initial_stress, self._initial_stress_form, bcs=self.bcs, diagonal=0.0)
+            dolfinx.fem.petsc.assemble_matrix(self.initial_stress, self._initial_stress_form, bcs=self.bcs,
+                                              diagonal=0.0)
             self.initial_stress.assemble()
 
     def lift(self, b: PETSc.Vec, bcs: list[fem.DirichletBC]) -> None:
