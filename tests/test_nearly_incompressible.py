@@ -26,6 +26,7 @@ from dolfinx import fem
 from contactqvi.case import parse_case
 from contactqvi.contact import LoadStep, build_contact_problem, solve_load_path
 from contactqvi.contact.hyperelastic import create_hyperelastic_system
+from contactqvi.contact.scd_newton import checked_parameters
 from contactqvi.elasticity import elasticity_forms
 from contactqvi.laws import Frictionless
 from contactqvi.materials import NeoHookean
@@ -278,6 +279,16 @@ def test_pressure_schur_krylov_counts_grow_far_less_than_gamg():
     assert gamg[0.4999] > 4.0 * gamg[0.45], gamg
     assert schur[0.4999] < 0.35 * gamg[0.4999], (schur, gamg)
 
+
+
+@pytest.mark.parametrize("formulation, degree, pc", [("nodal_pressure", 2, "pressure_schur"),
+                                                     ("nodal_pressure", 1, "gamg"), ("displacement", 2, "gamg")])
+def test_the_taylor_hood_pair_takes_the_block_preconditioner_by_default(formulation, degree, pc):
+    """``[solver] pc`` not given: the block preconditioner for quadratic bodies with the nodal pressure
+    (GAMG did not get the P2 O-ring at nu = 0.499 past its second step), GAMG otherwise."""
+    with _wavy(0.4999, formulation, degree=degree) as problem:
+        assert checked_parameters(problem, {})["pc"] == pc
+        assert checked_parameters(problem, {"pc": "lu"})["pc"] == "lu"
 
 def test_pressure_schur_needs_averaged_bodies():
     """The block preconditioner without a body of the averaged volume change is a named error."""

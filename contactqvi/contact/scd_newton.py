@@ -46,7 +46,7 @@ from contactqvi.contact.newton_matrix import NewtonMatrix
 from contactqvi.contact.newton_step_solver import NEWTON_STEP_SOLVERS, NewtonStepSolver
 from contactqvi.contact.pressure_schur import PressureSchur
 from contactqvi.contact.problem import ContactProblem
-from contactqvi.elasticity import lame_parameters
+from contactqvi.elasticity import displacement_degree, lame_parameters
 from contactqvi.lifetime import PETScOwner, VectorSet
 from contactqvi.linalg import power_iteration
 from contactqvi.nodal_pressure import NodalPressure
@@ -124,7 +124,9 @@ PARAMETERS = Parameters(
                         "(0: weak states only at exact zeros)", minimum=0.0),
     eliminate_fixed_rows=Parameter(True, "solve the identity rows (sticking, normal contact rows) exactly", type=bool),
     max_line_search=Parameter(20, "step sizes tried by the line search before it fails", type=int, minimum=1),
-    pc=Parameter("gamg", "Newton-step solver", type=str, choices=tuple(NEWTON_STEP_SOLVERS)),
+    pc=Parameter(None, "Newton-step solver; None: 'pressure_schur' where a quadratic body has the nodal pressure "
+                 "(the Taylor-Hood pair, whose Newton steps GAMG does not solve at nu near 0.5), else 'gamg'",
+                 type=str, choices=tuple(NEWTON_STEP_SOLVERS), optional=True),
     mixed=Parameter(True, "hyperelastic bodies with the nodal pressure: Newton's method on the displacements and "
                     "the nodal volume ratios, their constraint linearised (docs/nearly_incompressible.md, Sect. 7); "
                     "false: on the displacements with the volume ratios condensed", type=bool),
@@ -755,8 +757,12 @@ class SCDNewtonSolver(PETScOwner):
 
 def checked_parameters(problem: ContactProblem, parameters: dict | None) -> dict:
     """:data:`PARAMETERS` checked, with the defaults that depend on the problem filled in
-    (``tol``: :data:`LINEAR_TOL` or :data:`HYPERELASTIC_TOL`)."""
+    (``tol``: :data:`LINEAR_TOL` or :data:`HYPERELASTIC_TOL`; ``pc``: the block preconditioner
+    for the Taylor-Hood pair, docs/nearly_incompressible.md Sect. 5, else GAMG)."""
     p = PARAMETERS.check(parameters)
+    if p["pc"] is None:
+        taylor_hood = problem.averaged_volume is not None and displacement_degree(problem.V) == 2
+        p["pc"] = "pressure_schur" if taylor_hood else "gamg"
     if p["tol"] is None:
         p["tol"] = LINEAR_TOL if problem.hyperelastic is None else HYPERELASTIC_TOL
     if problem.follows_geometry:  # the rows U (dv/du~) T are no identity rows
