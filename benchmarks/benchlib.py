@@ -44,6 +44,7 @@ def make_parser(doc: str) -> argparse.ArgumentParser:
                                      epilog="Unknown options starting with '-' are passed to PETSc, under the "
                                             "script's options prefix (e.g. -bench_ksp_monitor).")
     PARAMETERS.add_arguments(parser, ["pc"])
+    parser.set_defaults(pc="gamg")  # the rows name their solver (the solver's default is per problem)
     parser.add_argument("--output", default=str(pathlib.Path(__file__).parent / "results"))
     return parser
 
