@@ -43,7 +43,7 @@ def main() -> None:
     args, comm, out = benchlib.parse(parser)
     prefix = "bench_"
     tag = "".join(f"_{getattr(args, name)}" for name in ("pc", "gamma_rule", "approximation", "tol_rule")
-                  if getattr(args, name) != PARAMETERS[name].default)
+                  if getattr(args, name) != parser.get_default(name))
     solver = {"tol": 0.1, "pc": args.pc, "gamma_rule": args.gamma_rule, "approximation": args.approximation,
               "tol_rule": args.tol_rule}
     solver_note = {
