@@ -43,7 +43,7 @@ from contactqvi.contact.postprocess import ContactResultsWriter, warn_solved_fit
 from contactqvi.contact.reach import check_reach
 from contactqvi.contact.interface import BodyPair, ObstaclePair
 from contactqvi.contact.problem import ContactProblem, assemble_contact_problem, build_contact_problem
-from contactqvi.contact.scd_newton import SCDNewtonResult
+from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult, checked_parameters
 from contactqvi.lifetime import unwind_together
 from contactqvi.linalg import default_options
 from contactqvi.materials import Material, create_material
@@ -213,8 +213,9 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
     if checkpoint is not None and checkpoint.step >= len(steps):
         return _nothing_to_solve(checkpoint, output)
     with warnings, default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, stop_signals() as stop:
-        logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks",
-                    problem.n_contact, problem.n_free, len(case.steps), comm.size)
+        logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks; Newton steps solved by pc = %s",
+                    problem.n_contact, problem.n_free, len(case.steps), comm.size,
+                    checked_parameters(problem, {k: v for k, v in parameters.items() if k in PARAMETERS})["pc"])
         check_reach(problem, case.steps, _largest_prescribed(case), case.pair_keys)
         recorder = _StepRecorder(case, problem, output, checkpoint, stop, warnings)
         state = PathState.at_rest(problem) if checkpoint is None else checkpoint.resume(problem)
