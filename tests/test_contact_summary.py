@@ -119,9 +119,11 @@ def test_patch_test_summary(friction):
 
 
 def test_case_with_bodies_only_reports_the_total_contact_force(mpi_tmp_path):
-    """cases/patch_test.toml through the runner: ``contact_force`` = the sum of ``pair_forces``."""
+    """cases/patch_test.toml through the runner: ``contact_force`` = the sum of ``pair_forces``; the
+    summary names the Newton-step solver (its default for linear elements)."""
     summary, code = run_case(load_case(ROOT / "cases" / "patch_test.toml"), mpi_tmp_path / "patch", plot=False)
     assert code == 0
+    assert summary["newton_step_solver"] == "gamg"
     step = summary["steps"][-1]
     assert step["contact_force"] == pytest.approx([0.0, 0.0, P], abs=1e-6 * P)
     assert step["contact_force"] == pytest.approx(step["pair_forces"]["upper.interface/lower.interface"], abs=1e-9 * P)
