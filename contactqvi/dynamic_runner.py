@@ -53,7 +53,7 @@ from contactqvi.paraview import MeshPiece, VTXDatasetWriter
 from contactqvi.parameters import Parameter, ParameterError, Parameters
 from contactqvi.records import Recorder, warn
 from contactqvi.result import Status
-from contactqvi.runner import EXIT_CODES, PREFIX, build_problem, stop_signals
+from contactqvi.runner import EXIT_CODES, PREFIX, build_problem, newton_step_solver_name, stop_signals
 
 __all__ = ["SOLVER_PARAMETERS", "STATE_FIELDS", "read_dynamic_checkpoint", "run_dynamics"]
 
@@ -98,6 +98,7 @@ def run_dynamics(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm =
             velocity.destroy()
             summary = {"problem": "dynamic contact case", "case": case.to_dict(), "mpi_size": comm.size,
                        "p": problem.n_contact, "n": problem.n_free,
+                       "newton_step_solver": newton_step_solver_name(problem, parameters),
                        "scheme": {"name": scheme.name, **scheme.parameters(),
                                   "stabilisation": "contact-stabilised predictor (Deuflhard, Krause, Ertel 2008)"},
                        "steps": []}

@@ -54,7 +54,8 @@ from contactqvi.problems.coulomb import gap_function
 from contactqvi.records import Recorder, warn
 from contactqvi.result import Status
 
-__all__ = ["EXIT_CODES", "PREFIX", "OutputError", "build_problem", "read_mesh", "run_case", "stop_signals"]
+__all__ = ["EXIT_CODES", "PREFIX", "OutputError", "build_problem", "newton_step_solver_name", "read_mesh", "run_case",
+           "stop_signals"]
 
 logger = logging.getLogger(__name__)
 
@@ -215,7 +216,7 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
     with warnings, default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, stop_signals() as stop:
         logger.info("case: %d contact nodes, %d free dofs, %d steps, %d ranks; Newton steps solved by pc = %s",
                     problem.n_contact, problem.n_free, len(case.steps), comm.size,
-                    _newton_step_solver(problem, parameters))
+                    newton_step_solver_name(problem, parameters))
         check_reach(problem, case.steps, _largest_prescribed(case), case.pair_keys)
         recorder = _StepRecorder(case, problem, output, checkpoint, stop, warnings)
         state = PathState.at_rest(problem) if checkpoint is None else checkpoint.resume(problem)
@@ -326,10 +327,10 @@ def _start_summary(case: ContactCase, problem: ContactProblem, checkpoint: Check
         return summary
     return {"problem": "contact case", "case": case.to_dict(), "mpi_size": comm.size,
             "p": problem.n_contact, "n": problem.n_free,
-            "newton_step_solver": _newton_step_solver(problem, case.solver), "steps": []}
+            "newton_step_solver": newton_step_solver_name(problem, case.solver), "steps": []}
 
 
-def _newton_step_solver(problem: ContactProblem, solver: dict[str, typing.Any]) -> str:
+def newton_step_solver_name(problem: ContactProblem, solver: dict[str, typing.Any]) -> str:
     """The Newton-step solver (``pc``) that a case's ``[solver]`` table gives ``problem``, its default resolved."""
     return checked_parameters(problem, {k: v for k, v in solver.items() if k in PARAMETERS})["pc"]
 
