@@ -69,7 +69,8 @@ _GMRES_RIGHT = {"ksp_type": "fgmres", "ksp_pc_side": "right", "ksp_norm_type": "
 #:   nodal/vector interpolation variants broke down on eliminated rows here).
 #: * ``gmres_pressure_schur``: as ``gmres_gamg`` with the block preconditioner of bodies with an
 #:   averaged volume change (:mod:`contactqvi.contact.pressure_schur`, a ``python`` PC whose context
-#:   the Newton-step solver sets): two BoomerAMG V-cycles on the Newton matrix without the bulk term.
+#:   the Newton-step solver sets: two BoomerAMG V-cycles on the Newton matrix without the bulk
+#:   term), on the uncondensed displacement-pressure system, its pressure rows in force units.
 #: * ``cg_jacobi``: CG + point Jacobi (cheap, for well-conditioned mass-like systems).
 #: * ``gmres_jacobi``: GMRES + point Jacobi, stopped at the left-preconditioned residual: the
 #:   Newton steps of a mass-like problem (the projection of a dynamic step's predictor,
@@ -102,7 +103,7 @@ KSP_PRESETS: dict[str, OptionsDict] = {
         "pc_hypre_type": "boomeramg",
         "pc_hypre_boomeramg_strong_threshold": 0.5,
     },
-    "gmres_pressure_schur": {**_GMRES_RIGHT, "ksp_max_it": 2000, "pc_type": "python"},
+    "gmres_pressure_schur": {**_GMRES_RIGHT, "ksp_max_it": 400, "pc_type": "python"},
     "cg_jacobi": {"ksp_type": "cg", "pc_type": "jacobi"},
     "gmres_jacobi": {"ksp_type": "gmres", "ksp_pc_side": "left", "ksp_norm_type": "preconditioned",
                      "ksp_converged_use_initial_residual_norm": True, "ksp_gmres_restart": 200, "ksp_max_it": 2000,

@@ -114,6 +114,7 @@ class NewtonStepSolver(PETScOwner):
         self._pc_kinds: np.ndarray | None = None  # contact node kinds when the preconditioner was last built
         self._direct: PETSc.KSP | None = None  # made at the first fall-back
         self.fallback: dict[str, str] = {}
+        self._solved_by, self._iterations = self.ksp, 0  # the KSP of the last solve and its iterations
 
     def petsc_objects(self) -> list[typing.Any]:
         return [self.galerkin, self.ksp, self._direct, self.pressure]
@@ -121,12 +122,12 @@ class NewtonStepSolver(PETScOwner):
     @property
     def iterations(self) -> int:
         """Krylov iterations of the last solve."""
-        return self.ksp.getIterationNumber()
+        return self._iterations
 
     @property
     def reason(self) -> str:
         """Name of the last solve's converged reason (e.g. ``CONVERGED_RTOL``)."""
-        return ksp_converged_reason(self.ksp)
+        return ksp_converged_reason(self._solved_by)
 
     def solve(self, J: PETSc.Mat, change: PETSc.Mat, kinds: np.ndarray, rhs: PETSc.Vec, du: PETSc.Vec, tol: float,
               rhs_ratio: float = 1.0) -> int:  # fmt: skip
@@ -147,7 +148,7 @@ class NewtonStepSolver(PETScOwner):
             self._discard_set_up()
         if multigrid and self.galerkin is not None:
             self.galerkin.update(change)
-        else:
+        elif self.pressure is None:  # the block preconditioner's KSP takes the uncondensed system
             self._set_operator(J, kinds, multigrid)
         self.ksp.setTolerances(rtol=self.krylov_rtol(tol, rhs_ratio))
         self.ksp.setInitialGuessNonzero(self.initial_guess and self.ksp.getType() != "preonly")
@@ -156,11 +157,15 @@ class NewtonStepSolver(PETScOwner):
             if multigrid and self.galerkin is None:
                 set_up(self.ksp)
                 self.galerkin = GalerkinUpdate(self.ksp.getPC())
-            self.ksp.solve(rhs, du)
+            if self.pressure is not None:
+                self._solved_by, self._iterations = self.pressure.solve(self.ksp, rhs, du)
+            else:
+                self.ksp.solve(rhs, du)
+                self._solved_by, self._iterations = self.ksp, self.ksp.getIterationNumber()
         self.fallback = {}
-        if self.ksp.getConvergedReason() < 0 and self.ksp.getType() != "preonly":
+        if self._solved_by.getConvergedReason() < 0 and self.ksp.getType() != "preonly":
             return self._solve_directly(J, rhs, du)
-        return self.ksp.getConvergedReason()
+        return self._solved_by.getConvergedReason()
 
     def _solve_directly(self, J: PETSc.Mat, rhs: PETSc.Vec, du: PETSc.Vec) -> int:
         """Solve J du = rhs by the direct :data:`FALLBACK` after the Krylov solve failed; log it and

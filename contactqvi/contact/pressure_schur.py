@@ -12,23 +12,33 @@ factor of (5.4) (the identity off the contact nodes,
 :class:`~contactqvi.contact.newton_matrix.NewtonMatrix`). J is the Schur complement of the
 uncondensed system
 
-    [ J_r   L    ] [du]   [r]
-    [ P    -D^-1 ] [ p] = [0],
+    [ J - L D P   L             ] [du]   [r]
+    [ Lambda P    -Lambda D^-1  ] [ p] = [0],
 
-whose pressure block is what the bulk modulus makes large. One sweep of its block
+its pressure rows (a volume change) brought to force units by Lambda = diag(mu_a / h_a)
+(h_a = V_a^(1/3), V_a = int chi phi_a). The Krylov method (FGMRES) runs on that system
+(:meth:`PressureSchur.solve`): where it holds, p = D P du and J du = r. One sweep of its block
 factorisation (the block preconditioners of saddle-point systems, Elman, Silvester & Wathen
-2014) applied to (r, 0),
+2014) applied to (r, q),
 
-    y = G r,   p = S~^-1 P y,   du = G (r - L p),
+    y = G r,   p = S~^-1 (P y - Lambda^-1 q),   du = G (r - L p),
 
-with G one BoomerAMG V-cycle on J_r (no term of the bulk modulus) and S~ = D^-1 + c M_L / mu
-the lumped approximation of the Schur complement D^-1 + P J_r^-1 L (M_L = diag(V_a), mu the
-nodal shear modulus, c = :data:`SHEAR_FACTOR`), preconditions J. Where the
+preconditions it, with G one BoomerAMG V-cycle on J_r (no term of the bulk modulus) and
+S~ = D^-1 + c M_L / mu the lumped approximation of its Schur complement D^-1 + P J_r^-1 L
+(M_L = diag(V_a), mu the nodal shear modulus, c = :data:`SHEAR_FACTOR`). Where the
 displacement-pressure pair is inf-sup stable (quadratic displacements with the nodal P1
-pressure: a Taylor-Hood pair with a lumped pressure mass) its Krylov counts grow little with
-lambda (2.2x from nu = 0.45 to 0.4999 on the wavy block, plain GAMG 7.3x); for linear
-displacements (P1/P1) the pressure modes the pair does not control are left to the Krylov
-method, and the counts grow as with GAMG.
+pressure: a Taylor-Hood pair with a lumped pressure mass) the preconditioned system's
+eigenvalues are bounded independently of the bulk modulus.
+
+Krylov iterations on J itself with the same sweep (the Woodbury formula with S~ for S; up to
+session 35) are not: J's preconditioned operator is I + L D (S~ - S) S~^-1 P J_r^-1, whose
+spectrum spreads with D however well S~ approximates S. A residual of J reduced by tol then
+left the shear part of the error, which decides the contact, far off: the two-body Hertz case at
+nu = 0.4999 crept to its contact patch a node per Newton step (66, 48, 33, 20 Newton steps per
+load step; exact solves 4, 3, 3, 3; the uncondensed system 6, 5, 6, 5). On the uncondensed
+system J's residual is e_u + L D e_p, e_p the pressure rows' residual (:meth:`PressureSchur.solve`
+goes on until J's residual meets the test). For linear displacements (P1/P1) the pressure modes
+the pair does not control are left to the Krylov method, and the counts grow as with GAMG.
 
 Eliminated rows (the SCD solver's identity rows, :meth:`NewtonMatrix.assemble`) have zero
 columns in J: P gets them too, so that J_r keeps J's identity rows and columns there.
@@ -46,6 +56,7 @@ The V-cycle takes J_r without two things of J (docs/nearly_incompressible.md, Se
 
 from __future__ import annotations
 
+import dataclasses
 import typing
 
 from petsc4py import PETSc
@@ -57,8 +68,8 @@ import dolfinx.fem.petsc
 from dolfinx import fem
 
 from contactqvi.contact.newton_matrix import NewtonMatrix
-from contactqvi.lifetime import PETScOwner
-from contactqvi.linalg import OptionsDict, create_ksp, default_options, significant
+from contactqvi.lifetime import PETScOwner, VectorSet
+from contactqvi.linalg import OptionsDict, create_ksp, default_options, preset, significant
 from contactqvi.nodal_pressure import VolumetricTangent
 
 __all__ = ["PressureSchur"]
@@ -73,10 +84,14 @@ SHEAR_FACTOR = 2.0
 #: the 2-ring of cells around it, as terms cancelled to round-off (bulk over shear modulus times
 #: eps of their row); the V-cycle takes J_r without its entries below this fraction of their row.
 CANCELLED = 1e-9
+#: :meth:`PressureSchur.solve`: the Krylov solves of the uncondensed system per Newton step, at most,
+#: and the margin of the tolerance each later one is cut by.
+ROUNDS, MARGIN = 4, 0.5
 
 
 class PressureSchur(PETScOwner):
-    """The block preconditioner of this module (:meth:`context`: as a petsc4py ``python`` PC).
+    """The block preconditioner of this module (:meth:`context`: as a petsc4py ``python`` PC) and the
+    uncondensed system it preconditions (:attr:`augmented`, solved by :meth:`solve`).
 
     Args:
         volumetric: the averaged term's B and D, assembled at the tangent the Newton matrix
@@ -96,21 +111,25 @@ class PressureSchur(PETScOwner):
         self._shear_volume = dolfinx.fem.petsc.assemble_vector(
             fem.form(nodal.chi * mu * ufl.TestFunction(nodal.Q) * nodal.dx))
         self._shear_volume.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        vec = self._shear_volume
         self.P: PETSc.Mat | None = None
         self.reduced: PETSc.Mat | None = None  # J_r
+        self._J: PETSc.Mat | None = None  # the Newton matrix of the last update (not owned)
         self._newton: NewtonMatrix | None = None
-        self._schur_inverse = vec.duplicate()
-        self._p = vec.duplicate()
-        self._y: PETSc.Vec | None = None
-        self._t: PETSc.Vec | None = None
+        self._scales = _Scales.create(self._shear_volume)
+        self._pressure = _Pressure.create(self._shear_volume)
+        self._displacement: _Displacement | None = None
+        self.augmented: PETSc.Mat | None = None  # the uncondensed system's operator
+        self._rhs: PETSc.Vec | None = None  # its right-hand side and solution
+        self._solution: PETSc.Vec | None = None
+        self._condensed: PETSc.KSP | None = None  # J's own solver (:meth:`solve`)
+        self._padded: tuple[PETSc.Vec, PETSc.Vec] = ()
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [self.cycle, self.P, self.reduced, self._shear_volume, self._schur_inverse, self._p, self._y,
-                self._t]
+        return [self.cycle, self.P, self.reduced, self._shear_volume, self._scales, self._pressure,
+                self._displacement, self.augmented, self._rhs, self._solution, self._condensed, *self._padded]
 
     def update(self, J: PETSc.Mat, newton: NewtonMatrix, transform: PETSc.Mat | None, eliminated: np.ndarray) -> None:
-        """J_r, P and S~^-1 for the Newton matrix J of ``newton`` (the averaged term at J's tangent),
+        """J_r, P and Sigma^-1 for the Newton matrix J of ``newton`` (the averaged term at J's tangent),
         the change of variables ``transform`` (None: the identity) and the owned local rows
         ``eliminated`` by the SCD solver (collective)."""
         self._newton = newton
@@ -142,37 +161,213 @@ class PressureSchur(PETScOwner):
         self.cycle.setOperators(self.reduced)
         with default_options(self.cycle.getOptionsPrefix(), self._options):
             self.cycle.setUp()
-        self._set_schur_inverse()
-        if self._y is None:
-            self._y, self._t = J.createVecRight(), J.createVecRight()
+        self._J = J
+        self._set_pressure_scales()
+        if self.augmented is None:
+            self._create_augmented(J)
         kept.destroy()
 
-    def _set_schur_inverse(self) -> None:
-        """1 / (V_a / U''_a + c V_a^2 / int chi mu phi_a) at the nodes of averaged cells, 0 elsewhere
-        (c = :data:`SHEAR_FACTOR`)."""
-        modulus = self.volumetric.D.getDiagonal()  # U''_a / V_a
+    def _set_pressure_scales(self) -> None:
+        """D's diagonal d_a = U''_a / V_a, 1 / d_a, S~^-1 = 1 / (1 / d_a + c V_a^2 / int chi mu phi_a)
+        (c = :data:`SHEAR_FACTOR`) and Lambda_a = mu_a / h_a = int chi mu phi_a / V_a^(4/3); at the nodes
+        of no averaged cell (P's zero rows, d_a = 0) 1, 1 and 1: there the system reads -Lambda p = q."""
+        modulus = self.volumetric.D.getDiagonal()
+        d = modulus.array_r
         volume = self.volumetric.nodal.volume.x.petsc_vec.array_r
         shear = self._shear_volume.array_r
-        inside = (volume > 0) & (modulus.array_r > 0)
-        schur = np.divide(1.0, modulus.array_r, out=np.zeros_like(volume), where=inside)
-        schur += SHEAR_FACTOR * np.divide(volume**2, shear, out=np.zeros_like(volume), where=inside)
-        self._schur_inverse.array[:] = np.divide(1.0, schur, out=np.zeros_like(volume), where=inside)
+        inside = (volume > 0) & (d > 0) & (shear > 0)
+        s = self._scales
+        s.modulus.array[:] = np.where(inside, d, 0.0)
+        s.compliance.array[:] = np.divide(1.0, d, out=np.ones_like(d), where=inside)
+        schur = s.compliance.array_r + SHEAR_FACTOR * np.divide(volume**2, shear, out=np.zeros_like(d), where=inside)
+        s.schur_inverse.array[:] = 1.0 / schur
+        s.force.array[:] = np.divide(shear, np.cbrt(volume) * volume, out=np.ones_like(d), where=inside)
         modulus.destroy()
+
+    def _create_augmented(self, J: PETSc.Mat) -> None:
+        """The uncondensed system's operator (a ``python`` Mat, :meth:`_mult`) and vectors: the
+        displacement rows of J's layout followed by the pressure rows, on each rank."""
+        self._displacement = _Displacement.create(J)
+        size = J.getLocalSize()[0] + self._pressure.x.getLocalSize()
+        self.augmented = PETSc.Mat().createPython(((size, PETSc.DECIDE), (size, PETSc.DECIDE)),
+                                                  _Operator(self._mult), comm=J.getComm())
+        self.augmented.setUp()
+        self._rhs, self._solution = self.augmented.createVecs()
+
+    def solve(self, ksp: PETSc.KSP, rhs: PETSc.Vec, du: PETSc.Vec) -> tuple[PETSc.KSP, int]:
+        """du with ||rhs - J du|| <= rtol ||rhs|| (``ksp``'s rtol) by ``ksp`` (whose PC :meth:`context`
+        is) on the uncondensed system, from (du, D P du) (after :meth:`update`). Returns the KSP
+        whose converged reason is the solve's and the Krylov iterations.
+
+        The uncondensed residual (e_u, Lambda e_p) leaves J's residual e_u + L D e_p: the pressure rows'
+        residual e_p comes back multiplied by the bulk modulus. So the solve goes on, from where it
+        stopped, with the uncondensed tolerance cut by what J's residual still misses (times
+        :data:`MARGIN`), until J's residual meets rtol (at most :data:`ROUNDS` times).
+
+        If the uncondensed solve fails, J itself is solved with the same sweep (:meth:`apply` to (r, 0),
+        the Woodbury formula with S~), from where it stopped: an iterate far from equilibrium can carry a
+        nodal pressure of several shear moduli, whose initial stress makes J - L D P indefinite, and the
+        uncondensed system's preconditioner, built on J_r without it, then fails (the first Newton step
+        of the Taylor-Hood block at nu = 0.4999 from the tangent's response: 8000 iterations without
+        convergence, where J's own solve converges in 300). That solve starts from ``du`` as given.
+        """
+        q, d = self._pressure, self._displacement
+        du.copy(d.start)
+        self._merge(rhs, q.zero(), self._rhs)
+        self.P.mult(du, q.x)
+        q.x.pointwiseMult(q.x, self._scales.modulus)
+        self._merge(du, q.x, self._solution)
+        ksp.setOperators(self.augmented)
+        rtol = ksp.getTolerances()[0]
+        target, iterations = rtol * rhs.norm(), 0
+        for _ in range(ROUNDS):
+            ksp.solve(self._rhs, self._solution)
+            iterations += ksp.getIterationNumber()
+            self._split(self._solution, du, q.x)
+            if ksp.getConvergedReason() < 0:
+                break
+            self._J.mult(du, d.y)
+            d.y.aypx(-1.0, rhs)
+            missed = d.y.norm()
+            if missed <= target:
+                break
+            ksp.setTolerances(rtol=ksp.getTolerances()[0] * MARGIN * target / missed)
+            ksp.setInitialGuessNonzero(True)
+        ksp.setTolerances(rtol=rtol)
+        if ksp.getConvergedReason() >= 0:
+            return ksp, iterations
+        condensed = self._condensed_solver(ksp)
+        condensed.setOperators(self._J)
+        condensed.setTolerances(rtol=rtol)
+        condensed.setInitialGuessNonzero(True)
+        d.start.copy(du)
+        condensed.solve(rhs, du)
+        return condensed, iterations + condensed.getIterationNumber()
+
+    def _condensed_solver(self, ksp: PETSc.KSP) -> PETSc.KSP:
+        """The KSP of :meth:`solve`'s solves of J (made at the first; options prefix ``ksp``'s and
+        ``condensed_``)."""
+        if self._condensed is None:
+            self._condensed = create_ksp(ksp.getComm(), f"{ksp.getOptionsPrefix()}condensed_",
+                                         preset("gmres_pressure_schur"))
+            self._condensed.getPC().setPythonContext(_Context(self._apply_condensed))
+            self._padded = self.augmented.createVecs()
+        return self._condensed
+
+    def _apply_condensed(self, r: PETSc.Vec, z: PETSc.Vec) -> None:
+        """z = the displacement rows of :meth:`apply` to (r, 0)."""
+        into, out = self._padded
+        self._merge(r, self._pressure.zero(), into)
+        self.apply(into, out)
+        self._split(out, z, self._pressure.t)
+
+    def _mult(self, x: PETSc.Vec, y: PETSc.Vec) -> None:
+        """(y_u, y_p) = ((J - L D P) x_u + L x_p, Lambda (P x_u - D^-1 x_p)) = (J x_u - L (D P x_u - x_p),
+        Lambda (P x_u - D^-1 x_p)), with D^-1 x_p = x_p at P's zero rows (:meth:`_set_pressure_scales`)."""
+        d, q, s = self._displacement, self._pressure, self._scales
+        self._split(x, d.x, q.x)
+        self.P.mult(d.x, q.y)  # P x_u
+        self._J.mult(d.x, d.y)
+        q.t.pointwiseMult(q.y, s.modulus)
+        q.t.axpy(-1.0, q.x)  # D P x_u - x_p
+        self._subtract_L(q.t, d.y)
+        q.t.pointwiseMult(q.x, s.compliance)
+        q.y.axpy(-1.0, q.t)
+        q.y.pointwiseMult(q.y, s.force)
+        self._merge(d.y, q.y, y)
+
+    def apply(self, r: PETSc.Vec, z: PETSc.Vec) -> None:
+        """(z_u, z_p) = (G (r_u - L z_p), S~^-1 (P G r_u - Lambda^-1 r_p)): one sweep of the block
+        factorisation."""
+        d, q, s = self._displacement, self._pressure, self._scales
+        self._split(r, d.x, q.x)
+        self.cycle.solve(d.x, d.y)
+        self.P.mult(d.y, q.y)
+        q.x.pointwiseDivide(q.x, s.force)
+        q.y.axpy(-1.0, q.x)
+        q.y.pointwiseMult(q.y, s.schur_inverse)
+        self._subtract_L(q.y, d.x)
+        self.cycle.solve(d.x, d.y)
+        self._merge(d.y, q.y, z)
+
+    def _subtract_L(self, p: PETSc.Vec, u: PETSc.Vec) -> None:
+        """u -= L p = W P^T p."""
+        t = self._displacement
+        self.P.multTranspose(p, t.t)
+        self._newton.left_scale(t.t, t.w)
+        u.axpy(-1.0, t.w)
+
+    def _split(self, x: PETSc.Vec, u: PETSc.Vec, p: PETSc.Vec) -> None:
+        """u, p = the displacement and pressure rows of the uncondensed vector x."""
+        n = u.getLocalSize()
+        with x.getBuffer(readonly=True) as values:
+            u.array[:] = values[:n]
+            p.array[:] = values[n:]
+
+    def _merge(self, u: PETSc.Vec, p: PETSc.Vec, x: PETSc.Vec) -> None:
+        """x = the uncondensed vector of rows u, p."""
+        n = u.getLocalSize()
+        with x.getBuffer() as values:
+            values[:n] = u.array_r
+            values[n:] = p.array_r
 
     def context(self) -> _Context:
         """The context of a petsc4py ``python`` PC that applies :meth:`apply`."""
         return _Context(self.apply)
 
-    def apply(self, r: PETSc.Vec, du: PETSc.Vec) -> None:
-        """du = G (r - L S~^-1 P G r)."""
-        y, t, p = self._y, self._t, self._p
-        self.cycle.solve(r, y)
-        self.P.mult(y, p)
-        p.pointwiseMult(p, self._schur_inverse)
-        self.P.multTranspose(p, y)
-        self._newton.left_scale(y, t)  # L p = W P^T p
-        t.aypx(-1.0, r)
-        self.cycle.solve(t, du)
+
+@dataclasses.dataclass
+class _Displacement(VectorSet):
+    """Work vectors of J's layout."""
+
+    x: PETSc.Vec
+    y: PETSc.Vec
+    t: PETSc.Vec
+    w: PETSc.Vec
+    start: PETSc.Vec
+
+
+class _Duplicates(VectorSet):
+    """Work vectors of one vector's layout."""
+
+    @classmethod
+    def create(cls, like: PETSc.Vec) -> typing.Self:
+        """One duplicate of ``like`` per field."""
+        return cls(*(like.duplicate() for _ in dataclasses.fields(cls)))
+
+
+@dataclasses.dataclass
+class _Pressure(_Duplicates):
+    """Work vectors of the nodal pressure's layout."""
+
+    x: PETSc.Vec
+    y: PETSc.Vec
+    t: PETSc.Vec
+
+    def zero(self) -> PETSc.Vec:
+        """y set to zero."""
+        self.y.zeroEntries()
+        return self.y
+
+
+@dataclasses.dataclass
+class _Scales(_Duplicates):
+    """The diagonals of the pressure rows (:meth:`PressureSchur._set_pressure_scales`)."""
+
+    modulus: PETSc.Vec
+    compliance: PETSc.Vec
+    schur_inverse: PETSc.Vec
+    force: PETSc.Vec
+
+
+class _Operator:
+    """A petsc4py ``python`` Mat context: MatMult only."""
+
+    def __init__(self, mult: typing.Callable[[PETSc.Vec, PETSc.Vec], None]):
+        self._mult = mult
+
+    def mult(self, mat: PETSc.Mat, x: PETSc.Vec, y: PETSc.Vec) -> None:
+        self._mult(x, y)
 
 
 class _Context:
