@@ -138,9 +138,12 @@ def write_table(
 ) -> None:
     """Write ``stem.json`` (``data``) and ``stem.md`` (``markdown``) atomically on rank 0.
 
-    The one writer of every benchmark table; ``echo`` also prints the markdown.
+    The one writer of every benchmark table; ``echo`` also prints the markdown. A missing directory
+    of ``stem`` is made (a benchmark's ``--output``: it used to fail at the end of the run).
     """
     stem = pathlib.Path(stem)
+    if comm.rank == 0:
+        stem.parent.mkdir(parents=True, exist_ok=True)
     write_summary(comm, stem.with_suffix(".json"), data)
     with atomic_path(comm, stem.with_suffix(".md")) as tmp:
         if comm.rank == 0:

@@ -193,6 +193,14 @@ def test_atomic_path_removes_partial_file_on_error(mpi_tmp_path):
     assert not list(mpi_tmp_path.iterdir())
 
 
+def test_write_table_makes_its_directory(mpi_tmp_path):
+    """A benchmark's ``--output`` that does not exist yet is made, not a failure after the run."""
+    stem = mpi_tmp_path / "new" / "deeper" / "table"
+    tables.write_table(MPI.COMM_WORLD, stem, {"rows": [1, 2]}, "| a |\n", echo=False)
+    assert json.loads(stem.with_suffix(".json").read_text()) == {"rows": [1, 2]}
+    assert stem.with_suffix(".md").read_text() == "| a |\n"
+
+
 @pytest.mark.parametrize(
     "call, name",
     [
