@@ -120,7 +120,10 @@ def markdown(rows: list[dict]) -> str:
              "Every body at the row's ν, pressed 1 mm by a sphere of R = 1 m (rigid, or a steel ball on an aluminium "
              "block), frictionless, default solver unless `pc` says; errors of the last step's P, a and p0 against "
              "Hertz's (E* = E/(1 − ν²) per body); the two-body rows include the ball's own compliance, which the "
-             "half-space formula lacks (P 1–2 % low at ν = 0.3). Newton steps and Krylov iterations per load step.",
+             "half-space formula lacks (P 1–2 % low at ν = 0.3). Newton steps and Krylov iterations per load step. "
+             "Taylor–Hood rows with `pc` = `pressure_schur` are session 34's, Krylov iterations on the condensed "
+             "Newton matrix; with `default` (the same block preconditioner) since session 35 on the uncondensed "
+             "system (docs/nearly_incompressible.md Sect. 5).",
              "", "| case | ν | formulation | mesh | pc | dofs | P | a | p0 | Newton | Krylov | run s |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:

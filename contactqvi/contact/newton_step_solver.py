@@ -38,7 +38,8 @@ FALLBACK = "lu"
 #: exact (MUMPS), the reference for the Newton counts. Measured in docs/coulomb.md.
 #: ``jacobi``: GMRES + point Jacobi for a mass-like problem (a dynamic step's projection).
 #: ``pressure_schur``: FGMRES + the block preconditioner of bodies with the nodally averaged
-#: volume change, robust in the bulk modulus (:mod:`contactqvi.contact.pressure_schur`).
+#: volume change on the uncondensed displacement-pressure system, robust in the bulk modulus
+#: (:mod:`contactqvi.contact.pressure_schur`).
 NEWTON_STEP_SOLVERS = {"gamg": "gmres_gamg", "paper": "gmres_ilu", "hypre": "gmres_hypre", "lu": "lu",
                        "jacobi": "gmres_jacobi", "pressure_schur": "gmres_pressure_schur"}
 

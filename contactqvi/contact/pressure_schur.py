@@ -205,11 +205,11 @@ class PressureSchur(PETScOwner):
         :data:`MARGIN`), until J's residual meets rtol (at most :data:`ROUNDS` times).
 
         If the uncondensed solve fails, J itself is solved with the same sweep (:meth:`apply` to (r, 0),
-        the Woodbury formula with S~), from where it stopped: an iterate far from equilibrium can carry a
+        the Woodbury formula with S~), from ``du`` as given: an iterate far from equilibrium can carry a
         nodal pressure of several shear moduli, whose initial stress makes J - L D P indefinite, and the
         uncondensed system's preconditioner, built on J_r without it, then fails (the first Newton step
         of the Taylor-Hood block at nu = 0.4999 from the tangent's response: 8000 iterations without
-        convergence, where J's own solve converges in 300). That solve starts from ``du`` as given.
+        convergence, where J's own solve converges in 300).
         """
         q, d = self._pressure, self._displacement
         du.copy(d.start)
