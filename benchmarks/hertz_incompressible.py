@@ -39,7 +39,7 @@ from contactqvi.problems import hertz
 from contactqvi.runner import build_problem
 from benchlib import hertz_measures
 from hertz_bodies import mesh_source
-from rows import cell, failed_row, merge_rows, order, percent
+from rows import cell, failed, failed_row, merge_rows, order, percent
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 CASES = {"rigid": (ROOT / "cases" / "hertz.toml", "hertz_{}.geo"),
@@ -107,10 +107,12 @@ def run(name: str, mesh: str, poisson: float, formulation: str, pc: str | None, 
     except Exception as exc:  # a step that failed: the table says so and the other runs go on
         return failed_row(f"failed: {type(exc).__name__}: {exc}", time.perf_counter() - start, **key)
     exact = closed_form(case)
+    converged = all(r.converged for r in results)
+    errors = ({"P": force / exact["P"] - 1.0, "a": a / exact["a"] - 1.0, "p0": p0 / exact["p0"] - 1.0} if converged
+              else {})  # a path that stopped has no last step to measure
     return {**key, "dofs": dofs, "status": [str(r.status) for r in results], "newton": [r.iterations for r in results],
             "krylov": [r.inner_iterations for r in results], "seconds": time.perf_counter() - start,
-            "P": force / exact["P"] - 1.0, "a": a / exact["a"] - 1.0,
-            "p0": p0 / exact["p0"] - 1.0, "failed": not all(r.converged for r in results)}
+            **errors, "failed": not converged}
 
 
 def markdown(rows: list[dict]) -> str:
@@ -128,8 +130,11 @@ def markdown(rows: list[dict]) -> str:
              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         counts = (" ".join(map(str, r[k])) if k in r else r.get("status", "") for k in ("newton", "krylov"))
+        status = r.get("status", "")
+        errors = ([percent(r, name) for name in ("P", "a", "p0")] if not failed(r) else
+                  [f"stopped at step {len(status)}: {status[-1]}" if isinstance(status, list) else status, "", ""])
         lines.append(f"| {r['case']} | {r['poisson']:g} | {r['formulation']} | {r['mesh']} | {r['pc']} "
-                     f"| {cell(r, 'dofs')} | {percent(r, 'P')} | {percent(r, 'a')} | {percent(r, 'p0')} | "
+                     f"| {cell(r, 'dofs')} | " + " | ".join(errors) + " | "
                      + " | ".join(counts) + f" | {cell(r, 'seconds', '.0f')} |")
     return "\n".join(lines) + "\n"
 
