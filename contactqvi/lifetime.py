@@ -95,13 +95,15 @@ class PETScOwner:
 
 
 class VectorSet(PETScOwner):
-    """A dataclass of named work vectors of one matrix's column layout, each field a ``PETSc.Vec``
-    (a solver's vectors, reused by its every iteration); :meth:`create` makes them, :meth:`destroy` frees them."""
+    """A dataclass of named work vectors of one layout, each field a ``PETSc.Vec`` (a solver's
+    vectors, reused by its every iteration); :meth:`create` makes them, :meth:`destroy` frees them."""
 
     @classmethod
-    def create(cls, A: typing.Any) -> typing.Self:
-        """One new vector of A's column layout per field."""
-        return cls(*(A.createVecRight() for _ in dataclasses.fields(cls)))
+    def create(cls, like: typing.Any) -> typing.Self:
+        """One new vector per field: of ``like``'s column layout (a matrix), or a duplicate of ``like``
+        (a vector)."""
+        make = like.createVecRight if hasattr(like, "createVecRight") else like.duplicate
+        return cls(*(make() for _ in dataclasses.fields(cls)))
 
     def petsc_objects(self) -> list[typing.Any]:
         return [getattr(self, field.name) for field in dataclasses.fields(self)]

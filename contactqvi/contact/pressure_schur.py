@@ -327,17 +327,8 @@ class _Displacement(VectorSet):
     start: PETSc.Vec
 
 
-class _Duplicates(VectorSet):
-    """Work vectors of one vector's layout."""
-
-    @classmethod
-    def create(cls, like: PETSc.Vec) -> typing.Self:
-        """One duplicate of ``like`` per field."""
-        return cls(*(like.duplicate() for _ in dataclasses.fields(cls)))
-
-
 @dataclasses.dataclass
-class _Pressure(_Duplicates):
+class _Pressure(VectorSet):
     """Work vectors of the nodal pressure's layout."""
 
     x: PETSc.Vec
@@ -351,7 +342,7 @@ class _Pressure(_Duplicates):
 
 
 @dataclasses.dataclass
-class _Scales(_Duplicates):
+class _Scales(VectorSet):
     """The diagonals of the pressure rows (:meth:`PressureSchur._set_pressure_scales`)."""
 
     modulus: PETSc.Vec
