@@ -211,17 +211,19 @@ def test_a_step_whose_predictor_inverts_elements_starts_from_the_elastic_respons
 
 
 def test_a_step_that_fails_is_cut_until_it_converges():
-    """From 1 % to 60 % of the height in one step with at most 4 Newton steps per solve: the step
+    """From 1 % to 95 % of the height in one step with at most 4 Newton steps per solve: the step
     fails, is halved and grows back until it ends at the closed form. With no halving allowed (and
-    no relaxation) the path stops, reported as not converged."""
+    no relaxation) the path stops, reported as not converged. (From the tangent's response at the
+    last step, load_path._tangent_change, 1 % to 80 % converges in 4 Newton steps uncut.)"""
     parameters = {"max_iterations": 4, "limit_points": "stop"}
-    _, row = _compressed_block(NeoHookean(), 0.6, 2, parameters=parameters, loads=[0.02, 1.0])
+    _, row = _compressed_block(NeoHookean(), 0.95, 2, parameters=parameters, loads=[0.01 / 0.95, 1.0])
     result = row["result"]
     assert result.converged, result.status
     attempts = {(entry["substep"], entry["substep_load"], entry["substep_status"]) for entry in result.history}
     assert (0, 1.0, "diverged_max_it") in attempts and len(attempts) > 2
-    assert _closed_form_error(row, 0.6) <= 1e-8 * 0.6
-    *_, row = _compressed_block(NeoHookean(), 0.6, 2, parameters={**parameters, "max_cuts": 0}, loads=[0.02, 1.0])
+    assert _closed_form_error(row, 0.95) <= 1e-8 * 0.95
+    *_, row = _compressed_block(NeoHookean(), 0.95, 2, parameters={**parameters, "max_cuts": 0},
+                                loads=[0.01 / 0.95, 1.0])
     assert not row["result"].converged
 
 

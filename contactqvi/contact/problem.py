@@ -502,8 +502,14 @@ class ContactProblem(PETScOwner):
 
     def tangent(self, u: PETSc.Vec) -> None:
         """The Jacobian of a hyperelastic problem's f at u, T^T K_T(u~) T, into the storage of A."""
+        self.tangent_at(self.physical_displacement(u, self.hyperelastic.displacement))
+
+    def tangent_at(self, displacement: fem.Function) -> None:
+        """T^T K_T(u~) T at the physical displacement u~ = ``displacement`` (global components)
+        into the storage of A (:meth:`tangent`)."""
         system = self.hyperelastic
-        self.physical_displacement(u, system.displacement)
+        if displacement is not system.displacement:
+            system.displacement.x.array[:] = displacement.x.array
         system.load_factor.value = self.load_factor
         transform = self.to_global
         if transform is None:
