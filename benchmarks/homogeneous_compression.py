@@ -147,7 +147,8 @@ def homogeneous_rows(name: str, mode: str, summary: dict, seconds: float, steps:
             (force,) = step["pair_forces"].values()
             row.update(u_error=float(np.abs(u - exact.displacement(points, body)).max() / exact.travel),
                        tangential=force_ratio(force),
-                       force_error=abs(on_upper * force[2] + exact.nominal_stress * AREA) / abs(exact.nominal_stress * AREA))
+                       force_error=abs(on_upper * force[2] + exact.nominal_stress * AREA)
+                       / abs(exact.nominal_stress * AREA))
         rows.append(row)
     return rows
 

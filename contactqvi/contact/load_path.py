@@ -274,7 +274,8 @@ class _StepSolver(PETScOwner):
         result = self.solver.solve(u, atol=state.target, stop=self.stop, volume_start=_volume_start(state))
         if (result.status == Status.DIVERGED_FUNCTION_DOMAIN and state.solved > 0 and problem.hyperelastic is not None
                 and _add_elastic_change(problem, u, state, pc, self.prefix)):
-            logger.info("the predictor inverts elements: the step starts from the elastic response to its change")
+            logger.info("the predictor inverts elements: the step starts from the tangent's response to its "
+                        "change at the last solution")
             result = self.solver.solve(u, atol=state.target, stop=self.stop, volume_start=_volume_start(state))
         self.solver, result = _settle(problem, step, u, state, self.solver, result, self.stop, self.path)
         return result
