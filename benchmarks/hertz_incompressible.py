@@ -34,6 +34,7 @@ from mpi4py import MPI
 
 from contactqvi import tables
 from contactqvi.case import ContactCase, load_case
+from contactqvi.cli import setup_logging
 from contactqvi.contact.load_path import solve_load_path
 from contactqvi.problems import hertz
 from contactqvi.runner import build_problem
@@ -147,7 +148,10 @@ def main() -> None:
     parser.add_argument("--poisson", type=float, default=0.4999)
     parser.add_argument("--pc", default=None, help="the Newton-step solver ([solver] pc); default: the case's")
     parser.add_argument("--output", type=pathlib.Path, default=ROOT / "benchmarks" / "results")
+    parser.add_argument("--log-level", choices=("DEBUG", "INFO", "WARNING", "ERROR"), default="INFO",
+                        help="progress of the runs (INFO: each load step and Newton step, as the case runner)")
     args = parser.parse_args()
+    setup_logging(args.log_level)
     comm = MPI.COMM_WORLD
     path = args.output / "hertz_incompressible.json"
     rows = []
