@@ -1,7 +1,9 @@
 """The local rate of ``search = "newton"`` (issue 45): ||y^|| per Newton step with exact Newton-step solves.
 
 Each load step of the cases of ``benchmarks/data/homogeneous_compression`` (the 30 % compression,
-the bulging block frictionless and with Coulomb friction 0.3) is solved with the geometry in the
+the bulging block frictionless and with Coulomb friction 0.3) and of the shipped shallow ironing,
+frictionless and frictional (``cases/shallow_ironing*.toml``: its 8 press steps and the first 3
+of the slide), is solved with the geometry in the
 current configuration and LU Newton steps; the table lists, per load step, the merit ||y^|| of
 each Newton step of its last solve and the ratios ||y^_{k+1}|| / ||y^_k||^2 of its last three
 steps. Bounded ratios are quadratic convergence (docs/finite_strain.md, Sect. 14); the ratio of a
@@ -27,20 +29,26 @@ from contactqvi.tables import write_table
 
 HERE = pathlib.Path(__file__).resolve().parent
 DATA = HERE / "data" / "homogeneous_compression"
-#: (case file, Coulomb friction) of the table.
-CASES = (("stacked_30.toml", 0.0), ("bulging_block.toml", 0.0), ("bulging_block.toml", 0.3))
+CASES_DIR = HERE.parent / "cases"
+#: (case file, Coulomb friction (0: the file's law), load steps run (None: all)) of the table.
+CASES = ((DATA / "stacked_30.toml", 0.0, None), (DATA / "bulging_block.toml", 0.0, None),
+         (DATA / "bulging_block.toml", 0.3, None), (CASES_DIR / "shallow_ironing.toml", 0.0, 11),
+         (CASES_DIR / "shallow_ironing_frictional.toml", 0.0, 11))
 
 
-def rows(name: str, friction: float, work: pathlib.Path, comm: MPI.Comm) -> list[dict]:
-    """One row per load step of ``name`` searched ``"newton"`` with friction ``friction`` and LU solves."""
-    data = tomllib.loads((DATA / name).read_text())
+def rows(path: pathlib.Path, friction: float, steps: int | None, work: pathlib.Path, comm: MPI.Comm) -> list[dict]:
+    """One row per load step of the case ``path`` (its first ``steps``) searched ``"newton"`` with friction
+    ``friction`` and LU solves."""
+    data = tomllib.loads(path.read_text())
     for pair in data["contacts"]:
         pair["search"] = "newton"
         if friction > 0.0:
             pair.update(law="coulomb", friction=friction)
     data.setdefault("solver", {})["pc"] = "lu"
-    out = work / f"{pathlib.Path(name).stem}_mu{friction:g}"
-    summary, _ = run_case(parse_case(data, DATA), out, comm, plot=False)
+    data["steps"] = data["steps"][:steps]
+    name, friction = path.name, data["contacts"][0].get("friction", 0.0)
+    out = work / f"{path.stem}_mu{friction:g}"
+    summary, _ = run_case(parse_case(data, path.parent), out, comm, plot=False)
     if comm.rank == 0:
         shutil.rmtree(out, ignore_errors=True)
     table = []
@@ -71,7 +79,8 @@ def main() -> int:
     parser.add_argument("--output", default=str(HERE / "results"))
     args = parser.parse_args()
     comm = MPI.COMM_WORLD
-    table = [row for name, friction in CASES for row in rows(name, friction, pathlib.Path(args.work), comm)]
+    work = pathlib.Path(args.work)
+    table = [row for path, friction, steps in CASES for row in rows(path, friction, steps, work, comm)]
     write_table(comm, pathlib.Path(args.output) / "newton_convergence", {"rows": table}, markdown(table))
     return 0
 
