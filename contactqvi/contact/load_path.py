@@ -391,7 +391,8 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
     predicted = fem.Function(problem.V)
     factor = state.extrapolation(step.load, step.translation, step.rotation)
     if factor > 0.0:
-        predicted.x.array[:] = state.displacement.x.array + factor * state.increment.x.array
+        points = problem.V.tabulate_dof_coordinates()
+        predicted.x.array[:] = state.extrapolated(factor, step.translation, step.rotation, points).ravel()
     else:
         change = _elastic_change(problem, state, pc, prefix)
         if state.solved > 0:
