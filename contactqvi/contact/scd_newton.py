@@ -651,10 +651,11 @@ class SCDNewtonSolver(PETScOwner):
         variables are differences of positions, resolved to a few hundred eps times their size,
         which y1^ multiplies by gamma: the floor is also :data:`POSITION_ROUNDOFF` ``floor`` gamma
         max |x| (the shipped ironing stalled at 1.4e-5 N, 1e-11 of its start, against a target of
-        9e-6 N; docs/finite_strain.md, Sect. 14). The same holds for the contact variables u themselves wherever gamma u is far
-        larger than the forces, as with a large slip increment of a stiff body: a dynamic time
-        step of steel blocks sliding 6 cm under gravity alone stalled at 1.4e-7 N, 6e-12 of its
-        start, against a target of 2.3e-8 N (docs/dynamics.md, Sect. 5).
+        9e-6 N; docs/finite_strain.md, Sect. 14). The same holds for the contact variables u
+        themselves wherever gamma u is far larger than the forces, as with a large slip increment
+        of a stiff body: a dynamic time step of steel blocks sliding 6 cm under gravity alone
+        stalled at 1.4e-7 N, 6e-12 of its start, against a target of 2.3e-8 N (docs/dynamics.md,
+        Sect. 5).
         """
         p = self.parameters
         geometric = p["floor"] * self.gamma * max(POSITION_ROUNDOFF * self.problem.position_scale(), variables)
