@@ -46,8 +46,8 @@ def rows(path: pathlib.Path, friction: float, steps: int | None, work: pathlib.P
             pair.update(law="coulomb", friction=friction)
     data.setdefault("solver", {})["pc"] = "lu"
     data["steps"] = data["steps"][:steps]
-    name, friction = path.name, data["contacts"][0].get("friction", 0.0)
-    out = work / f"{path.stem}_mu{friction:g}"
+    name, mu = path.name, data["contacts"][0].get("friction", 0.0)
+    out = work / f"{path.stem}_mu{mu:g}"
     summary, _ = run_case(parse_case(data, path.parent), out, comm, plot=False)
     if comm.rank == 0:
         shutil.rmtree(out, ignore_errors=True)
@@ -56,7 +56,7 @@ def rows(path: pathlib.Path, friction: float, steps: int | None, work: pathlib.P
         last = max(entry.get("search", 0) for entry in step["history"])
         merit = np.array([e["residual"] for e in step["history"] if e.get("search", 0) == last])
         ratios = merit[1:] / merit[:-1] ** 2
-        table.append({"case": name, "friction": friction, "step": step["step"], "status": step["status"],
+        table.append({"case": name, "friction": mu, "step": step["step"], "status": step["status"],
                       "newton": step["iterations"], "merit": merit.tolist(), "ratios": ratios[-3:].tolist()})
     return table
 

@@ -388,12 +388,11 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
     loads and prescribed values (:func:`_elastic_change`: at rest, or the tangent at the last
     solution; Code_Aster's ``'TANGENTE'``).
     ``pc``: the Newton-step solver's preset."""
-    predicted = fem.Function(problem.V)
     factor = state.extrapolation(step.load, step.translation, step.rotation)
     if factor > 0.0:
-        points = problem.V.tabulate_dof_coordinates()
-        predicted.x.array[:] = state.extrapolated(factor, step.translation, step.rotation, points).ravel()
+        predicted = _extrapolated(problem, step, state, factor)
     else:
+        predicted = fem.Function(problem.V)
         change = _elastic_change(problem, state, pc, prefix)
         if state.solved > 0:
             change.axpy(1.0, state.variables)
@@ -483,13 +482,10 @@ def _tangent_change(problem: ContactProblem, state: PathState, change: PETSc.Vec
     the prescribed rows). K_T g is the central difference of r_K along g at 1e-6 of it (its error
     of order 1e-12 of K_T g, its round-off eps ||r_K's terms|| / 1e-6): the tangent's matrix has
     identity rows and columns at the prescribed dofs, so it cannot lift them itself, and r_K at
-    u_n + g turns the cells under a moved face inside out. A's storage is left as it was."""
+    u_n + g turns the cells under a moved face inside out. A itself is left as it was."""
     system = problem.hyperelastic
     prescribed = system.prescribed
-    saved = problem.A.copy()
-    problem.tangent_at(state.displacement)
-    tangent = problem.A.copy()
-    saved.copy(problem.A, PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+    tangent = problem.tangent_at(state.displacement, problem.A.duplicate(copy=False))
     step = change.duplicate()
     step.zeroEntries()
     step.array[prescribed] = change.array_r[prescribed]
@@ -511,7 +507,7 @@ def _tangent_change(problem: ContactProblem, state: PathState, change: PETSc.Vec
     problem.force_from_global(rhs, free)
     free.array[prescribed] = change.array_r[prescribed]
     free.copy(change)
-    for obj in (saved, step, direction, rhs, free):
+    for obj in (step, direction, rhs, free):
         obj.destroy()
     return tangent
 
@@ -673,16 +669,22 @@ def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: Path
     problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation, state.rotation,
                      step.fit_fraction)
     factor = state.extrapolation(step.load, step.translation, step.rotation)
-    if factor > 0.0 and problem.hyperelastic is not None:  # a turn that continues the last one
-        turned = fem.Function(problem.V)
-        turned.x.array[:] = state.extrapolated(factor, step.translation, step.rotation,
-                                               problem.V.tabulate_dof_coordinates()).ravel()
-        problem.solver_variables(turned, u)
+    if factor > 0.0 and problem.hyperelastic is not None and not problem.follows_geometry:
+        problem.solver_variables(_extrapolated(problem, step, state, factor), u)  # a turn continued
         u.axpy(1.0, problem.shift)
     else:
         u.waxpy(1.0, problem.shift, state.variables)
     touching = np.isin(state.contact_states(problem), TOUCHING)
     u.array.reshape(-1, 3)[problem.contact_blk[touching], :2] = 0.0
+
+
+def _extrapolated(problem: ContactProblem, step: LoadStep, state: PathState, factor: float) -> fem.Function:
+    """u~ of ``state`` extrapolated to ``step`` by ``factor`` of its stride, a turning node turned on
+    (:meth:`PathState.extrapolated`)."""
+    predicted = fem.Function(problem.V)
+    points = problem.V.tabulate_dof_coordinates()
+    predicted.x.array[:] = state.extrapolated(factor, step.translation, step.rotation, points).ravel()
+    return predicted
 
 
 def contact_resultants(problem: ContactProblem, result: SCDNewtonResult,

@@ -504,19 +504,20 @@ class ContactProblem(PETScOwner):
         """The Jacobian of a hyperelastic problem's f at u, T^T K_T(u~) T, into the storage of A."""
         self.tangent_at(self.physical_displacement(u, self.hyperelastic.displacement))
 
-    def tangent_at(self, displacement: fem.Function) -> None:
+    def tangent_at(self, displacement: fem.Function, out: PETSc.Mat | None = None) -> PETSc.Mat:
         """T^T K_T(u~) T at the physical displacement u~ = ``displacement`` (global components)
-        into the storage of A (:meth:`tangent`)."""
+        into ``out`` (of A's pattern; default: the storage of A, :meth:`tangent`), which is returned."""
+        out = self.A if out is None else out
         system = self.hyperelastic
         if displacement is not system.displacement:
             system.displacement.x.array[:] = displacement.x.array
         system.load_factor.value = self.load_factor
         transform = self.to_global
         if transform is None:
-            system.assemble_tangent(self.A)
-            return
-        self.A.zeroEntries()
-        self.A.axpy(1.0, system.transformed_tangent(transform), _SUBSET)
+            return system.assemble_tangent(out)
+        out.zeroEntries()
+        out.axpy(1.0, system.transformed_tangent(transform), _SUBSET)
+        return out
 
     def gap(self, translation: typing.Sequence[float] = (0.0, 0.0, 0.0), rotation: Rotation | None = None,
             fit: float = 1.0) -> np.ndarray:
