@@ -37,7 +37,8 @@ SI units throughout (m, Pa, N/m^3). Example::
     # rotation = {axis = [0, 0, 1], angle = 30.0, centre = [0, 0, 0]}  # of the obstacle and the
     #                                   # boundary.moved groups: x = Q (X - centre) + centre + translation;
     #                                   # degrees, total; one centre for the whole path; a rotated
-    #                                   # obstacle needs [contact] search = "every_step" or "until_settled"
+    #                                   # obstacle needs [contact] search = "every_step", "until_settled"
+    #                                   # or "newton"
     [[steps]]
     load = 1.0
 
@@ -315,7 +316,9 @@ class Contact:
             ``Tresca(slip_bound=1e8)``, ``Frictionless()``.
         search: ``"once"`` (gaps and normals of the reference configuration; None means
             it), or ``"every_step"`` / ``"until_settled"``: found again in the deformed
-            configuration (finite displacements on a curved obstacle; :class:`ContactPair`).
+            configuration (finite displacements on a curved obstacle; :class:`ContactPair`), or
+            ``"newton"``: the geometry a function of the iterate inside the Newton iteration
+            (hyperelastic bodies; docs/finite_strain.md, Sect. 18).
     """
 
     surface: str
@@ -427,8 +430,8 @@ class ContactPair:
             after the first, in the configuration the step before ended in),
             ``"until_settled"`` (also after each step, which is solved again until its
             configuration settles), ``"newton"`` (the geometry a function of the iterate
-            inside the Newton iteration, a ``master`` of hyperelastic bodies;
-            docs/finite_strain.md, Sect. 14) or ``"once"`` (in the reference configuration
+            inside the Newton iteration, hyperelastic bodies; docs/finite_strain.md, Sects. 14
+            and 18) or ``"once"`` (in the reference configuration
             only); None: ``"every_step"`` for a ``master``, ``"once"`` for an obstacle.
         interference: the overlap of the slave and master surfaces as meshed (m, >= 0;
             a press or shrink fit), or an :class:`~contactqvi.interference.Interference`
@@ -938,8 +941,9 @@ def _check_rotations(case: ContactCase) -> None:
     require(bool(moved) or bool(searches), f"steps[{first}].rotation", "rotates the groups boundary.moved and the "
             "rigid obstacles, and the case has neither")
     for key, search in searches.items():
-        require(search in ("every_step", "until_settled"), key, f"steps[{first}] rotates the obstacle, whose normals "
-                f"then turn: search it each step ('every_step' or 'until_settled'), got {search or 'once'!r}")
+        require(search in ("every_step", "until_settled", "newton"), key, f"steps[{first}] rotates the obstacle, "
+                "whose normals then turn: search it each step ('every_step', 'until_settled' or 'newton'), got "
+                f"{search or 'once'!r}")
 
 
 def _check_fits(case: ContactCase) -> None:

@@ -30,14 +30,14 @@ from contactqvi.obstacles import Obstacle
 from contactqvi.parameters import require, require_positive
 
 __all__ = ["SEARCHES", "LoadStep", "Rotation", "at_time", "check_fit", "check_rotation", "check_steps", "finite_vector",
-           "interpolated", "placed", "rigid_increment", "rotates"]
+           "initial_points", "interpolated", "placed", "placed_points", "rigid_increment", "rotates"]
 
-#: When a pair of meshed bodies is searched along the load path: before every load step
+#: When a contact pair is searched along the load path: before every load step
 #: after the first, in the configuration the step before ended in; as that, and again
 #: after each step in the configuration it reached, the step solved again until that
 #: configuration settles; inside the Newton iteration, the geometry a function of the
-#: iterate (``newton``, body pairs of hyperelastic bodies); or once, in the reference
-#: configuration (:class:`~contactqvi.contact.interface.BodyPair`).
+#: iterate (``newton``, hyperelastic bodies); or once, in the reference configuration
+#: (:class:`~contactqvi.contact.interface.BodyPair`, :class:`~contactqvi.contact.interface.ObstaclePair`).
 SEARCHES = ("every_step", "until_settled", "newton", "once")
 
 
@@ -184,6 +184,27 @@ def rigid_increment(points: np.ndarray, translation: typing.Sequence[float], rot
     initial = (points - centre - np.asarray(translation, dtype=float)) @ Q1  # rows of Q_1^T (p - c - t_1)
     before = initial @ Q0.T + centre + np.asarray(previous_translation, dtype=float)
     return points - before
+
+
+def initial_points(points: np.ndarray, translation: typing.Sequence[float], rotation: Rotation | None) -> np.ndarray:
+    """phi^-1(p) = Q^T (p - c - t) + c (m, 3): where the material points of a rigidly moved body (an
+    obstacle) that lie at ``points`` (m, 3) when it is placed by ``translation`` and ``rotation``
+    (:func:`placed`) lie in its initial position."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3) - np.asarray(translation, dtype=float)
+    if rotation is None:
+        return points
+    centre = np.asarray(rotation.centre, dtype=float)
+    return (points - centre) @ rotation.matrix() + centre
+
+
+def placed_points(initial: np.ndarray, translation: typing.Sequence[float], rotation: Rotation | None) -> np.ndarray:
+    """phi(X) = Q (X - c) + c + t (m, 3) of material points at ``initial`` (m, 3) of a rigid body
+    placed by ``translation`` and ``rotation`` (:func:`placed`); the inverse of :func:`initial_points`."""
+    initial = np.asarray(initial, dtype=float).reshape(-1, 3)
+    if rotation is not None:
+        centre = np.asarray(rotation.centre, dtype=float)
+        initial = (initial - centre) @ rotation.matrix().T + centre
+    return initial + np.asarray(translation, dtype=float)
 
 
 def check_fit(fit: typing.Any, name: str) -> float | None:

@@ -51,6 +51,11 @@ def _rotated_point(matrix: np.ndarray, centre: Vector, point: np.ndarray) -> np.
     return np.asarray(matrix, dtype=float) @ (point - centre) + centre
 
 
+def _projector(normal: np.ndarray) -> np.ndarray:
+    """(m, 3, 3) I - n n^T of unit normals ``normal`` (m, 3)."""
+    return np.eye(3) - normal[:, :, None] * normal[:, None, :]
+
+
 def frame_axes(normals: np.ndarray) -> np.ndarray:
     """(m, 3) the fixed axis of :func:`tangent_frames` for each unit normal (m, 3): e1, or e2
     where the normal is within 25 degrees of e1."""
@@ -92,6 +97,11 @@ class Obstacle(abc.ABC):
         """The obstacle rotated rigidly by ``matrix`` (Q, orthogonal) about ``centre`` (c):
         its points x go to Q (x - c) + c, its directions d to Q d."""
 
+    @abc.abstractmethod
+    def curvature(self, x: np.ndarray) -> np.ndarray:
+        """(m, 3, 3) derivative dn/dx of the unit normal at points ``x`` (m, 3), the Hessian of
+        the signed distance: symmetric, with n in its null space (docs/finite_strain.md, Sect. 18)."""
+
     def frames(self, x: np.ndarray) -> np.ndarray:
         """Nodal frames (m, 3, 3), rows t1, t2, n, at points ``x``."""
         return tangent_frames(self.distance(x)[1])
@@ -111,6 +121,9 @@ class Plane(Obstacle):
     def distance(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         x = np.asarray(x, dtype=float).reshape(-1, 3)
         return (x - self.point) @ self.normal, np.broadcast_to(self.normal, x.shape).copy()
+
+    def curvature(self, x: np.ndarray) -> np.ndarray:
+        return np.zeros((len(np.asarray(x).reshape(-1, 3)), 3, 3))
 
     def translated(self, c: Vector) -> Plane:
         return Plane(self.point + _point("translation", c), self.normal)
@@ -136,6 +149,10 @@ class Sphere(Obstacle):
         length = np.linalg.norm(offset, axis=1)
         with np.errstate(invalid="ignore", divide="ignore"):  # a point at the centre: nan normal
             return length - self.radius, offset / length[:, None]
+
+    def curvature(self, x: np.ndarray) -> np.ndarray:
+        gap, normal = self.distance(x)
+        return _projector(normal) / (gap + self.radius)[:, None, None]
 
     def translated(self, c: Vector) -> Sphere:
         return Sphere(self.center + _point("translation", c), self.radius)
@@ -164,6 +181,11 @@ class Cylinder(Obstacle):
         length = np.linalg.norm(radial, axis=1)
         with np.errstate(invalid="ignore", divide="ignore"):  # a point on the axis: nan normal
             return length - self.radius, radial / length[:, None]
+
+    def curvature(self, x: np.ndarray) -> np.ndarray:
+        gap, normal = self.distance(x)
+        along = np.outer(self.axis, self.axis)
+        return (_projector(normal) - along) / (gap + self.radius)[:, None, None]
 
     def translated(self, c: Vector) -> Cylinder:
         return Cylinder(self.point + _point("translation", c), self.axis, self.radius)

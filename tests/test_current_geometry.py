@@ -58,8 +58,7 @@ def _deformed(x: np.ndarray, body: np.ndarray, amplitude: float) -> np.ndarray:
 def test_newton_matrix_against_differences():
     """(13.3)'s del_w f and del_w v at a slipped configuration against central differences
     (measured: 5e-11 and 1.2e-8 on 1 rank, 4e-10 and 1.2e-7 on 2, 8e-11 and 3e-8 on 3)."""
-    comm = MPI.COMM_WORLD
-    problem = build_problem(_case("bulging_block.toml"), comm)
+    problem = build_problem(_case("bulging_block.toml"), MPI.COMM_WORLD)
     V = problem.V
     x = V.tabulate_dof_coordinates()
     start, here = fem.Function(V), fem.Function(V)
@@ -69,6 +68,52 @@ def test_newton_matrix_against_differences():
     problem.search(start)  # the step's start: the slip's reference
     problem.search(here, start=False)  # the facet pairs of here
     problem.set_step(0.2)  # the top moved by 0.12 m, as the deformation of here
+    _check_jacobians(problem, here)
+
+
+def test_obstacle_newton_matrix_against_differences():
+    """(13.3) for a rigid obstacle searched ``"newton"`` ((18.1)-(18.2), docs/finite_strain.md
+    Sect. 18): the rubber pad under its roller (a cylinder, curvature terms), frictional, the
+    roller moved between the step's start and the iterate (the slip's reference carried with
+    it), rollers on the symmetry planes through the contact surface; del_w f and
+    del_w v against central differences (measured: 1.2e-10 and 3.7e-10 on 1 rank, 6.9e-11 and 3.4e-10 on
+    2, 1.4e-10 and 5.4e-10 on 3; without the curvature terms H, 1.6e-2 and 0.2)."""
+    data = tomllib.loads((ROOT / "cases" / "rubber_pad.toml").read_text())
+    data["mesh"]["file"] = str(ROOT / "meshes" / "rubber_pad_coarse.geo")
+    data["contact"]["search"] = "newton"
+    data["steps"] = [{"translation": [0.0, 0.0, -1e-3]}, {"translation": [0.0, 0.0, -2e-3]}]
+    case = parse_case(data, ROOT / "cases")
+    problem = build_problem(case, MPI.COMM_WORLD)
+    V = problem.V
+    x = V.tabulate_dof_coordinates()
+
+    height = x[:, 2] + 0.01  # above the clamped bottom z = -10 mm
+
+    def pressed(amplitude: float) -> np.ndarray:  # zero on the clamped bottom and the symmetry planes
+        wobble = 2e-5 * np.sin(x @ np.array([[1700.0, 500.0, 300.0], [0.0] * 3, [1100.0, 300.0, 1900.0]]).T)
+        smooth = amplitude * np.column_stack([8.0 * x[:, 0] * height, np.zeros(len(x)),
+                                              -20.0 * height**2 + 3.0 * x[:, 0] * height])
+        mask = np.column_stack([x[:, 0] > 1e-12, np.zeros(len(x)), np.ones(len(x))]) * (height[:, None] > 1e-12)
+        return (smooth + wobble) * mask
+
+    start, here = fem.Function(V), fem.Function(V)
+    start.x.array[:] = pressed(0.5).ravel()
+    here.x.array[:] = pressed(1.0).ravel()
+    steps = case.steps
+    problem.set_step(1.0, steps[0].translation)
+    problem.search(start)  # the step's start: the slip's reference, the roller where step 1 has it
+    problem.set_step(1.0, steps[1].translation)
+    problem.search(here, start=False)
+    problem.set_step(1.0, steps[1].translation)
+    _check_jacobians(problem, here)
+
+
+def _check_jacobians(problem, here: fem.Function) -> None:
+    """del_w f = A + Gamma T and del_w v = (dv/du~) T of ``problem`` (set at a step, its geometry
+    searched at ``here``) against central differences of f and of the contact nodes' variables
+    along three random directions, the geometry followed (:meth:`ContactProblem.follow`): the
+    largest difference within :data:`BOUND` of the largest action. Destroys ``problem``."""
+    comm, V = problem.comm, problem.V
     u = problem.A.createVecRight()
     problem.solver_variables(here, u)
     u.axpy(1.0, problem.shift)
@@ -86,7 +131,7 @@ def test_newton_matrix_against_differences():
     def at(w: PETSc.Vec) -> tuple[np.ndarray, np.ndarray]:
         """f and the contact nodes' variables at u~ + T w, the geometry followed there."""
         moved = fem.Function(V)
-        problem.transform.mult(w, moved.x.petsc_vec)
+        problem.to_global.mult(w, moved.x.petsc_vec)
         moved.x.scatter_forward()
         moved.x.array[:] += here.x.array
         problem_state = problem.current.displacement.x.array.copy()

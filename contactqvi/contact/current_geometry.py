@@ -20,7 +20,8 @@ The Newton step (13.3) needs two more Jacobians than the frozen geometry's J = D
 Gamma u~' the change of T(x)^T r_K at fixed r_K (the slave frames turning, the slave force
 passed to other master nodes), and dv/du~ the derivative of (13.1), identity-like in its own
 motion. :func:`geometric_rows` assembles both as PETSc matrices, right-multiplied by T, from
-the entries of :mod:`contactqvi.contact.kinematics`.
+the entries of :mod:`contactqvi.contact.kinematics`. An obstacle pair searched ``"newton"`` takes
+(18.1)-(18.2) of :mod:`contactqvi.contact.obstacle_geometry` instead (Sect. 18).
 """
 
 from __future__ import annotations
@@ -38,6 +39,8 @@ from contactqvi.contact.kinematics import (aligned_previous, contact_variables, 
                                            pair_frame_derivatives, variable_derivatives)
 from contactqvi.contact.interface import Interface
 from contactqvi.contact.mortar import MortarCoupling
+from contactqvi.contact.obstacle_geometry import ObstacleGeometry
+from contactqvi.load_steps import Rotation
 
 __all__ = ["CurrentGeometry", "following_shift", "geometric_rows"]
 
@@ -48,36 +51,40 @@ class CurrentGeometry:
 
     Attributes:
         displacement: u~ of the configuration the interfaces were integrated at.
-        start: per interface, its coupling at the start of the load step (C^start of (13.1)), or
-            None for a pair not searched ``"newton"``.
+        start: per interface, its coupling at the start of the load step (C^start of (13.1)), for an
+            obstacle pair its nodes' pi^start in the obstacle's initial position ((18.1),
+            :func:`~contactqvi.contact.obstacle_geometry.start_points`), or None for a pair not
+            searched ``"newton"``.
         base, direction: the line of the line search, u~_k and T_k du
             (:meth:`~contactqvi.contact.problem.ContactProblem.set_search_line`).
         trial: its trial point u~_k + alpha T_k du.
     """
 
     displacement: fem.Function
-    start: tuple[MortarCoupling | None, ...]
+    start: tuple[MortarCoupling | np.ndarray | None, ...]
     base: fem.Function
     direction: fem.Function
     trial: fem.Function
 
     @classmethod
-    def at(cls, displacement: fem.Function, couplings: typing.Sequence[MortarCoupling | None]) -> CurrentGeometry:
-        """The geometry at ``displacement`` (copied), the load step starting there with ``couplings``."""
+    def at(cls, displacement: fem.Function, starts: typing.Sequence[MortarCoupling | np.ndarray | None]) -> CurrentGeometry:
+        """The geometry at ``displacement`` (copied), the load step starting there with ``starts``."""
         copy = fem.Function(displacement.function_space)
         copy.x.array[:] = displacement.x.array
         V = displacement.function_space
-        return cls(copy, tuple(couplings), fem.Function(V), fem.Function(V), fem.Function(V))
+        return cls(copy, tuple(starts), fem.Function(V), fem.Function(V), fem.Function(V))
 
 
 def following_shift(V: fem.FunctionSpace, current: CurrentGeometry, interfaces: typing.Sequence[Interface],
-                    contact_blk: np.ndarray, interface_of_node: np.ndarray, fit: float,
-                    solver_variables: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                    contact_blk: np.ndarray, interface_of_node: np.ndarray, fit: float, solver_variables: np.ndarray,
+                    constrained: np.ndarray, translation: np.ndarray,
+                    rotation: Rotation | None) -> tuple[np.ndarray, np.ndarray]:
     """The shift d = v - w of the contact nodes (``contact_blk``, each one's interface
     ``interface_of_node``) of the pairs searched ``"newton"`` at the ``current`` geometry: v of
-    (13.1), w = T^-1 u~ the solver's variables of the displacement there (``solver_variables``,
-    owned local dofs), the interference not yet resolved (1 - ``fit``) delta(x) added to the
-    normal one. Returns ``(positions in contact_blk, (k, 3) shift)``. Collective."""
+    (13.1) (of (18.1) for an obstacle placed by ``translation`` and ``rotation``; ``constrained``:
+    (local nodes, 3) prescribed components), w = T^-1 u~ the solver's variables of the displacement
+    there (``solver_variables``, owned local dofs), the interference not yet resolved (1 - ``fit``)
+    delta(x) added to the normal one. Returns ``(positions in contact_blk, (k, 3) shift)``. Collective."""
     positions = V.tabulate_dof_coordinates() + current.displacement.x.array.reshape(-1, 3)
     x = V.tabulate_dof_coordinates()[contact_blk]
     at, shifts = [np.empty(0, dtype=np.int64)], [np.empty((0, 3))]
@@ -86,10 +93,15 @@ def following_shift(V: fem.FunctionSpace, current: CurrentGeometry, interfaces: 
             continue
         nodes = np.flatnonzero(interface_of_node == k)
         coupling = interface.coupling
-        previous = aligned_previous(current.start[k], coupling)
-        v = contact_variables(V.mesh.comm, V.dofmap.index_map, coupling, previous, positions, interface.frames)[0]
+        if coupling is None:
+            v = ObstacleGeometry(interface.obstacle, positions[interface.blk], constrained[interface.blk],
+                                 current.start[k], translation, rotation).variables()
+        else:
+            previous = aligned_previous(current.start[k], coupling)
+            v = contact_variables(V.mesh.comm, V.dofmap.index_map, coupling, previous, positions, interface.frames)[0]
         d = v - solver_variables.reshape(-1, 3)[contact_blk[nodes]]
-        d[:, 2] += interface.gap(x[nodes], np.zeros(3), fit=fit) - interface.initial_gap
+        if coupling is not None:
+            d[:, 2] += interface.gap(x[nodes], np.zeros(3), fit=fit) - interface.initial_gap
         at.append(nodes)
         shifts.append(d)
     return np.concatenate(at), np.concatenate(shifts)
@@ -97,10 +109,12 @@ def following_shift(V: fem.FunctionSpace, current: CurrentGeometry, interfaces: 
 
 def geometric_rows(V: fem.FunctionSpace, current: CurrentGeometry, interfaces: typing.Sequence[Interface],
                    constrained: np.ndarray, contact_blk: np.ndarray, transform: PETSc.Mat, prescribed: np.ndarray,
-                   residual: PETSc.Vec) -> tuple[PETSc.Mat, PETSc.Mat]:
+                   residual: PETSc.Vec, translation: np.ndarray,
+                   rotation: Rotation | None) -> tuple[PETSc.Mat, PETSc.Mat]:
     """Gamma T and (dv/du~) T of the Newton matrix (module docstring) at the ``current`` geometry
     of ``interfaces`` (``constrained``: (local nodes, 3) prescribed components; ``contact_blk``
-    the contact nodes), T = ``transform``, ``residual`` r_K there (global components, zero on
+    the contact nodes; the obstacles placed by ``translation`` and ``rotation``), T = ``transform``,
+    ``residual`` r_K there (global components, zero on
     prescribed rows): two new matrices of T's layout, their rows and columns of the solver's
     prescribed dofs (``prescribed``, owned local) dropped (those rows of f are u - l, and u~
     there is the prescribed value whatever the solver's variable is), the rows of a contact
@@ -112,6 +126,10 @@ def geometric_rows(V: fem.FunctionSpace, current: CurrentGeometry, interfaces: t
         if not interface.follows:
             continue
         coupling = interface.coupling
+        if coupling is None:
+            _obstacle_rows(index_map, interface, positions, constrained, current.start[k], translation, rotation,
+                           residual, forces, variables)
+            continue
         slave_glob = index_map.local_to_global(coupling.slave_blk)
         fixed = constrained[coupling.slave_blk]
         dframes = pair_frame_derivatives(coupling, fixed)
@@ -148,6 +166,21 @@ def geometric_rows(V: fem.FunctionSpace, current: CurrentGeometry, interfaces: t
     for obj in (free, identity):
         obj.destroy()
     return matrices[0], matrices[1]
+
+
+def _obstacle_rows(index_map, interface: Interface, positions: np.ndarray, constrained: np.ndarray,
+                   start: np.ndarray, translation: np.ndarray, rotation: Rotation | None, residual: PETSc.Vec,
+                   forces: _Entries, variables: _Entries) -> None:
+    """The entries of an obstacle pair's nodes (18.2) and frames' turn into ``variables`` and
+    ``forces`` (``positions`` the current ones of the local nodes, ``start`` pi^start of (18.1))."""
+    blk = interface.blk
+    fixed = constrained[blk]
+    geometry = ObstacleGeometry(interface.obstacle, positions[blk], fixed, start, translation, rotation)
+    r = residual.array_r.reshape(-1, 3)[blk] * ~fixed  # P_i r_i
+    nodes, components, dv, turn = geometry.derivatives(r)
+    glob = index_map.local_to_global(blk)[nodes]
+    variables.add_frame_rows(glob, 3 * np.asarray(glob, dtype=np.int64) + components, dv)
+    forces.add_frame_rows(glob, 3 * np.asarray(glob, dtype=np.int64) + components, turn)
 
 
 class _Entries:

@@ -63,7 +63,9 @@ class ObstaclePair:
             linearised as g + n . u (exact for a plane; small displacements on a curved
             obstacle); ``"every_step"``, ``"until_settled"``: found again in the deformed
             configuration as a body pair is (:class:`BodyPair`), the gap linearised about it
-            (finite displacements on a curved obstacle).
+            (finite displacements on a curved obstacle); ``"newton"``: gaps, normals, frames and the
+            objective slip a function of the displacement inside the Newton iteration
+            (:mod:`contactqvi.contact.obstacle_geometry`; hyperelastic bodies).
         key: the pair's key in a case file (``contacts[0]``), which errors about it name
             (:func:`error_key`); None: its :attr:`name` (the Python API) and ``obstacle``.
     """
@@ -310,14 +312,21 @@ def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: t
 
 
 def followed(V: fem.FunctionSpace, interfaces: typing.Sequence[Interface], constrained: np.ndarray,
-             displacement: fem.Function, linearised: bool = False) -> list[Interface]:
-    """The interfaces with the pairs searched ``"newton"`` integrated again at x + ``displacement``
-    on the facet pairs and slave nodes of their last search
-    (:func:`~contactqvi.contact.mortar.coupling_on_layout`), with their derivatives if
-    ``linearised``; the others as they are (collective)."""
+             displacement: fem.Function, translation: np.ndarray, rotation: Rotation | None,
+             linearised: bool = False) -> list[Interface]:
+    """The interfaces with the pairs searched ``"newton"`` taken again at x + ``displacement``: a body
+    pair integrated on the facet pairs and slave nodes of its last search
+    (:func:`~contactqvi.contact.mortar.coupling_on_layout`), with its derivatives if ``linearised``;
+    an obstacle pair's normals and frames at its nodes there, the obstacle placed by ``translation``
+    and ``rotation`` (its gap linearised about that configuration, :meth:`Interface.gap`); the
+    others as they are (collective)."""
     x = displacement.x.array.reshape(-1, 3)
 
     def again(interface: Interface) -> Interface:
+        if interface.coupling is None:
+            at = x[interface.blk]
+            normal = placed(interface.obstacle, translation, rotation).distance(interface.position + at)[1]
+            return dataclasses.replace(interface, frames=tangent_frames(normal), searched_at=at)
         coupling = coupling_on_layout(V, interface.coupling.layout, x, linearised=linearised)
         normal, frames = pair_frames(coupling.normal, constrained[coupling.slave_blk])
         return dataclasses.replace(interface, frames=frames, area=coupling.weight, coupling=coupling,
@@ -339,8 +348,6 @@ def _obstacle_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: 
     displacements and areas are those of the ``modified`` basis (:mod:`contactqvi.contact.quadratic`)."""
     require(pair.search in SEARCHES, error_key(pair, "search"),
             f"must be one of {', '.join(SEARCHES)}, got {pair.search!r}")
-    require(pair.search != "newton", error_key(pair, "search"), "'newton' (the geometry inside the Newton iteration) "
-            "is for pairs of meshed bodies; an obstacle pair takes 'every_step' or 'until_settled'")
     n_owned = V.dofmap.index_map.size_local
     excluded_blk = np.flatnonzero(constrained.all(axis=1))
     blk = fem.locate_dofs_topological(V, V.mesh.topology.dim - 1, boundary_facets(facet_tags, pair.surface))

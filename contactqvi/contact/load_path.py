@@ -363,6 +363,7 @@ def _start(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSta
     logger.info("step %d: %s", state.done + 1, step_position(step))
     if state.solved == 0:
         if problem.follows_geometry:  # the geometry and the slip's reference of the start (a retry's too)
+            _set_previous(problem, state)  # the obstacles where the start has them
             _search_in(problem, state.displacement, step_solver)
         problem.set_step(step.load, step.translation, rotation=step.rotation, fit=step.fit_fraction)
         if from_rest:

@@ -62,6 +62,8 @@ from contactqvi.contact.current_geometry import CurrentGeometry, following_shift
 from contactqvi.contact.interface import (BodyPair, Interface, ObstaclePair, Pair, build_interfaces, error_key,
                                           followed, search_again)
 from contactqvi.contact.kinematics import roller_aligned
+from contactqvi.contact.mortar import MortarCoupling
+from contactqvi.contact.obstacle_geometry import start_points
 from contactqvi.contact.quadratic import ModifiedBasis, modified_basis
 from contactqvi.elasticity import (BodyForce, displacement_degree, elasticity_forms, lame_parameters,
                                    orthonormalize, rigid_motions_nullspace)
@@ -296,11 +298,21 @@ class ContactProblem(PETScOwner):
             h.forget_transform()
         self.setup_seconds = {"contact_search": search_seconds, "change_of_variables": variables_seconds}
         if self.follows_geometry:
-            starts = [i.coupling if i.follows else None for i in self.interfaces]
+            starts = [self._start_of(i, displacement) if i.follows else None for i in self.interfaces]
             if not start and self.current is not None:
                 starts = list(self.current.start)
             self.current = CurrentGeometry.at(displacement, starts)
         return difference
+
+    def _start_of(self, interface: Interface, displacement: fem.Function) -> MortarCoupling | np.ndarray:
+        """The slip's reference of a pair searched ``"newton"`` at a load step's start in x +
+        ``displacement``: a body pair's coupling (C^start of (13.1)), an obstacle pair's closest
+        points in the obstacle's initial position (pi^start of (18.1), the obstacle where the step
+        before put it)."""
+        if interface.coupling is not None:
+            return interface.coupling
+        x = interface.position + displacement.x.array.reshape(-1, 3)[interface.blk]
+        return start_points(interface.obstacle, x, self.translation, self.step_rotation)
 
     def follow(self, displacement: fem.Function, linearised: bool = False) -> None:
         """Take the geometry of the pairs searched ``"newton"`` at x + ``displacement`` on the
@@ -311,18 +323,21 @@ class ContactProblem(PETScOwner):
         (:func:`~contactqvi.contact.current_geometry.following_shift`) with the load of the
         current step. A and the Newton solver's nodes stay. Collective."""
         elastic = self.elastic
-        interfaces = followed(self.V, self.interfaces, elastic.constrained, displacement, linearised)
+        interfaces = followed(self.V, self.interfaces, elastic.constrained, displacement, self.translation,
+                              self.step_rotation, linearised)
         contact_blk, _, frames, contact_area = _merged(interfaces)
         frames = roller_aligned(frames, elastic.constrained[contact_blk])
         rotation = _nodal_rotation(self.A, contact_blk, frames, always=True)
-        coupling = _mortar_rows(self.A, interfaces, elastic.constrained)
-        offsets = [_prescribed_offset(coupling, b, elastic.owned_dirichlet) for b in elastic.loads]
-        transform = _change_of_variables(coupling, rotation, elastic.owned_dirichlet)
-        for new, old in zip((rotation, coupling, transform), (self.rotation, self.coupling, self.transform)):
+        new_objects = [rotation]
+        if self.coupling is not None:  # body pairs: N, T and the offsets c too
+            coupling = _mortar_rows(self.A, interfaces, elastic.constrained)
+            offsets = [_prescribed_offset(coupling, b, elastic.owned_dirichlet) for b in elastic.loads]
+            new_objects += [coupling, _change_of_variables(coupling, rotation, elastic.owned_dirichlet)]
+            for new, old in zip(offsets, (self.offset, *self.translated_offset)):
+                new.copy(old)
+                new.destroy()
+        for new, old in zip(new_objects, (self.rotation, self.coupling, self.transform)):
             new.copy(old, _SAME)
-            new.destroy()
-        for new, old in zip(offsets, (self.offset, *self.translated_offset)):
-            new.copy(old)
             new.destroy()
         self.interfaces, self.frames, self.contact_area = tuple(interfaces), frames, contact_area
         self.law = _nodal_law(interfaces, self.interface_of_node, contact_area)
@@ -331,9 +346,10 @@ class ContactProblem(PETScOwner):
         self._shifted_load()
 
     def layout_changed(self, displacement: fem.Function) -> bool:
-        """Whether a search of the pairs searched ``"newton"`` in x + ``displacement`` finds other
-        facet pairs or slave nodes than their current geometry's (collective)."""
-        following = [i for i in self.interfaces if i.follows]
+        """Whether a search of the body pairs searched ``"newton"`` in x + ``displacement`` finds other
+        facet pairs or slave nodes than their current geometry's (collective; an obstacle pair's slave
+        nodes are those of its surface, whatever the configuration)."""
+        following = [i for i in self.interfaces if i.follows and i.coupling is not None]
         found = search_again(self.V, self.body.facet_tags, following, self.elastic.constrained, displacement,
                              self.translation, True, self.step_rotation, linearised=False)
         return not all(old.coupling.layout.covers(new.coupling.layout, self.comm) for new, old in zip(found, following))
@@ -361,13 +377,16 @@ class ContactProblem(PETScOwner):
     def geometric_rows(self, u: PETSc.Vec) -> tuple[PETSc.Mat, PETSc.Mat]:
         """Gamma T and (dv/du~) T of the Newton matrix at u, the iterate the geometry was last
         taken at (new matrices; :func:`~contactqvi.contact.current_geometry.geometric_rows`)."""
-        if any(i.follows and i.coupling.derivatives is None for i in self.interfaces):  # a trial's: the same
-            self.interfaces = tuple(followed(self.V, self.interfaces, self.elastic.constrained,  # values, with
-                                             self.current.displacement, linearised=True))  # their derivatives
+        if any(i.follows and i.coupling is not None and i.coupling.derivatives is None  # a trial's: the same
+               for i in self.interfaces):  # values, with their derivatives
+            self.interfaces = tuple(followed(self.V, self.interfaces, self.elastic.constrained,
+                                             self.current.displacement, self.translation, self.step_rotation,
+                                             linearised=True))
         h = self.hyperelastic
         self.physical_displacement(u, h.displacement)
         return geometric_rows(self.V, self.current, self.interfaces, self.elastic.constrained, self.contact_blk,
-                              self.transform, h.prescribed, h.assemble_residual(self.load_factor))
+                              self.to_global, h.prescribed, h.assemble_residual(self.load_factor), self.translation,
+                              self.step_rotation)
 
     def _shift_following(self) -> None:
         """The shift of the nodes of the pairs searched ``"newton"``: d = v - w at :attr:`current`,
@@ -376,7 +395,7 @@ class ContactProblem(PETScOwner):
         w = self.A.createVecRight()
         self.solver_variables(self.current.displacement, w)
         nodes, d = following_shift(self.V, self.current, self.interfaces, self.contact_blk, self.interface_of_node,
-                                   self.fit, w.array_r)
+                                   self.fit, w.array_r, self.elastic.constrained, self.translation, self.step_rotation)
         w.destroy()
         self.shift.array.reshape(-1, 3)[self.contact_blk[nodes]] = d
         dofs = (3 * self.contact_blk[nodes, None] + np.arange(3)).ravel()
@@ -1004,7 +1023,8 @@ def _solver_variables(
     otherwise new objects, and A_K and the loads are freed unless ``keep``."""
     A_K, loads = elastic.stiffness, elastic.loads
     mortar = any(i.coupling is not None for i in interfaces)
-    rotation = _nodal_rotation(A_K, contact_blk, frames, always=mortar or modified is not None)
+    follows = any(i.follows for i in interfaces)  # R's values change inside the Newton iteration
+    rotation = _nodal_rotation(A_K, contact_blk, frames, always=mortar or follows or modified is not None)
     coupling = transform = None
     offsets: list[PETSc.Vec | None] = [None] * len(loads)
     if mortar:
