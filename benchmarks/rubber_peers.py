@@ -9,7 +9,9 @@ run``, one rank) on both frames and ``peers/getfem_rubber.py`` (serial) run one 
 time; the table compares per load step the roller's force on the pad (half model; ours the pair
 force ``top/obstacle``, GetFEM's the nodal internal forces at the contact surface), the wall
 times of the processes, and how far the last step's nodal contact forces are from the roller's
-normal (:func:`force_directions`). Writes ``--table``.json/.md (:func:`contactqvi.tables.write_table`).
+normal (:func:`force_directions`). Our runs take the case's ``search`` (``"newton"``: the geometry
+inside the Newton iteration, docs/finite_strain.md Sect. 18), or ``--search``. Writes
+``--table``.json/.md (:func:`contactqvi.tables.write_table`).
 
     .venv/bin/python benchmarks/rubber_peers.py --meshes coarse shipped
     .venv/bin/python benchmarks/rubber_peers.py --meshes fine --laws frictionless --update
@@ -48,8 +50,9 @@ GETFEM_OPTIONS = ["--release", "2.5", "--max-iter", "40", "--max-res", "1e-8"]
 LAWS = {"coulomb": "Coulomb, friction 0.5", "frictionless": "frictionless"}
 
 
-def export_mesh(work: pathlib.Path, mesh: str) -> dict[str, dict[str, pathlib.Path]]:
-    """The case on ``mesh`` exported to ``work``, per law (its own and frictionless) and frame:
+def export_mesh(work: pathlib.Path, mesh: str, search: str | None = None) -> dict[str, dict[str, pathlib.Path]]:
+    """The case on ``mesh`` exported to ``work`` (its contact searched by ``search``; None: the
+    case's own), per law (its own and frictionless) and frame:
     ``"moved"`` as shipped (the roller moved by the steps' translations), ``"roller"`` in the
     roller's frame (the roller at rest, the clamped groups moved by minus the translations, as
     GetFEM's driver solves it; the same problem up to a rigid translation)."""
@@ -60,7 +63,7 @@ def export_mesh(work: pathlib.Path, mesh: str) -> dict[str, dict[str, pathlib.Pa
     else:
         source = None if geo is None else ROOT / geo
     data = tomllib.loads(CASE.read_text())
-    contact = data["contact"]
+    contact = data["contact"] | ({} if search is None else {"search": search})
     laws = {"coulomb": contact,
             "frictionless": {k: v for k, v in contact.items() if k != "friction"} | {"law": "frictionless"}}
     # The roller's frame: the translations t_k = s_k t_n of the steps along one direction.
@@ -193,8 +196,8 @@ def markdown(data: dict) -> str:
     lines = ["# The rubber pad against GetFEM 5.4 (issue 36)", "",
              "cases/rubber_pad.toml (neo-Hookean pad, E = 6 MPa, nu = 0.45, rigid roller R = 15 mm pressed "
              "4 mm in 8 steps; half model), the same P1 tetrahedra in both codes. F: the roller's force on the "
-             "pad (N). Ours: the pair force top/obstacle (nodal contact, searched in the current configuration "
-             "until settled), for the case as shipped (roller moved) and in the roller's frame (roller at rest, "
+             f"pad (N). Ours: the pair force top/obstacle (nodal contact, search = \"{data['search']}\"), "
+             "for the case as shipped (roller moved) and in the roller's frame (roller at rest, "
              "bottom moved up: the same problem up to a rigid translation, and the frame GetFEM is solved in). "
              "GetFEM: large-sliding integral contact brick (raytracing), Compressible_Neo_Hookean_Bonet, "
              f"options {' '.join(data['getfem_options'])}. diff = GetFEM / ours - 1. Wall: each process from "
@@ -241,6 +244,8 @@ def main() -> int:
     parser.add_argument("--table", default=str(HERE / "results" / "rubber_getfem"))
     parser.add_argument("--update", action="store_true", help="add to the table's JSON instead of replacing it")
     parser.add_argument("--rewrite", action="store_true", help="only write the markdown again from the table's JSON")
+    parser.add_argument("--search", choices=["newton", "until_settled", "every_step"],
+                        help="how our runs search the roller (default: the case's)")
     parser.add_argument("--getfem-options", nargs=argparse.REMAINDER, default=GETFEM_OPTIONS,
                         help="options of peers/getfem_rubber.py (last on the command line)")
     args = parser.parse_args()
@@ -253,10 +258,11 @@ def main() -> int:
         return 0
     data = read_table(table.with_suffix(".json")) if args.update else {}
     data.setdefault("meshes", {})
-    data |= {"case": str(CASE.relative_to(ROOT)), "getfem_options": args.getfem_options}
+    search = args.search or tomllib.loads(CASE.read_text())["contact"]["search"]
+    data |= {"case": str(CASE.relative_to(ROOT)), "getfem_options": args.getfem_options, "search": search}
     data.setdefault("machine", {})
     for mesh in args.meshes:
-        cases = export_mesh(work, mesh)
+        cases = export_mesh(work, mesh, search)
         entry = data["meshes"].setdefault(mesh, {"laws": {}})
         for law in args.laws:
             cases_of = {"ours_moved": cases[law]["moved"], "ours_roller": cases[law]["roller"],

@@ -19,7 +19,8 @@ THICKNESS = 0.01  # m, meshes/rubber_pad.geo
 def test_rubber_pad_is_pressed_beyond_30_percent_and_restarts_exactly(shipped_runs, mpi_tmp_path):
     """The roller pressed 4 mm into the 10 mm pad: the top under it moves down by more than 30 %
     of the thickness, the pad's touching nodes lie on the roller (the current configuration,
-    searched until settled) to 1e-7 m, every step in balance; stopped after step 4 and
+    searched inside the Newton iteration) to 1e-13 m (measured 1.7e-18 m; until settled, 2e-12 m),
+    every step in balance; stopped after step 4 and
     restarted, the path is the uninterrupted one to 1e-12 with the same Newton counts, and
     the restarted run draws its pictures (the forces of all eight steps among them)."""
     comm = MPI.COMM_WORLD
@@ -43,4 +44,4 @@ def test_rubber_pad_is_pressed_beyond_30_percent_and_restarts_exactly(shipped_ru
     assert isinstance(roller, Cylinder)
     distance = roller.distance(x[top] + u[top])[0]
     touching = distance < 1e-6
-    assert touching.sum() >= 3 and np.abs(distance[touching]).max() <= 1e-7
+    assert touching.sum() >= 3 and np.abs(distance[touching]).max() <= 1e-13

@@ -311,22 +311,23 @@ def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: t
     return [again(i) if i.searched_each_step else i for i in interfaces]
 
 
-def followed(V: fem.FunctionSpace, interfaces: typing.Sequence[Interface], constrained: np.ndarray,
-             displacement: fem.Function, translation: np.ndarray, rotation: Rotation | None,
+def followed(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: typing.Sequence[Interface],
+             constrained: np.ndarray, displacement: fem.Function, translation: np.ndarray, rotation: Rotation | None,
              linearised: bool = False) -> list[Interface]:
     """The interfaces with the pairs searched ``"newton"`` taken again at x + ``displacement``: a body
     pair integrated on the facet pairs and slave nodes of its last search
     (:func:`~contactqvi.contact.mortar.coupling_on_layout`), with its derivatives if ``linearised``;
-    an obstacle pair's normals and frames at its nodes there, the obstacle placed by ``translation``
-    and ``rotation`` (its gap linearised about that configuration, :meth:`Interface.gap`); the
-    others as they are (collective)."""
+    an obstacle pair's normals, frames and deformed nodal areas at its nodes there, the obstacle
+    placed by ``translation`` and ``rotation`` (its gap linearised about that configuration,
+    :meth:`Interface.gap`); the others as they are (collective)."""
     x = displacement.x.array.reshape(-1, 3)
 
     def again(interface: Interface) -> Interface:
         if interface.coupling is None:
             at = x[interface.blk]
             normal = placed(interface.obstacle, translation, rotation).distance(interface.position + at)[1]
-            return dataclasses.replace(interface, frames=tangent_frames(normal), searched_at=at)
+            area = _lumped_area(V, facet_tags, interface.pair.surface, displacement)[interface.blk]
+            return dataclasses.replace(interface, frames=tangent_frames(normal), area=area, searched_at=at)
         coupling = coupling_on_layout(V, interface.coupling.layout, x, linearised=linearised)
         normal, frames = pair_frames(coupling.normal, constrained[coupling.slave_blk])
         return dataclasses.replace(interface, frames=frames, area=coupling.weight, coupling=coupling,

@@ -323,8 +323,8 @@ class ContactProblem(PETScOwner):
         (:func:`~contactqvi.contact.current_geometry.following_shift`) with the load of the
         current step. A and the Newton solver's nodes stay. Collective."""
         elastic = self.elastic
-        interfaces = followed(self.V, self.interfaces, elastic.constrained, displacement, self.translation,
-                              self.step_rotation, linearised)
+        interfaces = followed(self.V, self.body.facet_tags, self.interfaces, elastic.constrained, displacement,
+                              self.translation, self.step_rotation, linearised)
         contact_blk, _, frames, contact_area = _merged(interfaces)
         frames = roller_aligned(frames, elastic.constrained[contact_blk])
         rotation = _nodal_rotation(self.A, contact_blk, frames, always=True)
@@ -379,7 +379,7 @@ class ContactProblem(PETScOwner):
         taken at (new matrices; :func:`~contactqvi.contact.current_geometry.geometric_rows`)."""
         if any(i.follows and i.coupling is not None and i.coupling.derivatives is None  # a trial's: the same
                for i in self.interfaces):  # values, with their derivatives
-            self.interfaces = tuple(followed(self.V, self.interfaces, self.elastic.constrained,
+            self.interfaces = tuple(followed(self.V, self.body.facet_tags, self.interfaces, self.elastic.constrained,
                                              self.current.displacement, self.translation, self.step_rotation,
                                              linearised=True))
         h = self.hyperelastic

@@ -49,7 +49,7 @@ FONT = 22
 #: The contact pressure's kinds, as contactqvi.contact.surface.PRESSURE_DEFINITIONS names them.
 PRESSURE_KINDS = ("Cauchy", "nominal")
 #: Searches in the current configuration each step (contactqvi.load_steps.SEARCHES).
-SEARCHED_EACH_STEP = ("every_step", "until_settled")
+SEARCHED_EACH_STEP = ("every_step", "until_settled", "newton")
 
 
 def finite_strain(case):
