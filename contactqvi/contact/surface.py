@@ -255,7 +255,8 @@ def pressure_measure(problem: ContactProblem) -> str:
     """What the nodal pressures lambda_j / A_j of ``problem`` are, in ``summary.json``: ``"cauchy"``
     (force per area of the deformed surface) when every pair's is (:func:`pressure_kinds`: a
     hyperelastic body, the pair searched each step, A_j the nodal areas of the configuration the
-    step was searched in: the step before's, this step's with ``search = "until_settled"``),
+    step was searched in: the step before's, this step's with ``search = "until_settled"`` or
+    ``"newton"``),
     ``"nominal"`` (per area of the reference surface) when every pair's is, else ``"mixed"``."""
     kinds = set(pressure_kinds(problem))
     return kinds.pop().lower() if len(kinds) == 1 else "mixed"
