@@ -285,6 +285,7 @@ class SCDNewtonSolver(PETScOwner):
         self._gamma_dofs: GammaVectors | None = None  # made at the first use of gamma
         self._rhs_ratio = 1.0  # of the last Newton system: ||rhs of (5.4)|| / ||rhs with the rows eliminated||
         self._eliminated = np.empty(0, dtype=np.int32)  # of the last Newton system: owned local rows
+        self._exact: tuple[np.ndarray, np.ndarray] | None = None  # ... and its rows with known du, du there
         self._work = WorkVectors.create(A)
         self._carried: NodalPressure | None = None  # the mixed method's nodal volume, during a solve
 
@@ -527,7 +528,11 @@ class SCDNewtonSolver(PETScOwner):
         (:meth:`_constraint_force`; docs/nearly_incompressible.md, Sect. 7).
 
         The right-hand side goes to the work vector ``rhs`` and the eliminated rows'
-        exact values to ``du``; returns J. Keeps ||rhs of (5.4)|| / ||rhs|| for the
+        exact values to ``du``; returns J. Where the geometry follows the iterate (nothing is
+        eliminated) the prescribed rows are identity rows, du = l - u there, and those exact
+        values replace the Krylov solve's (:meth:`linear_solve`; docs/finite_strain.md, Sect. 18:
+        a roller on a contact node solved to the Krylov tolerance of the force rows held the
+        rubber pad's Newton steps to a linear rate of 0.2). Keeps ||rhs of (5.4)|| / ||rhs|| for the
         Krylov test (:meth:`~contactqvi.contact.newton_step_solver.NewtonStepSolver.krylov_rtol`).
         """
         w = self._work
@@ -540,7 +545,11 @@ class SCDNewtonSolver(PETScOwner):
         w.du.set(0.0)
         self._rhs_ratio = 1.0
         self._eliminated = np.empty(0, dtype=np.int32)
+        self._exact = None
         if not self.parameters["eliminate_fixed_rows"]:
+            if self.problem.follows_geometry:  # identity rows, du = l - u there: exact, not the Krylov solve's
+                rows = self.problem.hyperelastic.prescribed
+                self._exact = rows, self.problem.load.array_r[rows] - u.array_r[rows]
             return self._newton.assemble()
         fixed = ~np.any(Wt, axis=2)  # (m, 3): W*^T rows that vanish, pure (gamma-scaled) identity rows
         self._eliminated = fixed_loc = self._newton.fixed_dofs(fixed)
@@ -581,7 +590,11 @@ class SCDNewtonSolver(PETScOwner):
         w = self._work
         if self.step_solver.pressure is not None:
             self.step_solver.pressure.update(J, self._newton, self.problem.to_global, self._eliminated)
-        return self.step_solver.solve(J, self._newton.change, kinds, w.rhs, w.du, tol, self._rhs_ratio)
+        reason = self.step_solver.solve(J, self._newton.change, kinds, w.rhs, w.du, tol, self._rhs_ratio)
+        if self._exact is not None:
+            rows, values = self._exact
+            w.du.array[rows] = values
+        return reason
 
     # -- step 5: globalisation -----------------------------------------------------------
     def line_search(self, u: PETSc.Vec, norm: float, k: int) -> tuple[float | None, GraphPoint | None]:
