@@ -528,11 +528,11 @@ class SCDNewtonSolver(PETScOwner):
         (:meth:`_constraint_force`; docs/nearly_incompressible.md, Sect. 7).
 
         The right-hand side goes to the work vector ``rhs`` and the eliminated rows'
-        exact values to ``du``; returns J. Where the geometry follows the iterate (nothing is
-        eliminated) the prescribed rows are identity rows, du = l - u there, and those exact
-        values replace the Krylov solve's (:meth:`linear_solve`; docs/finite_strain.md, Sect. 18:
-        a roller on a contact node solved to the Krylov tolerance of the force rows held the
-        rubber pad's Newton steps to a linear rate of 0.2). Keeps ||rhs of (5.4)|| / ||rhs|| for the
+        exact values to ``du``; returns J. The prescribed rows of a hyperelastic f are identity
+        rows, du = l - u there, and those exact values replace the Krylov solve's
+        (:meth:`linear_solve`; docs/finite_strain.md, Sect. 18: a roller on a contact node, whose
+        value the physical displacement does not reset, solved to the Krylov tolerance of the
+        force rows held the rubber pad's Newton steps to a linear rate of 0.2). Keeps ||rhs of (5.4)|| / ||rhs|| for the
         Krylov test (:meth:`~contactqvi.contact.newton_step_solver.NewtonStepSolver.krylov_rtol`).
         """
         w = self._work
@@ -546,10 +546,10 @@ class SCDNewtonSolver(PETScOwner):
         self._rhs_ratio = 1.0
         self._eliminated = np.empty(0, dtype=np.int32)
         self._exact = None
+        if self.problem.hyperelastic is not None:  # its prescribed rows are identity rows: du = l - u there
+            rows = self.problem.hyperelastic.prescribed
+            self._exact = rows, self.problem.load.array_r[rows] - u.array_r[rows]
         if not self.parameters["eliminate_fixed_rows"]:
-            if self.problem.follows_geometry:  # identity rows, du = l - u there: exact, not the Krylov solve's
-                rows = self.problem.hyperelastic.prescribed
-                self._exact = rows, self.problem.load.array_r[rows] - u.array_r[rows]
             return self._newton.assemble()
         fixed = ~np.any(Wt, axis=2)  # (m, 3): W*^T rows that vanish, pure (gamma-scaled) identity rows
         self._eliminated = fixed_loc = self._newton.fixed_dofs(fixed)
