@@ -398,8 +398,8 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
         if state.solved > 0:
             change.axpy(1.0, state.variables)
         change.axpy(1.0, problem.shift)
-        prescribed = problem.hyperelastic.prescribed  # their exact values, not the Krylov solve's (rollers at
-        change.array[prescribed] = problem.load.array_r[prescribed]  # contact nodes: the normals' plane)
+        prescribed = problem.hyperelastic.prescribed  # exact, not the Krylov solve's: a contact node's
+        change.array[prescribed] = problem.load.array_r[prescribed]  # roller keeps it in its plane
         problem.physical_displacement(change, predicted)
         change.destroy()
     _search_at(problem, step, u, state, predicted, step_solver, start=False)
