@@ -118,7 +118,8 @@ def geometric_rows(V: fem.FunctionSpace, current: CurrentGeometry, interfaces: t
     prescribed rows): two new matrices of T's layout, their rows and columns of the solver's
     prescribed dofs (``prescribed``, owned local) dropped (those rows of f are u - l, and u~
     there is the prescribed value whatever the solver's variable is), the rows of a contact
-    node's prescribed (roller) component identity rows of (dv/du~) T. Collective."""
+    node's prescribed (roller) component and all rows of the nodes of pairs that do not follow
+    the iterate identity rows of (dv/du~) T. Collective."""
     comm, index_map = V.mesh.comm, V.dofmap.index_map
     forces, variables = _Entries(), _Entries()
     positions = V.tabulate_dof_coordinates() + current.displacement.x.array.reshape(-1, 3)
@@ -152,15 +153,19 @@ def geometric_rows(V: fem.FunctionSpace, current: CurrentGeometry, interfaces: t
         product.diagonalScale(free, free)
         G.destroy()
         matrices.append(product)
-    # a prescribed (roller) component of a contact node: its variable is w + d, d the shift, as
-    # for the frozen geometry (:func:`~contactqvi.contact.problem._align_frames`): an identity row
+    # a prescribed (roller) component of a contact node, and every component of a node of a pair
+    # that does not follow the iterate (an obstacle searched once beside a pair searched "newton"):
+    # its variable is w + d, d the shift, as for the frozen geometry
+    # (:func:`~contactqvi.contact.problem._align_frames`): an identity row
     contact_dofs = (3 * contact_blk[:, None] + np.arange(3)).ravel()
-    rollers = contact_dofs[free.array_r[contact_dofs] == 0.0]
+    frozen = np.concatenate([np.empty(0, dtype=np.int64), *(i.blk for i in interfaces if not i.follows)])
+    identity_rows = np.union1d(contact_dofs[free.array_r[contact_dofs] == 0.0],
+                               (3 * frozen[:, None] + np.arange(3)).ravel()).astype(np.int64)
     marked = np.zeros(transform.getLocalSize()[0], dtype=PETSc.IntType)
-    marked[rollers] = 1
+    marked[identity_rows] = 1
     identity = PETSc.Mat().createAIJ(size=transform.getSizes(), comm=transform.getComm(), csr=(
         np.concatenate([[0], np.cumsum(marked)]).astype(PETSc.IntType),
-        (transform.getOwnershipRange()[0] + rollers).astype(PETSc.IntType), np.ones(len(rollers))))
+        (transform.getOwnershipRange()[0] + identity_rows).astype(PETSc.IntType), np.ones(len(identity_rows))))
     identity.assemble()
     matrices[1].axpy(1.0, identity, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
     for obj in (free, identity):

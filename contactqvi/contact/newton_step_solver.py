@@ -175,11 +175,15 @@ class NewtonStepSolver(PETScOwner):
             self._direct = create_ksp(self.comm, f"{self.ksp.getOptionsPrefix()}fallback_", preset(FALLBACK))
         self._direct.setOperators(J)
         self._direct.solve(rhs, du)
+        reason = self._direct.getConvergedReason()
         self.fallback = {"direct_fallback": self.reason, "direct_reason": ksp_converged_reason(self._direct)}
         warn(self.comm, logger, "direct_fallback", f"the Krylov solve of a Newton step failed ({self.reason} after "
              f"{self.iterations} iterations): solved by {FALLBACK} (MUMPS) instead, {self.fallback['direct_reason']}",
              krylov_iterations=self.iterations)
-        return self._direct.getConvergedReason()
+        if reason < 0:  # a factorisation that failed (a singular J) fails every later solve with a PETSc error
+            self._direct.destroy()
+            self._direct = None
+        return reason
 
     def set_up_levels(self, A: PETSc.Mat) -> bool:
         """Set the multigrid levels up on ``A`` (with its near-nullspace) before the first
