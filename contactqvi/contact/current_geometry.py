@@ -67,7 +67,8 @@ class CurrentGeometry:
     trial: fem.Function
 
     @classmethod
-    def at(cls, displacement: fem.Function, starts: typing.Sequence[MortarCoupling | np.ndarray | None]) -> CurrentGeometry:
+    def at(cls, displacement: fem.Function,
+           starts: typing.Sequence[MortarCoupling | np.ndarray | None]) -> CurrentGeometry:
         """The geometry at ``displacement`` (copied), the load step starting there with ``starts``."""
         copy = fem.Function(displacement.function_space)
         copy.x.array[:] = displacement.x.array
