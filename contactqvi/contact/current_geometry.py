@@ -154,24 +154,31 @@ def geometric_rows(V: fem.FunctionSpace, current: CurrentGeometry, interfaces: t
         product.diagonalScale(free, free)
         G.destroy()
         matrices.append(product)
-    # a prescribed (roller) component of a contact node, and every component of a node of a pair
-    # that does not follow the iterate (an obstacle searched once beside a pair searched "newton"):
-    # its variable is w + d, d the shift, as for the frozen geometry
-    # (:func:`~contactqvi.contact.problem._align_frames`): an identity row
-    contact_dofs = (3 * contact_blk[:, None] + np.arange(3)).ravel()
-    frozen = np.concatenate([np.empty(0, dtype=np.int64), *(i.blk for i in interfaces if not i.follows)])
-    identity_rows = np.union1d(contact_dofs[free.array_r[contact_dofs] == 0.0],
-                               (3 * frozen[:, None] + np.arange(3)).ravel()).astype(np.int64)
-    marked = np.zeros(transform.getLocalSize()[0], dtype=PETSc.IntType)
-    marked[identity_rows] = 1
-    identity = PETSc.Mat().createAIJ(size=transform.getSizes(), comm=transform.getComm(), csr=(
-        np.concatenate([[0], np.cumsum(marked)]).astype(PETSc.IntType),
-        (transform.getOwnershipRange()[0] + identity_rows).astype(PETSc.IntType), np.ones(len(identity_rows))))
-    identity.assemble()
+    identity = _identity_rows(interfaces, contact_blk, free, transform)
     matrices[1].axpy(1.0, identity, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
     for obj in (free, identity):
         obj.destroy()
     return matrices[0], matrices[1]
+
+
+def _identity_rows(interfaces: typing.Sequence[Interface], contact_blk: np.ndarray, free: PETSc.Vec,
+                   transform: PETSc.Mat) -> PETSc.Mat:
+    """The identity rows of (dv/du~) T (a new matrix of ``transform``'s layout): a prescribed
+    (roller) component of a contact node (``free`` zero there), and every component of a node of a
+    pair that does not follow the iterate (an obstacle searched once beside a pair searched
+    ``"newton"``). Their variable is w + d, d the shift, as for the frozen geometry
+    (:func:`~contactqvi.contact.problem._align_frames`)."""
+    contact_dofs = (3 * contact_blk[:, None] + np.arange(3)).ravel()
+    frozen = np.concatenate([np.empty(0, dtype=np.int64), *(i.blk for i in interfaces if not i.follows)])
+    rows = np.union1d(contact_dofs[free.array_r[contact_dofs] == 0.0],
+                      (3 * frozen[:, None] + np.arange(3)).ravel()).astype(np.int64)
+    marked = np.zeros(transform.getLocalSize()[0], dtype=PETSc.IntType)
+    marked[rows] = 1
+    identity = PETSc.Mat().createAIJ(size=transform.getSizes(), comm=transform.getComm(), csr=(
+        np.concatenate([[0], np.cumsum(marked)]).astype(PETSc.IntType),
+        (transform.getOwnershipRange()[0] + rows).astype(PETSc.IntType), np.ones(len(rows))))
+    identity.assemble()
+    return identity
 
 
 def _obstacle_rows(index_map, interface: Interface, positions: np.ndarray, constrained: np.ndarray,
