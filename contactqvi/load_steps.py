@@ -179,11 +179,8 @@ def rigid_increment(points: np.ndarray, translation: typing.Sequence[float], rot
     shift = np.asarray(translation, dtype=float) - np.asarray(previous_translation, dtype=float)
     if rotation is None and previous_rotation is None:
         return np.broadcast_to(shift, points.shape).copy()
-    centre = np.asarray((rotation if rotation is not None else previous_rotation).centre)
-    Q1, Q0 = (np.eye(3) if r is None else r.matrix() for r in (rotation, previous_rotation))
-    initial = (points - centre - np.asarray(translation, dtype=float)) @ Q1  # rows of Q_1^T (p - c - t_1)
-    before = initial @ Q0.T + centre + np.asarray(previous_translation, dtype=float)
-    return points - before
+    return points - placed_points(initial_points(points, translation, rotation), previous_translation,
+                                  previous_rotation)
 
 
 def initial_points(points: np.ndarray, translation: typing.Sequence[float], rotation: Rotation | None) -> np.ndarray:

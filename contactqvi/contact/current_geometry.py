@@ -34,10 +34,11 @@ from petsc4py import PETSc
 import numpy as np
 
 from dolfinx import fem
+from dolfinx import mesh as dmesh
 
 from contactqvi.contact.kinematics import (aligned_previous, contact_variables, frame_turn, master_shares,
                                            pair_frame_derivatives, variable_derivatives)
-from contactqvi.contact.interface import Interface
+from contactqvi.contact.interface import Interface, assembled_area, lumped_area_form
 from contactqvi.contact.mortar import MortarCoupling
 from contactqvi.contact.obstacle_geometry import ObstacleGeometry
 from contactqvi.load_steps import Rotation
@@ -58,6 +59,8 @@ class CurrentGeometry:
         base, direction: the line of the line search, u~_k and T_k du
             (:meth:`~contactqvi.contact.problem.ContactProblem.set_search_line`).
         trial: its trial point u~_k + alpha T_k du.
+        area_forms: per obstacle surface the form of its nodal areas deformed by ``displacement``
+            (:meth:`deformed_areas`), compiled once for this geometry.
     """
 
     displacement: fem.Function
@@ -65,6 +68,15 @@ class CurrentGeometry:
     base: fem.Function
     direction: fem.Function
     trial: fem.Function
+    area_forms: dict[str, fem.Form] = dataclasses.field(default_factory=dict)
+
+    def deformed_areas(self, facet_tags: dmesh.MeshTags, surface: str) -> np.ndarray:
+        """The nodal areas of ``surface`` deformed by :attr:`displacement` (local nodes; m^2;
+        :func:`~contactqvi.contact.interface.lumped_area_form`). Collective."""
+        if surface not in self.area_forms:
+            self.area_forms[surface] = lumped_area_form(self.displacement.function_space, facet_tags, surface,
+                                                        self.displacement)
+        return assembled_area(self.area_forms[surface])
 
     @classmethod
     def at(cls, displacement: fem.Function,

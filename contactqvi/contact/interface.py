@@ -44,8 +44,8 @@ from contactqvi.obstacles import Cylinder, Obstacle, tangent_frames
 from contactqvi.parameters import require
 from contactqvi.records import warn
 
-__all__ = ["MESHED_INTERFERENCE", "BodyPair", "Interface", "MeshedFit", "ObstaclePair", "build_interfaces", "error_key",
-           "followed", "search_again"]
+__all__ = ["MESHED_INTERFERENCE", "BodyPair", "Interface", "MeshedFit", "ObstaclePair", "assembled_area",
+           "build_interfaces", "error_key", "followed", "lumped_area_form", "search_again"]
 
 logger = logging.getLogger(__name__)
 
@@ -311,14 +311,15 @@ def search_again(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: t
     return [again(i) if i.searched_each_step else i for i in interfaces]
 
 
-def followed(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: typing.Sequence[Interface],
-             constrained: np.ndarray, displacement: fem.Function, translation: np.ndarray, rotation: Rotation | None,
-             linearised: bool = False) -> list[Interface]:
+def followed(V: fem.FunctionSpace, interfaces: typing.Sequence[Interface], constrained: np.ndarray,
+             displacement: fem.Function, translation: np.ndarray, rotation: Rotation | None,
+             areas: typing.Callable[[str], np.ndarray], linearised: bool = False) -> list[Interface]:
     """The interfaces with the pairs searched ``"newton"`` taken again at x + ``displacement``: a body
     pair integrated on the facet pairs and slave nodes of its last search
     (:func:`~contactqvi.contact.mortar.coupling_on_layout`), with its derivatives if ``linearised``;
-    an obstacle pair's normals, frames and deformed nodal areas at its nodes there, the obstacle
-    placed by ``translation`` and ``rotation`` (its gap linearised about that configuration,
+    an obstacle pair's normals, frames and nodal areas at its nodes there (``areas(surface)``: the
+    local nodes' areas of that surface deformed by ``displacement``), the obstacle placed by
+    ``translation`` and ``rotation`` (its gap linearised about that configuration,
     :meth:`Interface.gap`); the others as they are (collective)."""
     x = displacement.x.array.reshape(-1, 3)
 
@@ -326,7 +327,7 @@ def followed(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, interfaces: typin
         if interface.coupling is None:
             at = x[interface.blk]
             normal = placed(interface.obstacle, translation, rotation).distance(interface.position + at)[1]
-            area = _lumped_area(V, facet_tags, interface.pair.surface, displacement)[interface.blk]
+            area = areas(interface.pair.surface)[interface.blk]
             return dataclasses.replace(interface, frames=tangent_frames(normal), area=area, searched_at=at)
         coupling = coupling_on_layout(V, interface.coupling.layout, x, linearised=linearised)
         normal, frames = pair_frames(coupling.normal, constrained[coupling.slave_blk])
@@ -533,11 +534,11 @@ def _check_disjoint(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typ
                     "slave nodes of a pair; a node cannot be both")
 
 
-def _lumped_area(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, surface: str,
-                 deformed: fem.Function | None = None) -> np.ndarray:
-    """Lumped area int N_i of ``surface`` at each node of V (local, ghosts included; m^2; owned
-    entries complete), of the surface deformed by the displacement ``deformed`` if given:
-    da = J |F^-T N| dA (Nanson)."""
+def lumped_area_form(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, surface: str,
+                     deformed: fem.Function | None = None) -> fem.Form:
+    """The form of the lumped area int N_i of ``surface`` at each node of V, of the surface deformed
+    by the displacement ``deformed`` if given (da = J |F^-T N| dA, Nanson), else of the reference one
+    (:func:`assembled_area`)."""
     msh = V.mesh
     Q = fem.functionspace(msh, ("Lagrange", displacement_degree(V)))
     ds = ufl.Measure("ds", domain=msh, subdomain_data=facet_tags)
@@ -546,7 +547,20 @@ def _lumped_area(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, surface: str,
         F = ufl.Identity(3) + ufl.grad(deformed)
         pulled = ufl.inv(F).T * ufl.FacetNormal(msh)
         stretch = ufl.det(F) * ufl.sqrt(ufl.dot(pulled, pulled))
-    area = la.vector(Q.dofmap.index_map)
-    fem.assemble_vector(area.array, fem.form(stretch * ufl.TestFunction(Q) * ds(facet_tags.names[surface])))
+    return fem.form(stretch * ufl.TestFunction(Q) * ds(facet_tags.names[surface]))
+
+
+def assembled_area(form: fem.Form) -> np.ndarray:
+    """The nodal areas of a :func:`lumped_area_form` (m^2; local nodes, ghosts included, owned
+    entries complete)."""
+    area = la.vector(form.function_spaces[0].dofmap.index_map)
+    fem.assemble_vector(area.array, form)
     area.scatter_reverse(la.InsertMode.add)
     return area.array
+
+
+def _lumped_area(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, surface: str,
+                 deformed: fem.Function | None = None) -> np.ndarray:
+    """Lumped area int N_i of ``surface`` at each node of V (local, ghosts included; m^2; owned
+    entries complete), of the surface deformed by the displacement ``deformed`` if given."""
+    return assembled_area(lumped_area_form(V, facet_tags, surface, deformed))

@@ -322,9 +322,11 @@ class ContactProblem(PETScOwner):
         objects, of the same patterns), and the shift d = v - w of their nodes
         (:func:`~contactqvi.contact.current_geometry.following_shift`) with the load of the
         current step. A and the Newton solver's nodes stay. Collective."""
-        elastic = self.elastic
-        interfaces = followed(self.V, self.body.facet_tags, self.interfaces, elastic.constrained, displacement,
-                              self.translation, self.step_rotation, linearised)
+        elastic, current = self.elastic, self.current
+        if displacement is not current.displacement:
+            current.displacement.x.array[:] = displacement.x.array
+        interfaces = followed(self.V, self.interfaces, elastic.constrained, current.displacement, self.translation,
+                              self.step_rotation, self._deformed_areas, linearised)
         contact_blk, _, frames, contact_area = _merged(interfaces)
         frames = roller_aligned(frames, elastic.constrained[contact_blk])
         rotation = _nodal_rotation(self.A, contact_blk, frames, always=True)
@@ -341,9 +343,12 @@ class ContactProblem(PETScOwner):
             new.destroy()
         self.interfaces, self.frames, self.contact_area = tuple(interfaces), frames, contact_area
         self.law = _nodal_law(interfaces, self.interface_of_node, contact_area)
-        self.current.displacement.x.array[:] = displacement.x.array
         self._shift_following()
         self._shifted_load()
+
+    def _deformed_areas(self, surface: str) -> np.ndarray:
+        """The nodal areas of ``surface`` at the current geometry (:meth:`CurrentGeometry.deformed_areas`)."""
+        return self.current.deformed_areas(self.body.facet_tags, surface)
 
     def layout_changed(self, displacement: fem.Function) -> bool:
         """Whether a search of the body pairs searched ``"newton"`` in x + ``displacement`` finds other
@@ -379,9 +384,9 @@ class ContactProblem(PETScOwner):
         taken at (new matrices; :func:`~contactqvi.contact.current_geometry.geometric_rows`)."""
         if any(i.follows and i.coupling is not None and i.coupling.derivatives is None  # a trial's: the same
                for i in self.interfaces):  # values, with their derivatives
-            self.interfaces = tuple(followed(self.V, self.body.facet_tags, self.interfaces, self.elastic.constrained,
+            self.interfaces = tuple(followed(self.V, self.interfaces, self.elastic.constrained,
                                              self.current.displacement, self.translation, self.step_rotation,
-                                             linearised=True))
+                                             self._deformed_areas, linearised=True))
         h = self.hyperelastic
         self.physical_displacement(u, h.displacement)
         return geometric_rows(self.V, self.current, self.interfaces, self.elastic.constrained, self.contact_blk,
