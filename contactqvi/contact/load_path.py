@@ -45,6 +45,11 @@ instead, halved again if that fails too, up to ``max_cuts`` halvings in a row
 converges the next one is twice as large, up to the rest of the step. The step's result
 holds all its parts and attempts (history entries marked ``substep``, ``substep_load``,
 ``substep_translation``, ``substep_status``); the path stops when the cuts are used up.
+A path that relaxes past limit points (``limit_points``) relaxes there instead
+(:mod:`~contactqvi.contact.relaxation`), and at once where a solve stalls (its residual at a
+stationary point of the merit function short of a solution, as at a limit point): cuts that
+bracket a limit point fail again and again, each after the whole stall window (the seal strip of
+docs/finite_strain.md Sect. 15 spent 130-180 Newton steps in 6-8 failed parts before it relaxed).
 """
 
 from __future__ import annotations
@@ -166,7 +171,7 @@ def solve_load_path(
                 step = _toward(state, steps[index], cuts)
                 result = solve(step, u, state, from_rest)
                 attempts.append((step, result, {}))
-                cuts = _cuts_after(problem, u, state, index, step, result, cuts, solve.cuts_allowed)
+                cuts = _cuts_after(problem, u, state, index, step, result, cuts, solve)
                 if cuts is not None:
                     continue
                 result = _relaxed(problem, index, steps[index], u, state, solve, attempts)
@@ -184,15 +189,19 @@ def solve_load_path(
 
 
 def _cuts_after(problem: ContactProblem, u: PETSc.Vec, state: PathState, index: int, step: LoadStep,
-                result: SCDNewtonResult, cuts: int, allowed: int) -> int | None:
+                result: SCDNewtonResult, cuts: int, solve: _StepSolver) -> int | None:
     """Record a converged solve of (a part, after ``cuts`` halvings, of) step ``index`` in
     ``state``, and return the halvings of the next part: one fewer after a part that
-    converged (0: the rest of the step), one more after a failure while ``allowed``; None
-    when the step is done (solved whole, failed with its cuts used up, or interrupted)."""
+    converged (0: the rest of the step), one more after a failure while ``solve`` allows
+    (``cuts_allowed``); None when the step is done (solved whole, failed with its cuts used up,
+    or interrupted), or when it stalled on a path that relaxes past limit points: a limit point is
+    relaxed past at once, not bracketed by cuts (module docstring)."""
     if result.converged:
         state.record(problem, u, result, complete=cuts == 0)
         return cuts - 1 if cuts > 0 else None  # a part of the step: grow back toward its end
-    if result.status == Status.INTERRUPTED or cuts >= allowed:
+    if result.status == Status.INTERRUPTED or cuts >= solve.cuts_allowed:
+        return None
+    if result.status == Status.DIVERGED_STALLED and solve.relaxes:
         return None
     warn(problem.comm, logger, "step_cut", f"step {index + 1}: {result.status} at {step_position(step)}; cut to "
          f"{0.5 ** (cuts + 1):g} of what remains of it", step=index + 1, load=step.load, fraction=0.5 ** (cuts + 1))
@@ -259,7 +268,7 @@ class _StepSolver(PETScOwner):
             self.carried, self.solver = _released(self.solver), None
         if state.solved == 0 and self.initial is not None:
             self.initial.copy(u)  # the given guess, also for a retry of the first step
-        _start(problem, step, u, state, from_rest, self.carried)
+        extrapolated = _start(problem, step, u, state, from_rest, self.carried)
         pc = checked_parameters(problem, self.parameters)["pc"]
         if problem.follows_geometry and (state.solved > 0 or from_rest):
             _predict(problem, step, u, state, self.carried, pc, self.prefix)
@@ -272,11 +281,12 @@ class _StepSolver(PETScOwner):
             self.solver, result = _follow(problem, step, u, state, self.solver, self.stop)
             return result
         result = self.solver.solve(u, atol=state.target, stop=self.stop, volume_start=_volume_start(state))
-        if (result.status == Status.DIVERGED_FUNCTION_DOMAIN and state.solved > 0 and problem.hyperelastic is not None
-                and _add_elastic_change(problem, u, state, pc, self.prefix)):
-            logger.info("the predictor inverts elements: the step starts from the tangent's response to its "
-                        "change at the last solution")
-            result = self.solver.solve(u, atol=state.target, stop=self.stop, volume_start=_volume_start(state))
+        if result.status == Status.DIVERGED_FUNCTION_DOMAIN and state.solved > 0 and problem.hyperelastic is not None:
+            _carried(problem, u, state)
+            if _add_elastic_change(problem, u, state, pc, self.prefix) or extrapolated:
+                logger.info("the predictor inverts elements: the step starts again from the last solution%s",
+                            "" if extrapolated else " and the tangent's response to the step's change there")
+                result = self.solver.solve(u, atol=state.target, stop=self.stop, volume_start=_volume_start(state))
         self.solver, result = _settle(problem, step, u, state, self.solver, result, self.stop, self.path)
         return result
 
@@ -355,11 +365,12 @@ def _path_levels(problem: ContactProblem, parameters: dict | None, prefix: str) 
 
 
 def _start(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState, from_rest: bool,
-           step_solver: NewtonStepSolver | None) -> None:
+           step_solver: NewtonStepSolver | None) -> bool:
     """Set ``step``, the one after ``state``'s, and put its initial guess in ``u``: the guess
     given (or rest) for the first step, else the predictor of :func:`_continue`; a problem
     searched each step is searched first in the configuration of the step before, which
-    updates the levels of ``step_solver`` (if any) for the new A."""
+    updates the levels of ``step_solver`` (if any) for the new A. Whether the guess extrapolates
+    the last solve."""
     logger.info("step %d: %s", state.done + 1, step_position(step))
     if state.solved == 0:
         if problem.follows_geometry:  # the geometry and the slip's reference of the start (a retry's too)
@@ -368,12 +379,12 @@ def _start(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSta
         problem.set_step(step.load, step.translation, rotation=step.rotation, fit=step.fit_fraction)
         if from_rest:
             problem.shift.copy(u)  # u~ = 0
-        return
+        return False
     if problem.searched_each_step:
         _set_previous(problem, state)
         _search_in(problem, state.displacement, step_solver)
         problem.solver_variables(state.displacement, state.variables)
-    _continue(problem, step, u, state)
+    return _continue(problem, step, u, state)
 
 
 def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState,
@@ -389,7 +400,7 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
     loads and prescribed values (:func:`_elastic_change`: at rest, or the tangent at the last
     solution; Code_Aster's ``'TANGENTE'``).
     ``pc``: the Newton-step solver's preset."""
-    factor = state.extrapolation(step.load, step.translation, step.rotation)
+    factor = state.extrapolation(step.load, step.translation, step.rotation, turns_only=True)
     if factor > 0.0:
         predicted = _extrapolated(problem, step, state, factor)
     else:
@@ -662,21 +673,31 @@ def _merged(solves: list[SCDNewtonResult], status: Status,
         history=[{**entry, **mark} for mark, solve in zip(marks, solves) for entry in solve.history])
 
 
-def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState) -> None:
-    """Set ``step`` after ``state``'s step, the slip measured from it; ``u`` gets the predictor:
-    u~ of that step, or for a hyperelastic body's turn that continues the last one its nodes turned
-    on (:meth:`PathState.extrapolated`; the pressed blocks of tests/test_rotation.py: 3 Newton steps
-    per turn instead of 7 with ``until_settled``, 0-1 instead of 6 with ``every_step``), its
-    touching nodes moved along with their master surface (no slip increment; pairs searched
-    ``"newton"`` predict otherwise: :func:`_predict`)."""
+def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState) -> bool:
+    """Set ``step`` after ``state``'s step, the slip measured from it; ``u`` gets the predictor.
+    A hyperelastic body's step that continues the last solve (along its change of load,
+    translation and rotation) extrapolates it, slip increments included, a turning node turned on
+    (:meth:`PathState.extrapolated`; Abaqus' default, Code_Aster's ``PREDICTION = 'EXTRAPOLE'``).
+    The pressed blocks of tests/test_rotation.py take 3 Newton steps per turn instead of 7 with
+    ``until_settled``, 0-1 instead of 6 with ``every_step``; the seal strip of docs/finite_strain.md
+    Sect. 15 (nu 0.499, Coulomb 0.3) 5.1 a step instead of 12.8. Any other step starts from u~ of
+    the last, its touching nodes moved along with their master surface (no slip increment); pairs
+    searched ``"newton"`` predict otherwise (:func:`_predict`). Whether it extrapolates."""
     problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation, state.rotation,
                      step.fit_fraction)
-    factor = state.extrapolation(step.load, step.translation, step.rotation)
+    factor = state.extrapolation(step.load, step.translation, step.rotation, turns_only=False)
     if factor > 0.0 and problem.hyperelastic is not None and not problem.follows_geometry:
-        problem.solver_variables(_extrapolated(problem, step, state, factor), u)  # a turn continued
+        problem.solver_variables(_extrapolated(problem, step, state, factor), u)
         u.axpy(1.0, problem.shift)
-    else:
-        u.waxpy(1.0, problem.shift, state.variables)
+        return True
+    _carried(problem, u, state)
+    return False
+
+
+def _carried(problem: ContactProblem, u: PETSc.Vec, state: PathState) -> None:
+    """The predictor ``u`` of a step after ``state`` set in ``problem`` that is not extrapolated: u~
+    of the last step, its touching nodes moved along with their master surface (no slip increment)."""
+    u.waxpy(1.0, problem.shift, state.variables)
     touching = np.isin(state.contact_states(problem), TOUCHING)
     u.array.reshape(-1, 3)[problem.contact_blk[touching], :2] = 0.0
 

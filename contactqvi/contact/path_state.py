@@ -26,10 +26,11 @@ field               read by
                     before the next step; with ``until_settled``, the reference of the next
                     step's increment (``_settle``)
 ``node_states``     the predictor: touching nodes start the next step without a slip increment
+                    where it is not extrapolated
 ``target``          the stopping target ||y^|| of every later step (the first step's)
-``increment``,      the predictor of pairs searched ``"newton"``: the last solve's change of the
-``stride``          displacement, extrapolated along its change of rotation
-                    (:meth:`PathState.extrapolation`)
+``increment``,      the predictor of a hyperelastic body's step that continues the last solve:
+``stride``          the last solve's change of the displacement, extrapolated along its change
+                    of load, translation and rotation (:meth:`PathState.extrapolation`)
 ==================  ===========================================================================
 
 The Newton-step solver's preconditioner is not part of the state: it is solver data,
@@ -132,25 +133,26 @@ class PathState(PETScOwner):
         """(7,) load factor, translation (m) and rotation vector (rad) of the last converged solve."""
         return _position(self.load, self.translation, self.rotation)
 
-    def extrapolation(self, load: float, translation: typing.Sequence[float], rotation: Rotation | None) -> float:
+    def extrapolation(self, load: float, translation: typing.Sequence[float], rotation: Rotation | None,
+                      turns_only: bool) -> float:
         """The factor of :attr:`increment` that extrapolates the last solve to a step to ``load``,
         ``translation`` and ``rotation``: its change along the last solve's :attr:`stride`, relative
         to it (0 at rest or for a step that does not continue it; a fit over several steps is not
         extrapolated). The predictor
         u~ + factor x increment is the linear extrapolation of Abaqus/Standard's default and of
         Code_Aster's ``PREDICTION = 'EXTRAPOLE'``; a node that turns is turned on (:meth:`extrapolated`).
-        Only a stride that turns is extrapolated: a rigid
-        turn moves every node alike from one step to the next, while under a die that slides or a
-        plate that presses the displacement field is no translate of its last increment (the
-        shipped ironing's slide steps took 24-127 Newton steps and cuts extrapolated, 19-30 without;
-        the compressions take the same either way; docs/finite_strain.md Sect. 14)."""
+        ``turns_only``: only a stride that turns is extrapolated (the predictor of pairs searched
+        ``"newton"``, whose alternative is the tangent's response): a rigid turn moves every node
+        alike from one step to the next, while under a die that slides the displacement field is no
+        translate of its last increment (the shipped ironing's slide steps took 24-127 Newton steps
+        and cuts extrapolated, 19-30 without; docs/finite_strain.md Sect. 14)."""
         length = float(self.stride @ self.stride)
-        if length == 0.0 or not self.stride[4:].any():
+        if length == 0.0 or (turns_only and not self.stride[4:].any()):
             return 0.0
         change = _position(load, translation, rotation) - self.position
         return max(float(change @ self.stride) / length, 0.0)
 
-    def extrapolated(self, factor: float, translation: typing.Sequence[float], rotation: Rotation,
+    def extrapolated(self, factor: float, translation: typing.Sequence[float], rotation: Rotation | None,
                      points: np.ndarray) -> np.ndarray:
         """The predictor u~ (local nodes, (N, 3)) of a step to ``translation``, ``rotation`` that continues
         the last solve's turn, :meth:`extrapolation`'s ``factor`` of its stride; ``points`` the nodes'
@@ -164,7 +166,9 @@ class PathState(PETScOwner):
         t the translations, s the part of the last increment the turn does not explain: whichever of s
         and the increment is the smaller at that node. A node turned rigidly is predicted exactly, a node
         at rest stays; extrapolated linearly, a 9-degree turn's chord left the rim of the turned blocks
-        2.5 cm off its arc (docs/finite_strain.md Sect. 14)."""
+        2.5 cm off its arc (docs/finite_strain.md Sect. 14). A path without rotation (``rotation`` None)
+        translates: a node carried by the moved groups or an obstacle is moved on with them."""
+        rotation = Rotation() if rotation is None else rotation
         turn_now = _turn(self.position[4:])
         last = turn_now @ _turn(self.position[4:] - self.stride[4:]).T
         next_ = rotation.matrix() @ turn_now.T
