@@ -260,15 +260,18 @@ class _StepSolver(PETScOwner):
     def petsc_objects(self) -> list[typing.Any]:
         return [self.solver, self.carried, self.initial]
 
-    def __call__(self, step: LoadStep, u: PETSc.Vec, state: PathState, from_rest: bool) -> SCDNewtonResult:
+    def __call__(self, step: LoadStep, u: PETSc.Vec, state: PathState, from_rest: bool, extrapolate: float = 0.0,
+                 stall_iterations: int | None = None) -> SCDNewtonResult:
         """Solve ``step`` after ``state``'s (the predictor of :func:`_start`; a problem searched
-        each step searched first, and settled after); its solution in ``u``."""
+        each step searched first, and settled after); its solution in ``u``. ``extrapolate`` > 0:
+        the predictor is the last solve's increment extrapolated by that factor (a relaxation step
+        after one that converged); ``stall_iterations``: this solve's own (a relaxation step's)."""
         problem = self.problem
         if problem.searched_each_step and self.solver is not None:
             self.carried, self.solver = _released(self.solver), None
         if state.solved == 0 and self.initial is not None:
             self.initial.copy(u)  # the given guess, also for a retry of the first step
-        extrapolated = _start(problem, step, u, state, from_rest, self.carried)
+        extrapolated = _start(problem, step, u, state, from_rest, self.carried, extrapolate)
         pc = checked_parameters(problem, self.parameters)["pc"]
         if problem.follows_geometry and (state.solved > 0 or from_rest):
             _predict(problem, step, u, state, self.carried, pc, self.prefix)
@@ -280,13 +283,21 @@ class _StepSolver(PETScOwner):
         if problem.follows_geometry:
             self.solver, result = _follow(problem, step, u, state, self.solver, self.stop)
             return result
-        result = self.solver.solve(u, atol=state.target, stop=self.stop, volume_start=_volume_start(state))
-        if result.status == Status.DIVERGED_FUNCTION_DOMAIN and state.solved > 0 and problem.hyperelastic is not None:
-            _carried(problem, u, state)
-            if _add_elastic_change(problem, u, state, pc, self.prefix) or extrapolated:
-                logger.info("the predictor inverts elements: the step starts again from the last solution%s",
-                            "" if extrapolated else " and the tangent's response to the step's change there")
-                result = self.solver.solve(u, atol=state.target, stop=self.stop, volume_start=_volume_start(state))
+        window = self.solver.parameters["stall_iterations"]
+        if stall_iterations is not None:
+            self.solver.parameters["stall_iterations"] = stall_iterations
+        try:
+            result = self.solver.solve(u, atol=state.target, stop=self.stop, volume_start=_volume_start(state))
+            if (result.status == Status.DIVERGED_FUNCTION_DOMAIN and state.solved > 0
+                    and problem.hyperelastic is not None):
+                _carried(problem, u, state)
+                if _add_elastic_change(problem, u, state, pc, self.prefix) or extrapolated:
+                    logger.info("the predictor inverts elements: the step starts again from the last solution%s",
+                                "" if extrapolated else " and the tangent's response to the step's change there")
+                    result = self.solver.solve(u, atol=state.target, stop=self.stop,
+                                               volume_start=_volume_start(state))
+        finally:
+            self.solver.parameters["stall_iterations"] = window
         self.solver, result = _settle(problem, step, u, state, self.solver, result, self.stop, self.path)
         return result
 
@@ -365,9 +376,10 @@ def _path_levels(problem: ContactProblem, parameters: dict | None, prefix: str) 
 
 
 def _start(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState, from_rest: bool,
-           step_solver: NewtonStepSolver | None) -> bool:
+           step_solver: NewtonStepSolver | None, extrapolate: float = 0.0) -> bool:
     """Set ``step``, the one after ``state``'s, and put its initial guess in ``u``: the guess
-    given (or rest) for the first step, else the predictor of :func:`_continue`; a problem
+    given (or rest) for the first step, else the predictor of :func:`_continue` (``extrapolate``
+    its factor where given); a problem
     searched each step is searched first in the configuration of the step before, which
     updates the levels of ``step_solver`` (if any) for the new A. Whether the guess extrapolates
     the last solve."""
@@ -384,7 +396,7 @@ def _start(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSta
         _set_previous(problem, state)
         _search_in(problem, state.displacement, step_solver)
         problem.solver_variables(state.displacement, state.variables)
-    return _continue(problem, step, u, state)
+    return _continue(problem, step, u, state, extrapolate)
 
 
 def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState,
@@ -673,7 +685,8 @@ def _merged(solves: list[SCDNewtonResult], status: Status,
         history=[{**entry, **mark} for mark, solve in zip(marks, solves) for entry in solve.history])
 
 
-def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState) -> bool:
+def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState,
+              extrapolate: float = 0.0) -> bool:
     """Set ``step`` after ``state``'s step, the slip measured from it; ``u`` gets the predictor.
     A hyperelastic body's step that continues the last solve (along its change of load,
     translation and rotation) extrapolates it, slip increments included, a turning node turned on
@@ -682,10 +695,12 @@ def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: Path
     ``until_settled``, 0-1 instead of 6 with ``every_step``; the seal strip of docs/finite_strain.md
     Sect. 15 (nu 0.499, Coulomb 0.3) 5.1 a step instead of 12.8. Any other step starts from u~ of
     the last, its touching nodes moved along with their master surface (no slip increment); pairs
-    searched ``"newton"`` predict otherwise (:func:`_predict`). Whether it extrapolates."""
+    searched ``"newton"`` predict otherwise (:func:`_predict`). ``extrapolate`` > 0: the factor of
+    the extrapolation whether the step continues the last or not (a relaxation step, which stays at
+    the step's loads). Whether it extrapolates."""
     problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation, state.rotation,
                      step.fit_fraction)
-    factor = state.extrapolation(step.load, step.translation, step.rotation, turns_only=False)
+    factor = extrapolate or state.extrapolation(step.load, step.translation, step.rotation, turns_only=False)
     if factor > 0.0 and problem.hyperelastic is not None and not problem.follows_geometry:
         problem.solver_variables(_extrapolated(problem, step, state, factor), u)
         u.axpy(1.0, problem.shift)
