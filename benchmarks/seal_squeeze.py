@@ -18,6 +18,7 @@ Sects. 11 and 15, read the tables (the tables of Sect. 11, before relaxation exi
         --meshes h1.0 h0.5 --table seal_relaxed
     .venv/bin/python benchmarks/seal_squeeze.py --poisson 0.3 0.4 0.45 0.49 --friction 0.2 0.3 0.4 0.5 \
         --limit-points stop
+    .venv/bin/python benchmarks/seal_squeeze.py --poisson 0.45 0.499 --friction 0.4 --squeeze 0.45 --table seal_45
     .venv/bin/python benchmarks/seal_squeeze.py --poisson 0.45 --friction 0.4 --max-cuts 14 --limit-points stop \
         --table seal_path_end
     .venv/bin/python benchmarks/seal_squeeze.py --meshes h0.5 --poisson 0.45 0.49 --friction 0.3 0.4 \
@@ -49,10 +50,14 @@ HALF_HEIGHT = 5e-3
 
 
 def run(poisson: float, friction: float, mesh: str, max_cuts: int | None, work: pathlib.Path,
-        formulation: str = "displacement", limit_points: str | None = None) -> dict:
+        formulation: str = "displacement", limit_points: str | None = None, squeeze: float = 0.3) -> dict:
     """One run of the seal case (the strip's ``formulation``, docs/nearly_incompressible.md; ``[solver]``
-    ``max_cuts`` and ``limit_points`` if given); its row of the table."""
+    ``max_cuts`` and ``limit_points`` if given) to ``squeeze`` of the strip's height in steps of the
+    case's (1.5 %); its row of the table."""
     data = tomllib.loads(CASE.read_text())
+    stride = data["steps"][0]["translation"][2]
+    data["steps"] = [{"translation": [0.0, 0.0, k * stride]}
+                     for k in range(1, round(squeeze * HALF_HEIGHT / -stride) + 1)]
     data["material"]["formulation"] = formulation
     data["mesh"]["file"] = MESHES[mesh]
     data["material"]["poisson"] = poisson
@@ -61,7 +66,7 @@ def run(poisson: float, friction: float, mesh: str, max_cuts: int | None, work: 
     data.setdefault("solver", {}).update({key: value for key, value in solver.items() if value is not None})
     case = parse_case(data, CASE.parent)
     name = (f"{mesh}_nu{poisson:g}_mu{friction:g}_{formulation}" + ("" if max_cuts is None else f"_cuts{max_cuts}")
-            + ("" if limit_points is None else f"_{limit_points}"))
+            + ("" if limit_points is None else f"_{limit_points}") + ("" if squeeze == 0.3 else f"_to{squeeze:g}"))
     start = time.perf_counter()
     summary, code = run_case(case, work / name, MPI.COMM_WORLD, plot=False)
     seconds = time.perf_counter() - start
@@ -69,12 +74,12 @@ def run(poisson: float, friction: float, mesh: str, max_cuts: int | None, work: 
     parts = [entry["substep_translation"][2] for step in summary["steps"] if not step["converged"]
              for entry in step["history"] if entry.get("substep_status", "").startswith("converged")]
     travel = [-step["translation"][2] for step in converged] + [-z for z in parts]
-    squeeze = max(travel, default=0.0) / HALF_HEIGHT
+    reached = max(travel, default=0.0) / HALF_HEIGHT
     newton = [step["iterations"] for step in converged]
     relaxed = [step for step in summary["steps"] if any("relaxation" in entry for entry in step["history"])]
     return {"mesh": mesh, "poisson": poisson, "friction": friction, "max_cuts": max_cuts,
             "limit_points": limit_points, "exit": code, "status": summary["status"],
-            "failure": summary.get("failure"), "squeeze": squeeze, "newton_per_step": newton,
+            "failure": summary.get("failure"), "squeeze": reached, "newton_per_step": newton,
             "newton_total": sum(step["iterations"] for step in summary["steps"]),
             "relaxed_steps": [step["step"] for step in relaxed],
             "relaxation_steps": [max(entry["relaxation"] for entry in step["history"] if "relaxation" in entry)
@@ -109,12 +114,14 @@ def main() -> int:
     parser.add_argument("--formulation", default="displacement", help="[material] formulation of the strip")
     parser.add_argument("--limit-points", choices=("relax", "stop"), default=None,
                         help="[solver] limit_points (default: the solver's, relax)")
+    parser.add_argument("--squeeze", type=float, default=0.3,
+                        help="of the strip's height, in the case's steps of 1.5 %% (the case file's 30 %% in 20)")
     parser.add_argument("--work", default="/tmp/seal_squeeze", help="where the runs write their results")
     parser.add_argument("--table", default="seal_squeeze",
                         help="name of the table in benchmarks/results (no dot: .json and .md are appended)")
     args = parser.parse_args()
     work = pathlib.Path(args.work)
-    rows = [run(nu, mu, mesh, args.max_cuts, work, args.formulation, args.limit_points)
+    rows = [run(nu, mu, mesh, args.max_cuts, work, args.formulation, args.limit_points, args.squeeze)
             for mesh in args.meshes for nu in args.poisson for mu in args.friction]
     write_table(MPI.COMM_WORLD, HERE / "results" / args.table, {"case": str(CASE.relative_to(HERE.parent)),
                                                                 "formulation": args.formulation, "runs": rows},

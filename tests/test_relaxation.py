@@ -39,9 +39,9 @@ def seal(limit_points: str | None = None) -> dict:
 def test_the_seal_relaxes_past_its_limit_point(mpi_tmp_path):
     """Default settings: step 18 (25.5 % to 27 %) has no equilibrium near step 17's (the path ends at
     25.99 %, docs/finite_strain.md Sect. 11): its attempt stalls (``stall_iterations`` 20 of a
-    path that relaxes), and the strip relaxes there at once, uncut (measured 14 relaxation steps) to
+    path that relaxes), and the strip relaxes there at once, uncut (measured 11 relaxation steps) to
     an equilibrium,
-    and the path goes on to 30 % with 7 Newton steps per step as before the limit point. Every step
+    and the path goes on to 30 % with 4-5 Newton steps per step as before the limit point. Every step
     is in equilibrium (reactions = contact force to 1e-12 of it), the relaxation's last solve is a
     plain one, and the steps after it need no more Newton steps than the steps before the limit
     point."""
@@ -53,7 +53,7 @@ def test_the_seal_relaxes_past_its_limit_point(mpi_tmp_path):
     relaxed = [w for w in summary["warnings"] if w["key"] == "relaxed"]
     assert [w["numbers"]["step"] for w in relaxed] == [18]
     marks = [entry for entry in steps[17]["history"] if "relaxation" in entry]
-    assert 2 <= max(entry["relaxation"] for entry in marks) <= 20  # regression guard: measured 14
+    assert 2 <= max(entry["relaxation"] for entry in marks) <= 20  # regression guard: measured 11
     assert marks[-1]["viscosity"] == 0.0 and marks[-1]["substep_status"].startswith("converged")
     # the attempt that failed before the relaxation ended when it stalled, not after 100 Newton steps
     failed = {entry["substep"] for entry in steps[17]["history"]
