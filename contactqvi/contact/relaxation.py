@@ -20,9 +20,10 @@ is a strongly damped one; after each step that converges c_k is halved, after ea
 is multiplied by 4 (the switched evolution relaxation of pseudo-transient continuation, Kelley
 and Keyes, SIAM J. Numer. Anal. 35 (1998) 508). A step after one that converged starts from the
 extrapolation u_k + (u_k - u_{k-1}) of the flow, any other from u_k; a step that has not halved
-||y^|| in :data:`STALL` Newton steps is given up for a larger c (on the seal strips of
-docs/finite_strain.md Sect. 15 the two took 1 953 and 2 954 Newton steps to 1 820 and 2 435). Once a step changes the displacement by at most :data:`SETTLED` of the largest change
-of the relaxation, the step is solved again without the viscous term (c = 0) from there: its
+||y^|| in :data:`STALL` Newton steps is given up for a larger c (together, on the seal strips of
+docs/finite_strain.md Sect. 15: 1 953 -> 1 820 Newton steps on the 1.0 mm mesh, 2 954 -> 2 435 on
+the 0.5 mm one). Once a step changes the displacement by at most :data:`SETTLED` of the largest
+change of the relaxation, the step is solved again without the viscous term (c = 0) from there: its
 solution, an equilibrium of the quasi-static problem with the slip measured from the relaxed
 configuration, ends the load step; if that solve fails, the relaxation goes on until the change
 has fallen by another factor :data:`SETTLED`. The viscous forces do work on the relaxation path
