@@ -46,7 +46,8 @@ def make_parser(description: str, default_output: str, petsc_example: str | None
     )
     parser.add_argument("--output", default=default_output, help="directory for results")
     parser.add_argument(
-        "--log-level", default="INFO", choices=["DEBUG", "INFO", "WARNING", "ERROR"], help="progress output"
+        "--log-level", default="INFO", type=str.upper, choices=["DEBUG", "INFO", "WARNING", "ERROR"],
+        help="progress output (any case)"
     )
     return parser
 

@@ -78,3 +78,14 @@ def test_an_error_on_one_rank_propagates_without_abort():
     with pytest.raises(RuntimeError, match="this rank only"):
         abort_on_error(_fails, ranks)
     assert ranks.aborted is None and abort_on_error(lambda: 3, ranks) == 3
+
+
+@pytest.mark.one_rank(reason="argument parsing")
+def test_log_level_in_any_case():
+    """``--log-level info`` is ``INFO``; a level that is none names the choices."""
+    from contactqvi.cli import make_parser
+
+    parser = make_parser("demo", "results/demo")
+    assert parser.parse_args(["--log-level", "info"]).log_level == "INFO"
+    with pytest.raises(SystemExit):
+        parser.parse_args(["--log-level", "loud"])
