@@ -62,7 +62,7 @@ def _relaxation_end(result: SCDNewtonResult) -> str | None:
     tried = "it never slowed down to a tenth of its largest move"
     if plain:
         tried = f"{plain} solve{'s' * (plain > 1)} without the viscous term from where it slowed down failed"
-    return (f"the step failed with its cuts used up, and the body relaxed past the limit point for "
+    return (f"the step stalled (or failed with its cuts used up), and the body relaxed past the limit point for "
             f"{relaxed[-1]['relaxation']} steps without reaching an equilibrium: {tried} "
             "(docs/finite_strain.md, Sect. 15)")
 

@@ -113,8 +113,8 @@ PATH_PARAMETERS = Parameters(
                        "converged state, at most this many halvings in a row (the step grows back after each "
                        f"success); None: {HYPERELASTIC_CUTS} for a hyperelastic body, 0 for linear elasticity",
                        type=int, minimum=0, optional=True),
-    limit_points=Parameter(None, "a hyperelastic load step that fails with its cuts used up (the path's end at a "
-                           "limit point, where a part has to snap): 'relax' follows the body's overdamped motion at "
+    limit_points=Parameter(None, "a hyperelastic load step that stalls, or fails with its cuts used up (the path's "
+                           "end at a limit point, where a part has to snap): 'relax' follows the body's overdamped motion at "
                            "the step's loads to an equilibrium and goes on from there (docs/finite_strain.md Sect. "
                            "15), 'stop' ends the path; None: 'relax' for a hyperelastic body searched once or every "
                            "step, 'stop' otherwise", type=str, choices=LIMIT_POINTS, optional=True),
@@ -211,7 +211,7 @@ def _cuts_after(problem: ContactProblem, u: PETSc.Vec, state: PathState, index: 
 def _relaxed(problem: ContactProblem, index: int, step: LoadStep, u: PETSc.Vec, state: PathState,
              solve: _StepSolver, attempts: list) -> SCDNewtonResult:
     """The result of step ``index`` (``step``) after its ``attempts``: the last attempt's, unless it
-    failed with the step's cuts used up and ``solve`` relaxes (``limit_points``); then the step is
+    stalled or failed with the step's cuts used up and ``solve`` relaxes (``limit_points``); then the step is
     relaxed to an equilibrium after ``state`` (:func:`~contactqvi.contact.relaxation.relax`), its
     solves added to ``attempts`` and the equilibrium that ends it recorded in ``state``, and the
     result is the last solve's, ``diverged_max_it`` when the relaxation ended without one."""

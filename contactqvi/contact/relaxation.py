@@ -3,8 +3,8 @@
 A frictional quasi-static path can end at a limit point: beyond it no equilibrium lies near the
 last one, a part of the body has to snap, and neither a Newton globalisation nor smaller steps get
 past it (the seal strip of docs/finite_strain.md Sect. 11 ends at 25.99 % squeeze; a dynamic run of
-it snaps at 26.0 %). The physical path goes on through motion. Where a hyperelastic step has failed
-with its cuts used up, :func:`relax` follows the overdamped (gradient-flow) motion of the body
+it snaps at 26.0 %). The physical path goes on through motion. Where a hyperelastic step has stalled,
+or failed with its cuts used up, :func:`relax` follows the overdamped (gradient-flow) motion of the body
 instead, at the step's loads and obstacle positions: the implicit Euler steps
 
     0 in r(u_{k+1}) + c_k M (u_{k+1} - u_k) + Q(u_{k+1}),                                       (15.1)
