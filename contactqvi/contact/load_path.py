@@ -260,12 +260,12 @@ class _StepSolver(PETScOwner):
     def petsc_objects(self) -> list[typing.Any]:
         return [self.solver, self.carried, self.initial]
 
-    def __call__(self, step: LoadStep, u: PETSc.Vec, state: PathState, from_rest: bool, extrapolate: float = 0.0,
-                 stall_iterations: int | None = None) -> SCDNewtonResult:
+    def __call__(self, step: LoadStep, u: PETSc.Vec, state: PathState, from_rest: bool,
+                 extrapolate: float = 0.0) -> SCDNewtonResult:
         """Solve ``step`` after ``state``'s (the predictor of :func:`_start`; a problem searched
         each step searched first, and settled after); its solution in ``u``. ``extrapolate`` > 0:
         the predictor is the last solve's increment extrapolated by that factor (a relaxation step
-        after one that converged); ``stall_iterations``: this solve's own (a relaxation step's)."""
+        after one that converged)."""
         problem = self.problem
         if problem.searched_each_step and self.solver is not None:
             self.carried, self.solver = _released(self.solver), None
@@ -283,21 +283,13 @@ class _StepSolver(PETScOwner):
         if problem.follows_geometry:
             self.solver, result = _follow(problem, step, u, state, self.solver, self.stop)
             return result
-        window = self.solver.parameters["stall_iterations"]
-        if stall_iterations is not None:
-            self.solver.parameters["stall_iterations"] = stall_iterations
-        try:
-            result = self.solver.solve(u, atol=state.target, stop=self.stop, volume_start=_volume_start(state))
-            if (result.status == Status.DIVERGED_FUNCTION_DOMAIN and state.solved > 0
-                    and problem.hyperelastic is not None):
-                _carried(problem, u, state)
-                if _add_elastic_change(problem, u, state, pc, self.prefix) or extrapolated:
-                    logger.info("the predictor inverts elements: the step starts again from the last solution%s",
-                                "" if extrapolated else " and the tangent's response to the step's change there")
-                    result = self.solver.solve(u, atol=state.target, stop=self.stop,
-                                               volume_start=_volume_start(state))
-        finally:
-            self.solver.parameters["stall_iterations"] = window
+        result = self.solver.solve(u, atol=state.target, stop=self.stop, volume_start=_volume_start(state))
+        if result.status == Status.DIVERGED_FUNCTION_DOMAIN and state.solved > 0 and problem.hyperelastic is not None:
+            _carried(problem, u, state)
+            if _add_elastic_change(problem, u, state, pc, self.prefix) or extrapolated:
+                logger.info("the predictor inverts elements: the step starts again from the last solution%s",
+                            "" if extrapolated else " and the tangent's response to the step's change there")
+                result = self.solver.solve(u, atol=state.target, stop=self.stop, volume_start=_volume_start(state))
         self.solver, result = _settle(problem, step, u, state, self.solver, result, self.stop, self.path)
         return result
 
