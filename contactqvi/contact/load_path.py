@@ -114,9 +114,9 @@ PATH_PARAMETERS = Parameters(
                        f"success); None: {HYPERELASTIC_CUTS} for a hyperelastic body, 0 for linear elasticity",
                        type=int, minimum=0, optional=True),
     limit_points=Parameter(None, "a hyperelastic load step that stalls, or fails with its cuts used up (the path's "
-                           "end at a limit point, where a part has to snap): 'relax' follows the body's overdamped motion at "
-                           "the step's loads to an equilibrium and goes on from there (docs/finite_strain.md Sect. "
-                           "15), 'stop' ends the path; None: 'relax' for a hyperelastic body searched once or every "
+                           "end at a limit point, where a part has to snap): 'relax' follows the body's overdamped "
+                           "motion at the step's loads to an equilibrium and goes on from there "
+                           "(docs/finite_strain.md Sect. 15), 'stop' ends the path; None: 'relax' for a hyperelastic body searched once or every "
                            "step, 'stop' otherwise", type=str, choices=LIMIT_POINTS, optional=True),
 )
 #: A step whose displacement increment is below this fraction of the displacement has not

@@ -12,8 +12,8 @@ instead, at the step's loads and obstacle positions: the implicit Euler steps
 M = (E u, v) the mass matrix of a density equal to each body's Young's modulus (so that c M is in
 proportion to each body's stiffness, a steel base's as a rubber strip's; zero at the prescribed
 dofs), friction on the slip increment from u_k (each step a part of the load step at its full
-load, recorded in the path's state as a cut step's part is). This is the proximal-point iteration of the step's incremental problem
-(Rockafellar, SIAM J. Control Optim. 14 (1976) 877): for a large c_k each step is a small move that
+load, recorded in the path's state as a cut step's part is). This is the proximal-point iteration
+of the step's incremental problem (Rockafellar, SIAM J. Control Optim. 14 (1976) 877): for a large c_k each step is a small move that
 Newton's method follows, and its fixed points (u_{k+1} = u_k) are the equilibria of the step.
 c_0 is the ratio of the diagonals of the small-strain stiffness and of M, so that the first step
 is a strongly damped one; after each step that converges c_k is halved, after each that fails it
@@ -21,8 +21,8 @@ is multiplied by 4 (the switched evolution relaxation of pseudo-transient contin
 and Keyes, SIAM J. Numer. Anal. 35 (1998) 508). A step after one that converged starts from the
 extrapolation u_k + (u_k - u_{k-1}) of the flow, any other from u_k (docs/finite_strain.md
 Sect. 15: the seal strips on the 1.0 and 0.5 mm meshes took 1 898 and 2 865 Newton steps in all,
-1 953 and 2 954 from u_k). Once a step changes the displacement by at most :data:`SETTLED` of the largest
-change of the relaxation, the step is solved again without the viscous term (c = 0) from there: its
+1 953 and 2 954 from u_k). Once a step changes the displacement by at most :data:`SETTLED` of the
+largest change of the relaxation, the step is solved again without the viscous term (c = 0) from there: its
 solution, an equilibrium of the quasi-static problem with the slip measured from the relaxed
 configuration, ends the load step; if that solve fails, the relaxation goes on until the change
 has fallen by another factor :data:`SETTLED`. The viscous forces do work on the relaxation path
@@ -60,15 +60,21 @@ SETTLED = 0.1
 #: c_k after a converged relaxation step is c_{k-1} / GROWTH; after a failed one, c_{k-1} * 4.
 GROWTH = 2.0
 
-Solve = typing.Callable[..., SCDNewtonResult]
+
+
+class Solve(typing.Protocol):
+    """Solves a step after ``state`` into ``u`` (the load path's step solver), its predictor the
+    last solve's increment extrapolated by ``extrapolate`` where that is > 0."""
+
+    def __call__(self, step: LoadStep, u: PETSc.Vec, state: PathState, from_rest: bool,
+                 extrapolate: float = 0.0) -> SCDNewtonResult: ...
 
 
 def relax(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState,
           solve: Solve) -> list[tuple[LoadStep, SCDNewtonResult, dict[str, typing.Any]]]:
     """Relax ``problem`` (a hyperelastic body) at ``step`` from ``state`` (the last converged solve,
     advanced in place by each converged relaxation step) and solve the step there
-    (module docstring); ``solve(step, u, state, False, extrapolate=...)`` solves a step after
-    ``state`` into ``u`` (the load path's :class:`_StepSolver`).
+    (module docstring) by ``solve``.
     Returns each solve with its step and a mark (``relaxation``: the step k, ``viscosity``: c_k in
     1/m^2, 0 for the last, plain solve); the last one's solution is in ``u``, and ``state`` is not
     advanced by it. Collective."""
