@@ -13,8 +13,9 @@ M = (E u, v) the mass matrix of a density equal to each body's Young's modulus (
 proportion to each body's stiffness, a steel base's as a rubber strip's; zero at the prescribed
 dofs), friction on the slip increment from u_k (each step a part of the load step at its full
 load, recorded in the path's state as a cut step's part is). This is the proximal-point iteration
-of the step's incremental problem (Rockafellar, SIAM J. Control Optim. 14 (1976) 877): for a large c_k each step is a small move that
-Newton's method follows, and its fixed points (u_{k+1} = u_k) are the equilibria of the step.
+of the step's incremental problem (Rockafellar, SIAM J. Control Optim. 14 (1976) 877): for a large
+c_k each step is a small move that Newton's method follows, and its fixed points (u_{k+1} = u_k)
+are the equilibria of the step.
 c_0 is the ratio of the diagonals of the small-strain stiffness and of M, so that the first step
 is a strongly damped one; after each step that converges c_k is halved, after each that fails it
 is multiplied by 4 (the switched evolution relaxation of pseudo-transient continuation, Kelley
