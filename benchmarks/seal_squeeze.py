@@ -52,12 +52,13 @@ HALF_HEIGHT = 5e-3
 def run(poisson: float, friction: float, mesh: str, max_cuts: int | None, work: pathlib.Path,
         formulation: str = "displacement", limit_points: str | None = None, squeeze: float = 0.3) -> dict:
     """One run of the seal case (the strip's ``formulation``, docs/nearly_incompressible.md; ``[solver]``
-    ``max_cuts`` and ``limit_points`` if given) to ``squeeze`` of the strip's height in steps of the
-    case's (1.5 %); its row of the table."""
+    ``max_cuts`` and ``limit_points`` if given) to ``squeeze`` of the strip's height: the case's steps,
+    cut short or continued by its first (1.5 %); its row of the table."""
     data = tomllib.loads(CASE.read_text())
     stride = data["steps"][0]["translation"][2]
-    data["steps"] = [{"translation": [0.0, 0.0, k * stride]}
-                     for k in range(1, round(squeeze * HALF_HEIGHT / -stride) + 1)]
+    count = round(squeeze * HALF_HEIGHT / -stride)
+    data["steps"] = data["steps"][:count] + [{"translation": [0.0, 0.0, k * stride]}
+                                             for k in range(len(data["steps"]) + 1, count + 1)]
     data["material"]["formulation"] = formulation
     data["mesh"]["file"] = MESHES[mesh]
     data["material"]["poisson"] = poisson

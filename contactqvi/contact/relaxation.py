@@ -21,7 +21,7 @@ is a strongly damped one; after each step that converges c_k is halved, after ea
 is multiplied by 4 (the switched evolution relaxation of pseudo-transient continuation, Kelley
 and Keyes, SIAM J. Numer. Anal. 35 (1998) 508). A step after one that converged starts from the
 extrapolation u_k + (u_k - u_{k-1}) of the flow, any other from u_k (docs/finite_strain.md
-Sect. 15: the seal strips on the 1.0 and 0.5 mm meshes took 1 898 and 2 865 Newton steps in all,
+Sect. 15: the seal strips on the 1.0 and 0.5 mm meshes took 1 898 and 2 570 Newton steps in all,
 1 953 and 2 954 from u_k). Once a step changes the displacement by at most :data:`SETTLED` of the
 largest change of the relaxation, the step is solved again without the viscous term (c = 0) from there: its
 solution, an equilibrium of the quasi-static problem with the slip measured from the relaxed
