@@ -49,6 +49,7 @@ from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult
 from contactqvi.elasticity import cellwise
 from contactqvi.lifetime import unwind_together
 from contactqvi.linalg import default_options
+from contactqvi.load_steps import LoadStep, at_time
 from contactqvi.paraview import MeshPiece, VTXDatasetWriter
 from contactqvi.parameters import Parameter, ParameterError, Parameters
 from contactqvi.records import Recorder, warn
@@ -151,7 +152,7 @@ def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: B
                 tables.write_summary(problem.comm, out / "summary.json", summary)
                 return EXIT_CODES["not converged"]
             state.done += 1
-            summary["steps"].append(_entry(problem, state, projection, result, motion)
+            summary["steps"].append(_entry(problem, state, projection, result, motion, integrator.path)
                                     | ({"parts": parts} if len(parts) > 1 else {}))
             if problem.searched_each_step:  # the next step's contact, and the checkpoint's variables
                 integrator.search(state)
@@ -203,15 +204,16 @@ def _advance(problem: ContactProblem, integrator: StabilisedNewmark, state: Dyna
 
 
 def _entry(problem: ContactProblem, state: DynamicState, projection: SCDNewtonResult, result: SCDNewtonResult,
-           motion: BodyMotion) -> dict[str, typing.Any]:
-    """The summary entry of the time step just recorded in ``state``. The contact force is the
+           motion: BodyMotion, path: typing.Sequence[LoadStep]) -> dict[str, typing.Any]:
+    """The summary entry of the time step just recorded in ``state``, with the load factor and the
+    obstacles' motion of the time points ``path`` at its time. The contact force is the
     step's mean (:attr:`~contactqvi.contact.dynamics.DynamicState.contact_forces`; half the
     multiplier of the step's GE for Newmark's rule, docs/dynamics.md Sect. 3)."""
     mean = dataclasses.replace(result, normal_force=state.contact_forces[0], friction_force=state.contact_forces[1])
     logger.info("time step %d, t = %.6g s: %d + %d Newton steps; kinetic %.6g J, elastic %.6g J, balance error "
                 "%.3g J", state.done, state.time, projection.iterations, result.iterations,
                 state.energy["kinetic"], state.energy["elastic"], state.energy["balance_error"])
-    return {"step": state.done, "time": state.time, **result.summary(),
+    return {"step": state.done, "time": state.time, **at_time(path, state.time).summary(), **result.summary(),
             "predictor": {"iterations": projection.iterations, "inner_iterations": projection.inner_iterations},
             "energy": dict(state.energy), "body_velocity": motion.velocities(state.velocity),
             "body_displacement": motion.velocities(state.displacement),

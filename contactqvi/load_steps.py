@@ -93,6 +93,14 @@ class LoadStep:
         """``fit``, 1 when not given."""
         return 1.0 if self.fit is None else self.fit
 
+    def summary(self) -> dict[str, typing.Any]:
+        """The load factor, translation and rotation (if any) as a step of ``summary.json`` records
+        them (a time step at its time: the obstacles' place drawn in ParaView's views over time)."""
+        entry = {"load": self.load, "translation": list(self.translation)}
+        if self.rotation is not None:
+            entry["rotation"] = dataclasses.asdict(self.rotation)
+        return entry
+
 
 def at_time(steps: typing.Sequence[LoadStep], time: float) -> LoadStep:
     """The load factor, translation and rotation at ``time`` (s) of the time points ``steps``

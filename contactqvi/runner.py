@@ -17,7 +17,6 @@ up to the last converged step stays readable if a later step fails.
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import logging
 import math
 import pathlib
@@ -288,10 +287,8 @@ class _StepRecorder:
         """Write step ``index``'s results (if it converged), the summary, and the path's
         ``state`` as a checkpoint (if it converged); an :class:`OutputError` if the output
         cannot be written."""
-        entry = {"step": index + 1, "load": step.load, "translation": list(step.translation),
-                 **({} if step.fit is None else {"fit": step.fit}), **result.summary()}
-        if step.rotation is not None:
-            entry["rotation"] = dataclasses.asdict(step.rotation)
+        entry = {"step": index + 1, **step.summary(), **({} if step.fit is None else {"fit": step.fit}),
+                 **result.summary()}
         if index == 0 or self.problem.searched_each_step:  # the search this step's problem comes from
             entry.update(p=self.problem.n_contact, search_seconds=dict(self.problem.setup_seconds))
         if not result.converged:

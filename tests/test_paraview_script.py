@@ -84,9 +84,9 @@ def test_step_and_obstacle_from_the_summary(pv_views, mpi_tmp_path):
         (mpi_tmp_path / "summary.json").write_text(json.dumps({"case": {"obstacle": plane}, "steps": steps}))
     comm.Barrier()
     last, first = pv_views.describe(mpi_tmp_path, -1), pv_views.describe(mpi_tmp_path, 1)
-    assert last["obstacle"] == plane and last["translation"] == steps[2]["translation"]
+    assert last["obstacle"] == plane and last["step"]["translation"] == steps[2]["translation"]
     assert "step 3 of 3" in last["label"]
-    assert first["translation"] == steps[0]["translation"] and "step 1 of 3" in first["label"]
+    assert first["step"]["translation"] == steps[0]["translation"] and "step 1 of 3" in first["label"]
     assert pv_views.describe(mpi_tmp_path / "nothing", -1)["obstacle"] is None  # the paper demo: no obstacle
 
 
@@ -220,19 +220,66 @@ def test_a_dynamic_result_is_told_by_its_summary(pv_views):
 
 
 @pytest.mark.one_rank(reason="piecewise-linear interpolation, serial arithmetic")
-def test_the_obstacles_move_in_the_frames_as_in_the_run(pv_views):
-    """The obstacles' translation at a frame's time is contactqvi.load_steps.at_time's."""
-    from contactqvi.load_steps import LoadStep, at_time
+def _zxy(angles):
+    """R_z R_x R_y of ParaView's ``Transform.Rotate`` (degrees about x, y, z; checked against
+    pvbatch: a point of a PointSource under Translate = (1, 2, 3), Rotate = (20, 35, 50))."""
+    a, b, c = np.radians(angles)
+    Rx = np.array([[1.0, 0.0, 0.0], [0.0, np.cos(a), -np.sin(a)], [0.0, np.sin(a), np.cos(a)]])
+    Ry = np.array([[np.cos(b), 0.0, np.sin(b)], [0.0, 1.0, 0.0], [-np.sin(b), 0.0, np.cos(b)]])
+    Rz = np.array([[np.cos(c), -np.sin(c), 0.0], [np.sin(c), np.cos(c), 0.0], [0.0, 0.0, 1.0]])
+    return Rz @ Rx @ Ry
 
+
+@pytest.mark.one_rank(reason="3 x 3 matrices")
+@pytest.mark.parametrize("axis, angle", [((0.0, 1.0, 0.0), 10.0), ((1.0, -2.0, 0.5), 73.0), ((1.0, 0.0, 0.0), 90.0),
+                                         ((0.0, 0.0, 1.0), -135.0), ((0.3, 0.4, -0.2), 0.0)])
+def test_the_obstacles_are_drawn_where_the_step_has_them(pv_views, axis, angle):
+    """ParaView's Transform of a step's obstacle motion (translation t, rotation Q about c) maps every
+    point X to Q (X - c) + c + t (contactqvi.load_steps.Rotation's Q), also where the x angle is
+    90 degrees (gimbal lock); magnified, the angle and t scale alike; a step without a motion
+    stays in place."""
+    from contactqvi.load_steps import Rotation
+
+    import pv_body
+
+    centre, t = (0.2, -0.1, 0.05), (0.01, 0.02, -0.3)
+    X = np.random.default_rng(3).standard_normal((6, 3))
+    for scale in (1.0, 20.0):
+        step = {"translation": list(t), "rotation": {"axis": list(axis), "angle": angle, "centre": list(centre)}}
+        translate, rotate = pv_body.obstacle_transform(step, scale)
+        Q = Rotation(axis, scale * angle, centre).matrix()
+        expected = (X - centre) @ Q.T + centre + scale * np.asarray(t)
+        assert X @ _zxy(rotate).T + translate == pytest.approx(expected, abs=1e-12)
+    assert pv_body.obstacle_transform({"translation": [0.0, 0.0, -0.1]}, 2.0) == ([0.0, 0.0, -0.2], [0.0, 0.0, 0.0])
+    assert pv_body.obstacle_transform({}) == ([0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+
+
+def test_the_state_file_moves_the_obstacles_with_the_time(pv_views, monkeypatch):
+    """The animation cue of ``paraview_time.pvsm`` puts each obstacle's Transform where the written
+    step at or before the animation's time has it (here with a stand-in for paraview.simple)."""
+    import sys
+    import types
+
+    import pv_body
     import pv_time
 
-    for steps in ([LoadStep(0.5, (0.0, 0.1, 0.0), time=0.2), LoadStep(1.0, (0.3, 0.1, -0.2), time=0.5)],
-                  [LoadStep(1.0, (0.0, 0.0, 0.0), time=0.0), LoadStep(1.0, (1.0, 0.0, 0.0), time=1.0)],
-                  [LoadStep(1.0, (0.0, 0.0, -0.01))]):  # fmt: skip
-        case = {"steps": [{"load": s.load, "translation": list(s.translation), "time": s.time} for s in steps]}
-        for time in (0.0, 0.1, 0.2, 0.35, 0.5, 0.9, 2.0):
-            expected = at_time(steps, time).translation
-            assert pv_time.obstacle_translation(case, time) == pytest.approx(expected, abs=1e-15)
+    steps = [{"translation": [0.1 * k, 0.0, 0.0], "rotation": {"axis": [0, 0, 1], "angle": 5.0 * k, "centre": [0, 0, 0]}}
+             for k in range(4)]
+    times = [0.0, 0.1, 0.2, 0.3]
+    transforms = {name: types.SimpleNamespace(Transform=types.SimpleNamespace()) for name in ("obstacle 1", "obstacle 2")}
+    scene = types.SimpleNamespace(AnimationTime=0.0)
+    simple = types.SimpleNamespace(FindSource=transforms.__getitem__, GetAnimationScene=lambda: scene)
+    monkeypatch.setitem(sys.modules, "paraview", types.SimpleNamespace(simple=simple))
+    monkeypatch.setitem(sys.modules, "paraview.simple", simple)
+    cue = {}
+    exec(pv_time.obstacle_cue_script(steps, times, 2.0, 2), cue)
+    for time, index in ((0.0, 0), (0.15, 1), (0.2, 2), (0.29, 2), (1.0, 3)):
+        scene.AnimationTime = time
+        cue["tick"](None)
+        translate, rotate = pv_body.obstacle_transform(steps[index], 2.0)
+        for obstacle in transforms.values():
+            assert obstacle.Transform.Translate == pytest.approx(translate, abs=1e-15)
+            assert obstacle.Transform.Rotate == pytest.approx(rotate, abs=1e-12)
 
 
 @pytest.mark.one_rank(reason="colour ranges of numpy arrays, serial arithmetic")
@@ -288,7 +335,8 @@ def test_paraview_renders_the_drop_test_over_time(pv_views, shipped_runs, mpi_tm
     frames = sorted((mpi_tmp_path / "images").glob("paraview_time_*.png"))
     assert [frame.name for frame in frames] == [pv_time.FRAME_NAME.format(k) for k in (1, 2, 3, 4)]
     assert all(frame.read_bytes()[16:24] == bytes([0, 0, 6, 64, 0, 0, 3, 132]) for frame in frames)  # 1600 x 900
-    assert str(result / "body.bp") in (result / pv_time.STATE).read_text()
+    state = (result / pv_time.STATE).read_text()
+    assert str(result / "body.bp") in state and "TRANSFORMS = " in state  # the obstacles' cue
     (result / pv_common.SUMMARY).unlink()
     run = subprocess.run(["bash", str(SCRIPT.parent / "run.sh"), str(result), str(mpi_tmp_path / "images"), "--time"],
                          capture_output=True, text=True, timeout=300)  # fmt: skip

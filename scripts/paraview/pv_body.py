@@ -32,15 +32,58 @@ def obstacle_source(obstacle, centre, extent):
                         Point2=list(corner + 1.4 * extent * e2))  # fmt: skip
 
 
+#: The name of the k-th obstacle's Transform filter (k = 1, 2, ...) in the pipeline and in a saved state.
+OBSTACLE_NAME = "obstacle {}"
+
+
+def rotation_matrix(axis, angle):
+    """The rotation by ``angle`` degrees about ``axis`` (Rodrigues' formula, as contactqvi's Rotation)."""
+    a = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    K = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+    theta = math.radians(angle)
+    return np.eye(3) + math.sin(theta) * K + (1.0 - math.cos(theta)) * K @ K
+
+
+def euler_zxy(Q):
+    """Angles (degrees about x, y, z) with Q = R_z R_x R_y: ParaView's ``Transform.Rotate``
+    (vtkTransform's orientation order); y taken as 0 where x is +-90 degrees (gimbal lock)."""
+    x = math.asin(max(-1.0, min(1.0, Q[2, 1])))
+    if abs(math.cos(x)) < 1e-9:
+        return [math.degrees(x), 0.0, math.degrees(math.atan2(Q[1, 0], Q[0, 0]))]
+    return [math.degrees(x), math.degrees(math.atan2(-Q[2, 0], Q[2, 2])), math.degrees(math.atan2(-Q[0, 1], Q[1, 1]))]
+
+
+def obstacle_transform(step, scale=1.0):
+    """ParaView's ``Transform`` (``Translate``, ``Rotate``: x' = t + R_z R_x R_y x) that takes the rigid
+    obstacles from their initial place to theirs at the summary's ``step`` (its ``translation`` t
+    and ``rotation`` Q about the centre c: x = Q (X - c) + c + t; none when it has neither), the
+    motion magnified by ``scale`` as the body's displacement is drawn (t and the angle times it)."""
+    translation = scale * np.asarray(step.get("translation") or (0.0, 0.0, 0.0), dtype=float)
+    rotation = step.get("rotation")
+    if not rotation:
+        return [float(t) for t in translation], [0.0, 0.0, 0.0]
+    Q, centre = rotation_matrix(rotation["axis"], scale * rotation["angle"]), np.asarray(rotation["centre"], float)
+    return [float(t) for t in centre - Q @ centre + translation], euler_zxy(Q)
+
+
+def move_obstacles(moved, step, scale=1.0):
+    """Put the obstacles' Transform filters ``moved`` where the summary's ``step`` has them
+    (:func:`obstacle_transform`)."""
+    translate, rotate = obstacle_transform(step, scale)
+    for obstacle in moved:
+        obstacle.Transform.Translate, obstacle.Transform.Rotate = translate, rotate
+
+
 def show_obstacles(view, obstacles, centre, extent, when):
     """The rigid ``obstacles`` (brown, half transparent) about the body's ``centre``: the Transform
-    filters that move them (set ``Transform.Translate``) and a caption line for each, ``when``
-    saying at which time they are drawn."""
+    filters that move them (:func:`move_obstacles`; named :data:`OBSTACLE_NAME`) and a caption line
+    for each, ``when`` saying at which time they are drawn."""
     from paraview import simple
 
     moved, captions = [], []
-    for obstacle in obstacles:
+    for k, obstacle in enumerate(obstacles, 1):
         moved.append(simple.Transform(Input=obstacle_source(obstacle, centre, extent)))
+        simple.RenameSource(OBSTACLE_NAME.format(k), moved[-1])
         moved[-1].Transform = "Transform"
         shape = simple.Show(moved[-1], view)
         shape.DiffuseColor = shape.AmbientColor = [0.55, 0.45, 0.35]
@@ -131,8 +174,7 @@ def deformed_view(result, path):
     lut.RescaleTransferFunction(0.0, float(shown.max()) or 1.0)
     colour_bar(view, lut, f"{label} ({unit})", shown.max(), position=(0.85, 0.2))
     moved, captions = show_obstacles(view, case.get("obstacles") or [], centre, extent, "at this step")
-    for obstacle in moved:
-        obstacle.Transform.Translate = list(scale * np.asarray(case.get("translation") or [0.0, 0.0, 0.0], float))
+    move_obstacles(moved, case["step"], scale)
     captions.insert(0, f"{drawn} (largest displacement {u_max * 1e3:.3g} mm); {what}; grey box: undeformed")
     oblique_camera(view, centre, extent)
     add_title(view, f"Deformed body ({case['label']})", "\n".join(captions))

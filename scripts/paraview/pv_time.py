@@ -9,14 +9,14 @@ s) and ``summary.json`` it writes
   in the deformed view: :func:`pv_body.drawing_scale`), coloured by the velocity magnitude, one
   range in every frame so that frames compare (from 0 to the run's largest speed, or to a
   robust top when a few nodes ring far faster, :func:`speed_top`; those red), with velocity
-  arrows and the rigid obstacles at the frame's time (translated, not rotated); at the times
+  arrows and the rigid obstacles where the step of the frame has them; at the times
   :func:`chosen_frames` picks from the steps' contact force (before contact, first contact,
   peak contact force, separation, end), each with its time in the title;
 * ``RESULT_DIR/paraview_time.pvsm``: the same pipeline on ``body.bp`` with the time shown, for
-  ParaView's GUI: ``paraview --state=RESULT_DIR/paraview_time.pvsm``, then Play. A moving
-  obstacle stays at its place of the first time there (the PNGs move it).
+  ParaView's GUI: ``paraview --state=RESULT_DIR/paraview_time.pvsm``, then Play. A Python
+  animation cue in it (:func:`obstacle_cue_script`) moves the obstacles with the time.
 
-The pure-Python parts (the choice of frames, the time unit, the obstacles' translation) load
+The pure-Python parts (the choice of frames, the time unit, the obstacles' cue) load
 without ParaView (``tests/test_paraview_script.py``).
 """
 
@@ -27,7 +27,7 @@ import os
 
 import numpy as np
 
-from pv_body import drawing_scale, oblique_camera, show_body, show_obstacles
+from pv_body import OBSTACLE_NAME, drawing_scale, move_obstacles, oblique_camera, obstacle_transform, show_body, show_obstacles
 from pv_common import (
     FIELDS,
     SOURCES,
@@ -120,18 +120,28 @@ def time_unit(end):
     return next(((name, factor) for name, factor in TIME_UNITS if end * factor >= 1.0), TIME_UNITS[-1])
 
 
-def obstacle_translation(case, time):
-    """The obstacles' translation at ``time`` (s) from the summary's ``case``, as
-    contactqvi.load_steps.at_time gives it: linear between the ``steps``' time points, from no
-    translation at t = 0 unless a point is at 0, held after the last; steps without times hold theirs."""
-    steps = case.get("steps") or [{}]
-    if steps[0].get("time") is None:
-        return [float(x) for x in steps[0].get("translation") or (0.0, 0.0, 0.0)]
-    times = np.array([step["time"] for step in steps], dtype=float)
-    values = np.array([step.get("translation") or (0.0, 0.0, 0.0) for step in steps], dtype=float)
-    if times[0] > 0.0:
-        times, values = np.concatenate([[0.0], times]), np.vstack([np.zeros(3), values])
-    return [float(np.interp(time, times, column)) for column in values.T]
+def obstacle_cue_script(steps, times, scale, count):
+    """The script of the state file's Python animation cue that moves the ``count`` obstacles'
+    Transform filters (:data:`pv_body.OBSTACLE_NAME`) with the animation's time: at time t, where
+    the written step of ``steps`` at the last of ``times`` (s) not after t has them
+    (:func:`pv_body.obstacle_transform`, the motion magnified by ``scale``)."""
+    transforms = [obstacle_transform(step, scale) for step in steps]
+    names = [OBSTACLE_NAME.format(k) for k in range(1, count + 1)]
+    return f"""import bisect
+from paraview import simple
+TIMES = {[float(t) for t in times]!r}
+TRANSFORMS = {transforms!r}
+NAMES = {names!r}
+def start_cue(self):
+    tick(self)
+def tick(self):
+    index = max(bisect.bisect_right(TIMES, simple.GetAnimationScene().AnimationTime) - 1, 0)
+    for name in NAMES:
+        transform = simple.FindSource(name).Transform
+        transform.Translate, transform.Rotate = TRANSFORMS[index]
+def end_cue(self):
+    pass
+"""
 
 
 def speed_top(speeds):
@@ -228,8 +238,7 @@ def time_views(result_dir, out, summary):
 
     def show_time(index):
         scene.AnimationTime = times[index]
-        for obstacle in moved:
-            obstacle.Transform.Translate = list(run["scale"] * np.asarray(obstacle_translation(case, times[index])))
+        move_obstacles(moved, steps[index], run["scale"])
 
     for stale in glob.glob(os.path.join(out, FRAME_NAME.replace("{:02d}", "[0-9][0-9]"))):
         os.remove(stale)  # the frames of an earlier run
@@ -244,6 +253,10 @@ def time_views(result_dir, out, summary):
     title.Text, caption.Text = name, "\n".join(captions)
     clock = simple.AnnotateTimeFilter(Input=reader, Format=f"t = {{time:.4g}} {time_name}", Scale=factor)
     show_text(view, clock, "Upper Left Corner")
+    if moved:
+        cue = simple.PythonAnimationCue()
+        cue.Script = obstacle_cue_script(steps, times, run["scale"], len(moved))
+        scene.Cues.append(cue)
     state = os.path.join(result_dir, STATE)
     simple.SaveState(state)
     print(f"pv_views: wrote {state} (paraview --state={state}, then Play)")

@@ -66,8 +66,9 @@ VIEWS = {
 
 
 def describe(result_dir, step):
-    """From ``summary.json``: a label, the obstacles (if the result has any) and their translation
-    at ``step``, whether a body is hyperelastic and the contact pressure's name (:func:`pressure_name`)."""
+    """From ``summary.json``: a label, the obstacles (if the result has any), the entry of ``step``
+    (where the obstacles are then, :func:`pv_body.obstacle_transform`), whether a body is hyperelastic
+    and the contact pressure's name (:func:`pressure_name`)."""
     summary = read_summary(result_dir)
     p, case, steps = summary.get("parameters", {}), summary.get("case", {}), summary.get("steps", [])
     label = os.path.basename(os.path.normpath(result_dir))
@@ -79,7 +80,7 @@ def describe(result_dir, step):
     if steps:
         label += f", step {entry.get('step', '?')} of {len(steps)}"
     return {"label": label, "obstacle": case.get("obstacle"), "obstacles": obstacles_of(case),
-            "translation": entry.get("translation"), "finite_strain": finite_strain(case),
+            "step": entry, "finite_strain": finite_strain(case),
             "pressure": pressure_name(case)}
 
 
