@@ -263,10 +263,10 @@ def test_the_state_file_moves_the_obstacles_with_the_time(pv_views, monkeypatch)
     import pv_body
     import pv_time
 
-    steps = [{"translation": [0.1 * k, 0.0, 0.0], "rotation": {"axis": [0, 0, 1], "angle": 5.0 * k, "centre": [0, 0, 0]}}
-             for k in range(4)]
+    turn = {"axis": [0, 0, 1], "centre": [0, 0, 0]}
+    steps = [{"translation": [0.1 * k, 0.0, 0.0], "rotation": {**turn, "angle": 5.0 * k}} for k in range(4)]
     times = [0.0, 0.1, 0.2, 0.3]
-    transforms = {name: types.SimpleNamespace(Transform=types.SimpleNamespace()) for name in ("obstacle 1", "obstacle 2")}
+    transforms = {f"obstacle {k}": types.SimpleNamespace(Transform=types.SimpleNamespace()) for k in (1, 2)}
     scene = types.SimpleNamespace(AnimationTime=0.0)
     simple = types.SimpleNamespace(FindSource=transforms.__getitem__, GetAnimationScene=lambda: scene)
     monkeypatch.setitem(sys.modules, "paraview", types.SimpleNamespace(simple=simple))

@@ -633,7 +633,7 @@ def _follow(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathSt
                     len(solves))
         problem.physical_displacement(u, reached)
         solver = _search_reached(problem, step, u, state, reached, solver, start=False)
-        result = solver.solve(u, atol=target, stop=stop, search=moved)
+        result = solver.solve(u, atol=target, stop=stop, search=moved, forcing=result.forcing)
         solves.append(result)
     return solver, _merged(solves, result.status)
 

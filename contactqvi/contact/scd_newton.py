@@ -56,6 +56,7 @@ from contactqvi.result import Result, Status
 __all__ = [
     "GRADED_RANGE",
     "PARAMETERS",
+    "Forcing",
     "GraphPoint",
     "SCDNewtonResult",
     "SCDNewtonSolver",
@@ -193,6 +194,19 @@ class SCDNewtonResult(Result):
     states: np.ndarray
     normal_force: np.ndarray
     friction_force: np.ndarray
+    forcing: Forcing | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class Forcing:
+    """Where the Krylov tolerance of :meth:`SCDNewtonSolver.forcing_term` stood when a solve ended for
+    a new search (``search_again``), for the solve that goes on from the same iterate on the new
+    facet pairs (:meth:`SCDNewtonSolver.solve`'s ``forcing``): the last step's ||y^(k-1)||, whether
+    that step was a full one that left every kind unchanged, and the kinds at the last iterate."""
+
+    previous_norm: float
+    settled: bool
+    kinds: np.ndarray
 
 
 @dataclasses.dataclass(eq=False)
@@ -695,7 +709,7 @@ class SCDNewtonSolver(PETScOwner):
 
     def solve(self, u: PETSc.Vec, atol: float = 0.0, stop: typing.Callable[[], bool] | None = None,
               search: typing.Callable[[PETSc.Vec], bool] | None = None,
-              volume_start: fem.Function | None = None) -> SCDNewtonResult:
+              volume_start: fem.Function | None = None, forcing: Forcing | None = None) -> SCDNewtonResult:
         """Run Algorithm 1 from the initial guess ``u`` (shifted displacements), in place.
 
         Stops at ||y^|| <= max(rtol ||y^(0)||, floor ||l||, atol) (:meth:`stopping_target`),
@@ -710,12 +724,14 @@ class SCDNewtonSolver(PETScOwner):
         :mod:`contactqvi.contact.current_geometry`); then the solve ends with status ``search_again``.
         With the mixed method (``mixed``) the nodal volume ratios start at those of the displacement
         ``volume_start`` (global components: a load path's last converged step), or at u's.
+        ``forcing``: the :class:`Forcing` of a solve that ended for a search at the iterate ``u``; its
+        Krylov tolerance goes on from there (:meth:`forcing_term`) instead of starting at ``tol``.
         """
         self._carried = self._carried_volume()
         try:
             if self._carried is not None:
                 self._carried.carry(True, volume_start)
-            return self._algorithm_1(u, atol, stop, search)
+            return self._algorithm_1(u, atol, stop, search, forcing)
         finally:
             if self._carried is not None:
                 self._carried.carry(False)
@@ -723,7 +739,7 @@ class SCDNewtonSolver(PETScOwner):
             self._newton.restore()
 
     def _algorithm_1(self, u: PETSc.Vec, atol: float, stop: typing.Callable[[], bool] | None,
-                     search: typing.Callable[[PETSc.Vec], bool] | None) -> SCDNewtonResult:
+                     search: typing.Callable[[PETSc.Vec], bool] | None, forcing: Forcing | None) -> SCDNewtonResult:
         """Algorithm 1 of Sect. 4 (the loop of :meth:`solve`), A's storage left holding J."""
         comm, w = self.problem.comm, self._work
         result = SCDNewtonResult(status=Status.DIVERGED_MAX_IT, iterations=0, gamma=0.0, target=0.0,
@@ -737,6 +753,8 @@ class SCDNewtonSolver(PETScOwner):
         own_target = self.stopping_target(norm0, comm.allreduce(float(np.abs(contact).max(initial=0.0)), op=MPI.MAX))
         result.target = max(own_target, atol)
         v_previous = kinds_previous = previous_norm = alpha = None  # of the previous iteration
+        if forcing is not None:  # the solve before the search: its last step is this one's previous
+            previous_norm = forcing.previous_norm
         for k in range(self.parameters["max_iterations"] + 1):
             v_forward_backward = point.v
             normal, tangential, moved = self.classify(point, v_previous)
@@ -748,15 +766,20 @@ class SCDNewtonSolver(PETScOwner):
             status = self._stopping_status(point.norm, norm0, result.target, k, stop, result.history)
             if status is None and k > 0 and search is not None and search(u):
                 status = Status.SEARCH_AGAIN
+            kinds = np.concatenate([normal, tangential])
             if status is not None:
                 result.status = status
+                if status == Status.SEARCH_AGAIN:
+                    result.forcing = Forcing(previous_norm, alpha == 1.0 and _same(comm, kinds, kinds_previous), kinds)
                 _log_iteration(entry)
                 break
             with result.timings.phase("newton_matrix"):
                 self.linearise(u, k)
                 J = self.newton_system(*self.generalized_derivative(point, normal, tangential), u)
-            kinds = np.concatenate([normal, tangential])
-            settled = alpha == 1.0 and comm.allreduce(np.array_equal(kinds, kinds_previous), op=MPI.LAND)
+            if k == 0 and forcing is not None:  # the same iterate on new facet pairs
+                settled = forcing.settled and _same(comm, kinds, forcing.kinds)
+            else:
+                settled = alpha == 1.0 and _same(comm, kinds, kinds_previous)
             entry["tol"] = self.forcing_term(point.norm, previous_norm, settled, own_target)
             kinds_previous, previous_norm = kinds, point.norm
             with result.timings.phase("linear_solve"):
@@ -780,6 +803,11 @@ class SCDNewtonSolver(PETScOwner):
         result.iterations = len(result.history) - 1
         result.normal_force, result.friction_force = -point.z[:, 2].copy(), -point.z[:, :2].copy()
         return result
+
+
+def _same(comm: MPI.Comm, kinds: np.ndarray, other: np.ndarray | None) -> bool:
+    """Whether the contact nodes' ``kinds`` equal ``other`` on every rank (collective)."""
+    return comm.allreduce(np.array_equal(kinds, other), op=MPI.LAND)
 
 
 def checked_parameters(problem: ContactProblem, parameters: dict | None) -> dict:

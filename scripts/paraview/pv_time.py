@@ -27,7 +27,15 @@ import os
 
 import numpy as np
 
-from pv_body import OBSTACLE_NAME, drawing_scale, move_obstacles, oblique_camera, obstacle_transform, show_body, show_obstacles
+from pv_body import (
+    OBSTACLE_NAME,
+    drawing_scale,
+    move_obstacles,
+    oblique_camera,
+    obstacle_transform,
+    show_body,
+    show_obstacles,
+)
 from pv_common import (
     FIELDS,
     SOURCES,
