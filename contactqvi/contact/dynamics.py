@@ -48,7 +48,7 @@ from dolfinx import fem
 
 from contactqvi.contact.hyperelastic import HyperelasticSystem
 from contactqvi.contact.problem import ContactProblem
-from contactqvi.contact.scd_newton import SCDNewtonResult, SCDNewtonSolver
+from contactqvi.contact.scd_newton import HYPERELASTIC_TOL, SCDNewtonResult, SCDNewtonSolver
 from contactqvi.time_scheme import TimeScheme
 from contactqvi.elasticity import displacement_degree, lame_parameters
 from contactqvi.laws import Frictionless
@@ -58,7 +58,7 @@ from contactqvi.load_steps import LoadStep, at_time
 from contactqvi.parameters import require
 from contactqvi.postprocess import internal_force_form, load_form
 
-__all__ = ["ENERGY_TERMS", "MASS_RTOL", "BodyMotion", "DynamicState", "InertialSystem", "PhysicalEnergy",
+__all__ = ["ENERGY_TERMS", "MASS_RTOL", "STEP_TOL", "BodyMotion", "DynamicState", "InertialSystem", "PhysicalEnergy",
            "StabilisedNewmark", "global_components", "global_mass_matrix", "mass_matrix"]
 
 logger = logging.getLogger(__name__)
@@ -66,6 +66,15 @@ logger = logging.getLogger(__name__)
 #: Relative tolerance of the mass solves M â = m of the schemes that carry â (CG, Jacobi: the
 #: consistent mass is spectrally equivalent to its diagonal, some 20 iterations).
 MASS_RTOL = 1e-12
+#: ``tol`` of a frictional time step's Newton steps and of its projection's (3.2) unless ``[solver]
+#: tol`` is given: a hyperelastic step's, for a linear body too. In A_eff = K + c M a body's motion
+#: along the contact surface is held by the mass term alone, and Krylov solves to the load path's 0.1
+#: left it far off while friction decides between stick and slip (a block carried by a moving belt,
+#: GAMG: 30-39 Newton steps per sticking step, 249 in all; to 1e-3: 118; exact solves: 75; the shipped
+#: sliding_block 181 -> 114 Newton steps, its solver 0.13 -> 0.09 s). Without friction the load path's
+#: tolerance stays: the drop test on benchmarks/dynamics_cost.py's medium mesh took 7.6 Newton steps
+#: per time step instead of 9.4 to 1e-3, but 1.25 s instead of 0.83 (docs/dynamics.md Sect. 3.4).
+STEP_TOL = HYPERELASTIC_TOL
 #: The energy terms of a step (J), as in ``summary.json`` (docs/dynamics.md, Sect. 4).
 ENERGY_TERMS = ("kinetic", "elastic", "external_work", "support_work", "friction_dissipation", "contact_work",
                 "balance_error")
@@ -311,7 +320,9 @@ class StabilisedNewmark(PETScOwner):
                 "[dynamics] takes a hyperelastic body in the displacement formulation")
         require(dt > 0.0, "dynamics.dt", f"the time step must be > 0 (s), got {dt!r}")
         self.problem, self.tau, self.path, self.scheme = problem, float(dt), tuple(path), scheme
-        self._parameters, self._prefix = parameters, prefix
+        frictional = any(interface.pair.law.frictional for interface in problem.interfaces)
+        self._parameters = {**({"tol": STEP_TOL} if frictional else {}), **(parameters or {})}
+        self._prefix = prefix
         self.global_mass, self._nodal_mass = global_mass_matrix(problem, density)
         self.static = problem.hyperelastic
         if self.static is not None:
