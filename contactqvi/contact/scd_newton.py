@@ -199,13 +199,14 @@ class SCDNewtonResult(Result):
 
 @dataclasses.dataclass(frozen=True)
 class Forcing:
-    """Where the Krylov tolerance of :meth:`SCDNewtonSolver.forcing_term` stood when a solve ended for
-    a new search (``search_again``), for the solve that goes on from the same iterate on the new
-    facet pairs (:meth:`SCDNewtonSolver.solve`'s ``forcing``): the last step's ||y^(k-1)||, whether
-    that step was a full one that left every kind unchanged, and the kinds at the last iterate."""
+    """What :meth:`SCDNewtonSolver.forcing_term` needs of the Newton iterate before the present one:
+    its ||y^||, whether the step from it was a full one (``settled`` if also the present kinds equal
+    ``kinds``), and ``kinds``. Kept across a search inside the Newton iteration: a solve that ended
+    for one (``search_again``) hands it to the solve that goes on from the same iterate on the new
+    facet pairs (:meth:`SCDNewtonSolver.solve`'s ``forcing``), the step before the search included."""
 
-    previous_norm: float
-    settled: bool
+    norm: float
+    full: bool
     kinds: np.ndarray
 
 
@@ -752,9 +753,7 @@ class SCDNewtonSolver(PETScOwner):
         contact = u.array_r.reshape(-1, 3)[self.problem.contact_blk]
         own_target = self.stopping_target(norm0, comm.allreduce(float(np.abs(contact).max(initial=0.0)), op=MPI.MAX))
         result.target = max(own_target, atol)
-        v_previous = kinds_previous = previous_norm = alpha = None  # of the previous iteration
-        if forcing is not None:  # the solve before the search: its last step is this one's previous
-            previous_norm = forcing.previous_norm
+        v_previous, last = None, forcing  # of the previous iteration (a solve before a search: its last)
         for k in range(self.parameters["max_iterations"] + 1):
             v_forward_backward = point.v
             normal, tangential, moved = self.classify(point, v_previous)
@@ -767,21 +766,17 @@ class SCDNewtonSolver(PETScOwner):
             if status is None and k > 0 and search is not None and search(u):
                 status = Status.SEARCH_AGAIN
             kinds = np.concatenate([normal, tangential])
+            settled = last is not None and last.full and comm.allreduce(np.array_equal(kinds, last.kinds), op=MPI.LAND)
             if status is not None:
                 result.status = status
                 if status == Status.SEARCH_AGAIN:
-                    result.forcing = Forcing(previous_norm, alpha == 1.0 and _same(comm, kinds, kinds_previous), kinds)
+                    result.forcing = Forcing(last.norm, settled, kinds)
                 _log_iteration(entry)
                 break
             with result.timings.phase("newton_matrix"):
                 self.linearise(u, k)
                 J = self.newton_system(*self.generalized_derivative(point, normal, tangential), u)
-            if k == 0 and forcing is not None:  # the same iterate on new facet pairs
-                settled = forcing.settled and _same(comm, kinds, forcing.kinds)
-            else:
-                settled = alpha == 1.0 and _same(comm, kinds, kinds_previous)
-            entry["tol"] = self.forcing_term(point.norm, previous_norm, settled, own_target)
-            kinds_previous, previous_norm = kinds, point.norm
+            entry["tol"] = self.forcing_term(point.norm, None if last is None else last.norm, settled, own_target)
             with result.timings.phase("linear_solve"):
                 reason = self.linear_solve(J, kinds, entry["tol"])
             entry.update(krylov_iterations=self.step_solver.iterations, ksp_reason=self.step_solver.reason,
@@ -799,15 +794,10 @@ class SCDNewtonSolver(PETScOwner):
                 result.status = Status.DIVERGED_LINE_SEARCH
                 break
             self._accept_trial(u)
-            point = trial
+            last, point = Forcing(point.norm, alpha == 1.0, kinds), trial
         result.iterations = len(result.history) - 1
         result.normal_force, result.friction_force = -point.z[:, 2].copy(), -point.z[:, :2].copy()
         return result
-
-
-def _same(comm: MPI.Comm, kinds: np.ndarray, other: np.ndarray | None) -> bool:
-    """Whether the contact nodes' ``kinds`` equal ``other`` on every rank (collective)."""
-    return comm.allreduce(np.array_equal(kinds, other), op=MPI.LAND)
 
 
 def checked_parameters(problem: ContactProblem, parameters: dict | None) -> dict:
