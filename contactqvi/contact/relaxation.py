@@ -62,7 +62,6 @@ SETTLED = 0.1
 GROWTH = 2.0
 
 
-
 class Solve(typing.Protocol):
     """Solves a step after ``state`` into ``u`` (the load path's step solver), its predictor the
     last solve's increment extrapolated by ``extrapolate`` where that is > 0."""
