@@ -219,7 +219,6 @@ def test_a_dynamic_result_is_told_by_its_summary(pv_views):
         pv_common.read_summary(ROOT / "nothing", required=True)
 
 
-@pytest.mark.one_rank(reason="piecewise-linear interpolation, serial arithmetic")
 def _zxy(angles):
     """R_z R_x R_y of ParaView's ``Transform.Rotate`` (degrees about x, y, z; checked against
     pvbatch: a point of a PointSource under Translate = (1, 2, 3), Rotate = (20, 35, 50))."""
