@@ -42,14 +42,14 @@ from contactqvi.case import ContactCase, check_solver
 from contactqvi.contact.checkpoint import DIRECTORY, ENGINE, read_marker, write_step_file
 from contactqvi.contact.diagnosis import failure_cause
 from contactqvi.contact.figures import draw_on_rank_0
-from contactqvi.contact.dynamics import ENERGY_TERMS, BodyMotion, DynamicState, StabilisedNewmark, global_components
+from contactqvi.contact.dynamics import ENERGY_TERMS, DynamicState, StabilisedNewmark, global_components
 from contactqvi.contact.load_path import contact_resultants
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import PARAMETERS, SCDNewtonResult
 from contactqvi.elasticity import cellwise
 from contactqvi.lifetime import unwind_together
 from contactqvi.linalg import default_options
-from contactqvi.load_steps import LoadStep, at_time
+from contactqvi.load_steps import at_time
 from contactqvi.paraview import MeshPiece, VTXDatasetWriter
 from contactqvi.parameters import Parameter, ParameterError, Parameters
 from contactqvi.records import Recorder, warn
@@ -93,7 +93,7 @@ def run_dynamics(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm =
     with warnings, default_options(PREFIX, case.petsc), build_problem(case, comm) as problem, stop_signals() as signal:
         scheme = dynamics.time_scheme()
         with StabilisedNewmark(problem, _density(case, problem), dynamics.dt, parameters, PREFIX, case.steps,
-                               scheme) as integrator, BodyMotion(problem, integrator.global_mass) as motion:
+                               scheme) as integrator:
             velocity = _initial_velocity(case, problem)
             state = integrator.initial_state(velocity)
             velocity.destroy()
@@ -110,8 +110,7 @@ def run_dynamics(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm =
                 return comm.allreduce(signal.is_set(), op=MPI.LOR)
 
             try:
-                code = _integrate(problem, integrator, motion, state, summary, out, (count, dynamics.dt, max_cuts),
-                                  stop)
+                code = _integrate(problem, integrator, state, summary, out, (count, dynamics.dt, max_cuts), stop)
             finally:
                 state.destroy()
     if warnings.records:
@@ -125,7 +124,7 @@ def run_dynamics(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm =
     return summary, code
 
 
-def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: BodyMotion, state: DynamicState,
+def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, state: DynamicState,
                summary: dict[str, typing.Any], out: pathlib.Path, steps: tuple[int, float, int],
                stop: typing.Callable[[], bool]) -> int:
     """The time steps after ``state.done`` up to ``count`` of ``steps`` = (count, dt, max_cuts):
@@ -152,7 +151,7 @@ def _integrate(problem: ContactProblem, integrator: StabilisedNewmark, motion: B
                 tables.write_summary(problem.comm, out / "summary.json", summary)
                 return EXIT_CODES["not converged"]
             state.done += 1
-            summary["steps"].append(_entry(problem, state, projection, result, motion, integrator.path)
+            summary["steps"].append(_entry(problem, state, projection, result, integrator)
                                     | ({"parts": parts} if len(parts) > 1 else {}))
             if problem.searched_each_step:  # the next step's contact, and the checkpoint's variables
                 integrator.search(state)
@@ -204,19 +203,21 @@ def _advance(problem: ContactProblem, integrator: StabilisedNewmark, state: Dyna
 
 
 def _entry(problem: ContactProblem, state: DynamicState, projection: SCDNewtonResult, result: SCDNewtonResult,
-           motion: BodyMotion, path: typing.Sequence[LoadStep]) -> dict[str, typing.Any]:
+           integrator: StabilisedNewmark) -> dict[str, typing.Any]:
     """The summary entry of the time step just recorded in ``state``, with the load factor and the
-    obstacles' motion of the time points ``path`` at its time. The contact force is the
+    obstacles' motion of the integrator's time points at its time. The contact force is the
     step's mean (:attr:`~contactqvi.contact.dynamics.DynamicState.contact_forces`; half the
     multiplier of the step's GE for Newmark's rule, docs/dynamics.md Sect. 3)."""
     mean = dataclasses.replace(result, normal_force=state.contact_forces[0], friction_force=state.contact_forces[1])
     logger.info("time step %d, t = %.6g s: %d + %d Newton steps; kinetic %.6g J, elastic %.6g J, balance error "
                 "%.3g J", state.done, state.time, projection.iterations, result.iterations,
                 state.energy["kinetic"], state.energy["elastic"], state.energy["balance_error"])
-    return {"step": state.done, "time": state.time, **at_time(path, state.time).summary(), **result.summary(),
+    motion = integrator.motion
+    return {"step": state.done, "time": state.time, **at_time(integrator.path, state.time).summary(),
+            **result.summary(),
             "predictor": {"iterations": projection.iterations, "inner_iterations": projection.inner_iterations},
             "energy": dict(state.energy), "body_velocity": motion.velocities(state.velocity),
-            "body_displacement": motion.velocities(state.displacement),
+            "body_displacement": integrator.mean_displacements(state),
             "body_acceleration": motion.velocities(state.acceleration),
             **contact_resultants(problem, mean)}
 
@@ -253,7 +254,8 @@ def write_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, state: 
     name = f"time_{state.done:06d}.bp"
     write_step_file(comm, out, name, _state_functions(problem.V, state, fill=True), state.done, _MARKER,
                     {"step": state.done, "time": state.time, "file": name, "fields": list(STATE_FIELDS),
-                     "energy": state.energy, "initial_energy": state.initial_energy, "summary": summary})
+                     "energy": state.energy, "initial_energy": state.initial_energy,
+                     "translation": state.translation.tolist(), "summary": summary})
 
 
 def _state_functions(V: fem.FunctionSpace, state: DynamicState, fill: bool) -> list[fem.Function]:
@@ -292,6 +294,7 @@ def read_dynamic_checkpoint(problem: ContactProblem, out: pathlib.Path, case: Co
         vector.array[:] = field.x.array[: vector.getLocalSize()]
     state.done, state.time = int(data["step"]), float(data["time"])
     state.energy, state.initial_energy = {k: float(data["energy"][k]) for k in ENERGY_TERMS}, data["initial_energy"]
+    state.translation[:] = data.get("translation", 0.0)  # none before session 41: w_n held the whole motion
     data["summary"].setdefault("restarts", []).append({"after_step": state.done, "mpi_size": comm.size})
     return data["summary"]
 

@@ -74,6 +74,21 @@ def _points(kind: str, m: int = 40, law: NodalLaw = COULOMB) -> np.ndarray:
     return w
 
 
+@pytest.mark.parametrize("law", FRICTIONAL.values(), ids=FRICTIONAL.keys())
+def test_resolvent_force_is_not_a_difference_of_large_terms(law):
+    """A sliding node whose trial force w12 is 1e8 times its slip bound (a steel block slipping
+    1.7 cm per time step: gamma |u| = 4e8 N against nodal forces of a few newtons) gets ||g|| = b to
+    a few eps of b: z is the projection itself. As w - gamma v it was resolved to eps ||w12||, 1e-8
+    of b, which the step's final iterate carried (docs/dynamics.md Sect. 5)."""
+    w = np.array([[1e8, 3e7, -1.0], [-4e8, 1e8, -2.0], [2e8, -5e8, -0.5]])
+    v, z = resolvent(w, GAMMA, law)
+    bound = np.broadcast_to(law.bound(-z[:, 2]), (len(w),))
+    assert np.all(bound > 0.0) and np.all(np.linalg.norm(v[:, :2], axis=1) > 0.0)
+    assert np.all(np.abs(np.linalg.norm(z[:, :2], axis=1) - bound) <= 4 * np.finfo(float).eps * bound)
+    assert np.all(np.abs(z[:, :2] * np.linalg.norm(w[:, :2], axis=1)[:, None] - bound[:, None] * w[:, :2])
+                  <= 4 * np.finfo(float).eps * (bound * np.linalg.norm(w[:, :2], axis=1))[:, None])
+
+
 @pytest.mark.parametrize("law", LAWS_AT_NODES.values(), ids=LAWS_AT_NODES.keys())
 @pytest.mark.parametrize("kind", ["no_contact", "sliding", "sticking", "mixed", "wide"])
 def test_resolvent_is_the_projection_onto_the_graph(kind, law):

@@ -54,7 +54,7 @@ def test_newton_matrix_regular(law):
         v, z = resolvent(w, solver.gamma, problem.law)
         kinds = classify(v, z, solver.gamma, problem.law, 0.0)
         assert len(np.unique(contact_states(*kinds))) >= 3
-        J = solver.newton_system(*scd_adjoint_blocks(v, z, *kinds, solver.gamma, problem.law), u)
+        J = solver.newton_system(*scd_adjoint_blocks(v, z, *kinds, solver.gamma, problem.law), u, u)
         dense_J = J.convert("dense").getDenseArray()
         contact_rows = (3 * problem.contact_blk[:, None] + np.arange(3)).ravel()
         other = np.setdiff1d(np.arange(J.getSize()[0]), contact_rows)  # serial: local = global

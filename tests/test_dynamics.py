@@ -162,23 +162,26 @@ def _conveyor(dt_fraction: float = 10) -> ContactCase:
 
 
 @pytest.mark.ranks(2, 3, 4)
-@pytest.mark.parametrize("name, tolerance", [("bars", 1e-9), ("conveyor", 1e-7), ("blocks", 1e-9)])
-def test_history_on_any_number_of_ranks(name, tolerance, mpi_tmp_path):
+@pytest.mark.parametrize("name", ["bars", "conveyor", "sliding", "blocks"])
+def test_history_on_any_number_of_ranks(name, mpi_tmp_path):
     """The whole history on all ranks and on rank 0 alone (LU Newton-step solves): every step's
-    Newton counts equal, its energies and each body's velocity to ``tolerance`` of their scale.
-    The bars' impact through a mortar pair agrees to 1e-9 (measured 9e-13 on 3 ranks), the block
-    sliding to a stop on a block (friction, a mortar pair, E = 1 GPa) to 1e-9 (measured 6e-12,
-    4.6e-11 and 5.6e-11 on 2, 3 and 4 ranks); the conveyor's steel block carried 0.2 m by friction
-    to 1e-7 (measured 7.9e-9 and 2.3e-8 in the plane's work on 2 and 3 ranks): round-off of the
-    stiff block's forces at a travel of 1e8 times its deflection under its weight, which falls with E
-    (3.3e-11 at E = 210 MPa, 1e-14 at 210 kPa; docs/dynamics.md Sect. 5). Runs under ``make test``
-    on 2 ranks and in ``make test-ranks`` on 3 and 4."""
+    Newton counts equal, its energies and each body's velocity to 1e-9 of their scale (issue 44).
+    Measured on 2, 3 and 4 ranks: the bars' impact through a mortar pair 9e-13; the steel block
+    carried 0.2 m by the conveyor's friction 2.1e-10, 9.1e-11, 2.0e-10 (7.9e-9 and 2.3e-8 on 2 and 3
+    ranks before its translation was held apart from its deformation and the contact rows' y^ was
+    taken without cancellation, docs/dynamics.md Sect. 5); the steel block sliding 0.17 m to a stop
+    5.4e-11 at most (1.9e-8 and 3.0e-8 before); the block sliding to a stop on a block (friction, a
+    mortar pair, E = 1 GPa) 4e-14 at most (5.6e-11 before). The projections of the blocks on the plane
+    may take 0 or 1 Newton step at the same step: the predictor of a block resting on it is admissible
+    to round-off, which decides whether it is moved. Runs under ``make test`` on 2 ranks and in ``make
+    test-ranks`` on 3 and 4."""
     world = MPI.COMM_WORLD
-    case = {"bars": lambda: bars(DURATION / 40, DURATION), "conveyor": _conveyor, "blocks": block_on_block}[name]()
+    case = {"bars": lambda: bars(DURATION / 40, DURATION), "conveyor": _conveyor, "blocks": block_on_block,
+            "sliding": lambda: block(0.3, 9.81, {"pc": "lu"})}[name]()
     many, code = run_dynamics(case, mpi_tmp_path / "many", world, plot=False)
     assert code == 0
     on_rank_0(world, lambda: _same_history(run_dynamics(case, mpi_tmp_path / "one", MPI.COMM_SELF, plot=False),
-                                           many, tolerance))
+                                           many, 1e-9, projections=name in ("bars", "blocks")))
 
 
 def _same_history(run: tuple[dict, int], many: dict, tolerance: float, projections: bool = True) -> None:
@@ -277,7 +280,8 @@ def test_block_slides_to_a_stop_on_a_block(variant, balance, mpi_tmp_path):
 def test_restart_mid_slide(mpi_tmp_path):
     """The block sliding on a block (pair searched every time step) stopped after step 8 of 22 and
     restarted: the checkpoint holds the state in the variables of the search at the end of step
-    8, which the restart searches again; the uninterrupted run's energies and velocities to
+    8, which the restart searches again, and the upper block's translation held apart from them;
+    the uninterrupted run's mean displacements to 1e-12 m, its energies and velocities to
     1e-10 (measured on 1 rank 1e-12 and 1.9e-12 m/s of 1.9 m/s, on 2 ranks 1.5e-11 in the friction
     dissipation: the restarted search starts its projections from the reference configuration's,
     the uninterrupted one from step 7's, and their round-off differs; the impact's restart of
@@ -295,6 +299,8 @@ def test_restart_mid_slide(mpi_tmp_path):
         for term in ("kinetic", "elastic", "friction_dissipation"):
             assert b["energy"][term] == pytest.approx(a["energy"][term], rel=1e-10, abs=1e-10 * scale)
         assert b["body_velocity"]["upper"] == pytest.approx(a["body_velocity"]["upper"], abs=1e-10 * speed)
+        # the upper block's translation, held apart from w (docs/dynamics.md Sect. 5), comes with the checkpoint
+        assert b["body_displacement"]["upper"] == pytest.approx(a["body_displacement"]["upper"], abs=1e-12)
 
 
 def resting_block(law, body_force: tuple, steps: tuple[Step, ...], dt: float, end: float) -> ContactCase:
@@ -413,7 +419,7 @@ def test_time_step_halved(mpi_tmp_path):
                                  mpi_tmp_path / "halved", plot=False)
     assert code == 0 and [w["key"] for w in summary["warnings"]] == ["step_cut"]
     parts = summary["steps"][10]["parts"]
-    assert [p["status"] for p in parts] == ["diverged_max_it", "converged_atol", "converged_atol"]
+    assert [p["status"].split("_")[0] for p in parts] == ["diverged", "converged", "converged"]
     assert [p["dt"] / case.dynamics.dt for p in parts] == pytest.approx([1.0, 0.5, 0.5], rel=1e-12)
     assert summary["steps"][10]["time"] == pytest.approx(11 * case.dynamics.dt, rel=1e-15)
     assert summary["steps"][-1]["body_velocity"]["body"][0] == pytest.approx(speed, rel=1e-5)
@@ -508,22 +514,24 @@ def test_rubber_ball_bounces(mpi_tmp_path):
     assert 0.97 < restitution < 1.0 and -0.02 * before < steps[-1]["energy"]["contact_work"] < 0.0
 
 
-@pytest.mark.parametrize("name, tolerance", [("bars", 1e-12), ("conveyor", 1e-7), ("ball", 1e-10)])
+@pytest.mark.parametrize("name, tolerance", [("bars", 1e-12), ("conveyor", 1e-9), ("ball", 1e-10)])
 def test_generalized_alpha_one_is_newmark(name, tolerance, mpi_tmp_path):
     """Generalized-α with rho_infinity = 1 (alpha_m = alpha_f = 1/2, beta = 1/4, gamma = 1/2) is the
     average acceleration rule written at the step's midpoint: from a consistent start (m_0 = g_0)
     m_n = g_n at every step, so its history is Newmark's, computed by the other path (Newmark's
     acceleration and the inertial force carried, the balance split at t_{n+1/2}). The bars'
     impact through a mortar pair agrees to 1e-12 of the energy (measured 4e-15), the conveyor's
-    friction to 1e-7 (1.6e-8: Coulomb's stopping test), the neo-Hookean ball to 1e-10 (2e-13). The
-    Newton counts of the steps are equal; those of the ball's projections are not always (2 and
-    4 at one step): its projection stops near round-off, where 1e-13 apart decides."""
+    friction to 1e-9 (measured 1.3e-10; 1.6e-8 before the block's translation was held apart from
+    its deformation, docs/dynamics.md Sect. 5), the neo-Hookean ball to 1e-10 (2e-13). The Newton
+    counts of the steps are equal; those of the projections are not always, the conveyor's (2 and
+    3 while the block sticks) and the ball's (2 and 4 at one step): they stop near round-off, where
+    1e-13 apart decides."""
     case = {"bars": lambda: bars(DURATION / 40, 1.25 * DURATION), "conveyor": _conveyor,
             "ball": lambda: rubber_ball(mpi_tmp_path)}[name]()
     newmark, code = run_dynamics(case, mpi_tmp_path / "newmark", plot=False)
     assert code == 0
     run = run_dynamics(with_scheme(case, "generalized_alpha", rho_infinity=1.0), mpi_tmp_path / "alpha", plot=False)
-    _same_history(run, newmark, tolerance, projections=name != "ball")
+    _same_history(run, newmark, tolerance, projections=name == "bars")
 
 
 @pytest.mark.parametrize("scheme", [{"scheme": "hht", "alpha": 0.1},

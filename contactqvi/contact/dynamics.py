@@ -29,6 +29,11 @@ u = w + d of :meth:`~contactqvi.contact.problem.ContactProblem.set_step` (slip m
 from w_n: u_t is the slip increment over the step, slip rate times tau), solved by
 :class:`~contactqvi.contact.scd_newton.SCDNewtonSolver` unchanged. All that a step reads
 from the steps before is one :class:`DynamicState`.
+
+A linear body with no prescribed dof (a free block) has its rigid translation c_b held apart from
+w, u = T w + sum_b c_b e_b + offsets (:attr:`DynamicState.translation`), moved before each step to
+the predicted one (:meth:`StabilisedNewmark._float`): K e_b = 0, so the stiffness multiplies the
+deformation, not the travel (docs/dynamics.md Sect. 5).
 """
 
 from __future__ import annotations
@@ -171,6 +176,8 @@ class DynamicState(PETScOwner):
         energy: the step's energy terms (:data:`ENERGY_TERMS`), the works and the dissipation
             summed from time 0 (J).
         initial_energy: kinetic + elastic energy at time 0 (J).
+        translation: (bodies, 3) rigid translation c_b of each body held apart from w_n (m, global
+            axes; :meth:`StabilisedNewmark.step`): u_n = T w_n + sum_b c_b e_b + offsets.
     """
 
     done: int
@@ -184,6 +191,7 @@ class DynamicState(PETScOwner):
     energy: dict[str, float]
     initial_energy: float
     contact_forces: tuple[np.ndarray, np.ndarray] = (np.empty(0), np.empty((0, 2)))
+    translation: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 3)))
 
     def petsc_objects(self) -> list[typing.Any]:
         return [self.displacement, self.physical, self.velocity, self.acceleration, self.newmark_acceleration,
@@ -308,6 +316,8 @@ class StabilisedNewmark(PETScOwner):
         scheme: the time scheme (α_m, α_f, β, γ).
         prescribed: owned local indices of the prescribed dofs in the solver's variables.
         tau: the time step A_eff and the step's solver are made for (s).
+        motion: each body's mass-weighted mean motion and rigid translations (:class:`BodyMotion`).
+        floating: (bodies,) whether a body's translation is held apart from w (:meth:`_float`).
     """
 
     def __init__(self, problem: ContactProblem, density: float | fem.Function, dt: float,
@@ -334,6 +344,8 @@ class StabilisedNewmark(PETScOwner):
         self._assemble()
         self.energy = PhysicalEnergy(problem)
         self._work = _Work.create(problem.A)
+        self.motion = BodyMotion(problem, self.global_mass)
+        self.floating = self._floating_bodies()
 
     def _assemble(self) -> None:
         """What depends on the problem's last search (its T): M = T^T M_K T, a linear body's K
@@ -354,6 +366,7 @@ class StabilisedNewmark(PETScOwner):
         self.projection_matrix.setDiagonal(diagonal, addv=PETSc.InsertMode.ADD_VALUES)
         diagonal.destroy()
         self.projection = dataclasses.replace(problem, A=self.projection_matrix, load=problem.load.duplicate(),
+                                              unshifted=problem.load.duplicate(),
                                               law=Frictionless().lumped(problem.contact_area), hyperelastic=None)
         self.predictor_solver = SCDNewtonSolver(self.projection, self._projection_parameters(),
                                                 prefix=self._prefix + "predictor_")
@@ -373,14 +386,27 @@ class StabilisedNewmark(PETScOwner):
     def _assembled(self) -> list[typing.Any]:
         """The PETSc objects of :meth:`_assemble`."""
         return [self.predictor_solver, self.solver, self.mass, self.stiffness, self.projection_matrix,
-                self.projection.load]
+                self.projection.load, self.projection.unshifted]
 
     def petsc_objects(self) -> list[typing.Any]:
         """The solvers, M, M_K, K, the projection's matrix and load, the energies' vectors, the work
         vectors and a hyperelastic step's inertia vectors (not the problem's)."""
         system = self.problem.hyperelastic
         inertial = [system.inertia, system.work] if isinstance(system, InertialSystem) else []
-        return [*self._assembled(), self.global_mass, self.energy, self._work, *inertial]
+        return [*self._assembled(), self.global_mass, self.energy, self._work, self.motion, *inertial]
+
+    def _floating_bodies(self) -> np.ndarray:
+        """Whether each body (:attr:`BodyMotion.translations`' order) has its translation held apart
+        from w (:meth:`_float`): the linear bodies none of whose dofs is prescribed (their
+        stiffness has the rigid translations in its kernel). Collective."""
+        problem = self.problem
+        held = np.zeros(len(self.motion.translations), dtype=np.int32)
+        if self.static is not None:
+            return np.zeros(len(held), dtype=bool)
+        nodes = problem.dirichlet_dofs_loc // 3
+        held[np.zeros(len(nodes), dtype=np.int32) if problem.node_body is None else problem.node_body[nodes]] = 1
+        problem.comm.Allreduce(MPI.IN_PLACE, held, op=MPI.MAX)
+        return held == 0
 
     def search(self, state: DynamicState, carry: bool = True) -> None:
         """Search the problem's pairs again in the configuration ``state`` ended in (its physical
@@ -407,6 +433,7 @@ class StabilisedNewmark(PETScOwner):
                 obj.destroy()
         self._assemble()
         if carry:
+            field.x.petsc_vec.axpy(-1.0, self.motion.translate(state.translation))
             problem.solver_variables(field, state.displacement)
             for x, y in zip(carried, moved):
                 problem.from_global(y, x)
@@ -450,7 +477,8 @@ class StabilisedNewmark(PETScOwner):
             self._initial_acceleration(force, newmark)
         energy = {name: 0.0 for name in ENERGY_TERMS}
         energy["kinetic"] = 0.5 * _energy_norm(self.mass, v, self._work.scratch)
-        return DynamicState(0, 0.0, w, physical, v, a, newmark, force, energy, energy["kinetic"])
+        return DynamicState(0, 0.0, w, physical, v, a, newmark, force, energy, energy["kinetic"],
+                            translation=np.zeros((len(self.floating), 3)))
 
     def step(self, state: DynamicState, u: PETSc.Vec, tau: float | None = None,
              stop: typing.Callable[[], bool] | None = None) -> tuple[SCDNewtonResult, SCDNewtonResult]:
@@ -464,12 +492,18 @@ class StabilisedNewmark(PETScOwner):
         predicted, projected = self._work.predicted, self._work.projected
         before, after = at_time(self.path, state.time), at_time(self.path, state.time + tau)
         problem.step_load(before.load, before.translation, before.rotation, self._work.previous_load)
+        if self.static is None:  # g_n = F_n - K w_n before the translation moves (K e_b = 0)
+            force = self._work.previous_force
+            self.stiffness.mult(state.displacement, force)
+            force.aypx(-1.0, self._work.previous_load)
+            force.array[self.prescribed] = 0.0
+        held = self._float(state, tau)
         problem.set_step(after.load, after.translation, previous=state.displacement, rotation=after.rotation,
-                         previous_translation=before.translation, previous_rotation=before.rotation)
+                         previous_translation=before.translation, previous_rotation=before.rotation, held=held)
         # d: gaps at t_{n+1}, slip measured from w_n and the obstacles' motion over the step
         predicted.waxpy(tau, state.velocity, state.displacement)
-        self.projection_matrix.mult(predicted, self.projection.load)
-        self.projection_matrix.multAdd(problem.shift, self.projection.load, self.projection.load)
+        self.projection_matrix.mult(predicted, self.projection.unshifted)
+        self.projection.shift_load()
         u.waxpy(1.0, predicted, problem.shift)
         projection = self.predictor_solver.solve(u, stop=stop)
         if not projection.converged:
@@ -483,6 +517,32 @@ class StabilisedNewmark(PETScOwner):
         if result.converged:
             self._record(state, u, result, (before, after))
         return projection, result
+
+    def _float(self, state: DynamicState, tau: float) -> PETSc.Vec | None:
+        """Hold the predicted translation of each floating body (:attr:`floating`) apart from w:
+        c_b += the mass-weighted mean over body b of w_n + tau v_n + tau^2/2 a (a the last step's
+        mean acceleration), w_n -= T^-1 e_b times it. Returns T^-1 sum_b c_b e_b (the work vector
+        ``increment``; None without floating bodies), whose normal components at the contact nodes
+        the gaps take (:meth:`~contactqvi.contact.problem.ContactProblem.set_step`). An exact change
+        of variables, K T^-1 e_b = 0: the stiffness then multiplies the deformation and the step's
+        departure from the predicted translation, where the travel made its products round-off of
+        K |u| (docs/dynamics.md Sect. 5)."""
+        if not self.floating.any():
+            return None
+        x, held = self._work.scratch, self._work.increment
+        x.waxpy(tau, state.velocity, state.displacement)
+        x.axpy(0.5 * tau**2, state.acceleration)
+        change = np.array(list(self.motion.velocities(x).values())) * self.floating[:, None]
+        state.translation += change
+        self.problem.from_global(self.motion.translate(change), x)
+        state.displacement.axpy(-1.0, x)
+        return self.problem.from_global(self.motion.translate(state.translation), held)
+
+    def mean_displacements(self, state: DynamicState) -> dict[str, list[float]]:
+        """Each body's mass-weighted mean displacement (m, global axes) at ``state``: of w_n and the
+        translation held apart. Collective."""
+        means = self.motion.velocities(state.displacement).items()
+        return {name: [m + c for m, c in zip(mean, held)] for (name, mean), held in zip(means, state.translation)}
 
     def _use_time_step(self, tau: float) -> None:
         """Make A_eff = K + c M and the step's solver (its gamma and preconditioner are A_eff's)
@@ -506,15 +566,14 @@ class StabilisedNewmark(PETScOwner):
         Newmark's rule (c_a = -1, alpha_f = 0: the last term is g_n)."""
         problem, work, scheme = self.problem, self._work.scratch, self.scheme
         self.mass.mult(projected, work)
-        problem.load.axpy(scheme.inertia_coefficient(self.tau), work)
+        load = problem.unshifted
+        load.axpy(scheme.inertia_coefficient(self.tau), work)
         force = self._work.previous_force
-        self.stiffness.mult(state.displacement, force)
-        force.aypx(-1.0, self._work.previous_load)
-        force.array[self.prescribed] = 0.0
         history = state.inertial_force if scheme.carries_acceleration else force
-        problem.load.axpy(-scheme.history_factor / (1.0 - scheme.alpha_f), history)
+        load.axpy(-scheme.history_factor / (1.0 - scheme.alpha_f), history)
         if scheme.alpha_f != 0.0:
-            problem.load.axpy(scheme.alpha_f / (1.0 - scheme.alpha_f), force)
+            load.axpy(scheme.alpha_f / (1.0 - scheme.alpha_f), force)
+        problem.shift_load()
 
     def _set_inertia(self, state: DynamicState, u: PETSc.Vec, load: float) -> None:
         """The hyperelastic step's b = -c M_K u_bar + (alpha_f r_K(u_n) + c_a m_n) / (1 - alpha_f) at
@@ -621,6 +680,7 @@ class StabilisedNewmark(PETScOwner):
         state.acceleration.scale(1.0 / tau)
         w_next.copy(state.displacement)
         physical = problem.physical_displacement(u, self.energy.field).x.petsc_vec.copy()
+        physical.axpy(1.0, self.motion.translate(state.translation))
         changes = self.energy.step(state.physical, physical, (steps[0].load, steps[1].load))
         physical.copy(state.physical)
         physical.destroy()
@@ -692,6 +752,16 @@ class BodyMotion(PETScOwner):
     def petsc_objects(self) -> list[typing.Any]:
         """The translations and the work vectors (not M_K)."""
         return [*(z for zs in self.translations.values() for z in zs), self._work, self._global]
+
+    def translate(self, translation: np.ndarray) -> PETSc.Vec:
+        """sum_b t_b e_b of the (bodies, 3) translations ``translation`` (m; global components), in a
+        work vector of this object."""
+        self._global.set(0.0)
+        for zs, t in zip(self.translations.values(), translation):
+            for z, component in zip(zs, t):
+                if component != 0.0:
+                    self._global.axpy(component, z)
+        return self._global
 
     def velocities(self, velocity: PETSc.Vec) -> dict[str, list[float]]:
         """Each body's mean velocity (m/s, global axes) of ``velocity`` (solver variables); of a

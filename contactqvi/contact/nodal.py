@@ -84,7 +84,9 @@ def resolvent(w: np.ndarray, gamma: float | np.ndarray, law: NodalLaw) -> tuple[
 
     Returns:
         ``(v, z)``: v = (gamma I + Q~)^{-1}(w) and z = w - gamma v in Q~(v), so
-        (v, z) lies on the graph of Q~.
+        (v, z) lies on the graph of Q~. z is computed as the projection itself (z_12 = w_12 of a
+        sticking node, b w_12 / ||w_12|| of a sliding one; theta = min(w_3, 0)), not as the
+        difference w - gamma v, whose terms are gamma |v| where the forces are far smaller.
     """
     v = np.empty_like(w)
     gamma = _per_node(gamma, len(w))
@@ -97,7 +99,8 @@ def resolvent(w: np.ndarray, gamma: float | np.ndarray, law: NodalLaw) -> tuple[
     shrink = np.zeros_like(norm_w12)
     shrink[slides] = (1.0 - bound[slides] / norm_w12[slides]) / gamma[slides]
     v[:, :2] = shrink[:, None] * w12  # (6.7): block soft thresholding
-    z = w - gamma[:, None] * v
+    z = w.copy()
+    z[slides, :2] *= (bound[slides] / norm_w12[slides])[:, None]
     z[:, 2] = theta
     return v, z
 

@@ -121,6 +121,11 @@ class ContactProblem(PETScOwner):
             force and the lifting of prescribed displacements; their values on
             prescribed dofs).
         load: shifted load l = lambda l~ + A d of the current step.
+        unshifted: the current step's load without the shift, lambda l~ + sum_k s_k l~_k and
+            what a time step adds (:meth:`shift_load`): a linear f is evaluated as A (u - d) -
+            this, so that A multiplies the displacement u~ = u - d and not u and d apart, whose
+            products are round-off of A |d| where d carries a travelled slip (docs/dynamics.md
+            Sect. 5).
         shift: the shift d of the current step (nodal frames).
         contact_blk: owned local node (block) indices of the contact (slave) nodes, sorted.
         contact_facets: local facet indices of the slave surfaces (for output on them).
@@ -173,6 +178,7 @@ class ContactProblem(PETScOwner):
     A: PETSc.Mat
     applied: PETSc.Vec
     load: PETSc.Vec
+    unshifted: PETSc.Vec
     shift: PETSc.Vec
     contact_blk: np.ndarray
     contact_facets: np.ndarray
@@ -215,8 +221,8 @@ class ContactProblem(PETScOwner):
 
     def petsc_objects(self) -> list[typing.Any]:
         """A, the load vectors, S, R, N, T and c (copies by ``dataclasses.replace`` share them)."""
-        objects = (self.A, self.applied, self.load, self.shift, self.elastic, self.hyperelastic, self.modified,
-                   self.volumetric, *self._variables_objects())
+        objects = (self.A, self.applied, self.load, self.unshifted, self.shift, self.elastic, self.hyperelastic,
+                   self.modified, self.volumetric, *self._variables_objects())
         return [obj for obj in objects if obj is not None]
 
     def _variables_objects(self) -> list[typing.Any]:
@@ -563,6 +569,7 @@ class ContactProblem(PETScOwner):
         self, load_factor: float = 1.0, translation: typing.Sequence[float] = (0.0, 0.0, 0.0),
         previous: PETSc.Vec | None = None, previous_translation: typing.Sequence[float] = (0.0, 0.0, 0.0),
         rotation: Rotation | None = None, previous_rotation: Rotation | None = None, fit: float = 1.0,
+        held: PETSc.Vec | None = None,
     ) -> None:
         """Shift and load of a load step: tractions, body force and prescribed displacements
         times ``load_factor``, the obstacles and moved groups rotated by ``rotation`` (total,
@@ -577,7 +584,10 @@ class ContactProblem(PETScOwner):
         (:meth:`~contactqvi.contact.interface.Interface.obstacle_increment`; a master body moves
         with the solution, its slip is in w itself). Both come from the load path's
         :class:`~contactqvi.contact.path_state.PathState`; nothing of the step before is
-        read from the problem itself.
+        read from the problem itself. ``held``: a displacement held apart from the solver's
+        variables (solver's variables; a time step's translations of free bodies,
+        :meth:`~contactqvi.contact.dynamics.StabilisedNewmark.step`), whose normal components
+        at the contact nodes the gaps take.
         """
         translation = np.asarray(translation, dtype=float)
         if rotation is not None or previous_rotation is not None:
@@ -589,6 +599,8 @@ class ContactProblem(PETScOwner):
             nodal[:, :2] = previous.array.reshape(-1, 3)[self.contact_blk, :2]
         nodal[:, :2] = -(nodal[:, :2] + moved)
         nodal[:, 2] = self.gap(translation, rotation, fit)
+        if held is not None:
+            nodal[:, 2] += held.array.reshape(-1, 3)[self.contact_blk, 2]
         self.shift.set(0.0)
         self.shift.array.reshape(-1, 3)[self.contact_blk] = nodal
         self.load_factor, self.translation, self.step_rotation = float(load_factor), translation, rotation
@@ -598,9 +610,15 @@ class ContactProblem(PETScOwner):
         self._shifted_load()
 
     def _shifted_load(self) -> None:
-        """The load l of the current step and shift: lambda l~ + sum_k s_k l~_k + A d (a hyperelastic
-        f is evaluated at u - d itself: d only on its identity rows, as A d there)."""
-        self.step_load(self.load_factor, self.translation, self.step_rotation, self.load)
+        """The loads of the current step and shift: :attr:`unshifted` = lambda l~ + sum_k s_k l~_k and
+        l (:meth:`shift_load`)."""
+        self.step_load(self.load_factor, self.translation, self.step_rotation, self.unshifted)
+        self.shift_load()
+
+    def shift_load(self) -> None:
+        """l = :attr:`unshifted` + A d (a hyperelastic f is evaluated at u - d itself: d only on its
+        identity rows, as A d there); after a change of either."""
+        self.unshifted.copy(self.load)
         if self.hyperelastic is None:
             self.A.multAdd(self.shift, self.load, self.load)
         else:
@@ -838,7 +856,7 @@ def assemble_contact_problem(
     node_body = _bodies(V, facet_tags, cell_tags, constrained, interfaces, held=not inertia)
     supports, comm = tuple(dict.fromkeys([*clamped, *(displacements or {}), *moved])), msh.comm
     problem = ContactProblem(
-        V=V, load=fields["applied"].duplicate(), shift=fields["applied"].duplicate(),
+        V=V, **{vector: fields["applied"].duplicate() for vector in ("load", "unshifted", "shift")},
         contact_facets=np.unique(np.concatenate(
             [boundary_facets(facet_tags, i.slave_surface) for i in interfaces])).astype(np.int32),
         body=ElasticBody(young, poisson, facet_tags, supports, dict(tractions), body_force,

@@ -250,6 +250,7 @@ class WorkVectors(VectorSet):
         r_trial: its residual r + alpha A du -> r when accepted; scratch of
             :meth:`~SCDNewtonSolver.residual`.
         d_trial: its d^ -> ``dhat`` when accepted; scratch of :meth:`~SCDNewtonSolver.residual`.
+        displacement: u - d of a linear f's iterate: scratch of :meth:`~SCDNewtonSolver.smooth_part`.
     """
 
     r: PETSc.Vec
@@ -261,6 +262,7 @@ class WorkVectors(VectorSet):
     u_trial: PETSc.Vec
     r_trial: PETSc.Vec
     d_trial: PETSc.Vec
+    displacement: PETSc.Vec
 
 
 class SCDNewtonSolver(PETScOwner):
@@ -421,18 +423,30 @@ class SCDNewtonSolver(PETScOwner):
         sqrt(gamma^2 + 1) ||u - d^|| for one gamma.
         """
         gamma, blk = self.gamma_nodes[:, None], self.problem.contact_blk
-        dhat.pointwiseMult(self._gamma_dofs.inverse, r)
-        dhat.aypx(-1.0, u)  # non-contact dofs: (gamma I)^{-1}(gamma u - r) = u - r/gamma
+        diff = self._work.y2
+        diff.pointwiseMult(self._gamma_dofs.inverse, r)
+        dhat.waxpy(-1.0, diff, u)  # non-contact dofs: (gamma I)^{-1}(gamma u - r) = u - r/gamma
         w = gamma * u.array.reshape(-1, 3)[blk] - r.array.reshape(-1, 3)[blk]
         v, z = resolvent(w, gamma[:, 0], self.problem.law)
         dhat.array.reshape(-1, 3)[blk] = v
-        diff = self._work.y2
-        diff.waxpy(-1.0, dhat, u)
+        self._difference(r, u, GraphPoint(0.0, v, z), diff)
         diff.pointwiseMult(diff, self._gamma_dofs.weight)
         norm = diff.norm()
         if self._carried is not None:  # the mixed method's constraint rows, as r's off the contact
             norm = float(np.hypot(norm, self._carried.constraint_norm() / self.gamma))
         return GraphPoint(float(np.sqrt(self.gamma**2 + 1.0) * norm), v, z)
+
+    def _difference(self, r: PETSc.Vec, u: PETSc.Vec, point: GraphPoint, out: PETSc.Vec) -> None:
+        """y2^ = u - d^ of the graph point ``point`` at u (r = f(u)) into ``out``, without subtracting
+        u and d^: where gamma |u| is far above the forces (a stiff body's slip increment, a travel)
+        their difference is round-off of |u|, which y1^ = Gamma y2^ multiplies by gamma. Off the
+        contact nodes y2^ = r / gamma; at them, from gamma u - r = gamma v + z, y2^ = (r + z) / gamma
+        where v does not vanish and u itself where it does (the sticking and touching components,
+        and those the approximation step moved to v_12 = 0)."""
+        blk = self.problem.contact_blk
+        out.pointwiseMult(self._gamma_dofs.inverse, r)
+        nodal = (r.array_r.reshape(-1, 3)[blk] + point.z) / self.gamma_nodes[:, None]
+        out.array.reshape(-1, 3)[blk] = np.where(point.v == 0.0, u.array_r.reshape(-1, 3)[blk], nodal)
 
     def _graph_point(self, u: PETSc.Vec, r: PETSc.Vec, dhat: PETSc.Vec) -> GraphPoint:
         """r = f(u) into ``r``, then the approximation step at u (d^ into ``dhat``)."""
@@ -440,13 +454,17 @@ class SCDNewtonSolver(PETScOwner):
         return self.approximation_step(r, u, dhat)
 
     def smooth_part(self, u: PETSc.Vec, r: PETSc.Vec) -> None:
-        """f(u) of 0 in f(u) + Q(u) into ``r``: A u - l (6.3), or the residual of a hyperelastic
-        body (:mod:`contactqvi.contact.hyperelastic`; Sect. 5 takes any smooth f)."""
-        if self.problem.hyperelastic is not None:
-            self.problem.residual(u, r)
+        """f(u) of 0 in f(u) + Q(u) into ``r``: A u - l (6.3), evaluated as A (u - d) - (l - A d)
+        (:attr:`~contactqvi.contact.problem.ContactProblem.unshifted`), or the residual of a
+        hyperelastic body (:mod:`contactqvi.contact.hyperelastic`; Sect. 5 takes any smooth f)."""
+        problem = self.problem
+        if problem.hyperelastic is not None:
+            problem.residual(u, r)
             return
-        self._newton.mult_stiffness(u, r)
-        r.axpy(-1.0, self.problem.load)
+        x = self._work.displacement
+        x.waxpy(-1.0, problem.shift, u)
+        self._newton.mult_stiffness(x, r)
+        r.axpy(-1.0, problem.unshifted)
 
     def linearise(self, u: PETSc.Vec, k: int) -> None:
         """grad f at u of (5.4) into A's storage when f is nonlinear (a hyperelastic body):
@@ -537,10 +555,11 @@ class SCDNewtonSolver(PETScOwner):
         return scd_adjoint_blocks(point.v, point.z, normal, tangential, self.gamma_nodes, self.problem.law)
 
     # -- step 3: reduced Newton system -----------------------------------------------
-    def newton_system(self, Wt: np.ndarray, Ut: np.ndarray, u: PETSc.Vec) -> PETSc.Mat:
+    def newton_system(self, Wt: np.ndarray, Ut: np.ndarray, u: PETSc.Vec, y2: PETSc.Vec) -> PETSc.Mat:
         """Matrix J = D A + U and right-hand side -(D y1^ + U y2^) of (5.4), fixed rows eliminated;
         -(D (y1^ + g) + U y2^) in the mixed method, g its linearised constraint's force
-        (:meth:`_constraint_force`; docs/nearly_incompressible.md, Sect. 7).
+        (:meth:`_constraint_force`; docs/nearly_incompressible.md, Sect. 7). ``y2`` is y2^ = u - d^ at
+        the iterate u (:meth:`_difference`), y1^ = Gamma y2^.
 
         The right-hand side goes to the work vector ``rhs`` and the eliminated rows'
         exact values to ``du``; returns J. The prescribed rows of a hyperelastic f are identity
@@ -552,8 +571,7 @@ class SCDNewtonSolver(PETScOwner):
         """
         w = self._work
         self._newton.set_blocks(Wt, Ut)
-        w.y2.waxpy(-1.0, w.dhat, u)  # y1^ = Gamma y2^ = Gamma (u - d^)
-        self._newton.mult_blocks(w.y2, w.rhs, self._gamma_dofs.gamma)
+        self._newton.mult_blocks(y2, w.rhs, self._gamma_dofs.gamma)  # y1^ = Gamma y2^
         if self._carried is not None:
             self._newton.mult_add_D(self._constraint_force(u), w.rhs)
         w.rhs.scale(-1.0)
@@ -775,7 +793,8 @@ class SCDNewtonSolver(PETScOwner):
                 break
             with result.timings.phase("newton_matrix"):
                 self.linearise(u, k)
-                J = self.newton_system(*self.generalized_derivative(point, normal, tangential), u)
+                self._difference(w.r, u, point, w.y2)
+                J = self.newton_system(*self.generalized_derivative(point, normal, tangential), u, w.y2)
             entry["tol"] = self.forcing_term(point.norm, None if last is None else last.norm, settled, own_target)
             with result.timings.phase("linear_solve"):
                 reason = self.linear_solve(J, kinds, entry["tol"])
