@@ -217,11 +217,12 @@ UNSTRUCTURED = ROOT / "meshes" / "press_fit.geo"
 USER_FIT = 15e-6
 
 
-def _unstructured(directory: pathlib.Path, order: int) -> pathlib.Path:
-    """The user's fit in tetrahedra of ``order`` (1: flat facets, 2: curved, 10 nodes), written on rank 0."""
-    path = directory / f"press_fit_order{order}.geo"
+def _unstructured(directory: pathlib.Path, order: int, delta: float = USER_FIT) -> pathlib.Path:
+    """The user's fit in tetrahedra of ``order`` (1: flat facets, 2: curved, 10 nodes), the pin drawn
+    ``delta`` (m) larger than the bore, written on rank 0."""
+    path = directory / f"press_fit_order{order}_delta{delta:g}.geo"
     if MPI.COMM_WORLD.rank == 0:
-        path.write_text(f'order = {order}; delta = {USER_FIT!r};\nInclude "{UNSTRUCTURED}";\n')
+        path.write_text(f'order = {order}; delta = {delta!r};\nInclude "{UNSTRUCTURED}";\n')
     MPI.COMM_WORLD.Barrier()
     return path
 
@@ -291,23 +292,24 @@ def test_a_fit_on_second_order_tetrahedra_meets_lame(mpi_tmp_path, caplog, slave
     assert not recorded.records
 
 
-@pytest.mark.parametrize("slave", ["ring", "pin"])
-def test_a_fit_with_quadratic_elements_meets_lame(mpi_tmp_path, slave):
+@pytest.mark.parametrize("slave, delta, bound", [("ring", USER_FIT, 0.01), ("pin", USER_FIT, 0.01),
+                                                 ("pin", 1e-4 * B, 0.05)])
+def test_a_fit_with_quadratic_elements_meets_lame(mpi_tmp_path, slave, delta, bound):
     """The user's fit on 10-node tetrahedra with quadratic displacements (the quadratic dual mortar,
-    docs/quadratic.md Sect. 5), either body the slave: the pressure from the pair force and the
-    radial displacements within 0.1 % of Lamé (measured: at most 0.04 %; linear elements 0.34 %),
-    every slave node in contact, vertices and edge nodes, and the nodal pressures within 8 % of
-    Lamé's at every node (a regression guard: measured -2.1 ... +1.2 % and -6.4 ... +2.7 %: the
-    6-node facets deviate from the cylinders by O(h^3 / R^2), which the exact cylinders of
-    test_exact_cylinders_make_the_nodal_pressure_uniform remove; benchmarks/results/press_fit_curved.md)."""
-    delta = USER_FIT
-    measured = _measured(_case(_unstructured(mpi_tmp_path, 2), STEEL, STEEL, delta, slave, order=2), delta)
+    docs/quadratic.md Sect. 5), no exact surfaces declared, either body the slave: the pressure from
+    the pair force and the radial displacements within 0.1 % of Lamé (measured: at most 0.02 %;
+    linear elements 0.34 %), every slave node in contact, vertices and edge nodes, and the nodal
+    pressures within ``bound`` of Lamé's at every node, the issue's 5 % at 0.01 % of b (measured at
+    15 um -0.22 ... +0.22 % and -0.45 ... +0.70 %, the pin at 2 um -4.6 ... +4.8 %; before the
+    separation was taken along the slave surface's normal -2.1 ... +1.2 %, -6.4 ... +2.7 % and
+    -22 ... +8.6 %; benchmarks/results/press_fit_curved.md)."""
+    measured = _measured(_case(_unstructured(mpi_tmp_path, 2, delta), STEEL, STEEL, delta, slave, order=2), delta)
     expected = lame(delta, STEEL)
     errors = {name: measured[name] / expected[name] - 1.0 for name in expected}
     assert max(abs(e) for name, e in errors.items() if name != "nodal") < 1e-3, errors
     assert measured["open"] == 0
     low, high = measured["nodal range"]
-    assert expected["nodal"] * 0.92 < low <= high < expected["nodal"] * 1.08
+    assert expected["nodal"] * (1.0 - bound) < low <= high < expected["nodal"] * (1.0 + bound)
 
 
 #: Push-out (cases/push_out.toml): the slice lengthened to a pin and a hub of length L = b,

@@ -55,7 +55,8 @@ from contactqvi.contact.facets import MODIFIED_AREAS, facet_areas, nodal_integra
 from contactqvi.contact.linearisation import CouplingDerivatives, coupling_derivatives
 from contactqvi.contact.owners import fetch_rows, owner_ranges, sum_to_owners
 from contactqvi.contact.segments import (Surface, curvature_integrals, diameters, exact_surface_integrals,
-                                         quadratic_segment_integrals, segment_integrals, slave_moments)
+                                         normal_separation_integrals, quadratic_segment_integrals,
+                                         segment_integrals, slave_moments)
 from contactqvi.parameters import require
 
 __all__ = ["MortarCoupling", "MortarLayout", "coupling_on_layout", "exterior_facet_cells", "facet_closures",
@@ -317,6 +318,8 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
         correction = _exact_correction(V, slave_facets, pairs_s, mglob[pairs_m],
                                        None if slave.sagitta is None else msagitta[0][pairs_m], exact)
         added = correction if added is None else added + correction
+    elif slave.quadratic:
+        added = _normal_correction(V, slave, pairs_s, mx[pairs_m], mglob[pairs_m], current)
     coupling, lumped_area, gap = _integrated(V, layout, slave, mx[pairs_m], current, None, excluded_blk,
                                              integrals, linearised, kept_blk, added)
     # a node farther than the search distance (default: its own size) cannot touch in this step
@@ -430,6 +433,19 @@ def _exact_correction(V: fem.FunctionSpace, slave_facets: np.ndarray, pairs_s: n
         master_sagitta = _midside_offsets(master)
     return exact_surface_integrals(slave_x, -slave.normal[pairs_s], master[:, :3], slave_sagitta, master_sagitta,
                                    exact, slave.quadratic)
+
+
+def _normal_correction(V: fem.FunctionSpace, slave: SurfaceFacets, pairs_s: np.ndarray, master_x: np.ndarray,
+                       master_glob: np.ndarray, current: np.ndarray) -> np.ndarray:
+    """(P, 6, 3) what taking the separation of 6-node facets along the slave surface's own normal
+    adds to D_ii times the separation of slave node i, per facet pair (the slave facets
+    ``pairs_s``, the master facets' vertex triangles ``master_x`` and global nodes ``master_glob``),
+    at the positions ``current`` (:func:`~contactqvi.contact.segments.normal_separation_integrals`).
+    Collective."""
+    comm, index_map = V.mesh.comm, V.dofmap.index_map
+    master = fetch_rows(comm, index_map, current[:index_map.size_local], master_glob.ravel())
+    return normal_separation_integrals(slave.x[pairs_s], -slave.normal[pairs_s], master_x[:, :3],
+                                       current[slave.blk[pairs_s]], master.reshape(*master_glob.shape, 3))
 
 
 def _midside_offsets(nodes: np.ndarray) -> np.ndarray:
