@@ -195,15 +195,18 @@ def test_newton_on_linear_bodies_is_named():
 
 def test_a_restarted_path_is_the_uninterrupted_one(mpi_tmp_path):
     """The 30 % compression searched ``"newton"``, its first five steps (to 25 %), stopped after
-    step 3 and restarted: the pair forces and displacements of the uninterrupted run to 1e-12
-    (measured 1e-14: the slip's reference and the predictor's increment come back from the
-    checkpoint), the Newton steps to one (equal in every run on 1 rank; on 2 ranks, under `make
-    test` beside another job, the run stopped after step 3 once took 4 Newton steps in step 2
-    against 3: a second run of the same steps with MUMPS). Exact Newton steps (LU): a multigrid
-    set up again at the restart, where the uninterrupted run carries its levels, changes the
-    inexact directions at round-off; and the last step to 30 %, where the blocks' rims meet and
-    the layout changes with round-off (docs/finite_strain.md Sect. 14), took 7 Newton steps
-    against 5 in the restarted run even with LU."""
+    step 3 and restarted: the pair forces and displacements of the uninterrupted run to 1e-12 on 1
+    rank (measured 1e-14: the slip's reference and the predictor's increment come back from the
+    checkpoint) and to 1e-11 on more, where two runs of the same steps differ by up to 1.3e-12 of
+    the force already in step 1, before any restart (MUMPS schedules its parallel factorisation
+    dynamically; one run in five, on the code before session 41 too). The Newton steps to one
+    (equal in every run on 1 rank; on 2 ranks, under `make test` beside another job, the run
+    stopped after step 3 once took 4 Newton steps in step 2 against 3: a second run of the same
+    steps with MUMPS). Exact Newton steps (LU): a multigrid set up again at the restart, where the
+    uninterrupted run carries its levels, changes the inexact directions at round-off; and the last
+    step to 30 %, where the blocks' rims meet and the layout changes with round-off
+    (docs/finite_strain.md Sect. 14), took 7 Newton steps against 5 in the restarted run even with
+    LU."""
     from contactqvi.paraview import read_vtx
     from contactqvi.runner import run_case
 
@@ -219,14 +222,15 @@ def test_a_restarted_path_is_the_uninterrupted_one(mpi_tmp_path):
     run_case(case, parts, comm, plot=False, stop_after=3)
     continued, code = run_case(case, parts, comm, plot=False, restart=True)
     assert code == 0
+    bound = 1e-12 if comm.size == 1 else 1e-11
     counts = np.array([[a["iterations"], b["iterations"]] for a, b in zip(full["steps"], continued["steps"])])
     assert np.abs(np.diff(counts, axis=1)).max() <= 1, counts  # on 2 ranks once 4 against 3 (step 2)
     for a, b in zip(full["steps"], continued["steps"]):
         (fa,), (fb,) = a["pair_forces"].values(), b["pair_forces"].values()
-        assert np.abs(np.subtract(fa, fb)).max() <= 1e-12 * np.abs(fa).max(), (a["step"], fa, fb)
+        assert np.abs(np.subtract(fa, fb)).max() <= bound * np.abs(fa).max(), (a["step"], fa, fb)
     difference = None
     if comm.rank == 0:
         last = len(full["steps"]) - 1
         difference = float(np.abs(read_vtx(whole / "body.bp", last).point_data["displacement [m]"]
                                   - read_vtx(parts / "body.bp", last).point_data["displacement [m]"]).max())
-    assert comm.bcast(difference, root=0) <= 1e-12
+    assert comm.bcast(difference, root=0) <= bound
