@@ -423,13 +423,12 @@ class SCDNewtonSolver(PETScOwner):
         sqrt(gamma^2 + 1) ||u - d^|| for one gamma.
         """
         gamma, blk = self.gamma_nodes[:, None], self.problem.contact_blk
-        diff = self._work.y2
-        diff.pointwiseMult(self._gamma_dofs.inverse, r)
-        dhat.waxpy(-1.0, diff, u)  # non-contact dofs: (gamma I)^{-1}(gamma u - r) = u - r/gamma
         w = gamma * u.array.reshape(-1, 3)[blk] - r.array.reshape(-1, 3)[blk]
         v, z = resolvent(w, gamma[:, 0], self.problem.law)
-        dhat.array.reshape(-1, 3)[blk] = v
+        diff = self._work.y2
         self._difference(r, u, GraphPoint(0.0, v, z), diff)
+        dhat.waxpy(-1.0, diff, u)  # non-contact dofs: (gamma I)^{-1}(gamma u - r) = u - r/gamma
+        dhat.array.reshape(-1, 3)[blk] = v
         diff.pointwiseMult(diff, self._gamma_dofs.weight)
         norm = diff.norm()
         if self._carried is not None:  # the mixed method's constraint rows, as r's off the contact
