@@ -35,8 +35,8 @@ from contactqvi.parameters import ParameterError
 
 __all__ = ["ALPHA", "MODIFIED_AREAS", "MODIFIED_DUAL", "POLYGON_ORDER", "area_elements", "dual_coefficients",
            "facet_areas", "length", "magnitude", "modified_dual", "modified_shapes", "nodal_integrals",
-           "planar_jacobians", "quadratic_shapes", "quadrilateral_shapes", "reference_coordinates", "triangle_rule",
-           "unit_normals"]
+           "planar_jacobians", "quadratic_normals", "quadratic_shapes", "quadrilateral_shapes", "reference_coordinates",
+           "triangle_rule", "unit_normals"]
 
 #: The vertices of a facet with n vertices in the order round its polygon.
 POLYGON_ORDER = {3: [0, 1, 2], 4: [0, 1, 3, 2]}
@@ -204,6 +204,20 @@ def quadratic_shapes(L: np.ndarray) -> np.ndarray:
     """(..., 6) the Lagrange functions of a 6-node triangle at barycentric coordinates L (..., 3):
     the vertices' L_v (2 L_v - 1), then the edges' 4 L_(k+1) L_(k+2) (edge k opposite vertex k)."""
     return np.concatenate([L * (2.0 * L - 1.0), 4.0 * L[..., [1, 2, 0]] * L[..., [2, 0, 1]]], axis=-1)
+
+
+def quadratic_normals(L: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """(p, Q, 3) unit normals of 6-node triangles ``nodes`` (p, 6, 3), ordered as
+    :func:`quadratic_shapes`, at barycentric coordinates L (p, Q, 3): of the tangents
+    dx/dL_1 - dx/dL_0 and dx/dL_2 - dx/dL_0, not oriented."""
+    G = np.zeros((*L.shape[:-1], 6, 3))  # dN_a / dL_j
+    for k in range(3):
+        G[..., k, k] = 4.0 * L[..., k] - 1.0
+        G[..., 3 + k, (k + 1) % 3] = 4.0 * L[..., (k + 2) % 3]
+        G[..., 3 + k, (k + 2) % 3] = 4.0 * L[..., (k + 1) % 3]
+    dx = np.einsum("pqaj,pad->pqjd", G, nodes)
+    normal = np.cross(dx[..., 1, :] - dx[..., 0, :], dx[..., 2, :] - dx[..., 0, :])
+    return normal / length(normal)[..., None]
 
 
 #: Ñ = B N of the modified basis: the vertices' rows take alpha of the two edges at the vertex.

@@ -319,7 +319,7 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
                                        None if slave.sagitta is None else msagitta[0][pairs_m], exact)
         added = correction if added is None else added + correction
     elif slave.quadratic:
-        added = _normal_correction(V, slave, pairs_s, mx[pairs_m], mglob[pairs_m], current)
+        added = _normal_correction(V, slave, pairs_s, mglob[pairs_m], current)
     coupling, lumped_area, gap = _integrated(V, layout, slave, mx[pairs_m], current, None, excluded_blk,
                                              integrals, linearised, kept_blk, added)
     # a node farther than the search distance (default: its own size) cannot touch in this step
@@ -422,11 +422,9 @@ def _exact_correction(V: fem.FunctionSpace, slave_facets: np.ndarray, pairs_s: n
     taken between reference positions, whichever configuration the pairs were found in. The
     points of the discrete surfaces are those of the vertex triangles, curved by the sagittas of
     a second-order mesh or the midside nodes of quadratic elements. Collective."""
-    comm, index_map = V.mesh.comm, V.dofmap.index_map
     reference = V.tabulate_dof_coordinates()
     slave = surface_facets(V, slave_facets)
-    master = fetch_rows(comm, index_map, reference[:index_map.size_local], master_glob.ravel())
-    master = master.reshape(*master_glob.shape, 3)
+    master = _master_nodes(V, master_glob, reference)
     slave_x, slave_sagitta = slave.x[pairs_s], None if slave.sagitta is None else slave.sagitta[pairs_s]
     if slave.quadratic:  # the curved facets of quadratic displacements: their midside nodes
         slave_sagitta = _midside_offsets(reference[slave.blk[pairs_s]])
@@ -435,17 +433,23 @@ def _exact_correction(V: fem.FunctionSpace, slave_facets: np.ndarray, pairs_s: n
                                    exact, slave.quadratic)
 
 
-def _normal_correction(V: fem.FunctionSpace, slave: SurfaceFacets, pairs_s: np.ndarray, master_x: np.ndarray,
-                       master_glob: np.ndarray, current: np.ndarray) -> np.ndarray:
+def _normal_correction(V: fem.FunctionSpace, slave: SurfaceFacets, pairs_s: np.ndarray, master_glob: np.ndarray,
+                       current: np.ndarray) -> np.ndarray:
     """(P, 6, 3) what taking the separation of 6-node facets along the slave surface's own normal
     adds to D_ii times the separation of slave node i, per facet pair (the slave facets
-    ``pairs_s``, the master facets' vertex triangles ``master_x`` and global nodes ``master_glob``),
-    at the positions ``current`` (:func:`~contactqvi.contact.segments.normal_separation_integrals`).
-    Collective."""
-    comm, index_map = V.mesh.comm, V.dofmap.index_map
-    master = fetch_rows(comm, index_map, current[:index_map.size_local], master_glob.ravel())
-    return normal_separation_integrals(slave.x[pairs_s], -slave.normal[pairs_s], master_x[:, :3],
-                                       current[slave.blk[pairs_s]], master.reshape(*master_glob.shape, 3))
+    ``pairs_s``, the master facets' global nodes ``master_glob``), at the positions ``current``
+    (:func:`~contactqvi.contact.segments.normal_separation_integrals`). Collective."""
+    master = _master_nodes(V, master_glob, current)
+    return normal_separation_integrals(slave.x[pairs_s], -slave.normal[pairs_s], master[:, :3],
+                                       current[slave.blk[pairs_s]], master)
+
+
+def _master_nodes(V: fem.FunctionSpace, master_glob: np.ndarray, positions: np.ndarray) -> np.ndarray:
+    """(P, n, 3) the ``positions`` (local nodes, 3) of the master facets' global nodes ``master_glob``
+    (P, n), fetched from their owners. Collective."""
+    index_map = V.dofmap.index_map
+    master = fetch_rows(V.mesh.comm, index_map, positions[:index_map.size_local], master_glob.ravel())
+    return master.reshape(*master_glob.shape, 3)
 
 
 def _midside_offsets(nodes: np.ndarray) -> np.ndarray:

@@ -41,6 +41,7 @@ from contactqvi.contact.facets import (
     magnitude,
     modified_dual,
     planar_jacobians,
+    quadratic_normals,
     quadratic_shapes,
     quadrilateral_shapes,
     reference_coordinates,
@@ -401,23 +402,10 @@ def normal_separation_integrals(slave: np.ndarray, normal: np.ndarray, master: n
         Ls, Lm = _barycentric(s2[rows], points), _barycentric(m2[rows], points)
         x_s = np.einsum("pqk,pkd->pqd", quadratic_shapes(Ls), slave_nodes[rows])
         delta = x_s - np.einsum("pqk,pkd->pqd", quadratic_shapes(Lm), master_nodes[rows])
-        nu = _quadratic_normals(Ls, slave_nodes[rows])
+        nu = quadratic_normals(Ls, slave_nodes[rows])
         integrand = np.einsum("pqd,pqd->pq", nu, delta)[..., None] * nu - delta
         E[rows] += np.einsum("pq,pqi,pqd->pid", weights, modified_dual(Ls), integrand)
     return E
-
-
-def _quadratic_normals(L: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-    """(p, Q, 3) unit normals of 6-node triangles ``nodes`` (p, 6, 3) at barycentric coordinates L
-    (p, Q, 3): of the tangents dx/dL_1 - dx/dL_0 and dx/dL_2 - dx/dL_0."""
-    G = np.zeros((*L.shape[:-1], 6, 3))  # dN_a / dL_j
-    for k in range(3):
-        G[..., k, k] = 4.0 * L[..., k] - 1.0
-        G[..., 3 + k, (k + 1) % 3] = 4.0 * L[..., (k + 2) % 3]
-        G[..., 3 + k, (k + 2) % 3] = 4.0 * L[..., (k + 1) % 3]
-    dx = np.einsum("pqaj,pad->pqjd", G, nodes)
-    n = np.cross(dx[..., 1, :] - dx[..., 0, :], dx[..., 2, :] - dx[..., 0, :])
-    return n / np.linalg.norm(n, axis=-1)[..., None]
 
 
 def _edge_bubbles(L: np.ndarray) -> np.ndarray:
