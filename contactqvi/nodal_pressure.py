@@ -161,6 +161,7 @@ class _Line:
     change: fem.Function
     form: fem.Form
     linearised: fem.Function
+    missed: fem.Function
     theta: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0))
     residual: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0))
     alpha: float = 0.0
@@ -281,6 +282,12 @@ class NodalPressure:
         n = self.Q.dofmap.index_map.size_local
         return self.ratio.x.array[:n] - self.mean.x.array[:n]
 
+    def constraint_pressure(self) -> np.ndarray:
+        """U''(theta_a) (Jbar_a - theta_a) of the owned nodes at the last :meth:`update`: the pressure
+        that the linearised constraint adds to p_h in the Newton step's right-hand side (:meth:`condense_constraint`)."""
+        n = self.Q.dofmap.index_map.size_local
+        return self.modulus.x.array[:n] * self.constraint()
+
     def constraint_norm(self) -> float:
         """||w (Jbar - theta)|| (N; :meth:`_merit_weight`) over the ranks: the constraint's share of
         the mixed method's merit function (collective)."""
@@ -293,19 +300,25 @@ class NodalPressure:
         linearised constraint condensed (Sect. 7, (7.2))."""
         self.pressure.x.array[:] += self.modulus.x.array * (self.ratio.x.array - self.mean.x.array)
 
-    def start_line(self) -> None:
+    def start_line(self, missed: np.ndarray | None = None) -> None:
         """A line search from the current ``u`` (of the last :meth:`update`, the Newton step's
-        linearisation point u_k) begins: theta(alpha) = theta_k + alpha (Jbar_k - theta_k) +
-        dJbar_k[u - u_k] follows the trial points (:meth:`set_step`)."""
+        linearisation point u_k) begins: theta(alpha) = theta_k + alpha (Jbar_k - theta_k - e) +
+        dJbar_k[u - u_k] follows the trial points (:meth:`set_step`). ``missed``: e at the owned nodes,
+        the residual of the linearised constraint that an inexact solve of the Newton step left
+        (:attr:`~contactqvi.contact.pressure_schur.PressureSchur.missed`), or None (0)."""
         if self._line is None:
             anchor = fem.Function(self.u.function_space)
             change = fem.Function(self.u.function_space)
             form = fem.form(self.chi * ufl.TestFunction(self.Q) * _volume_change(anchor, True)[1](change) * self.dx)
-            self._line = _Line(anchor, change, form, fem.Function(self.Q))
+            self._line = _Line(anchor, change, form, fem.Function(self.Q), fem.Function(self.Q))
         line = self._line
         line.anchor.x.array[:] = self.u.x.array
         line.theta = self.mean.x.array.copy()
         line.residual = self.ratio.x.array - self.mean.x.array
+        if missed is not None:
+            line.missed.x.array[:len(missed)] = missed
+            line.missed.x.scatter_forward()
+            line.residual -= line.missed.x.array
         line.alpha, self._on_line = 0.0, True
 
     def set_step(self, alpha: float) -> None:

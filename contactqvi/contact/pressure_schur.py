@@ -123,6 +123,10 @@ class PressureSchur(PETScOwner):
         self._solution: PETSc.Vec | None = None
         self._condensed: PETSc.KSP | None = None  # J's own solver (:meth:`solve`)
         self._padded: tuple[PETSc.Vec, PETSc.Vec] = ()
+        self._constrained = False
+        #: after a constrained :meth:`solve`: the linearised constraint's residual e_p / V_a that the
+        #: solve left at the owned nodes (the Newton step's volume ratios take it, Sect. 7)
+        self.missed = np.empty(0)
 
     def petsc_objects(self) -> list[typing.Any]:
         return [self.cycle, self.P, self.reduced, self._shear_volume, self._scales, self._pressure,
@@ -194,10 +198,27 @@ class PressureSchur(PETScOwner):
         self.augmented.setUp()
         self._rhs, self._solution = self.augmented.createVecs()
 
+    def set_constraint(self, pressure: np.ndarray | None) -> None:
+        """The mixed Newton method's linearised constraint for the next :meth:`solve`: ``pressure`` =
+        U''(theta_a) (Jbar_a - theta_a) at the owned nodes, the pressure that its force g = L ``pressure``
+        in the right-hand side stands for (docs/nearly_incompressible.md, Sect. 7), or None (the
+        condensed method, linear bodies)."""
+        self._constrained = pressure is not None
+        if self._constrained:
+            self._pressure.c.array[:] = pressure
+
     def solve(self, ksp: PETSc.KSP, rhs: PETSc.Vec, du: PETSc.Vec) -> tuple[PETSc.KSP, int]:
-        """du with ||rhs - J du|| <= rtol ||rhs|| (``ksp``'s rtol) by ``ksp`` (whose PC :meth:`context`
-        is) on the uncondensed system, from (du, D P du) (after :meth:`update`). Returns the KSP
-        whose converged reason is the solve's and the Krylov iterations.
+        """du of J du = rhs (after :meth:`update`) by ``ksp`` (whose PC :meth:`context` is) on the
+        uncondensed system, to ``ksp``'s rtol. Returns the KSP whose converged reason is the solve's
+        and the Krylov iterations.
+
+        *The mixed method* (:meth:`set_constraint`): the constraint's rows are the pressure rows,
+        rhs = (rhs + L c_p, -Lambda D^-1 c_p) with c_p = U''(theta) (Jbar - theta), so the uncondensed
+        residual is that of the (u, theta) Newton system with the constraint's rows in the merit
+        function's weights (Lambda D^-1 c_p = w (Jbar - theta), w_a = mu_a V_a^(2/3), (7.3)), and rtol
+        is the inexact Newton test in the merit's own norm. One solve, from (du, D P du + c_p).
+
+        *Otherwise* the test is ||rhs - J du|| <= rtol ||rhs|| on the condensed residual, from (du, D P du).
 
         The uncondensed residual (e_u, Lambda e_p) leaves J's residual e_u + L D e_p: the pressure rows'
         residual e_p comes back multiplied by the bulk modulus. So the solve goes on, from where it
@@ -213,9 +234,19 @@ class PressureSchur(PETScOwner):
         """
         q, d = self._pressure, self._displacement
         du.copy(d.start)
-        self._merge(rhs, q.zero(), self._rhs)
         self.P.mult(du, q.x)
         q.x.pointwiseMult(q.x, self._scales.modulus)
+        if self._constrained:
+            q.x.axpy(1.0, q.c)
+            rhs.copy(d.y)
+            q.c.copy(q.t)
+            q.t.scale(-1.0)
+            self._subtract_L(q.t, d.y)  # rhs + L c_p
+            q.t.pointwiseMult(q.t, self._scales.compliance)
+            q.t.pointwiseMult(q.t, self._scales.force)  # -Lambda D^-1 c_p
+            self._merge(d.y, q.t, self._rhs)
+        else:
+            self._merge(rhs, q.zero(), self._rhs)
         self._merge(du, q.x, self._solution)
         ksp.setOperators(self.augmented)
         rtol = ksp.getTolerances()[0]
@@ -224,7 +255,9 @@ class PressureSchur(PETScOwner):
             ksp.solve(self._rhs, self._solution)
             iterations += ksp.getIterationNumber()
             self._split(self._solution, du, q.x)
-            if ksp.getConvergedReason() < 0:
+            if self._constrained:
+                self._set_missed(du, q.x, ksp.getConvergedReason() >= 0)
+            if ksp.getConvergedReason() < 0 or self._constrained:
                 break
             self._J.mult(du, d.y)
             d.y.aypx(-1.0, rhs)
@@ -243,6 +276,21 @@ class PressureSchur(PETScOwner):
         d.start.copy(du)
         condensed.solve(rhs, du)
         return condensed, iterations + condensed.getIterationNumber()
+
+    def _set_missed(self, du: PETSc.Vec, p: PETSc.Vec, converged: bool) -> None:
+        """:attr:`missed` of the constrained solve that gave (du, p): the pressure rows' residual
+        e_p = P du - D^-1 (p - c_p) over V_a, or zero if the solve failed (J is then solved, and the
+        constraint's linearisation holds exactly)."""
+        q = self._pressure
+        if not converged:
+            self.missed = np.zeros(q.x.getLocalSize())
+            return
+        self.P.mult(du, q.y)
+        q.t.waxpy(-1.0, q.c, p)
+        q.t.pointwiseMult(q.t, self._scales.compliance)
+        q.y.axpy(-1.0, q.t)
+        volume = self.volumetric.nodal.volume.x.petsc_vec.array_r
+        self.missed = np.divide(q.y.array_r, volume, out=np.zeros_like(volume), where=volume > 0)
 
     def _condensed_solver(self, ksp: PETSc.KSP) -> PETSc.KSP:
         """The KSP of :meth:`solve`'s solves of J (made at the first; options prefix ``ksp``'s and
@@ -329,11 +377,12 @@ class _Displacement(VectorSet):
 
 @dataclasses.dataclass
 class _Pressure(VectorSet):
-    """Work vectors of the nodal pressure's layout."""
+    """Work vectors of the nodal pressure's layout; ``c`` the constraint's pressure (:meth:`PressureSchur.set_constraint`)."""
 
     x: PETSc.Vec
     y: PETSc.Vec
     t: PETSc.Vec
+    c: PETSc.Vec
 
     def zero(self) -> PETSc.Vec:
         """y set to zero."""

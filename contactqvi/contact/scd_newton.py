@@ -305,6 +305,8 @@ class SCDNewtonSolver(PETScOwner):
         self._exact: tuple[np.ndarray, np.ndarray] | None = None  # ... and its rows with known du, du there
         self._work = WorkVectors.create(A)
         self._carried: NodalPressure | None = None  # the mixed method's nodal volume, during a solve
+        self._constraint: np.ndarray | None = None  # its U''(theta) (Jbar - theta) at the Newton step's iterate
+        self._missed: np.ndarray | None = None  # and the linearised constraint's residual the step's solve left
 
     def petsc_objects(self) -> list[typing.Any]:
         objects = [self.step_solver, self._newton, self._near_nullspace, self._work, self._gamma_dofs]
@@ -571,8 +573,10 @@ class SCDNewtonSolver(PETScOwner):
         w = self._work
         self._newton.set_blocks(Wt, Ut)
         self._newton.mult_blocks(y2, w.rhs, self._gamma_dofs.gamma)  # y1^ = Gamma y2^
+        self._constraint = None
         if self._carried is not None:
             self._newton.mult_add_D(self._constraint_force(u), w.rhs)
+            self._constraint = self._carried.constraint_pressure()
         w.rhs.scale(-1.0)
         w.du.set(0.0)
         self._rhs_ratio = 1.0
@@ -622,7 +626,11 @@ class SCDNewtonSolver(PETScOwner):
         w = self._work
         if self.step_solver.pressure is not None:
             self.step_solver.pressure.update(J, self._newton, self.problem.to_global, self._eliminated)
+            self.step_solver.pressure.set_constraint(self._constraint)
         reason = self.step_solver.solve(J, self._newton.change, kinds, w.rhs, w.du, tol, self._rhs_ratio)
+        pressure = self.step_solver.pressure
+        self._missed = None if pressure is None or self._constraint is None or self.step_solver.fallback else \
+            pressure.missed
         if self._exact is not None:
             rows, values = self._exact
             w.du.array[rows] = values
@@ -645,7 +653,7 @@ class SCDNewtonSolver(PETScOwner):
             self.problem.set_search_line(u, w.du)
         bound = 1.0 + 0.1 / (k + 1)
         if self._carried is not None:
-            self._carried.start_line()
+            self._carried.start_line(self._missed)
         for alpha in self._steps:
             if self._carried is not None:
                 self._carried.set_step(float(alpha))
