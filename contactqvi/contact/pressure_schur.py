@@ -24,11 +24,14 @@ factorisation (the block preconditioners of saddle-point systems, Elman, Silvest
     y = G r,   p = S~^-1 (P y - Lambda^-1 q),   du = G (r - L p),
 
 preconditions it, with G one BoomerAMG V-cycle on J_r (no term of the bulk modulus) and
-S~ = D^-1 + c M_L / mu the lumped approximation of its Schur complement D^-1 + P J_r^-1 L
-(M_L = diag(V_a), mu the nodal shear modulus, c = :data:`SHEAR_FACTOR`). Where the
-displacement-pressure pair is inf-sup stable (quadratic displacements with the nodal P1
+S~ = D^-1 + s S_loc the approximation of its Schur complement D^-1 + P J_r^-1 L by the summed
+element Schur complements S_loc of the shear stiffness (:mod:`contactqvi.contact.local_schur`;
+s = :data:`SCHUR_SCALE`), solved exactly (options prefix ``{prefix}schur_``, MUMPS by default).
+Where the displacement-pressure pair is inf-sup stable (quadratic displacements with the nodal P1
 pressure: a Taylor-Hood pair with a lumped pressure mass) the preconditioned system's
-eigenvalues are bounded independently of the bulk modulus.
+eigenvalues are bounded independently of the bulk modulus. Up to session 41 S~ was
+D^-1 + c M_L / mu (M_L = diag(V_a)): exact where D^-1 dominates, near nu = 0.5 only spectrally
+equivalent, with constants of the cells' shapes (docs/nearly_incompressible.md, Sect. 5).
 
 Krylov iterations on J itself with the same sweep (the Woodbury formula with S~ for S; up to
 session 35) are not: J's preconditioned operator is I + L D (S~ - S) S~^-1 P J_r^-1, whose
@@ -67,6 +70,7 @@ import ufl
 import dolfinx.fem.petsc
 from dolfinx import fem
 
+from contactqvi.contact.local_schur import local_schur
 from contactqvi.contact.newton_matrix import NewtonMatrix
 from contactqvi.lifetime import PETScOwner, VectorSet
 from contactqvi.linalg import OptionsDict, create_ksp, default_options, preset, significant
@@ -76,10 +80,11 @@ __all__ = ["PressureSchur"]
 
 _DIFFERENT = PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN
 
-#: c of S~ = D^-1 + c M_L / mu. Measured on the wavy block with quadratic displacements (linear
-#: elasticity, exact solves with J_r; Krylov iterations per Newton step at nu = 0.45 / 0.4999):
-#: c = 0.5: 17.3 / 27.4; 1: 9.4 / 14.1; 2: 4.8 / 10.7; 3: 5.7 / 12.3; 5: 6.5 / 14.2.
-SHEAR_FACTOR = 2.0
+#: s of S~ = D^-1 + s S_loc (S_loc bounds P J_r^-1 L from above). Measured on the P2 O-ring (h 0.25,
+#: the first six steps, exact solves of J_r; Krylov iterations per Newton step at nu = 0.45 / 0.4999):
+#: s = 1: 6.3 / 11.8; 0.5: 5.2 / 9.6; 0.25: 6.1 / 10.5; with the V-cycle, 20 steps: 0.5: 10.0 / 14.6,
+#: 0.35: 11.3 / 16.1 (docs/nearly_incompressible.md, Sect. 5).
+SCHUR_SCALE = 0.5
 #: J_r = J - W P^T D P keeps J's entries of B^T D B, which couples every displacement dof with
 #: the 2-ring of cells around it, as terms cancelled to round-off (bulk over shear modulus times
 #: eps of their row); the V-cycle takes J_r without its entries below this fraction of their row.
@@ -116,6 +121,10 @@ class PressureSchur(PETScOwner):
         self._J: PETSc.Mat | None = None  # the Newton matrix of the last update (not owned)
         self._newton: NewtonMatrix | None = None
         self._scales = _Scales.create(self._shear_volume)
+        self._local = local_schur(nodal.u.function_space, nodal.Q, mu, nodal.chi)  # s S_loc
+        self._local.scale(SCHUR_SCALE)
+        self._schur = self._local.duplicate(copy=True)  # S~
+        self._schur_solver = create_ksp(volumetric.B.getComm(), f"{prefix}schur_", preset("lu"), self._schur)
         self._pressure = _Pressure.create(self._shear_volume)
         self._displacement: _Displacement | None = None
         self.augmented: PETSc.Mat | None = None  # the uncondensed system's operator
@@ -129,7 +138,8 @@ class PressureSchur(PETScOwner):
         self.missed = np.empty(0)
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [self.cycle, self.P, self.reduced, self._shear_volume, self._scales, self._pressure,
+        return [self.cycle, self.P, self.reduced, self._shear_volume, self._scales, self._local, self._schur,
+                self._schur_solver, self._pressure,
                 self._displacement, self.augmented, self._rhs, self._solution, self._condensed, *self._padded]
 
     def update(self, J: PETSc.Mat, newton: NewtonMatrix, transform: PETSc.Mat | None, eliminated: np.ndarray) -> None:
@@ -172,9 +182,9 @@ class PressureSchur(PETScOwner):
         kept.destroy()
 
     def _set_pressure_scales(self) -> None:
-        """D's diagonal d_a = U''_a / V_a, 1 / d_a, S~^-1 = 1 / (1 / d_a + c V_a^2 / int chi mu phi_a)
-        (c = :data:`SHEAR_FACTOR`) and Lambda_a = mu_a / h_a = int chi mu phi_a / V_a^(4/3); at the nodes
-        of no averaged cell (P's zero rows, d_a = 0) 1, 1 and 1: there the system reads -Lambda p = q."""
+        """D's diagonal d_a = U''_a / V_a, 1 / d_a, Lambda_a = mu_a / h_a = int chi mu phi_a / V_a^(4/3)
+        (at the nodes of no averaged cell, P's zero rows with d_a = 0: 0, 1 and 1; there the system reads
+        -Lambda p = q) and S~ = diag(1 / d_a) + s S_loc, factorised."""
         modulus = self.volumetric.D.getDiagonal()
         d = modulus.array_r
         volume = self.volumetric.nodal.volume.x.petsc_vec.array_r
@@ -183,10 +193,11 @@ class PressureSchur(PETScOwner):
         s = self._scales
         s.modulus.array[:] = np.where(inside, d, 0.0)
         s.compliance.array[:] = np.divide(1.0, d, out=np.ones_like(d), where=inside)
-        schur = s.compliance.array_r + SHEAR_FACTOR * np.divide(volume**2, shear, out=np.zeros_like(d), where=inside)
-        s.schur_inverse.array[:] = 1.0 / schur
         s.force.array[:] = np.divide(shear, np.cbrt(volume) * volume, out=np.ones_like(d), where=inside)
         modulus.destroy()
+        self._local.copy(self._schur, PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        self._schur.setDiagonal(s.compliance, addv=PETSc.InsertMode.ADD_VALUES)
+        self._schur_solver.setUp()
 
     def _create_augmented(self, J: PETSc.Mat) -> None:
         """The uncondensed system's operator (a ``python`` Mat, :meth:`_mult`) and vectors: the
@@ -333,10 +344,10 @@ class PressureSchur(PETScOwner):
         self.P.mult(d.y, q.y)
         q.x.pointwiseDivide(q.x, s.force)
         q.y.axpy(-1.0, q.x)
-        q.y.pointwiseMult(q.y, s.schur_inverse)
-        self._subtract_L(q.y, d.x)
+        self._schur_solver.solve(q.y, q.t)
+        self._subtract_L(q.t, d.x)
         self.cycle.solve(d.x, d.y)
-        self._merge(d.y, q.y, z)
+        self._merge(d.y, q.t, z)
 
     def _subtract_L(self, p: PETSc.Vec, u: PETSc.Vec) -> None:
         """u -= L p = W P^T p."""
@@ -396,7 +407,6 @@ class _Scales(VectorSet):
 
     modulus: PETSc.Vec
     compliance: PETSc.Vec
-    schur_inverse: PETSc.Vec
     force: PETSc.Vec
 
 
