@@ -26,7 +26,7 @@ factorisation (the block preconditioners of saddle-point systems, Elman, Silvest
 preconditions it, with G one BoomerAMG V-cycle on J_r (no term of the bulk modulus) and
 S~ = D^-1 + s S_loc the approximation of its Schur complement D^-1 + P J_r^-1 L by the summed
 element Schur complements S_loc of the shear stiffness (:mod:`contactqvi.contact.local_schur`;
-s = :data:`SCHUR_SCALE`), solved exactly (options prefix ``{prefix}schur_``, MUMPS by default).
+s = :data:`SCHUR_SCALE`), solved exactly (MUMPS; options prefix the V-cycle's + ``schur_``).
 Where the displacement-pressure pair is inf-sup stable (quadratic displacements with the nodal P1
 pressure: a Taylor-Hood pair with a lumped pressure mass) the preconditioned system's
 eigenvalues are bounded independently of the bulk modulus. Up to session 41 S~ was
@@ -244,21 +244,7 @@ class PressureSchur(PETScOwner):
         convergence, where J's own solve converges in 300).
         """
         q, d = self._pressure, self._displacement
-        du.copy(d.start)
-        self.P.mult(du, q.x)
-        q.x.pointwiseMult(q.x, self._scales.modulus)
-        if self._constrained:
-            q.x.axpy(1.0, q.c)
-            rhs.copy(d.y)
-            q.c.copy(q.t)
-            q.t.scale(-1.0)
-            self._subtract_L(q.t, d.y)  # rhs + L c_p
-            q.t.pointwiseMult(q.t, self._scales.compliance)
-            q.t.pointwiseMult(q.t, self._scales.force)  # -Lambda D^-1 c_p
-            self._merge(d.y, q.t, self._rhs)
-        else:
-            self._merge(rhs, q.zero(), self._rhs)
-        self._merge(du, q.x, self._solution)
+        self._set_start(rhs, du)
         ksp.setOperators(self.augmented)
         rtol = ksp.getTolerances()[0]
         target, iterations = rtol * rhs.norm(), 0
@@ -287,6 +273,28 @@ class PressureSchur(PETScOwner):
         d.start.copy(du)
         condensed.solve(rhs, du)
         return condensed, iterations + condensed.getIterationNumber()
+
+    def _set_start(self, rhs: PETSc.Vec, du: PETSc.Vec) -> None:
+        """The uncondensed right-hand side and start of :meth:`solve` (``du`` kept in the work vector
+        ``start``): (rhs + L c_p, -Lambda D^-1 c_p) and (du, D P du + c_p) in the mixed method, else
+        (rhs, 0) and (du, D P du)."""
+        q, d = self._pressure, self._displacement
+        du.copy(d.start)
+        self.P.mult(du, q.x)
+        q.x.pointwiseMult(q.x, self._scales.modulus)
+        if not self._constrained:
+            self._merge(rhs, q.zero(), self._rhs)
+            self._merge(du, q.x, self._solution)
+            return
+        q.x.axpy(1.0, q.c)
+        rhs.copy(d.y)
+        q.c.copy(q.t)
+        q.t.scale(-1.0)
+        self._subtract_L(q.t, d.y)  # rhs + L c_p
+        q.t.pointwiseMult(q.t, self._scales.compliance)
+        q.t.pointwiseMult(q.t, self._scales.force)  # -Lambda D^-1 c_p
+        self._merge(d.y, q.t, self._rhs)
+        self._merge(du, q.x, self._solution)
 
     def _set_missed(self, du: PETSc.Vec, p: PETSc.Vec, converged: bool) -> None:
         """:attr:`missed` of the constrained solve that gave (du, p): the pressure rows' residual
