@@ -284,7 +284,8 @@ class NodalPressure:
 
     def constraint_pressure(self) -> np.ndarray:
         """U''(theta_a) (Jbar_a - theta_a) of the owned nodes at the last :meth:`update`: the pressure
-        that the linearised constraint adds to p_h in the Newton step's right-hand side (:meth:`condense_constraint`)."""
+        that the linearised constraint adds to p_h in the Newton step's right-hand side
+        (:meth:`condense_constraint`)."""
         n = self.Q.dofmap.index_map.size_local
         return self.modulus.x.array[:n] * self.constraint()
 

@@ -21,6 +21,7 @@ import pytest
 import ufl
 
 import dolfinx.fem.petsc
+import dolfinx.mesh
 from dolfinx import fem
 
 from contactqvi.case import parse_case
@@ -293,7 +294,9 @@ def _schur_complement_pair(msh) -> tuple[np.ndarray, np.ndarray, float]:
 
 
 def _distorted_box(comm: MPI.Comm):
-    msh = dolfinx.mesh.create_box(comm, [[0.0, 0.0, 0.0], [1.0, 2.0, 0.5]], [3, 3, 2], dolfinx.mesh.CellType.tetrahedron)
+    """A 1 x 2 x 0.5 box of 3 x 3 x 2 x 6 tetrahedra, sheared by a sine."""
+    msh = dolfinx.mesh.create_box(comm, [[0.0, 0.0, 0.0], [1.0, 2.0, 0.5]], [3, 3, 2],
+                                  dolfinx.mesh.CellType.tetrahedron)
     x = msh.geometry.x
     x[:, 0] += 0.1 * np.sin(3.0 * x[:, 1]) * x[:, 2]
     return msh

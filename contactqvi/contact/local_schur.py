@@ -8,8 +8,9 @@ int 2 mu eps(u) : eps(v) and B_e its block of B = int chi phi_a div v (reference
     S_e = B_e A_e^+ B_e^T,   S_loc = sum_e S_e                                              (1)
 
 (A_e^+ the pseudo-inverse: A_e vanishes on the cell's rigid motions, which B_e does not see, as
-div vanishes on them; computed as (A_e + a R R^T)^-1 with R their orthonormal basis). S_loc bounds the true S = B A^-1 B^T from above, because
-p^T S p = sup_v 2 p^T B v - v^T A v and giving every cell its own v only enlarges the sup; where
+div vanishes on them; computed as (A_e + a R R^T)^-1 with R their orthonormal basis). S_loc
+bounds the true S = B A^-1 B^T from above, because p^T S p = sup_v 2 p^T B v - v^T A v and giving
+every cell its own v only enlarges the sup; where
 the pair is inf-sup stable cell by cell (P2 displacements, P1 pressure: div maps a P2 tetrahedron's
 fields onto the P1 functions) each S_e is definite, and S_loc is spectrally equivalent to S with
 constants of the cells' shapes, not of their aspect ratios and moduli alone as the lumped mass
@@ -28,6 +29,8 @@ import ufl
 
 import dolfinx.fem.petsc
 from dolfinx import fem
+
+from contactqvi.elasticity import strain
 
 __all__ = ["local_schur"]
 
@@ -81,12 +84,10 @@ def local_schur(V: fem.FunctionSpace, Q: fem.FunctionSpace, mu: typing.Any, chi:
     degree = V.ufl_element().embedded_superdegree
     broken_u = fem.functionspace(msh, basix.ufl.element("Lagrange", cell, degree, shape=(3,), discontinuous=True))
     broken_p = fem.functionspace(msh, basix.ufl.element("Lagrange", cell, 1, discontinuous=True))
-    u, v = ufl.TrialFunction(broken_u), ufl.TestFunction(broken_u)
-    p, q = ufl.TrialFunction(broken_p), ufl.TestFunction(broken_p)
-    eps = lambda w: ufl.sym(ufl.grad(w))  # noqa: E731
+    u, v, q = ufl.TrialFunction(broken_u), ufl.TestFunction(broken_u), ufl.TestFunction(broken_p)
     n_cells = msh.topology.index_map(msh.topology.dim).size_local
     inside = np.flatnonzero(chi.x.array[:n_cells] > 0.5).astype(np.int32)
-    A = _cell_blocks(2 * mu * ufl.inner(eps(u), eps(v)) * ufl.dx, broken_u, broken_u, inside)
+    A = _cell_blocks(2 * mu * ufl.inner(strain(u), strain(v)) * ufl.dx, broken_u, broken_u, inside)
     B = _cell_blocks(chi * q * ufl.div(u) * ufl.dx, broken_p, broken_u, inside)
     S = B @ np.linalg.solve(A + _rigid_projector(broken_u, inside, A), np.swapaxes(B, 1, 2))
     index_map = Q.dofmap.index_map

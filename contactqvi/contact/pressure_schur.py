@@ -396,7 +396,8 @@ class _Displacement(VectorSet):
 
 @dataclasses.dataclass
 class _Pressure(VectorSet):
-    """Work vectors of the nodal pressure's layout; ``c`` the constraint's pressure (:meth:`PressureSchur.set_constraint`)."""
+    """Work vectors of the nodal pressure's layout; ``c`` the constraint's pressure
+    (:meth:`PressureSchur.set_constraint`)."""
 
     x: PETSc.Vec
     y: PETSc.Vec
