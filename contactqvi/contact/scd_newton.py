@@ -576,7 +576,8 @@ class SCDNewtonSolver(PETScOwner):
         self._constraint = None
         if self._carried is not None:
             self._newton.mult_add_D(self._constraint_force(u), w.rhs)
-            self._constraint = self._carried.constraint_pressure()
+            if not self.problem.law.frictional:  # docs/nearly_incompressible.md, Sect. 7: J's test with friction
+                self._constraint = self._carried.constraint_pressure()
         w.rhs.scale(-1.0)
         w.du.set(0.0)
         self._rhs_ratio = 1.0
