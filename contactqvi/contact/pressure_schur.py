@@ -9,8 +9,13 @@ matrix of (5.4) (seed 000) is, in the solver's variables (T the change of variab
 
 with J_r the Newton matrix of everything but the averaged term B^T D B and W the rows' left
 factor of (5.4) (the identity off the contact nodes,
-:class:`~contactqvi.contact.newton_matrix.NewtonMatrix`). J is the Schur complement of the
-uncondensed system
+:class:`~contactqvi.contact.newton_matrix.NewtonMatrix`). With rows eliminated by the SCD solver
+(identity rows, their columns moved to the right-hand side) P loses their columns and L their
+rows, but not their columns: L = K W (B T)^T, K the identity but at the eliminated rows. W couples
+a sliding node's tangential rows to its normal row (Coulomb's bound follows the normal force),
+which is eliminated; with L = W P^T those rows kept the bulk term in J_r (up to session 42: every
+Krylov solve of a frictional Taylor-Hood block failed from nu = 0.49 on). J is the Schur complement
+of the uncondensed system
 
     [ J - L D P   L             ] [du]   [r]
     [ Lambda P    -Lambda D^-1  ] [ p] = [0],
@@ -44,7 +49,8 @@ goes on until J's residual meets the test). For linear displacements (P1/P1) the
 the pair does not control are left to the Krylov method, and the counts grow as with GAMG.
 
 Eliminated rows (the SCD solver's identity rows, :meth:`NewtonMatrix.assemble`) have zero
-columns in J: P gets them too, so that J_r keeps J's identity rows and columns there.
+columns in J: P gets them too, and L zero rows, so that J_r keeps J's identity rows and columns
+there.
 
 The V-cycle takes J_r without two things of J (docs/nearly_incompressible.md, Sect. 5):
 
@@ -116,7 +122,9 @@ class PressureSchur(PETScOwner):
         self._shear_volume = dolfinx.fem.petsc.assemble_vector(
             fem.form(nodal.chi * mu * ufl.TestFunction(nodal.Q) * nodal.dx))
         self._shear_volume.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        self.P: PETSc.Mat | None = None
+        self.P: PETSc.Mat | None = None  # B T without the eliminated columns
+        self._full: PETSc.Mat | None = None  # B T
+        self._kept = volumetric.B.createVecRight()  # 0 at the eliminated rows, else 1
         self.reduced: PETSc.Mat | None = None  # J_r
         self._J: PETSc.Mat | None = None  # the Newton matrix of the last update (not owned)
         self._newton: NewtonMatrix | None = None
@@ -138,7 +146,7 @@ class PressureSchur(PETScOwner):
         self.missed = np.empty(0)
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [self.cycle, self.P, self.reduced, self._shear_volume, self._scales, self._local, self._schur,
+        return [self.cycle, self.P, self._full, self._kept, self.reduced, self._shear_volume, self._scales, self._local, self._schur,
                 self._schur_solver, self._pressure,
                 self._displacement, self.augmented, self._rhs, self._solution, self._condensed, *self._padded]
 
@@ -148,21 +156,25 @@ class PressureSchur(PETScOwner):
         ``eliminated`` by the SCD solver (collective)."""
         self._newton = newton
         B = self.volumetric.B
-        if self.P is not None:
-            self.P.destroy()
-        self.P = B.matMult(transform) if transform is not None else B.copy()
-        kept = J.createVecRight()
-        kept.set(1.0)
-        kept.array[eliminated] = 0.0
-        self.P.diagonalScale(R=kept)
-        averaged = self.volumetric.D.PtAP(self.P)  # P^T D P
+        for matrix in (self.P, self._full):
+            if matrix is not None:
+                matrix.destroy()
+        self._full = B.matMult(transform) if transform is not None else B.copy()  # B T
+        self._kept.set(1.0)
+        self._kept.array[eliminated] = 0.0
+        self.P = self._full.copy()
+        self.P.diagonalScale(R=self._kept)
+        product = self.volumetric.D.matMult(self.P)
+        averaged = self._full.transposeMatMult(product)  # (B T)^T D P
+        product.destroy()
         stress = self.volumetric.initial_stress
         if stress is not None:  # + T^T K_p T
             moved = stress.PtAP(transform) if transform is not None else stress.copy()
-            moved.diagonalScale(L=kept, R=kept)
+            moved.diagonalScale(R=self._kept)
             averaged.axpy(1.0, moved, _DIFFERENT)
             moved.destroy()
-        scaled = newton.left_scaled(averaged)  # W (P^T D P + T^T K_p T)
+        scaled = newton.left_scaled(averaged)  # W ((B T)^T D P + T^T K_p T)
+        scaled.diagonalScale(L=self._kept)
         averaged.destroy()
         wide = J.duplicate(copy=True)  # the matrices of J's 2-ring pattern go as soon as done with
         wide.axpy(-1.0, scaled, _DIFFERENT)
@@ -179,7 +191,6 @@ class PressureSchur(PETScOwner):
         self._set_pressure_scales()
         if self.augmented is None:
             self._create_augmented(J)
-        kept.destroy()
 
     def _set_pressure_scales(self) -> None:
         """D's diagonal d_a = U''_a / V_a, 1 / d_a, Lambda_a = mu_a / h_a = int chi mu phi_a / V_a^(4/3)
@@ -358,10 +369,11 @@ class PressureSchur(PETScOwner):
         self._merge(d.y, q.t, z)
 
     def _subtract_L(self, p: PETSc.Vec, u: PETSc.Vec) -> None:
-        """u -= L p = W P^T p."""
+        """u -= L p = K W (B T)^T p (K the identity but at the eliminated rows)."""
         t = self._displacement
-        self.P.multTranspose(p, t.t)
+        self._full.multTranspose(p, t.t)
         self._newton.left_scale(t.t, t.w)
+        t.w.pointwiseMult(t.w, self._kept)
         u.axpy(-1.0, t.w)
 
     def _split(self, x: PETSc.Vec, u: PETSc.Vec, p: PETSc.Vec) -> None:
