@@ -29,6 +29,7 @@ __all__ = [
     "stress",
     "elasticity_forms",
     "pressure_form",
+    "rigid_motions",
     "rigid_motions_nullspace",
 ]
 
@@ -236,6 +237,22 @@ def displacement_degree(V: fem.FunctionSpace) -> int:
     return V.ufl_element().basix_element.degree
 
 
+def rigid_motions(x: np.ndarray) -> np.ndarray:
+    """(..., gdim, modes) the rigid motions at points x (..., gdim): the gdim translations, then the
+    rotations (three in 3D, one in 2D), by component."""
+    gdim = x.shape[-1]
+    modes = np.zeros((*x.shape, gdim + (3 if gdim == 3 else 1)))
+    for i in range(gdim):
+        modes[..., i, i] = 1.0
+    if gdim == 3:
+        modes[..., 0, 3], modes[..., 1, 3] = -x[..., 1], x[..., 0]
+        modes[..., 0, 4], modes[..., 2, 4] = x[..., 2], -x[..., 0]
+        modes[..., 2, 5], modes[..., 1, 5] = x[..., 1], -x[..., 2]
+    else:
+        modes[..., 0, 2], modes[..., 1, 2] = -x[..., 1], x[..., 0]
+    return modes
+
+
 def rigid_motions_nullspace(V: fem.FunctionSpace, node_body: np.ndarray | None = None) -> PETSc.NullSpace:
     """Orthonormal rigid-body modes (3 translations, 3 rotations in 3D; 2 + 1 in 2D).
 
@@ -246,19 +263,12 @@ def rigid_motions_nullspace(V: fem.FunctionSpace, node_body: np.ndarray | None =
     msh = V.mesh
     gdim = msh.geometry.dim
     index_map, bs = V.dofmap.index_map, V.dofmap.index_map_bs
-    n_rot = 3 if gdim == 3 else 1
-    basis = [la.vector(index_map, bs=bs, dtype=PETSc.ScalarType) for _ in range(gdim + n_rot)]
     n_owned = index_map.size_local
-    x = V.tabulate_dof_coordinates()[:n_owned]
+    modes = rigid_motions(V.tabulate_dof_coordinates()[:n_owned, :gdim])
+    basis = [la.vector(index_map, bs=bs, dtype=PETSc.ScalarType) for _ in range(modes.shape[-1])]
     values = [b.array[: n_owned * bs].reshape(-1, bs) for b in basis]
-    for i in range(gdim):
-        values[i][:, i] = 1.0
-    if gdim == 3:
-        values[3][:, 0], values[3][:, 1] = -x[:, 1], x[:, 0]
-        values[4][:, 0], values[4][:, 2] = x[:, 2], -x[:, 0]
-        values[5][:, 2], values[5][:, 1] = x[:, 1], -x[:, 2]
-    else:
-        values[2][:, 0], values[2][:, 1] = -x[:, 1], x[:, 0]
+    for i, b in enumerate(values):
+        b[:] = modes[..., i]
     if node_body is not None:
         owned_body = node_body[:n_owned]
         bodies = V.mesh.comm.allreduce(int(owned_body.max(initial=-1)), op=MPI.MAX) + 1

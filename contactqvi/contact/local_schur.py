@@ -30,7 +30,7 @@ import ufl
 import dolfinx.fem.petsc
 from dolfinx import fem
 
-from contactqvi.elasticity import strain
+from contactqvi.elasticity import rigid_motions, strain
 
 __all__ = ["local_schur"]
 
@@ -66,12 +66,8 @@ def _rigid_projector(V: fem.FunctionSpace, cells: np.ndarray, A: np.ndarray) -> 
     the broken vector space ``V`` and a the mean of the diagonal of its cell matrix ``A``: A + a R R^T
     is regular, and B_e (A + a R R^T)^-1 B_e^T = B_e A^+ B_e^T, because B_e vanishes on R."""
     x = V.tabulate_dof_coordinates()[V.dofmap.list[cells]]  # (cells, nodes, 3)
-    x = x - x.mean(axis=1, keepdims=True)
-    modes = np.zeros((*x.shape, 6))  # (cells, nodes, component, mode)
-    modes[:, :, [0, 1, 2], [0, 1, 2]] = 1.0
-    for k, (i, j) in enumerate([(1, 2), (2, 0), (0, 1)]):  # e_k x x
-        modes[:, :, j, 3 + k], modes[:, :, i, 3 + k] = x[:, :, i], -x[:, :, j]
-    R = np.linalg.qr(modes.reshape(len(cells), -1, 6))[0]
+    modes = rigid_motions(x - x.mean(axis=1, keepdims=True))  # (cells, nodes, component, mode)
+    R = np.linalg.qr(modes.reshape(len(cells), -1, modes.shape[-1]))[0]
     scale = np.trace(A, axis1=1, axis2=2) / A.shape[1]
     return scale[:, None, None] * R @ np.swapaxes(R, 1, 2)
 

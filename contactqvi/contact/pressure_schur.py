@@ -146,9 +146,9 @@ class PressureSchur(PETScOwner):
         self.missed = np.empty(0)
 
     def petsc_objects(self) -> list[typing.Any]:
-        return [self.cycle, self.P, self._full, self._kept, self.reduced, self._shear_volume, self._scales, self._local, self._schur,
-                self._schur_solver, self._pressure,
-                self._displacement, self.augmented, self._rhs, self._solution, self._condensed, *self._padded]
+        return [self.cycle, self.P, self._full, self._kept, self.reduced, self._shear_volume, self._scales,
+                self._local, self._schur, self._schur_solver, self._pressure, self._displacement, self.augmented,
+                self._rhs, self._solution, self._condensed, *self._padded]
 
     def update(self, J: PETSc.Mat, newton: NewtonMatrix, transform: PETSc.Mat | None, eliminated: np.ndarray) -> None:
         """J_r, P and Sigma^-1 for the Newton matrix J of ``newton`` (the averaged term at J's tangent),
