@@ -5,17 +5,22 @@ order`` 1 (P1) or 2 (P2 displacements, the contact in the modified basis of
 :mod:`contactqvi.contact.quadratic`):
 
 * ``oring``: the new user's O-ring cord (``benchmarks/data/oring/oring.toml``: d = 5 mm,
-  neo-Hookean, E = 5 MPa, squeezed 30 % between frictionless plates in 20 steps, a plane-strain
-  slice) at Poisson's ratio ``--poisson`` on the meshes of h = 0.25 and 0.125 mm: the plate's
-  force at 30 %, its ratio to the same mesh and order at nu = 0.45, the contact area.
+  neo-Hookean, E = 5 MPa, squeezed 30 % between plates in 20 steps, a plane-strain slice) at
+  Poisson's ratio ``--poisson`` on the meshes of h = 0.25 and 0.125 mm, frictionless or with Coulomb
+  friction ``--friction``, its ``[material] formulation`` ``--formulation`` (``nodal_pressure``
+  with ``order`` 2 is the condensed Taylor-Hood pair, docs/nearly_incompressible.md Sect. 6): the
+  plate's force at 30 %, its ratio to the same mesh, order, formulation and friction at nu = 0.45,
+  the contact area, the Newton steps that fell back on a direct solve.
 * ``hertz``: ``cases/hertz.toml`` (a rigid sphere, R = 1 m, pressed 1 mm into a block, E = 70 GPa,
   nu = 0.3) on its coarse and medium meshes: P, a and p0 against Hertz.
 
 Per row the dofs, Newton steps per load step, Krylov iterations per Newton step and seconds::
 
     .venv/bin/python benchmarks/quadratic_elements.py [--cases oring hertz] [--poisson 0.45 0.499]
+    .venv/bin/python benchmarks/quadratic_elements.py --cases oring --orders 2 --formulation nodal_pressure \
+        --friction 0 0.4 --poisson 0.45 0.499 0.4999 --table oring_taylor_hood
 
-Results: ``benchmarks/results/quadratic_elements.{json,md}``.
+Results: ``benchmarks/results/quadratic_elements.{json,md}`` (``--table``: another name).
 """
 
 from __future__ import annotations
@@ -43,11 +48,14 @@ ORING = HERE / "data" / "oring"
 MESHES = {"oring": ("h0.25", "h0.125"), "hertz": ("coarse", "medium")}
 
 
-def oring(order: int, mesh: str, poisson: float):
-    """The O-ring case on ``mesh`` at ``poisson`` with elements of ``order``."""
+def oring(order: int, mesh: str, poisson: float, formulation: str = "displacement", friction: float = 0.0):
+    """The O-ring case on ``mesh`` at ``poisson`` with elements of ``order``, the cord's ``formulation``
+    and, if ``friction`` > 0, Coulomb friction of that coefficient on the plate."""
     data = tomllib.loads((ORING / "oring.toml").read_text())
     data["mesh"].update(file=f"oring_{mesh}.msh", order=order)
-    data["material"]["poisson"] = poisson
+    data["material"].update(poisson=poisson, formulation=formulation)
+    if friction > 0.0:
+        data["contact"].update(law="coulomb", friction=friction)
     return parse_case(data, ORING)
 
 
@@ -58,11 +66,14 @@ def hertz_case(order: int, mesh: str, poisson: float):
                                                               order=order))
 
 
-def measure(name: str, order: int, mesh: str, poisson: float, work: pathlib.Path, comm: MPI.Comm) -> dict:
-    """One run's row."""
+def measure(name: str, order: int, mesh: str, poisson: float, work: pathlib.Path, comm: MPI.Comm,
+            formulation: str = "displacement", friction: float = 0.0) -> dict:
+    """One run's row (``formulation`` and ``friction``: the O-ring's)."""
     key = {"case": name, "order": order, "mesh": mesh, "poisson": poisson}
-    case = oring(order, mesh, poisson) if name == "oring" else hertz_case(order, mesh, poisson)
-    out = work / f"{name}_{order}_{mesh}_{poisson}"
+    if name == "oring":
+        key.update(formulation=formulation, friction=friction)
+    case = oring(order, mesh, poisson, formulation, friction) if name == "oring" else hertz_case(order, mesh, poisson)
+    out = work / "_".join(str(value) for value in key.values())
     start = time.perf_counter()
     try:
         summary, code = run_case(case, out, comm, plot=False)
@@ -71,10 +82,11 @@ def measure(name: str, order: int, mesh: str, poisson: float, work: pathlib.Path
     steps = summary["steps"]
     newton = sum(s["iterations"] for s in steps)
     krylov = sum(h.get("krylov_iterations") or 0 for s in steps for h in s["history"])
+    fallbacks = sum("direct_fallback" in h for s in steps for h in s["history"])
     last = steps[-1]
     row = {**key, "status": summary["status"], "dofs": summary["n"], "newton_per_step": newton / len(steps),
-           "krylov_per_newton": krylov / max(newton, 1), "seconds": time.perf_counter() - start,
-           "failed": code != 0}
+           "newton": newton, "krylov_per_newton": krylov / max(newton, 1), "direct_fallbacks": fallbacks,
+           "seconds": time.perf_counter() - start, "failed": code != 0}
     if name == "oring":
         row.update(force=abs(last["contact_force"][2]), area=last["contact_area"])
     else:
@@ -89,21 +101,15 @@ def measure(name: str, order: int, mesh: str, poisson: float, work: pathlib.Path
 
 def markdown(rows: list[dict]) -> str:
     """The O-ring table and the Hertz table."""
-    reference = {(r["order"], r["mesh"]): r["force"] for r in rows if r["case"] == "oring" and r["poisson"] == 0.45
-                 and "force" in r}
     lines = ["## Quadratic (P2) against linear (P1) tetrahedra with a rigid obstacle", "",
              "Default settings, one run each (`benchmarks/quadratic_elements.py`). O-ring: the plate's force at 30 % "
-             "squeeze (N, the quarter slice), its ratio to the same mesh and order at ν = 0.45, the contact area.", "",
-             "| O-ring | ν | order | dofs | force (N) | / ν = 0.45 | area (mm²) | Newton / step | Krylov / Newton | run s |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
-    for r in (r for r in rows if r["case"] == "oring"):
-        ratio = reference.get((r["order"], r["mesh"]))
-        ratio = f"{100.0 * (r['force'] / ratio - 1.0):+.1f} %" if ratio and "force" in r else "\u2013"
-        force = f"{r['force']:.4f}" if "force" in r else r.get("status", "")
-        area = f"{1e6 * r['area']:.3f}" if "area" in r else "\u2013"
-        lines.append(f"| {r['mesh']} | {r['poisson']:g} | {r['order']} | {cell(r, 'dofs')} | {force} | {ratio} | {area} "
-                     f"| {cell(r, 'newton_per_step', '.1f')} | {cell(r, 'krylov_per_newton', '.1f')} "
-                     f"| {cell(r, 'seconds', '.0f')} |")
+             "squeeze (N, the quarter slice), its ratio to the same mesh, order, formulation and friction at "
+             "ν = 0.45, the contact area, Newton steps per load step and in all, Krylov iterations per Newton step "
+             "and their ratio to ν = 0.45's, the Newton steps solved by the direct fall-back.", "",
+             "| O-ring | ν | order | formulation | μ | dofs | force (N) | / ν = 0.45 | area (mm²) | Newton / step "
+             "(in all) | Krylov / Newton | / ν = 0.45 | LU fall-backs | run s |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines += [_oring_line(r, rows) for r in rows if r["case"] == "oring"]
     lines += ["", "Hertz, a rigid sphere (R = 1 m) 1 mm into a block (E = 70 GPa, ν = 0.3): errors against Hertz.", "",
               "| Hertz mesh | order | dofs | P | a | p0 | Newton / step | Krylov / Newton | run s |",
               "|---|---|---|---|---|---|---|---|---|"]
@@ -116,24 +122,54 @@ def markdown(rows: list[dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _oring_line(r: dict, rows: list[dict]) -> str:
+    """The O-ring table's line of row ``r``, with its ratios to the row of ν = 0.45 among ``rows``."""
+    same = ("order", "mesh", "formulation", "friction")
+    reference = next((q for q in rows if q["case"] == "oring" and q["poisson"] == 0.45 and "force" in q
+                      and all(q.get(k) == r.get(k) for k in same)), None)
+
+    def ratio(field: str, form: str, less: float = 0.0) -> str:
+        if reference is None or field not in r:
+            return "\u2013"
+        return form.format(r[field] / reference[field] - less)
+
+    force = f"{r['force']:.5f}" if "force" in r else r.get("status", "")
+    area = f"{1e6 * r['area']:.3f}" if "area" in r else "\u2013"
+    newton = f"{cell(r, 'newton_per_step', '.1f')} ({cell(r, 'newton')})"
+    return (f"| {r['mesh']} | {r['poisson']:g} | {r['order']} | {r.get('formulation', 'displacement')} "
+            f"| {r.get('friction', 0.0):g} | {cell(r, 'dofs')} | {force} | {ratio('force', '{:+.1%}', 1.0)} | {area} "
+            f"| {newton} | {cell(r, 'krylov_per_newton', '.1f')} | {ratio('krylov_per_newton', '{:.2f}×')} "
+            f"| {cell(r, 'direct_fallbacks')} | {cell(r, 'seconds', '.0f')} |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", nargs="+", choices=tuple(MESHES), default=list(MESHES))
     parser.add_argument("--poisson", nargs="+", type=float, default=[0.45, 0.499])
+    parser.add_argument("--orders", nargs="+", type=int, choices=(1, 2), default=[1, 2])
+    parser.add_argument("--meshes", nargs="+", help="the meshes of each case (default: all of them)")
+    parser.add_argument("--formulation", default="displacement", help="the O-ring's [material] formulation")
+    parser.add_argument("--friction", nargs="+", type=float, default=[0.0],
+                        help="the O-ring's Coulomb friction coefficients (0: frictionless)")
     parser.add_argument("--output", type=pathlib.Path, default=HERE / "results")
+    parser.add_argument("--table", default="quadratic_elements", help="name of the table (.json and .md appended)")
     args = parser.parse_args()
+    known = {mesh for name in args.cases for mesh in MESHES[name]}
+    if args.meshes is not None and not set(args.meshes) <= known:
+        parser.error(f"--meshes: {sorted(set(args.meshes) - known)} not among the cases' meshes {sorted(known)}")
     comm = MPI.COMM_WORLD
-    work = args.output / "quadratic_elements_work"
+    work = args.output / f"{args.table}_work"
     rows = []
     for name in args.cases:
-        for poisson in args.poisson if name == "oring" else [0.3]:
-            for mesh in MESHES[name]:
-                for order in (1, 2):
-                    rows.append(measure(name, order, mesh, poisson, work, comm))
-                    if comm.rank == 0:
-                        print(rows[-1], flush=True)
-                    write_table(comm, args.output / "quadratic_elements", {"mpi_size": comm.size, "rows": rows},
-                                markdown(rows), echo=False)
+        for friction in args.friction if name == "oring" else [0.0]:
+            for poisson in args.poisson if name == "oring" else [0.3]:
+                for mesh in (m for m in MESHES[name] if args.meshes is None or m in args.meshes):
+                    for order in args.orders:
+                        rows.append(measure(name, order, mesh, poisson, work, comm, args.formulation, friction))
+                        if comm.rank == 0:
+                            print(rows[-1], flush=True)
+                        write_table(comm, args.output / args.table, {"mpi_size": comm.size, "rows": rows},
+                                    markdown(rows), echo=False)
     if comm.rank == 0:
         shutil.rmtree(work, ignore_errors=True)
 

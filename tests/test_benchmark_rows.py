@@ -122,6 +122,29 @@ def test_homogeneous_compression_counts_and_tables():
         hc.bulging_markdown(measured)
 
 
+def test_quadratic_elements_compares_each_oring_with_its_own_nu_045_row():
+    """``benchmarks/quadratic_elements.py``: an O-ring row's force change and Krylov ratio are taken
+    against the row of nu = 0.45 with the same mesh, order, formulation and friction (the frictional
+    Taylor-Hood rows against each other, not against the frictionless ones), and a failed run is a
+    row of the table with its status."""
+    import quadratic_elements as qe
+
+    key = {"case": "oring", "order": 2, "mesh": "h0.25", "formulation": "nodal_pressure"}
+
+    def converged(poisson: float, friction: float, force: float, krylov: float) -> dict:
+        return {**key, "poisson": poisson, "friction": friction, "status": "converged_rtol", "dofs": 8766,
+                "newton_per_step": 4.0, "newton": 80, "krylov_per_newton": krylov, "direct_fallbacks": 0,
+                "seconds": 70.0, "failed": False, "force": force, "area": 1.7e-6}
+
+    measured = [converged(0.45, 0.0, 2.0, 10.0), converged(0.45, 0.4, 4.0, 8.0), converged(0.4999, 0.4, 5.0, 12.0),
+                rows.failed_row("diverged_max_it", 3.0, **key, poisson=0.4999, friction=0.0)]
+    table = qe.markdown(measured)
+    assert "| h0.25 | 0.4999 | 2 | nodal_pressure | 0.4 | 8766 | 5.00000 | +25.0% | 1.700 | 4.0 (80) | 12.0 | 1.50× | 0 " \
+        in table
+    assert "| h0.25 | 0.45 | 2 | nodal_pressure | 0 | 8766 | 2.00000 | +0.0% |" in table
+    assert "| h0.25 | 0.4999 | 2 | nodal_pressure | 0 | \u2013 | diverged_max_it | \u2013 | \u2013 |" in table
+
+
 @pytest.mark.serial  # launches mpirun
 def test_restart_shows_a_run_without_summary_as_failed_rows(tmp_path):
     """``benchmarks/restart.py``: the uninterrupted run of a case that stops at its input check
