@@ -139,8 +139,8 @@ def test_quadratic_elements_compares_each_oring_with_its_own_nu_045_row():
     measured = [converged(0.45, 0.0, 2.0, 10.0), converged(0.45, 0.4, 4.0, 8.0), converged(0.4999, 0.4, 5.0, 12.0),
                 rows.failed_row("diverged_max_it", 3.0, **key, poisson=0.4999, friction=0.0)]
     table = qe.markdown(measured)
-    assert "| h0.25 | 0.4999 | 2 | nodal_pressure | 0.4 | 8766 | 5.00000 | +25.0% | 1.700 | 4.0 (80) | 12.0 | 1.50× | 0 " \
-        in table
+    assert ("| h0.25 | 0.4999 | 2 | nodal_pressure | 0.4 | 8766 | 5.00000 | +25.0% | 1.700 | 4.0 (80) "
+            "| 12.0 | 1.50× | 0 |") in table
     assert "| h0.25 | 0.45 | 2 | nodal_pressure | 0 | 8766 | 2.00000 | +0.0% |" in table
     assert "| h0.25 | 0.4999 | 2 | nodal_pressure | 0 | \u2013 | diverged_max_it | \u2013 | \u2013 |" in table
 

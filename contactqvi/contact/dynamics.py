@@ -132,12 +132,17 @@ class InertialSystem(HyperelasticSystem):
         coefficient: c of the scheme and the current time step (:meth:`TimeScheme.inertia_coefficient`).
         inertia: b (global components, ghosted; not owned).
         work: a vector for M_K u (not owned).
+        density: rho of M_K = (rho u, v) (number or DG0 function).
     """
 
     mass: PETSc.Mat | None = None
     coefficient: float = 0.0
     inertia: PETSc.Vec | None = None
     work: PETSc.Vec | None = None
+    density: typing.Any = None
+
+    def mass_term(self) -> tuple[float, typing.Any] | None:
+        return (self.coefficient, self.density) if self.coefficient > 0.0 and self.density is not None else None
 
     def assemble_residual(self, load_factor: float, condensed: bool = False) -> PETSc.Vec:
         r = super().assemble_residual(load_factor, condensed)
@@ -340,7 +345,7 @@ class StabilisedNewmark(PETScOwner):
             problem.hyperelastic = InertialSystem(
                 **{f.name: getattr(self.static, f.name) for f in dataclasses.fields(self.static)},
                 mass=self.global_mass, coefficient=scheme.inertia_coefficient(self.tau), inertia=inertia,
-                work=inertia.duplicate())
+                work=inertia.duplicate(), density=density)
         self._assemble()
         self.energy = PhysicalEnergy(problem)
         self._work = _Work.create(problem.A)

@@ -105,6 +105,11 @@ class HyperelasticSystem(PETScOwner):
     def petsc_objects(self) -> list[typing.Any]:
         return [self.transformed, self.stiffness, self.internal, self.external, self.volumetric]
 
+    def mass_term(self) -> tuple[float, typing.Any] | None:
+        """(c, rho) of a term c M u of r with M = (rho u, v), or None: a static body has none
+        (:class:`~contactqvi.contact.dynamics.InertialSystem` has)."""
+        return None
+
     def assemble_residual(self, load_factor: float, condensed: bool = False) -> PETSc.Vec:
         """r_K at :attr:`displacement` (global components, zero on the prescribed rows) into
         :attr:`internal`, which is returned. ``condensed``: in the mixed method's Newton solve (the

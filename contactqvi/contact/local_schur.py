@@ -15,6 +15,18 @@ the pair is inf-sup stable cell by cell (P2 displacements, P1 pressure: div maps
 fields onto the P1 functions) each S_e is definite, and S_loc is spectrally equivalent to S with
 constants of the cells' shapes, not of their aspect ratios and moduli alone as the lumped mass
 M_L / mu is.
+
+With a mass term c M in the displacement block (the viscous relaxation past a limit point,
+:mod:`contactqvi.contact.relaxation`: M = (rho u, v), rho each body's Young's modulus) the true
+complement is S(c) = B (A + c M)^-1 B^T, and the cells take A_e + c M_e, regular for c > 0:
+
+    S_loc(c) = sum_e B_e (A_e + c M_e)^-1 B_e^T,                                            (2)
+
+an upper bound of S(c) by the same argument. S_loc of (1) alone is S_loc(0), which sees the
+smooth pressure modes through A_e only: it overestimates S(c) where c M dominates A (the first
+relaxation steps), and the pressure block's preconditioner with it (the
+0.125 mm P2 O-ring with Coulomb friction at nu = 0.4999, its first relaxation step: 169-484 Krylov
+iterations per Newton step with S_loc(0), 52-113 with S_loc(c); docs/nearly_incompressible.md Sect. 5).
 """
 
 from __future__ import annotations
@@ -72,9 +84,11 @@ def _rigid_projector(V: fem.FunctionSpace, cells: np.ndarray, A: np.ndarray) -> 
     return scale[:, None, None] * R @ np.swapaxes(R, 1, 2)
 
 
-def local_schur(V: fem.FunctionSpace, Q: fem.FunctionSpace, mu: typing.Any, chi: fem.Function) -> PETSc.Mat:
+def local_schur(V: fem.FunctionSpace, Q: fem.FunctionSpace, mu: typing.Any, chi: fem.Function,
+                mass: tuple[float, typing.Any] | None = None) -> PETSc.Mat:
     """S_loc of (1) on the scalar P1 space ``Q`` for the displacement space ``V`` (its degree), the
-    shear modulus ``mu`` and the cells ``chi`` marks (collective)."""
+    shear modulus ``mu`` and the cells ``chi`` marks, or S_loc(c) of (2) for ``mass`` = (c, rho) with
+    c > 0 (collective)."""
     msh = V.mesh
     cell = msh.basix_cell()
     degree = V.ufl_element().embedded_superdegree
@@ -85,7 +99,12 @@ def local_schur(V: fem.FunctionSpace, Q: fem.FunctionSpace, mu: typing.Any, chi:
     inside = np.flatnonzero(chi.x.array[:n_cells] > 0.5).astype(np.int32)
     A = _cell_blocks(2 * mu * ufl.inner(strain(u), strain(v)) * ufl.dx, broken_u, broken_u, inside)
     B = _cell_blocks(chi * q * ufl.div(u) * ufl.dx, broken_p, broken_u, inside)
-    S = B @ np.linalg.solve(A + _rigid_projector(broken_u, inside, A), np.swapaxes(B, 1, 2))
+    if mass is not None and mass[0] > 0.0:
+        coefficient, density = mass
+        regular = A + coefficient * _cell_blocks(density * ufl.inner(u, v) * ufl.dx, broken_u, broken_u, inside)
+    else:
+        regular = A + _rigid_projector(broken_u, inside, A)
+    S = B @ np.linalg.solve(regular, np.swapaxes(B, 1, 2))
     index_map = Q.dofmap.index_map
     vertices = index_map.local_to_global(Q.dofmap.list[inside].ravel()).reshape(len(inside), -1)
     sizes = (index_map.size_local, index_map.size_global)

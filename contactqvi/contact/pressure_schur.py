@@ -129,8 +129,10 @@ class PressureSchur(PETScOwner):
         self._J: PETSc.Mat | None = None  # the Newton matrix of the last update (not owned)
         self._newton: NewtonMatrix | None = None
         self._scales = _Scales.create(self._shear_volume)
-        self._local = local_schur(nodal.u.function_space, nodal.Q, mu, nodal.chi)  # s S_loc
-        self._local.scale(SCHUR_SCALE)
+        self._mu = mu
+        self._static = self._summed(None)  # s S_loc
+        self._local = self._static  # s S_loc(c) of the mass term of :meth:`set_mass`, S_loc(0) without one
+        self._mass: tuple[float, typing.Any] | None = None
         self._schur = self._local.duplicate(copy=True)  # S~
         self._schur_solver = create_ksp(volumetric.B.getComm(), f"{prefix}schur_", preset("lu"), self._schur)
         self._pressure = _Pressure.create(self._shear_volume)
@@ -146,9 +148,28 @@ class PressureSchur(PETScOwner):
         self.missed = np.empty(0)
 
     def petsc_objects(self) -> list[typing.Any]:
+        viscous = [] if self._local is self._static else [self._local]
         return [self.cycle, self.P, self._full, self._kept, self.reduced, self._shear_volume, self._scales,
-                self._local, self._schur, self._schur_solver, self._pressure, self._displacement, self.augmented,
-                self._rhs, self._solution, self._condensed, *self._padded]
+                self._static, *viscous, self._schur, self._schur_solver, self._pressure, self._displacement,
+                self.augmented, self._rhs, self._solution, self._condensed, *self._padded]
+
+    def _summed(self, mass: tuple[float, typing.Any] | None) -> PETSc.Mat:
+        """s S_loc(c) of :func:`~contactqvi.contact.local_schur.local_schur` for the mass term ``mass``."""
+        nodal = self.volumetric.nodal
+        summed = local_schur(nodal.u.function_space, nodal.Q, self._mu, nodal.chi, mass)
+        summed.scale(SCHUR_SCALE)
+        return summed
+
+    def set_mass(self, mass: tuple[float, typing.Any] | None) -> None:
+        """The mass term (c, rho) of the displacement block for the next :meth:`update` (None: none):
+        S~ takes the summed element Schur complements of A_e + c M_e (local_schur (2)), assembled again
+        when c changes (a relaxation step's viscosity; collective)."""
+        if mass == self._mass:
+            return
+        if self._local is not self._static:
+            self._local.destroy()
+        self._local = self._static if mass is None else self._summed(mass)
+        self._mass = mass
 
     def update(self, J: PETSc.Mat, newton: NewtonMatrix, transform: PETSc.Mat | None, eliminated: np.ndarray) -> None:
         """J_r, P and Sigma^-1 for the Newton matrix J of ``newton`` (the averaged term at J's tangent),

@@ -83,7 +83,7 @@ def relax(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathStat
     inertia = static.internal.duplicate()
     viscous = InertialSystem(**{f.name: getattr(static, f.name) for f in dataclasses.fields(static)}, mass=mass,
                              coefficient=_initial_coefficient(problem, mass), inertia=inertia,
-                             work=inertia.duplicate())
+                             work=inertia.duplicate(), density=problem.body.young)
     solves, largest, settled, before = [], 0.0, np.inf, state.displacement.x.array.copy()
     moving = False  # whether the last relaxation step converged: the next starts from its extrapolation
     try:

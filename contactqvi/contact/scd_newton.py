@@ -626,6 +626,8 @@ class SCDNewtonSolver(PETScOwner):
         :attr:`step_solver`, from and into the work vector ``du``; returns the KSP's converged reason."""
         w = self._work
         if self.step_solver.pressure is not None:
+            system = self.problem.hyperelastic
+            self.step_solver.pressure.set_mass(None if system is None else system.mass_term())
             self.step_solver.pressure.update(J, self._newton, self.problem.to_global, self._eliminated)
             self.step_solver.pressure.set_constraint(self._constraint)
         reason = self.step_solver.solve(J, self._newton.change, kinds, w.rhs, w.du, tol, self._rhs_ratio)
