@@ -142,6 +142,7 @@ class InertialSystem(HyperelasticSystem):
     density: typing.Any = None
 
     def mass_term(self) -> tuple[float, typing.Any] | None:
+        """(c, rho) of the term c M_K u while c > 0 and rho is known, else None."""
         return (self.coefficient, self.density) if self.coefficient > 0.0 and self.density is not None else None
 
     def assemble_residual(self, load_factor: float, condensed: bool = False) -> PETSc.Vec:

@@ -78,12 +78,12 @@ def relax(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathStat
     Returns each solve with its step and a mark (``relaxation``: the step k, ``viscosity``: c_k in
     1/m^2, 0 for the last, plain solve); the last one's solution is in ``u``, and ``state`` is not
     advanced by it. Collective."""
-    static = problem.hyperelastic
-    mass, _ = global_mass_matrix(problem, problem.body.young)
+    static, density = problem.hyperelastic, problem.body.young  # M's density: each body's Young's modulus
+    mass, _ = global_mass_matrix(problem, density)
     inertia = static.internal.duplicate()
     viscous = InertialSystem(**{f.name: getattr(static, f.name) for f in dataclasses.fields(static)}, mass=mass,
                              coefficient=_initial_coefficient(problem, mass), inertia=inertia,
-                             work=inertia.duplicate(), density=problem.body.young)
+                             work=inertia.duplicate(), density=density)
     solves, largest, settled, before = [], 0.0, np.inf, state.displacement.x.array.copy()
     moving = False  # whether the last relaxation step converged: the next starts from its extrapolation
     try:
