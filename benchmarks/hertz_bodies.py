@@ -8,7 +8,7 @@ the total contact force (four times the quarter model's), a = sqrt(4 A / pi) fro
 contact area A (the sum of the D_ii of the nodes in contact), p0 the largest nodal
 pressure lambda_i / D_ii. Writes ``hertz_bodies.{json,md}``. ``--order 2``: quadratic elements on
 second-order meshes of the same sizes (the sphere curved; the quadratic dual mortar of
-docs/quadratic.md), into ``hertz_bodies_p2.{json,md}`` by default.
+docs/quadratic.md; 27-node hexahedra for the ``hex_*`` meshes), into ``hertz_bodies_p2.{json,md}`` by default.
 
 ``--tables mindlin``: ``cases/cattaneo_mindlin_bodies.toml`` (one material, Dundurs'
 beta = 0) on ``--mindlin-mesh``; per step Q/(mu P) beside Mindlin's law at the
@@ -49,15 +49,16 @@ MESHES = {"xcoarse": 4, "coarse": 6, "medium": 10, "fine": 16, "xfine": 21, "xxf
 
 
 def mesh_source(mesh: str, order: int, work: pathlib.Path, comm: MPI.Comm) -> MeshSource:
-    """``meshes/hertz_bodies_{mesh}.geo``, or with ``order`` 2 the same sizes in 10-node tetrahedra
-    (a wrapper written into ``work``) with quadratic displacements."""
+    """``meshes/hertz_bodies_{mesh}.geo``, or with ``order`` 2 the same sizes in 10-node tetrahedra or
+    27-node hexahedra (a wrapper written into ``work``) with quadratic displacements."""
     if order == 1:
         return MeshSource(file=ROOT / "meshes" / f"hertz_bodies_{mesh}.geo")
-    require(not mesh.startswith("hex"), "--order", "quadratic elements are 10-node tetrahedra, not hexahedra")
     geo = work / f"hertz_bodies_{mesh}_order2.geo"
+    included = ROOT / "meshes" / ("hertz_bodies.geo" if not mesh.startswith("hex") else f"hertz_bodies_{mesh}.geo")
+    refinement = "" if mesh.startswith("hex") else f"refinement = {MESHES[mesh]};\n"
     if comm.rank == 0:
         work.mkdir(parents=True, exist_ok=True)
-        geo.write_text(f'refinement = {MESHES[mesh]};\norder = 2;\nInclude "{ROOT / "meshes" / "hertz_bodies.geo"}";\n')
+        geo.write_text(f'{refinement}order = 2;\nInclude "{included}";\n')
     comm.Barrier()
     return MeshSource(file=geo, order=2)
 
@@ -197,7 +198,10 @@ def _hertz_table(meshes: list[str], comm: MPI.Comm, output: pathlib.Path, order:
                       f"{row['contact_search_s']:.2f}", f"{row['contact_search_s'] * len(row['newton']) / row['solve_s']:.1%}",
                       f"{row['step_search_s']:.2f}", f"{row['step_search_s'] * len(row['newton']) / row['solve_s']:.1%}",
                       f"{row['peak_rss_mib'] / 1024:.1f}", f"{row['peak_rss_mib'] * 1024 / row['dofs']:.1f}"])
-    elements = "linear tetrahedra" if order == 1 else "quadratic elements (10-node tetrahedra, P2; docs/quadratic.md)"
+    hexahedra = all(mesh.startswith("hex") for mesh in meshes)
+    elements = {(1, False): "linear tetrahedra", (1, True): "trilinear hexahedra (Q1)",
+                (2, False): "quadratic elements (10-node tetrahedra, P2; docs/quadratic.md)",
+                (2, True): "quadratic elements (27-node hexahedra, Q2; docs/quadratic.md)"}[order, hexahedra]
     title = ("## Hertz between two elastic bodies: steel ball (R = 1 m, E = 210 GPa) pressed 1 mm into an "
              f"aluminium block (E = 70 GPa), nu = 0.3, non-matching meshes, mortar contact, {elements}\n\n"
              f"E* = {reference['E_star'] / 1e9:.2f} GPa; quarter model, four steps of 0.25 mm on "

@@ -90,13 +90,14 @@ class Dataset:
 
 def _is_nodal(V: fem.FunctionSpace) -> bool:
     """One dof (per block) at each vertex and nowhere else (P1/Q1, on a mesh of any degree), or
-    the dofs of a quadratic Lagrange space: values at the mesh's nodes."""
+    the dofs of a quadratic Lagrange space on tetrahedra or hexahedra (P2, Q2): values at the mesh's
+    nodes."""
     layout = V.dofmap.dof_layout
     vertices = cell_num_vertices(V.mesh.topology.cell_type)
     linear = layout.num_dofs == vertices and layout.num_entity_dofs(0) == 1
     element = V.ufl_element().basix_element
     return linear or (element.family == basix.ElementFamily.P and element.degree == 2
-                      and V.mesh.topology.cell_name() == "tetrahedron")
+                      and V.mesh.topology.cell_name() in ("tetrahedron", "hexahedron"))
 
 
 def _vertex_weights(msh: dmesh.Mesh) -> np.ndarray:

@@ -259,13 +259,13 @@ def test_two_body_parallel_equals_serial(pc):
     assert error < 1e-10
 
 
-def on_all_ranks_and_alone(pc: str, degree: int = 1) -> tuple[tuple[int, int], float]:
-    """The patch blocks with slip (F = 0.3, moduli 1 and 3 GPa), displacements of ``degree``, solved on
-    all ranks and on each rank alone: the Newton counts (all, alone) and the largest difference of the
-    displacements at a node over the largest displacement. Collective."""
+def on_all_ranks_and_alone(pc: str, degree: int = 1, mesh: pathlib.Path = MESH) -> tuple[tuple[int, int], float]:
+    """The patch blocks of ``mesh`` with slip (F = 0.3, moduli 1 and 3 GPa), displacements of ``degree``,
+    solved on all ranks and on each rank alone: the Newton counts (all, alone) and the largest difference
+    of the displacements at a node over the largest displacement. Collective."""
     runs = {}
     for name, comm in (("parallel", MPI.COMM_WORLD), ("serial", MPI.COMM_SELF)):
-        msh, facet_tags, cell_tags = read_gmsh(MESH, comm)
+        msh, facet_tags, cell_tags = read_gmsh(mesh, comm)
         problem = _patch_problem((msh, split_by_body(msh, facet_tags, cell_tags), cell_tags), 3e9, 0.3, degree)
         with problem:
             result, displacement = _solve(problem, pc)

@@ -23,6 +23,15 @@ onto which both facets are projected), and on a slave facet the dual basis psi.
   modified basis Ñ of Popp, Wohlmuth, Gee and Wall (2012, Sect. 3; docs/quadratic.md (1)),
   Ñ_v = N_v + alpha sum_(k != v) N_(3+k), Ñ_(3+k) = (1 - 2 alpha) N_(3+k), whose dual basis
   Φ = A Ñ, A = D_e M_e^{-1}, is one matrix on every flat facet (:data:`MODIFIED_DUAL`).
+* Biquadratic quadrilaterals (facets of 27-node hexahedra, quadratic displacements): the nine
+  Lagrange functions of basix's quadrilateral of degree 2, in the order of the facet's closure
+  (the vertices in tensor-product order, the midside nodes of the edges v0 v1, v0 v2, v1 v3,
+  v2 v3, the centre), of the reference coordinates of the vertices' bilinear map. Each of them
+  has a positive integral (on a parallelogram 1/36, 1/9 and 4/9 of the area at a vertex, an edge
+  and the centre), so the slave surface needs no modified basis (Popp, Wohlmuth, Gee and Wall
+  2012, Sect. 3: it is the 8-node serendipity facet whose vertex functions integrate to a
+  negative number): the dual basis is Φ = A N, A = D_e M_e^{-1} with the vertex quadrilateral's
+  area element, as on a bilinear facet.
 """
 
 from __future__ import annotations
@@ -33,7 +42,8 @@ import numpy as np
 from contactqvi.contact.dual import Dual, primal
 from contactqvi.parameters import ParameterError
 
-__all__ = ["ALPHA", "MODIFIED_AREAS", "MODIFIED_DUAL", "POLYGON_ORDER", "area_elements", "dual_coefficients",
+__all__ = ["ALPHA", "MODIFIED_AREAS", "MODIFIED_DUAL", "POLYGON_ORDER", "area_elements", "biquadratic_normals",
+           "biquadratic_shapes", "dual_coefficients",
            "facet_areas", "length", "magnitude", "modified_dual", "modified_shapes", "nodal_integrals",
            "planar_jacobians", "quadratic_normals", "quadratic_shapes", "quadrilateral_shapes", "reference_coordinates",
            "triangle_rule", "unit_normals"]
@@ -161,20 +171,23 @@ _GAUSS_POINTS, _GAUSS_WEIGHTS = basix.make_quadrature(basix.CellType.quadrilater
 _GAUSS_WEIGHTS = _GAUSS_WEIGHTS / _GAUSS_WEIGHTS.sum()
 
 
-def _facet_mass(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Lumped masses D_e (P, 4) = int phi_k and mass matrices M_e (P, 4, 4) of quadrilaterals (P, 4, 3)."""
+def _facet_mass(x: np.ndarray, nodes: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """Lumped masses D_e (P, n) = int phi_k and mass matrices M_e (P, n, n) of quadrilaterals (P, 4, 3)
+    with the area element of their bilinear map: of the bilinear functions (``nodes`` 4) or the
+    biquadratic ones (9; the rule is exact for them too on a flat facet)."""
     xi = np.broadcast_to(_GAUSS_POINTS, (len(x), *_GAUSS_POINTS.shape))
     weights = area_elements(x, xi) * _GAUSS_WEIGHTS
-    phi = quadrilateral_shapes(_GAUSS_POINTS)
+    phi = (quadrilateral_shapes if nodes == 4 else biquadratic_shapes)(_GAUSS_POINTS)
     return np.einsum("pq,qk->pk", weights, phi), np.einsum("pq,qj,qk->pjk", weights, phi, phi)
 
 
-def nodal_integrals(x: np.ndarray) -> np.ndarray:
-    """(P, n) int phi_k of facets (P, n, 3): the lumped area of each vertex (area / 3 on a triangle)."""
+def nodal_integrals(x: np.ndarray, nodes: int | None = None) -> np.ndarray:
+    """(P, n) int phi_k of facets (P, n, 3): the lumped area of each vertex (area / 3 on a triangle);
+    with ``nodes`` = 9 of each node of the biquadratic functions on quadrilaterals."""
     if x.shape[1] == 3:
         area = 0.5 * length(np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]))
         return np.repeat(area[:, None] / 3.0, 3, axis=1)
-    return _facet_mass(x)[0]
+    return _facet_mass(x, nodes or 4)[0]
 
 
 def facet_areas(x: np.ndarray) -> np.ndarray:
@@ -185,15 +198,42 @@ def facet_areas(x: np.ndarray) -> np.ndarray:
     return nodal_integrals(x).sum(axis=1)
 
 
-def dual_coefficients(x: np.ndarray) -> np.ndarray:
+def dual_coefficients(x: np.ndarray, nodes: int | None = None) -> np.ndarray:
     """(P, n, n) A with psi_i = sum_k A_ik phi_k, the dual basis of facets (P, n, 3):
     int psi_i phi_k = delta_ik int phi_k. Triangles: A = 4 I - 1; quadrilaterals:
-    A = D_e M_e^{-1} (M_e is symmetric, so A = (M_e^{-1} D_e)^T)."""
-    n = x.shape[1]
-    if n == 3:
+    A = D_e M_e^{-1} (M_e is symmetric, so A = (M_e^{-1} D_e)^T), of the bilinear functions, or
+    with ``nodes`` = 9 of the biquadratic ones (P, 9, 9)."""
+    if x.shape[1] == 3:
         return np.broadcast_to(4.0 * np.eye(3) - 1.0, (len(x), 3, 3))
-    lumped, mass = _facet_mass(x)
-    return np.swapaxes(np.linalg.solve(mass, lumped[:, :, None] * np.eye(n)), 1, 2)
+    nodes = nodes or 4
+    lumped, mass = _facet_mass(x, nodes)
+    return np.swapaxes(np.linalg.solve(mass, lumped[:, :, None] * np.eye(nodes)), 1, 2)
+
+
+#: basix's quadrilateral of degree 2: its nodes in the order of a 27-node hexahedron's facet closure
+#: in DOLFINx (module docstring; ``tests/test_quadratic_hexahedra.py`` checks the order).
+_BIQUADRATIC = basix.create_element(basix.ElementFamily.P, basix.CellType.quadrilateral, 2,
+                                    basix.LagrangeVariant.equispaced)
+
+
+def _biquadratic_table(xi: np.ndarray, derivatives: int) -> np.ndarray:
+    """(1 + 2 derivatives, ..., 9) the biquadratic functions (and their xi-derivatives) at points xi (..., 2)."""
+    table = _BIQUADRATIC.tabulate(derivatives, np.ascontiguousarray(xi, dtype=float).reshape(-1, 2))[..., 0]
+    return table.reshape(len(table), *xi.shape[:-1], 9)
+
+
+def biquadratic_shapes(xi: np.ndarray) -> np.ndarray:
+    """(..., 9) the Lagrange functions of a 9-node quadrilateral at reference points xi (..., 2)."""
+    return _biquadratic_table(xi, 0)[0]
+
+
+def biquadratic_normals(xi: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """(p, Q, 3) unit normals of 9-node quadrilaterals ``nodes`` (p, 9, 3), ordered as
+    :func:`biquadratic_shapes`, at reference points xi (p, Q, 2): dx/dxi x dx/deta, not oriented."""
+    gradient = _biquadratic_table(xi, 1)[1:]
+    dx = np.einsum("jpqa,pad->jpqd", gradient, nodes)
+    normal = np.cross(dx[0], dx[1])
+    return normal / length(normal)[..., None]
 
 
 #: alpha of the modified basis of 6-node triangles (Popp, Wohlmuth, Gee and Wall 2012).

@@ -76,12 +76,13 @@ MIN_COVERAGE = 0.5
 @dataclasses.dataclass(frozen=True)
 class SurfaceFacets:
     """Facets of a boundary surface, owned by this rank: linear triangles (tetrahedral
-    meshes), bilinear quadrilaterals (hexahedral meshes, vertices in tensor-product order) or
-    the 6-node triangles of quadratic displacements on tetrahedra.
+    meshes), bilinear quadrilaterals (hexahedral meshes, vertices in tensor-product order), or
+    the 6-node triangles and 9-node quadrilaterals of quadratic displacements.
 
     Attributes:
         blk: (f, n) local node (block) indices (ghosts included) of the vertices, n = 3 or 4, or
-            of a 6-node triangle's vertices and then the midside node of the edge opposite each.
+            of a 6-node triangle's vertices and then the midside node of the edge opposite each,
+            or of a 9-node quadrilateral's nodes (:func:`~contactqvi.contact.facets.biquadratic_shapes`).
         x: (f, 3 or 4, 3) vertex coordinates.
         normal: (f, 3) outward unit normals (away from the body; of a quadrilateral's mean
             plane, the cross product of its diagonals).
@@ -101,20 +102,23 @@ class SurfaceFacets:
 
     @property
     def quadratic(self) -> bool:
-        """Whether these are 6-node triangles (quadratic displacements)."""
-        return self.blk.shape[1] == 6
+        """Whether these are 6-node triangles or 9-node quadrilaterals (quadratic displacements)."""
+        return self.blk.shape[1] in _VERTICES
 
     @property
     def lumped(self) -> np.ndarray:
-        """(f, n) each node's lumped area: int phi_k, or int Ñ_k of the modified basis of 6-node
-        triangles (over their vertex triangles)."""
-        if self.quadratic:
+        """(f, n) each node's lumped area: int phi_k, int Ñ_k of the modified basis of 6-node
+        triangles (over their vertex triangles), or int N_k of 9-node quadrilaterals (with their
+        vertices' area element)."""
+        if self.blk.shape[1] == 6:
             return self.area[:, None] * MODIFIED_AREAS
-        return nodal_integrals(self.x)
+        return nodal_integrals(self.x, self.blk.shape[1])
 
 
 #: Facets per cell of DOLFINx's cell types with mortar contact.
 _CELL_FACETS = {"tetrahedron": 4, "hexahedron": 6}
+#: The vertices of a quadratic facet of n nodes (its first ones).
+_VERTICES = {6: 3, 9: 4}
 
 
 def surface_facets(V: fem.FunctionSpace, facets: np.ndarray, coords: np.ndarray | None = None) -> SurfaceFacets:
@@ -132,8 +136,8 @@ def surface_facets(V: fem.FunctionSpace, facets: np.ndarray, coords: np.ndarray 
     cell_blk = V.dofmap.list[cells]
     blk = np.take_along_axis(cell_blk, facet_closures(V.dofmap.dof_layout, msh)[local], axis=1)
     coords = V.tabulate_dof_coordinates() if coords is None else coords
-    quadratic = blk.shape[1] == 6
-    x = coords[blk[:, :3] if quadratic else blk]
+    quadratic = blk.shape[1] in _VERTICES
+    x = coords[blk[:, :_VERTICES[blk.shape[1]]] if quadratic else blk]
     normal = unit_normals(x)
     outward = np.einsum("ij,ij->i", normal, x.mean(axis=1) - coords[cell_blk].mean(axis=1)) > 0.0
     normal[~outward] *= -1.0
@@ -155,7 +159,8 @@ def exterior_facet_cells(msh: dmesh.Mesh, facets: np.ndarray) -> tuple[np.ndarra
 def facet_closures(layout, msh: dmesh.Mesh) -> np.ndarray:
     """(facets per cell, k) the dofs of each facet's closure in a cell of the element ``layout``
     (a dof layout of ``msh``'s cells): its vertices first, then on quadratic triangles the
-    midside nodes of the edges opposite each."""
+    midside nodes of the edges opposite each, on biquadratic quadrilaterals the midside nodes and
+    the centre in the order of :func:`~contactqvi.contact.facets.biquadratic_shapes`."""
     facets = range(_CELL_FACETS[msh.topology.cell_name()])
     return np.array([layout.entity_closure_dofs(msh.topology.dim - 1, i) for i in facets])
 
@@ -435,12 +440,12 @@ def _exact_correction(V: fem.FunctionSpace, slave_facets: np.ndarray, pairs_s: n
 
 def _normal_correction(V: fem.FunctionSpace, slave: SurfaceFacets, pairs_s: np.ndarray, master_glob: np.ndarray,
                        current: np.ndarray) -> np.ndarray:
-    """(P, 6, 3) what taking the separation of 6-node facets along the slave surface's own normal
+    """(P, n, 3) what taking the separation of quadratic facets along the slave surface's own normal
     adds to D_ii times the separation of slave node i, per facet pair (the slave facets
     ``pairs_s``, the master facets' global nodes ``master_glob``), at the positions ``current``
     (:func:`~contactqvi.contact.segments.normal_separation_integrals`). Collective."""
     master = _master_nodes(V, master_glob, current)
-    return normal_separation_integrals(slave.x[pairs_s], -slave.normal[pairs_s], master[:, :3],
+    return normal_separation_integrals(slave.x[pairs_s], -slave.normal[pairs_s], master[:, :slave.x.shape[1]],
                                        current[slave.blk[pairs_s]], master)
 
 

@@ -889,18 +889,20 @@ def _prescribed(V: fem.FunctionSpace, dirichlet_dofs_loc: np.ndarray) -> tuple[n
 
 def _slave_basis(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pairs: typing.Sequence[Pair],
                  constrained: np.ndarray) -> ModifiedBasis | None:
-    """The modified basis of the pairs' slave surfaces on quadratic elements, else None."""
-    if displacement_degree(V) == 1:
+    """The modified basis of the pairs' slave surfaces on quadratic tetrahedra, else None (linear
+    elements, and the 9-node facets of 27-node hexahedra, whose Lagrange functions all have positive
+    integrals: :mod:`contactqvi.contact.facets`)."""
+    if displacement_degree(V) == 1 or V.mesh.topology.cell_name() == "hexahedron":
         return None
     return modified_basis(V, np.unique(np.concatenate([boundary_facets(facet_tags, pair.slave_surface)
                                                        for pair in pairs])), constrained)
 
 
 def _check_degree(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair], material: Material | None) -> None:
-    """Quadratic displacements take tetrahedra, pairs searched once or each step (a hyperelastic body's
-    pairs of bodies: once); linear ones on a second-order (curved) mesh take
-    tetrahedra and linear-elastic bodies, their displacements staying linear on the curved cells
-    (docs/press_fit.md, "Curved contact surfaces")."""
+    """Quadratic displacements take tetrahedra or hexahedra, pairs searched once or each step (a
+    hyperelastic body's pairs of bodies: once; exact cylinders on tetrahedra); linear ones on a
+    second-order (curved) mesh take tetrahedra and linear-elastic bodies, their displacements
+    staying linear on the curved cells (docs/press_fit.md, "Curved contact surfaces")."""
     require(degree in (1, 2), "mesh.order", f"must be 1 (linear elements) or 2 (quadratic), got {degree!r}")
     cells, geometry = msh.topology.cell_name(), msh.geometry.cmap.degree
     if degree == 1:
@@ -913,9 +915,10 @@ def _check_degree(msh: dmesh.Mesh, degree: int, pairs: typing.Sequence[Pair], ma
                 "which follows the deformed surfaces, needs quadratic ones: give mesh.order = 2 (bodies against "
                 "rigid obstacles), or mesh with Mesh.ElementOrder = 1")
         return
-    require(cells == "tetrahedron", "mesh.order", f"quadratic elements are 10-node tetrahedra; the mesh has {cells} "
-            "cells")
     for pair in pairs:
+        require(cells == "tetrahedron" or not isinstance(pair, BodyPair) or pair.cylinder is None,
+                error_key(pair, "cylinder"),
+                "exact cylinders take tetrahedra with quadratic elements (10-node); the mesh has hexahedra")
         require(pair.search != "newton", error_key(pair, "search"), "quadratic elements take pairs searched once "
                 "or each step ('once', 'every_step', 'until_settled'); the geometry inside the Newton iteration "
                 "('newton') is built for linear elements")

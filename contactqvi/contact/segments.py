@@ -36,6 +36,8 @@ from contactqvi.contact.dual import primal
 from contactqvi.contact.facets import (
     POLYGON_ORDER,
     area_elements,
+    biquadratic_normals,
+    biquadratic_shapes,
     dual_coefficients,
     length,
     magnitude,
@@ -48,7 +50,7 @@ from contactqvi.contact.facets import (
     triangle_rule,
 )
 
-__all__ = ["AFFINE_DEGREE", "QUADRILATERAL_DEGREE", "Surface", "clip_polygons", "curvature_integrals", "diameters",
+__all__ = ["AFFINE_DEGREE", "BIQUADRATIC_DEGREE", "QUADRILATERAL_DEGREE", "Surface", "clip_polygons", "curvature_integrals", "diameters",
            "edge_ties", "exact_surface_integrals", "normal_separation_integrals", "planar_integrals",
            "plane_coordinates", "quadratic_segment_integrals", "segment_integrals", "slave_moments"]
 
@@ -73,6 +75,9 @@ AFFINE_DEGREE = 4
 #: (meshes/hex_on_split_tets.geo, as slave) to 3e-7 (12), 6e-9 (16), 5e-11 (20, 79 points),
 #: 3e-14 (30), and the patch test on them as master to 3e-8, 6e-10, 4e-12 (tests/test_hex_mortar.py).
 QUADRILATERAL_DEGREE = 20
+#: Degree of the rule for a pair of biquadratic (9-node) parallelograms: Φ_i N_j^m is of degree 4 in
+#: each facet's reference coordinates, affine in the plane's, so of degree 8 on a flat pair (exact).
+BIQUADRATIC_DEGREE = 8
 
 def clip_polygons(polygon: np.ndarray, count: np.ndarray, clip: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Sutherland-Hodgman: convex polygons clipped by convex counter-clockwise polygons, vectorised.
@@ -231,16 +236,17 @@ def _affine(x: np.ndarray) -> np.ndarray:
     return np.linalg.norm(x[:, 3] - x[:, 2] - x[:, 1] + x[:, 0], axis=1) <= 1e-12 * diameters(x)
 
 
-def _rules(slave: np.ndarray, master: np.ndarray, degree: int | None) -> list[tuple[np.ndarray, tuple]]:
+def _rules(slave: np.ndarray, master: np.ndarray, degree: int | None,
+           affine_degree: int = AFFINE_DEGREE) -> list[tuple[np.ndarray, tuple]]:
     """The pairs (a mask) integrated with each rule (barycentric points, weights): ``degree``
-    if given; else degree 2 for two triangles and :data:`AFFINE_DEGREE` for other pairs of
+    if given; else degree 2 for two triangles and ``affine_degree`` for other pairs of
     affine facets (exact on a flat pair), :data:`QUADRILATERAL_DEGREE` for the rest."""
     if degree is not None:
         return [(np.ones(len(slave), dtype=bool), triangle_rule(degree))]
     if slave.shape[1] == master.shape[1] == 3:
         return [(np.ones(len(slave), dtype=bool), (_POINTS, _WEIGHTS))]
     affine = _affine(slave) & _affine(master)
-    return [(affine, triangle_rule(AFFINE_DEGREE)), (~affine, triangle_rule(QUADRILATERAL_DEGREE))]
+    return [(affine, triangle_rule(affine_degree)), (~affine, triangle_rule(QUADRILATERAL_DEGREE))]
 
 
 def segment_integrals(slave: np.ndarray, normal: np.ndarray, master: np.ndarray,
@@ -314,30 +320,71 @@ def slave_moments(slave: np.ndarray, normal: np.ndarray, master: np.ndarray) -> 
 
 def quadratic_segment_integrals(slave: np.ndarray, normal: np.ndarray,
                                 master: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The mortar integrals of pairs of 6-node triangles (quadratic displacements):
+    """The mortar integrals of pairs of quadratic facets (quadratic displacements): 6-node triangles
+    (``slave``, ``master``: (P, 3, 3) vertices) or 9-node quadrilaterals ((P, 4, 3)),
 
         D[i] = int Φ_i,    M[i, j] = int Φ_i (N_j^m o pi),    S[i, k] = int Φ_i N_k,
 
-    Φ the dual basis of the slave's modified basis (:data:`~contactqvi.contact.facets.MODIFIED_DUAL`),
-    N^m the master's quadratic Lagrange functions (vertices, then the edge opposite each), over
-    the segments of the facets' vertex triangles (``slave``, ``master``: (P, 3, 3) vertices,
-    ``normal`` the slave's), pi the projection along ``normal`` onto the master's. Φ_i N_j^m is
-    of degree 4 on a flat pair: the rule is exact there. Curved facets enter through the
-    positions of their nodes, which the weighted gap takes: S x (N the slave's own quadratic
-    Lagrange functions) is its slave part, int Φ_i x_s, over the segments only; it is D_ii x̃_i
-    where the master covers the slave facet (biorthogonality), and where it does not (a sliver at
-    the rim of a surface, where the projection along a facet's tilted normal reaches a little past
-    the master's edge), it stays the integral of the positions that are there, while x̃_i lies 2/3
-    of the edges' sagittas off the surface (docs/quadratic.md, Sect. 5)."""
+    Φ the slave's dual basis (of the modified basis of a triangle,
+    :data:`~contactqvi.contact.facets.MODIFIED_DUAL`; of the biquadratic functions of a
+    quadrilateral, with its vertices' area element), N^m the master's quadratic Lagrange
+    functions (:func:`~contactqvi.contact.facets.quadratic_shapes`,
+    :func:`~contactqvi.contact.facets.biquadratic_shapes`), over the segments of the facets'
+    vertex polygons, pi the projection along ``normal`` (the slave's) onto the master's. Φ_i N_j^m
+    is of degree 4 on a flat pair of triangles and of degree 8 on a pair of parallelograms: the
+    rules are exact there. Curved facets enter through the positions of their nodes, which the
+    weighted gap takes: S x (N the slave's own quadratic Lagrange functions) is its slave part,
+    int Φ_i x_s, over the segments only; it is D_ii x̃_i where the master covers the slave facet
+    (biorthogonality), and where it does not (a sliver at the rim of a surface, where the
+    projection along a facet's tilted normal reaches a little past the master's edge), it stays
+    the integral of the positions that are there, while x̃_i lies 2/3 of the edges' sagittas off
+    the surface (docs/quadratic.md, Sect. 5)."""
     s2, m2, _ = plane_coordinates(slave, normal, master)
-    D, M, S = np.zeros((len(slave), 6)), np.zeros((len(slave), 6, 6)), np.zeros((len(slave), 6, 6))
-    for rows, weights, _, points in _segment_points(slave, s2, master, m2, 4):
-        Ls = _barycentric(s2[rows], points)
-        dual = modified_dual(Ls)
-        D[rows] += np.einsum("pq,pqi->pi", weights, dual)
-        M[rows] += np.einsum("pq,pqi,pqj->pij", weights, dual, quadratic_shapes(_barycentric(m2[rows], points)))
-        S[rows] += np.einsum("pq,pqi,pqk->pik", weights, dual, quadratic_shapes(Ls))
+    n = 6 if slave.shape[1] == 3 else 9
+    D, M, S = np.zeros((len(slave), n)), np.zeros((len(slave), n, n)), np.zeros((len(slave), n, n))
+    for rows, weights, values in _quadratic_points(slave, s2, master, m2):
+        D[rows] += np.einsum("pq,pqi->pi", weights, values.dual)
+        M[rows] += np.einsum("pq,pqi,pqj->pij", weights, values.dual, values.master)
+        S[rows] += np.einsum("pq,pqi,pqk->pik", weights, values.dual, values.slave)
     return D, M, S
+
+
+class _QuadraticValues(typing.NamedTuple):
+    """The functions of a pair of quadratic facets at the points of their segments (p, Q, n) each:
+    the slave's dual basis Φ, its Lagrange functions N and the master's N^m at the projections,
+    with the slave's reference (or barycentric) coordinates of the points."""
+
+    dual: np.ndarray
+    slave: np.ndarray
+    master: np.ndarray
+    coordinates: np.ndarray
+
+    def slave_normals(self, nodes: np.ndarray) -> np.ndarray:
+        """(p, Q, 3) unit normals of the slave facets of ``nodes`` (p, n, 3) at the points, not oriented."""
+        if nodes.shape[1] == 6:
+            return quadratic_normals(self.coordinates, nodes)
+        return biquadratic_normals(self.coordinates, nodes)
+
+
+def _quadratic_points(slave: np.ndarray, s2: np.ndarray, master: np.ndarray,
+                      m2: np.ndarray) -> typing.Iterator[tuple[np.ndarray, np.ndarray, _QuadraticValues]]:
+    """The quadrature of the segments of pairs of quadratic facets (their vertex polygons ``slave``,
+    ``master`` and their :func:`plane_coordinates` ``s2``, ``m2``): per triangle of the clipped
+    polygons' fans, the pairs (indices), the weights (p, Q) and the :class:`_QuadraticValues`. Pairs of
+    triangles take the rule of degree 4; of quadrilaterals :data:`BIQUADRATIC_DEGREE` where both are
+    parallelograms, else :data:`QUADRILATERAL_DEGREE`."""
+    if slave.shape[1] == 3:
+        for rows, weights, _, points in _segment_points(slave, s2, master, m2, 4):
+            Ls = _barycentric(s2[rows], points)
+            yield rows, weights, _QuadraticValues(modified_dual(Ls), quadratic_shapes(Ls),
+                                                  quadratic_shapes(_barycentric(m2[rows], points)), Ls)
+        return
+    dual = dual_coefficients(slave, 9)
+    for rows, weights, _, points in _segment_points(slave, s2, master, m2, None, BIQUADRATIC_DEGREE):
+        xi = reference_coordinates(s2[rows], points)
+        shapes = biquadratic_shapes(xi)
+        yield rows, weights, _QuadraticValues(np.einsum("pik,pqk->pqi", dual[rows], shapes), shapes,
+                                              biquadratic_shapes(reference_coordinates(m2[rows], points)), xi)
 
 
 def exact_surface_integrals(slave: np.ndarray, normal: np.ndarray, master: np.ndarray,
@@ -382,29 +429,29 @@ def exact_surface_integrals(slave: np.ndarray, normal: np.ndarray, master: np.nd
 
 def normal_separation_integrals(slave: np.ndarray, normal: np.ndarray, master: np.ndarray,
                                 slave_nodes: np.ndarray, master_nodes: np.ndarray) -> np.ndarray:
-    """(P, 6, 3) what taking the separation along the curved slave surface's normal adds to D_ii
-    times the separation of slave node i, per pair of 6-node triangles (quadratic displacements):
+    """(P, n, 3) what taking the separation along the curved slave surface's normal adds to D_ii
+    times the separation of slave node i, per pair of quadratic facets (6-node triangles or 9-node
+    quadrilaterals, quadratic displacements):
 
         E[i] = int Φ_i (nu (nu . (x_s - x_m)) - (x_s - x_m)),
 
-    x_s = sum_k N_k x_k the slave facet's point (``slave_nodes`` (P, 6, 3), vertices then the edge
-    opposite each), x_m the master facet's (``master_nodes``) at its projection pi, nu the slave
-    facet's unit normal at x_s, Φ the modified dual basis; the segments are those of the vertex
-    triangles ``slave``, ``master`` (P, 3, 3) projected along ``normal``, as in
-    :func:`quadratic_segment_integrals`. pi pairs the two curved surfaces through their vertex
-    triangles, so x_m lies beside the foot of x_s's normal by about the triangles' tilt times their
+    x_s = sum_k N_k x_k the slave facet's point (``slave_nodes`` (P, n, 3), in the order of
+    :func:`quadratic_segment_integrals`' functions), x_m the master facet's (``master_nodes``) at
+    its projection pi, nu the slave facet's unit normal at x_s, Φ the slave's dual basis; the
+    segments are those of the vertex polygons ``slave``, ``master`` projected along ``normal``, as
+    in :func:`quadratic_segment_integrals`. pi pairs the two curved surfaces through their vertex
+    polygons, so x_m lies beside the foot of x_s's normal by about the facets' tilt times their
     sagittas (0.5 µm on the press fit's 1.5 mm facets), and a nodal normal takes a part of that
-    tangential offset into the gap (docs/quadratic.md Sect. 5). A rule of degree 4.
+    tangential offset into the gap (docs/quadratic.md Sect. 5).
     """
     s2, m2, _ = plane_coordinates(slave, normal, master)
-    E = np.zeros((len(slave), 6, 3))
-    for rows, weights, _, points in _segment_points(slave, s2, master, m2, 4):
-        Ls, Lm = _barycentric(s2[rows], points), _barycentric(m2[rows], points)
-        x_s = np.einsum("pqk,pkd->pqd", quadratic_shapes(Ls), slave_nodes[rows])
-        delta = x_s - np.einsum("pqk,pkd->pqd", quadratic_shapes(Lm), master_nodes[rows])
-        nu = quadratic_normals(Ls, slave_nodes[rows])
+    E = np.zeros((len(slave), slave_nodes.shape[1], 3))
+    for rows, weights, values in _quadratic_points(slave, s2, master, m2):
+        x_s = np.einsum("pqk,pkd->pqd", values.slave, slave_nodes[rows])
+        delta = x_s - np.einsum("pqk,pkd->pqd", values.master, master_nodes[rows])
+        nu = values.slave_normals(slave_nodes[rows])
         integrand = np.einsum("pqd,pqd->pq", nu, delta)[..., None] * nu - delta
-        E[rows] += np.einsum("pq,pqi,pqd->pid", weights, modified_dual(Ls), integrand)
+        E[rows] += np.einsum("pq,pqi,pqd->pid", weights, values.dual, integrand)
     return E
 
 
@@ -413,19 +460,20 @@ def _edge_bubbles(L: np.ndarray) -> np.ndarray:
     return 4.0 * L[..., [1, 2, 0]] * L[..., [2, 0, 1]]
 
 
-def _segment_points(slave: np.ndarray, s2: np.ndarray, master: np.ndarray, m2: np.ndarray,
-                    degree: int | None) -> typing.Iterator[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+def _segment_points(slave: np.ndarray, s2: np.ndarray, master: np.ndarray, m2: np.ndarray, degree: int | None,
+                    affine_degree: int = AFFINE_DEGREE,
+                    ) -> typing.Iterator[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
     """The quadrature of the segments of facet pairs in the slave's plane (:func:`planar_integrals`):
     per triangle of the clipped polygons' fans, the pairs that have one (indices), the weights
     (p, Q) (a slave quadrilateral's true area element included), the slave's dual basis psi
-    (p, Q, n) and the points (p, Q, 2)."""
+    (p, Q, n) and the points (p, Q, 2); the rules of :func:`_rules`."""
     ns, nm = slave.shape[1], master.shape[1]
     s_ccw, m_ccw, pairs = _overlapping_shadows(s2, m2)
     polygon = np.zeros((len(pairs), ns + nm, 2), like=m_ccw)  # clipping adds at most one vertex per clipping edge
     polygon[:, :nm] = m_ccw[pairs]
     polygon, count = clip_polygons(polygon, np.full(len(pairs), nm), s_ccw[pairs])
     dual = dual_coefficients(slave[pairs]) if ns == 4 else None
-    for group, rule in _rules(slave[pairs], master[pairs], degree):
+    for group, rule in _rules(slave[pairs], master[pairs], degree, affine_degree):
         for k in range(1, polygon.shape[1] - 1):  # fan (v0, v_k, v_k+1)
             has = group & (count >= k + 2)
             if not has.any():
