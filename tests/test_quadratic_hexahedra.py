@@ -24,6 +24,7 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
+import scipy.spatial
 
 from dolfinx import fem
 
@@ -276,3 +277,26 @@ def test_a_27_node_block_on_a_plane_writes_its_quadratic_field(mpi_tmp_path):
         (name,) = [key for key in dataset.point_data if key.startswith("displacement")]
         assert dataset.cells.shape[1] == 27
         assert np.abs(dataset.point_data[name] - exact).max() < 1e-10 * pressure / young
+
+
+def test_the_contact_surface_file_shows_the_quadratic_field_at_every_node(mpi_tmp_path):
+    """The 27-node block, clamped on top, pressed 2 mm by a rigid sphere (R = 2 m) at its corner: every
+    point of the contact surface's VTX file (the facets' vertices, edge midpoints and centres) shows the
+    displacement of the body's file at that point, to 1e-12 of the travel. With the centre nodes' values
+    replaced by the mean of the facet's vertices (the linear facets' patches), the centres were off by
+    0.22 of the travel."""
+    travel = 2e-3
+    data = {"mesh": {"file": str(BLOCK), "order": 2}, "material": {"young": 1e9, "poisson": NU},
+            "boundary": {"clamped": ["top"], "displacement": {"symmetry_x": {"x": 0.0}, "symmetry_y": {"y": 0.0}}},
+            "contact": {"surface": "bottom", "law": "frictionless"},
+            "obstacle": {"type": "sphere", "center": [0.0, 0.0, -2.0], "radius": 2.0},
+            "steps": [{"translation": [0.0, 0.0, travel]}]}
+    summary, code = run_case(parse_case(data, ROOT), mpi_tmp_path, plot=False)
+    assert code == 0, summary["status"]
+    if MPI.COMM_WORLD.rank == 0:
+        body, surface = read_vtx(mpi_tmp_path / "body.bp", -1), read_vtx(mpi_tmp_path / "contact_surface.bp", -1)
+        distance, point = scipy.spatial.cKDTree(body.points).query(surface.points)
+        (name,) = [key for key in surface.point_data if key.startswith("displacement")]
+        (body_name,) = [key for key in body.point_data if key.startswith("displacement")]
+        assert len(surface.points) >= 49 and distance.max() < 1e-14  # 4^2 vertices, 24 midpoints, 9 centres
+        assert np.abs(surface.point_data[name] - body.point_data[body_name][point]).max() < 1e-12 * travel

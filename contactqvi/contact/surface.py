@@ -30,6 +30,7 @@ from dolfinx import fem, la
 from dolfinx import mesh as dmesh
 from dolfinx.cpp.mesh import cell_num_vertices
 
+from contactqvi.contact.mortar import exterior_facet_cells, facet_closures
 from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult
@@ -413,15 +414,21 @@ class TributaryPatches:
         patches.duplicate[n_points : n_points + len(patches.edges)] = _edges_owned_elsewhere(piece, patches.edges)
         return patches
 
-    def extend(self, values: np.ndarray, midpoints: np.ndarray | None = None) -> np.ndarray:
+    def extend(self, values: np.ndarray, midpoints: np.ndarray | None = None,
+               centres: np.ndarray | None = None) -> np.ndarray:
         """Values at the vertices extended to the patches' points; at the edges' midpoints
-        ``midpoints`` where given (the midside nodes of quadratic elements), else the mean of the ends."""
+        ``midpoints`` where given (the midside nodes of quadratic elements), else the mean of the ends;
+        at the facets' centres ``centres`` where given (the centre nodes of 9-node quadrilaterals), else
+        the mean of the vertices."""
         at_edges = values[self.edges].mean(axis=1) if midpoints is None else midpoints
-        return np.concatenate([values, at_edges, values[self._cells].mean(axis=1)])
+        at_centres = values[self._cells].mean(axis=1) if centres is None else centres
+        return np.concatenate([values, at_edges, at_centres])
 
     def dataset(self, point_data: dict[str, np.ndarray], state: np.ndarray, pair: np.ndarray,
-                midpoints: dict[str, np.ndarray] | None = None) -> Dataset:
-        """Point data (at the vertices; ``midpoints``: at the edges' midpoints) extended; cell data: ``state`` and ``pair`` of each patch's
+                midpoints: dict[str, np.ndarray] | None = None, centres: dict[str, np.ndarray] | None = None,
+                ) -> Dataset:
+        """Point data (at the vertices; ``midpoints``: at the edges' midpoints, ``centres``: at the facets'
+        centres) extended; cell data: ``state`` and ``pair`` of each patch's
         vertex and the indicators ``is_open``, ``is_in_contact`` (sticking or sliding: the
         one that names a frictionless pair's contact), ``is_sliding``, ``is_sticking``: 0/1 by the
         vertex's state, and on the patch of a vertex without contact law (``pair`` -1, a
@@ -443,7 +450,8 @@ class TributaryPatches:
             points=self.points,
             cells=self.cells,
             cell_type=9,  # VTK_QUAD
-            point_data={name: self.extend(values, (midpoints or {}).get(name)) for name, values in point_data.items()},
+            point_data={name: self.extend(values, (midpoints or {}).get(name), (centres or {}).get(name))
+                        for name, values in point_data.items()},
             cell_data={"contact_state": state, "contact_pair": pair, **{
                 name: indicators[name] for name in ("is_open", "is_in_contact", "is_sliding", "is_sticking")}},
             duplicate=self.duplicate,
@@ -500,6 +508,13 @@ def _midside_blocks(V: fem.FunctionSpace, piece: MeshPiece, edges: np.ndarray, v
     return V.dofmap.list[cells, edge_dof[local]]
 
 
+def _centre_blocks(V: fem.FunctionSpace, facets: np.ndarray) -> np.ndarray:
+    """The block of the quadratic space ``V`` on hexahedra at the centre node of each exterior facet
+    ``facets`` of V's mesh (the last node of its closure)."""
+    cells, local = exterior_facet_cells(V.mesh, np.asarray(facets, dtype=np.int32))
+    return V.dofmap.list[cells, facet_closures(V.dofmap.dof_layout, V.mesh)[local, -1]]
+
+
 class ContactSurface:
     """The contact facets of ``problem`` as a surface mesh with its fields; built once, updated per step.
 
@@ -511,7 +526,8 @@ class ContactSurface:
         V = problem.V
         msh = V.mesh
         self.problem = problem
-        self.mesh, _, vertex_map, _ = dmesh.create_submesh(msh, msh.topology.dim - 1, problem.contact_facets)
+        self.mesh, facet_of_cell, vertex_map, _ = dmesh.create_submesh(msh, msh.topology.dim - 1,
+                                                                       problem.contact_facets)
         scalars = fem.functionspace(self.mesh, ("Lagrange", 1))
         vectors = fem.functionspace(self.mesh, ("Lagrange", 1, (3,)))
         self._parent_blk = vertex_blocks(V)[vertex_map]  # every local surface vertex, owned or ghost
@@ -536,8 +552,12 @@ class ContactSurface:
         # quadratic elements: the values at the midside nodes go to the patches' edge midpoints
         self._midside_blk = (None if displacement_degree(V) == 1 else
                              _midside_blocks(V, self._piece, self._patches.edges, vertex_map))
-        self._midside_x = None if self._midside_blk is None else V.tabulate_dof_coordinates()[self._midside_blk]
+        # ... and on hexahedra the values at the facets' centre nodes to the patches' centres
+        quadratic_hexahedra = self._midside_blk is not None and msh.topology.cell_name() == "hexahedron"
+        self._centre_blk = (_centre_blocks(V, facet_of_cell[:self.mesh.topology.index_map(2).size_local])
+                            if quadratic_hexahedra else None)
         self._midside_values: dict[str, np.ndarray] = {}
+        self._centre_values: dict[str, np.ndarray] = {}
 
     @property
     def n_nodes(self) -> int:
@@ -605,10 +625,17 @@ class ContactSurface:
             bs = f.function_space.dofmap.index_map_bs
             f.x.array.reshape(-1, bs)[blk] = values.reshape(-1, bs)
         if self._midside_blk is not None:
-            self._midside_values = {labelled(getattr(fields, name).name): values for name, values in
-                                    self._values_at(table, u_all, self._midside_blk, self._midside_x).items()
-                                    if name not in ("state", "pair")}  # cell data: the patches' vertices
+            self._midside_values = self._point_values_at(table, u_all, self._midside_blk)
+        if self._centre_blk is not None:
+            self._centre_values = self._point_values_at(table, u_all, self._centre_blk)
         return fields
+
+    def _point_values_at(self, table: np.ndarray, displacement: np.ndarray, blocks: np.ndarray) -> dict[str, np.ndarray]:
+        """The point fields' values (by file name) at the nodes ``blocks`` of V (:meth:`_values_at`; the
+        state and pair are cell data, those of the patches' vertices)."""
+        x = self.problem.V.tabulate_dof_coordinates()[blocks]
+        return {labelled(getattr(self.fields, name).name): values for name, values in
+                self._values_at(table, displacement, blocks, x).items() if name not in ("state", "pair")}
 
     def _values_at(self, table: np.ndarray, displacement: np.ndarray, blocks: np.ndarray,
                    x: np.ndarray) -> dict[str, np.ndarray]:
@@ -640,4 +667,4 @@ class ContactSurface:
         point_data = {labelled(f.name): piece.point_values(f) for f in self.fields.functions
                       if f.name not in ("contact_state", "contact_pair", "nodal_area")}
         return self._patches.dataset(point_data, piece.point_values(self.fields.state),
-                                     piece.point_values(self.fields.pair), self._midside_values)
+                                     piece.point_values(self.fields.pair), self._midside_values, self._centre_values)
