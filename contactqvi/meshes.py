@@ -321,7 +321,7 @@ def _read_model(path: pathlib.Path, gdim: int) -> _GmshModel:
     node_tags, node_x, _ = gmsh.model.mesh.getNodes()
     nodes = _Nodes(np.asarray(node_tags, dtype=np.int64), np.asarray(node_x, dtype=float).reshape(-1, 3))
     shared, fault = _mesh_faults(facets, cells, entities, nodes)
-    fault = _facets_in_two_groups(gdim - 1, groups[gdim - 1]) or _mixed_cells(kinds) or fault
+    fault = _facets_in_two_groups(gdim - 1, groups[gdim - 1]) or _mixed_cells(kinds) or _unread_cells(kinds) or fault
     counts = {name: sum(len(rows) for rows in facets[name]) for name in facets}
     return _GmshModel(groups[gdim - 1], groups[gdim], counts, shared, fault)
 
@@ -385,6 +385,23 @@ def _mixed_cells(kinds: dict[str, set[str]]) -> str | None:
     return (f"the physical volumes hold cells of several kinds ({listed}): the bodies of a case share one mesh, "
             "and DOLFINx 0.9 takes one kind of cell per mesh; mesh every body with the same kind (all "
             "hexahedra: Transfinite and Recombine on every volume, or all tetrahedra)")
+
+
+#: gmsh's kinds of volume element that the bodies take: first-order and complete second-order
+#: tetrahedra and hexahedra (DOLFINx 0.9 reads no serendipity cell, and the elements are of degree 1 or 2).
+ELEMENT_KINDS = ("Tetrahedron 4", "Tetrahedron 10", "Hexahedron 8", "Hexahedron 27")
+
+
+def _unread_cells(kinds: dict[str, set[str]]) -> str | None:
+    """The error text when a physical volume holds cells of a kind not in :data:`ELEMENT_KINDS`, else None
+    (gmshio stopped with a KeyError of gmsh's element type)."""
+    other = {name: sorted(kind - set(ELEMENT_KINDS)) for name, kind in kinds.items() if kind - set(ELEMENT_KINDS)}
+    if not other:
+        return None
+    listed = "; ".join(f"{name!r}: {', '.join(kind)}" for name, kind in other.items())
+    return (f"the physical volumes hold cells of kinds that cannot be read ({listed}); the bodies take "
+            f"{', '.join(ELEMENT_KINDS)}: mesh with Mesh.ElementOrder = 1 or 2 and, for hexahedra of second order, "
+            "Mesh.SecondOrderIncomplete = 0 (27 nodes, not the 20-node serendipity hexahedron)")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -300,3 +300,15 @@ def test_the_contact_surface_file_shows_the_quadratic_field_at_every_node(mpi_tm
         (body_name,) = [key for key in body.point_data if key.startswith("displacement")]
         assert len(surface.points) >= 49 and distance.max() < 1e-14  # 4^2 vertices, 24 midpoints, 9 centres
         assert np.abs(surface.point_data[name] - body.point_data[body_name][point]).max() < 1e-12 * travel
+
+
+def test_serendipity_hexahedra_are_refused_by_name(mpi_tmp_path):
+    """The block meshed with 20-node (incomplete second-order) hexahedra, which DOLFINx 0.9 does not read
+    (gmshio stopped with a KeyError of gmsh's type 17): a ParameterError named mesh that says how to mesh
+    instead, before the mesh is distributed."""
+    geo = mpi_tmp_path / "hex20_block.geo"
+    if MPI.COMM_WORLD.rank == 0:
+        geo.write_text(BLOCK.read_text().replace("Mesh.SecondOrderIncomplete = 0;", "Mesh.SecondOrderIncomplete = 1;"))
+    MPI.COMM_WORLD.Barrier()
+    with pytest.raises(ParameterError, match=r"^mesh: .*'block': Hexahedron 20.*Mesh\.SecondOrderIncomplete = 0"):
+        read_gmsh(geo, MPI.COMM_WORLD)
