@@ -230,9 +230,9 @@ class MeshSource:
         file: a gmsh ``.geo`` or ``.msh`` file whose physical groups name the
             boundaries (in a case file: relative to the case file).
         box: the paper's body instead of a file.
-        order: of the elements' displacements: 1 (linear) or 2 (quadratic: 10-node
-            tetrahedra, curved where the mesh file is of second order; bodies against rigid
-            obstacles, :mod:`contactqvi.contact.quadratic`).
+        order: of the elements' displacements: 1 (linear) or 2 (quadratic: P2 on 10-node
+            tetrahedra, Q2 on 27-node hexahedra, curved where the mesh file is of second order;
+            docs/quadratic.md).
     """
 
     file: pathlib.Path | None = None

@@ -11,8 +11,11 @@ facets' dual mortar (docs/quadratic.md, Sect. 6).
 * The flat non-matching interface of the hexahedral blocks reproduces linear fields; the contact patch
   test holds to 1e-8 (frictionless, Coulomb 0.3, moduli 1 and 3 GPa); the frictional stack rotated by Q
   gives Q u(Q^T x); all ranks equal each rank alone; a path stopped and restarted continues exactly.
-* A 27-node block on a rigid plane through the runner: the homogeneous solution at all 27 nodes of
-  every cell of the VTX output, the pressure uniform.
+* A 27-node block on a rigid plane through the runner, with displacements alone and as the Taylor-Hood
+  pair Q2/Q1 at nu = 0.4999: the homogeneous solution at all 27 nodes of every cell of the VTX output;
+  under a rigid sphere the contact surface's file shows the body's displacement at every point (facet
+  centres included).
+* A mesh of 20-node hexahedra is refused by name.
 """
 
 from __future__ import annotations
@@ -254,13 +257,16 @@ def test_a_biquadratic_pair_restarts_exactly(mpi_tmp_path):
     assert abs(force[2]) == pytest.approx(P, rel=1e-10)
 
 
-def test_a_27_node_block_on_a_plane_writes_its_quadratic_field(mpi_tmp_path):
+@pytest.mark.parametrize("poisson, formulation", [(NU, "displacement"), (0.4999, "nodal_pressure")])
+def test_a_27_node_block_on_a_plane_writes_its_quadratic_field(mpi_tmp_path, poisson, formulation):
     """tests/data/hex27_block.geo (3^3 hexahedra of 27 nodes) pressed by p onto a frictionless rigid plane,
-    rollers on two sides, through the runner: the VTX body file holds 27-point cells, the displacement at
-    every point is the homogeneous one (nu p x / E, nu p y / E, -p z / E) to 1e-10 of p / E, and the plane
-    carries p x 1 m^2."""
+    rollers on two sides, through the runner, with displacements alone and as the Taylor-Hood pair Q2/Q1
+    at nu = 0.4999 (docs/nearly_incompressible.md, Sect. 6): the VTX body file holds 27-point cells, the
+    displacement at every point is the homogeneous one (nu p x / E, nu p y / E, -p z / E) to 1e-10 of
+    p / E, and the plane carries p x 1 m^2."""
     young, pressure = 1e9, 1e6
-    data = {"mesh": {"file": str(BLOCK), "order": 2}, "material": {"young": young, "poisson": NU},
+    data = {"mesh": {"file": str(BLOCK), "order": 2},
+            "material": {"young": young, "poisson": poisson, "formulation": formulation},
             "boundary": {"displacement": {"symmetry_x": {"x": 0.0}, "symmetry_y": {"y": 0.0}},
                          "traction": {"top": [0.0, 0.0, -pressure]}},
             "contact": {"surface": "bottom", "law": "frictionless"},
@@ -273,7 +279,7 @@ def test_a_27_node_block_on_a_plane_writes_its_quadratic_field(mpi_tmp_path):
     if MPI.COMM_WORLD.rank == 0:
         dataset = read_vtx(mpi_tmp_path / "body.bp", -1)
         x = dataset.points
-        exact = np.column_stack([NU * x[:, 0], NU * x[:, 1], -x[:, 2]]) * pressure / young
+        exact = np.column_stack([poisson * x[:, 0], poisson * x[:, 1], -x[:, 2]]) * pressure / young
         (name,) = [key for key in dataset.point_data if key.startswith("displacement")]
         assert dataset.cells.shape[1] == 27
         assert np.abs(dataset.point_data[name] - exact).max() < 1e-10 * pressure / young
