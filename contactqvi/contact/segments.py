@@ -50,8 +50,8 @@ from contactqvi.contact.facets import (
     triangle_rule,
 )
 
-__all__ = ["AFFINE_DEGREE", "BIQUADRATIC_DEGREE", "QUADRILATERAL_DEGREE", "Surface", "clip_polygons", "curvature_integrals", "diameters",
-           "edge_ties", "exact_surface_integrals", "normal_separation_integrals", "planar_integrals",
+__all__ = ["AFFINE_DEGREE", "BIQUADRATIC_DEGREE", "QUADRILATERAL_DEGREE", "Surface", "clip_polygons",
+           "curvature_integrals", "diameters", "edge_ties", "exact_surface_integrals", "normal_separation_integrals", "planar_integrals",
            "plane_coordinates", "quadratic_segment_integrals", "segment_integrals", "slave_moments"]
 
 class Surface(typing.Protocol):

@@ -630,7 +630,8 @@ class ContactSurface:
             self._centre_values = self._point_values_at(table, u_all, self._centre_blk)
         return fields
 
-    def _point_values_at(self, table: np.ndarray, displacement: np.ndarray, blocks: np.ndarray) -> dict[str, np.ndarray]:
+    def _point_values_at(self, table: np.ndarray, displacement: np.ndarray,
+                         blocks: np.ndarray) -> dict[str, np.ndarray]:
         """The point fields' values (by file name) at the nodes ``blocks`` of V (:meth:`_values_at`; the
         state and pair are cell data, those of the patches' vertices)."""
         x = self.problem.V.tabulate_dof_coordinates()[blocks]
