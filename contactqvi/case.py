@@ -976,15 +976,16 @@ def _check_solver(solver: dict[str, typing.Any]) -> dict[str, typing.Any]:
 
 def _check_limit_points(case: ContactCase) -> None:
     """``solver.limit_points = "relax"`` (the load path's relaxation past a limit point,
-    docs/finite_strain.md Sect. 15) takes a hyperelastic body whose pairs are searched once or every
-    step; the value itself is checked with the solver's table (:func:`check_solver`)."""
+    docs/finite_strain.md Sect. 15) takes a hyperelastic body whose pairs are not searched
+    ``until_settled``; the value itself is checked with the solver's table (:func:`check_solver`)."""
     if case.solver.get("limit_points") != "relax":
         return
     model = case.bodies[0].material.model if case.bodies else case.material.model
     searches = [case.contact.search] if case.contact is not None else [p.search for p in case.contacts]
-    require(model is not None and all(s in (None, "once", "every_step") for s in searches), "solver.limit_points",
-            "'relax' takes a hyperelastic body (material.model) whose pairs are searched once or every step, "
-            f"got model {model or 'linear'!r} and search {', '.join(str(s) for s in searches)}")
+    require(model is not None and "until_settled" not in searches, "solver.limit_points",
+            "'relax' takes a hyperelastic body (material.model) whose pairs are searched once, every step or inside "
+            f"the Newton iteration ('newton'), got model {model or 'linear'!r} and search "
+            f"{', '.join(str(s) for s in searches)}")
 
 
 def check_solver(case: ContactCase, table: Parameters) -> dict[str, typing.Any]:

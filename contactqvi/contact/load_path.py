@@ -117,7 +117,7 @@ PATH_PARAMETERS = Parameters(
                            "end at a limit point, where a part has to snap): 'relax' follows the body's overdamped "
                            "motion at the step's loads to an equilibrium and goes on from there "
                            "(docs/finite_strain.md Sect. 15), 'stop' ends the path; None: 'relax' for a hyperelastic "
-                           "body searched once or every step, 'stop' otherwise", type=str, choices=LIMIT_POINTS,
+                           "body whose pairs are not searched 'until_settled', 'stop' otherwise", type=str, choices=LIMIT_POINTS,
                            optional=True),
 )
 #: A step whose displacement increment is below this fraction of the displacement has not
@@ -250,10 +250,11 @@ class _StepSolver(PETScOwner):
         self.carried = _path_levels(problem, parameters, prefix) if problem.searched_each_step else None
         default_cuts = HYPERELASTIC_CUTS if problem.hyperelastic is not None else 0
         self.cuts_allowed = path["max_cuts"] if path["max_cuts"] is not None else default_cuts
-        relaxable = problem.hyperelastic is not None and not (problem.follows_geometry or problem.settles_geometry)
+        relaxable = problem.hyperelastic is not None and not problem.settles_geometry
         limit_points = path["limit_points"] or ("relax" if relaxable else "stop")
         require(limit_points == "stop" or relaxable, "solver.limit_points",
-                "'relax' takes a hyperelastic body whose pairs are searched once or every step")
+                "'relax' takes a hyperelastic body whose pairs are searched once, every step or inside the Newton "
+                "iteration ('newton'), not 'until_settled'")
         self.relaxes = limit_points == "relax"
         if self.relaxes and parameters.get("stall_iterations") is None:  # a failed attempt ends when it stalls
             self.parameters = {**parameters, "stall_iterations": RELAXING_STALL}
