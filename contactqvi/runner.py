@@ -22,6 +22,7 @@ import math
 import pathlib
 import signal
 import threading
+import time
 import typing
 
 from mpi4py import MPI
@@ -272,6 +273,7 @@ class _StepRecorder:
         self._fit_step = next((i for i, step in enumerate(case.steps) if step.fit is None or step.fit == 1.0), None)
         self.writer = ContactResultsWriter(output, problem.comm, keep=0 if checkpoint is None else checkpoint.step)
         self.checkpoints = CheckpointWriter(output, problem, 0 if checkpoint is None else checkpoint.step)
+        self._clock = time.perf_counter()  # the end of the last step's recording: the next step's solve starts
 
     def stopped(self, step: int) -> None:
         """The run stopped after ``step`` as asked (``stop_after``): the summary says ``interrupted``."""
@@ -286,9 +288,12 @@ class _StepRecorder:
     def record(self, index: int, step: LoadStep, u: PETSc.Vec, result: SCDNewtonResult, state: PathState) -> None:
         """Write step ``index``'s results (if it converged), the summary, and the path's
         ``state`` as a checkpoint (if it converged); an :class:`OutputError` if the output
-        cannot be written."""
+        cannot be written. ``solve_seconds``: the step's wall time from the end of the last step's
+        recording (its searches, Newton steps, cuts and relaxation; not the writing of its results),
+        the largest over the ranks."""
+        solve_seconds = self.problem.comm.allreduce(time.perf_counter() - self._clock, op=MPI.MAX)
         entry = {"step": index + 1, **step.summary(), **({} if step.fit is None else {"fit": step.fit}),
-                 **result.summary()}
+                 **result.summary(), "solve_seconds": solve_seconds}
         if index == 0 or self.problem.searched_each_step:  # the search this step's problem comes from
             entry.update(p=self.problem.n_contact, search_seconds=dict(self.problem.setup_seconds))
         if not result.converged:
@@ -312,6 +317,7 @@ class _StepRecorder:
             raise OutputError(f"output: writing step {index + 1} to {writer.out} failed ({exc}); the last "
                               f"complete checkpoint, of step {self.checkpoints.step}, is kept") from exc
         _log_step(index, result, entry)
+        self._clock = time.perf_counter()
 
 
 def _start_summary(case: ContactCase, problem: ContactProblem, checkpoint: Checkpoint | None) -> dict[str, typing.Any]:
@@ -355,9 +361,9 @@ def _draw_figures(writer: ContactResultsWriter, summary: dict[str, typing.Any], 
 def _log_step(index: int, result: SCDNewtonResult, entry: dict[str, typing.Any]) -> None:
     """One line per step: status, counts, the force of each contact pair's master side on its slave, the area."""
     forces = "; ".join(f"{name} {_vector_text(force)}" for name, force in entry.get("pair_forces", {}).items())
-    logger.info("step %d: %s, %d Newton steps, %d Krylov; contact forces (N) %s; contact area %.4g m^2",
-                index + 1, result.status, result.iterations, result.inner_iterations, forces or "-",
-                entry.get("contact_area", float("nan")))
+    logger.info("step %d: %s, %d Newton steps, %d Krylov, %.3g s; contact forces (N) %s; contact area %.4g m^2",
+                index + 1, result.status, result.iterations, result.inner_iterations, entry["solve_seconds"],
+                forces or "-", entry.get("contact_area", float("nan")))
     if "failure" in entry:
         logger.error("step %d failed: %s", index + 1, entry["failure"])
 

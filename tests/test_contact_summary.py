@@ -120,7 +120,8 @@ def test_patch_test_summary(friction):
 
 def test_case_with_bodies_only_reports_the_total_contact_force(mpi_tmp_path):
     """cases/patch_test.toml through the runner: ``contact_force`` = the sum of ``pair_forces``; the
-    summary names the Newton-step solver (its default for linear elements)."""
+    summary names the Newton-step solver (its default for linear elements); the step's wall time
+    ``solve_seconds`` holds its solver phases (``timings``)."""
     summary, code = run_case(load_case(ROOT / "cases" / "patch_test.toml"), mpi_tmp_path / "patch", plot=False)
     assert code == 0
     assert summary["newton_step_solver"] == "gamg"
@@ -128,6 +129,7 @@ def test_case_with_bodies_only_reports_the_total_contact_force(mpi_tmp_path):
     assert step["contact_force"] == pytest.approx([0.0, 0.0, P], abs=1e-6 * P)
     assert step["contact_force"] == pytest.approx(step["pair_forces"]["upper.interface/lower.interface"], abs=1e-9 * P)
     assert step["contact_area"] == pytest.approx(1.0, rel=1e-12)
+    assert sum(step["timings"].values()) <= step["solve_seconds"]
 
 
 DATA = ROOT / "tests" / "data"
