@@ -9,9 +9,10 @@ run``, one rank) on both frames and ``peers/getfem_rubber.py`` (serial) run one 
 time; the table compares per load step the roller's force on the pad (half model; ours the pair
 force ``top/obstacle``, GetFEM's the nodal internal forces at the contact surface), the wall
 times of the processes and of their load steps alone (ours the steps' ``solve_seconds``, GetFEM's its
-step loop; the processes' wall times include Python's imports and the set-up, 0.8 s of ours), and how far the last step's nodal contact forces are from the roller's
-normal (:func:`force_directions`). Our runs take the case's ``search`` (``"newton"``: the geometry
-inside the Newton iteration, docs/finite_strain.md Sect. 18), or ``--search``. Writes
+step loop; the processes' wall times include Python's imports and the set-up, 0.8 s of ours), and
+how far the last step's nodal contact forces are from the roller's normal (:func:`force_directions`).
+Our runs take the case's ``search`` (``"newton"``: the geometry inside the Newton iteration,
+docs/finite_strain.md Sect. 18), or ``--search``. Writes
 ``--table``.json/.md (:func:`contactqvi.tables.write_table`).
 
     .venv/bin/python benchmarks/rubber_peers.py --meshes coarse shipped

@@ -29,6 +29,7 @@ from contactqvi.parameters import ParameterError, require
 
 __all__ = [
     "BOX_BOUNDARIES",
+    "ELEMENT_KINDS",
     "SQUARE_BOUNDARIES",
     "INTERVAL_BOUNDARIES",
     "contact_body_sizes",
@@ -400,8 +401,9 @@ def _unread_cells(kinds: dict[str, set[str]]) -> str | None:
         return None
     listed = "; ".join(f"{name!r}: {', '.join(kind)}" for name, kind in other.items())
     return (f"the physical volumes hold cells of kinds that cannot be read ({listed}); the bodies take "
-            f"{', '.join(ELEMENT_KINDS)}: mesh with Mesh.ElementOrder = 1 or 2 and, for hexahedra of second order, "
-            "Mesh.SecondOrderIncomplete = 0 (27 nodes, not the 20-node serendipity hexahedron)")
+            f"{', '.join(ELEMENT_KINDS)}: mesh in tetrahedra or hexahedra (no prisms or pyramids) with "
+            "Mesh.ElementOrder = 1 or 2 and, for hexahedra of second order, Mesh.SecondOrderIncomplete = 0 "
+            "(27 nodes, not the 20-node serendipity hexahedron)")
 
 
 @dataclasses.dataclass(frozen=True)

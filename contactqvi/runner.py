@@ -218,9 +218,9 @@ def run_case(case: ContactCase, output: str | pathlib.Path, comm: MPI.Comm = MPI
                     problem.n_contact, problem.n_free, len(case.steps), comm.size,
                     newton_step_solver_name(problem, parameters))
         check_reach(problem, case.steps, _largest_prescribed(case), case.pair_keys)
-        recorder = _StepRecorder(case, problem, output, checkpoint, stop, warnings)
         state = PathState.at_rest(problem) if checkpoint is None else checkpoint.resume(problem)
         first, u = state.done, problem.A.createVecRight()
+        recorder = _StepRecorder(case, problem, output, checkpoint, stop, warnings)
         try:
             results = solve_load_path(problem, steps, u, parameters, PREFIX, recorder.record,
                                       case.solver.get("start", "rest") == "rest", state, recorder.stop_requested)
@@ -289,8 +289,9 @@ class _StepRecorder:
         """Write step ``index``'s results (if it converged), the summary, and the path's
         ``state`` as a checkpoint (if it converged); an :class:`OutputError` if the output
         cannot be written. ``solve_seconds``: the step's wall time from the end of the last step's
-        recording (its searches, Newton steps, cuts and relaxation; not the writing of its results),
-        the largest over the ranks."""
+        recording (the first step's: from the start of the path), the largest over the ranks: its
+        Newton steps, cuts and relaxation and the searches it makes, not the writing of its results
+        (nor the first search, made with the problem: ``search_seconds``)."""
         solve_seconds = self.problem.comm.allreduce(time.perf_counter() - self._clock, op=MPI.MAX)
         entry = {"step": index + 1, **step.summary(), **({} if step.fit is None else {"fit": step.fit}),
                  **result.summary(), "solve_seconds": solve_seconds}

@@ -30,6 +30,7 @@ import pytest
 import scipy.spatial
 
 from dolfinx import fem
+from dolfinx.mesh import exterior_facet_indices
 
 from contactqvi.case import Step, load_case, parse_case
 from contactqvi.contact.facets import (
@@ -66,6 +67,12 @@ def meshes() -> dict:
     return {}
 
 
+def _exterior_facets(msh) -> np.ndarray:
+    """The owned exterior facets of ``msh``."""
+    facets = exterior_facet_indices(msh.topology)
+    return facets[facets < msh.topology.index_map(2).size_local]
+
+
 @pytest.mark.parametrize("path", [MESH, BLOCK])
 def test_the_facet_closure_is_in_the_order_of_the_biquadratic_shapes(meshes, path):
     """Each exterior facet's closure in a Q2 space, on 8-node and on 27-node hexahedra: its nodes are the
@@ -74,7 +81,7 @@ def test_the_facet_closure_is_in_the_order_of_the_biquadratic_shapes(meshes, pat
     msh = _blocks(meshes, path)[0] if path == MESH else read_gmsh(path, MPI.COMM_WORLD)[0]
     V = fem.functionspace(msh, ("Lagrange", 2, (3,)))
     msh.topology.create_connectivity(2, 3)
-    facets = dolfinx_exterior_facets(msh)
+    facets = _exterior_facets(msh)
     cells, local = exterior_facet_cells(msh, facets)
     blk = np.take_along_axis(V.dofmap.list[cells], facet_closures(V.dofmap.dof_layout, msh)[local], axis=1)
     x = V.tabulate_dof_coordinates()[blk]
@@ -82,14 +89,6 @@ def test_the_facet_closure_is_in_the_order_of_the_biquadratic_shapes(meshes, pat
     assert blk.shape[1] == 9 and len(facets) > 0
     assert np.abs(x - mapped).max() < 1e-14
     assert np.abs(biquadratic_shapes(NODES) - np.eye(9)).max() < 1e-14
-
-
-def dolfinx_exterior_facets(msh) -> np.ndarray:
-    """The owned exterior facets of ``msh``."""
-    from dolfinx.mesh import exterior_facet_indices
-
-    facets = exterior_facet_indices(msh.topology)
-    return facets[facets < msh.topology.index_map(2).size_local]
 
 
 @pytest.mark.one_rank(reason="the dual basis of given quadrilaterals (numpy), no mesh")
@@ -130,8 +129,11 @@ def test_a_biquadratic_master_equal_to_the_slave_gives_the_dual_weights():
 
 @pytest.mark.one_rank(reason="segment integrals of given quadrilaterals (numpy), no search")
 def test_biquadratic_segments_are_those_of_the_vertex_quadrilaterals():
-    """Random parallelograms in parallel planes: sum_j M_ij = D_i and sum_k S_ik = D_i (the functions
-    sum to one), and sum_i D_i is the bilinear facets' (the overlap's area)."""
+    """Random parallelograms in parallel planes: sum_i D_i is the bilinear facets' (the overlap's area);
+    and for a quadratic field f of the plane, which the biquadratic functions of a parallelogram hold
+    exactly, sum_j M_ij f(x_j^m) = sum_k S_ik f(x_k) = int Φ_i f over the overlap, whatever part of the
+    slave facet the master covers (a wrong projection, reference coordinate or master order breaks it;
+    the rows of M and S summing to D follow from f = 1)."""
     rng = np.random.default_rng(5)
     count = 500
 
@@ -141,13 +143,18 @@ def test_biquadratic_segments_are_those_of_the_vertex_quadrilaterals():
         corners = np.concatenate([origin, origin + a, origin + b, origin + a + b], axis=1)
         return np.concatenate([corners, np.full((count, 4, 1), z)], axis=2)
 
+    def field(x: np.ndarray) -> np.ndarray:
+        return 1.0 + 0.3 * x[..., 0] - 0.7 * x[..., 1] + 0.5 * x[..., 0] ** 2 - 0.2 * x[..., 0] * x[..., 1]
+
     slave, master = parallelograms(0.0, 0.0), parallelograms(0.5, -0.1)
     normal = np.tile([0.0, 0.0, 1.0], (count, 1))
     D, M, S = quadratic_segment_integrals(slave, normal, master)
     linear, _ = segment_integrals(slave, normal, master)
+    nodes = quadrilateral_shapes(NODES)  # (9, 4): the nine nodes of a facet from its vertices
+    slave_f, master_f = (field(np.einsum("kv,pvd->pkd", nodes, x)) for x in (slave, master))
     assert np.count_nonzero(linear.sum(axis=1)) > count // 5
+    assert np.allclose(np.einsum("pij,pj->pi", M, master_f), np.einsum("pik,pk->pi", S, slave_f), atol=1e-13)
     assert np.allclose(M.sum(axis=2), D, atol=1e-13)
-    assert np.allclose(S.sum(axis=2), D, atol=1e-13)
     assert np.allclose(D.sum(axis=1), linear.sum(axis=1), atol=1e-13)
 
 

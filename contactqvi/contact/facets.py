@@ -43,10 +43,9 @@ from contactqvi.contact.dual import Dual, primal
 from contactqvi.parameters import ParameterError
 
 __all__ = ["ALPHA", "MODIFIED_AREAS", "MODIFIED_DUAL", "POLYGON_ORDER", "area_elements", "biquadratic_normals",
-           "biquadratic_shapes", "dual_coefficients",
-           "facet_areas", "length", "magnitude", "modified_dual", "modified_shapes", "nodal_integrals",
-           "planar_jacobians", "quadratic_normals", "quadratic_shapes", "quadrilateral_shapes", "reference_coordinates",
-           "triangle_rule", "unit_normals"]
+           "biquadratic_shapes", "dual_coefficients", "facet_areas", "length", "magnitude", "modified_dual",
+           "modified_shapes", "nodal_integrals", "planar_jacobians", "quadratic_normals", "quadratic_shapes",
+           "quadrilateral_shapes", "reference_coordinates", "triangle_rule", "unit_normals"]
 
 #: The vertices of a facet with n vertices in the order round its polygon.
 POLYGON_ORDER = {3: [0, 1, 2], 4: [0, 1, 3, 2]}

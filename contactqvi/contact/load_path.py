@@ -117,8 +117,8 @@ PATH_PARAMETERS = Parameters(
                            "end at a limit point, where a part has to snap): 'relax' follows the body's overdamped "
                            "motion at the step's loads to an equilibrium and goes on from there "
                            "(docs/finite_strain.md Sect. 15), 'stop' ends the path; None: 'relax' for a hyperelastic "
-                           "body whose pairs are not searched 'until_settled', 'stop' otherwise", type=str, choices=LIMIT_POINTS,
-                           optional=True),
+                           "body whose pairs are not searched 'until_settled', 'stop' otherwise", type=str,
+                           choices=LIMIT_POINTS, optional=True),
 )
 #: A step whose displacement increment is below this fraction of the displacement has not
 #: moved (round-off): its configuration is the settled one of the step before.

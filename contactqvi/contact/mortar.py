@@ -7,8 +7,9 @@ int_T psi_i phi_k = delta_ik int_T phi_k; on a bilinear quadrilateral (hexahedra
 meshes) psi = A phi with A = D_e M_e^{-1} from the facet's mass matrix
 (:mod:`contactqvi.contact.facets`); on the 6-node triangles of quadratic displacements, the dual
 basis Φ of the slave's modified basis Ñ (:mod:`contactqvi.contact.quadratic`), whose
-coefficients ũ = S^-1 u are the slave's unknowns, the slave's part of the weighted separation being
-int Φ_i x over the segments (docs/quadratic.md, Sect. 5). The mortar matrices
+coefficients ũ = S^-1 u are the slave's unknowns, and on the 9-node quadrilaterals of 27-node
+hexahedra the dual basis of their Lagrange functions, the slave's part of the weighted separation
+being int Φ_i x over the segments (docs/quadratic.md, Sects. 5-6). The mortar matrices
 
     D_ii = int_{Gamma_s} psi_i,        M_ij = int_{Gamma_s} psi_i (phi_j^m o pi),
 
@@ -123,14 +124,14 @@ _VERTICES = {6: 3, 9: 4}
 
 def surface_facets(V: fem.FunctionSpace, facets: np.ndarray, coords: np.ndarray | None = None) -> SurfaceFacets:
     """The owned exterior facets ``facets`` (local indices) of a P1 or P2 space on tetrahedra or a
-    Q1 space on hexahedra, with the node positions ``coords`` (local nodes, ghosts included;
+    Q1 or Q2 space on hexahedra, with the node positions ``coords`` (local nodes, ghosts included;
     default the mesh's)."""
     msh = V.mesh
     tdim = msh.topology.dim
     cell_name = msh.topology.cell_name()
     require(cell_name in _CELL_FACETS, "mesh",
             f"mortar contact needs tetrahedral or hexahedral meshes, got {cell_name} cells")
-    degree = msh.geometry.cmap.degree  # 2: second-order tetrahedra (the problem's builder checks it)
+    degree = msh.geometry.cmap.degree  # 2: second-order cells (the problem's builder checks them)
     facets = np.asarray(facets, dtype=np.int32)
     cells, local = exterior_facet_cells(msh, facets[facets < msh.topology.index_map(tdim - 1).size_local])
     cell_blk = V.dofmap.list[cells]
@@ -359,7 +360,7 @@ def _integrated(V: fem.FunctionSpace, layout: MortarLayout, slave: SurfaceFacets
     ``current``. ``rows`` None: the nodes the pairs cover for at least :data:`MIN_COVERAGE` of
     their lumped area (:data:`KEPT_COVERAGE` for ``kept_blk``), less ``excluded_blk``. ``added``:
     per pair, what the curvature of a second-order mesh with linear displacements (:func:`_bulge`)
-    and exact surfaces (:func:`_exact_correction`) add to D_ii times the separation. 6-node triangles
+    and exact surfaces (:func:`_exact_correction`) add to D_ii times the separation. Quadratic facets
     take the slave's part of the separation from their integrals' third array,
     int Φ_i x = sum_k S_ik x_k (:func:`~contactqvi.contact.segments.quadratic_segment_integrals`)."""
     comm, index_map, x = V.mesh.comm, V.dofmap.index_map, V.tabulate_dof_coordinates()
@@ -522,7 +523,7 @@ def _pair_integrals(slave: SurfaceFacets, master_x: np.ndarray, pairs_s: np.ndar
     """:func:`segment_integrals` (D, M) of the pairs of slave facets ``pairs_s`` with the master
     facets ``master_x`` (P, n_m, 3), in chunks, so the work arrays stay bounded (all at once
     they took 390 MB on the two-body Hertz fine mesh); :func:`quadratic_segment_integrals` of
-    6-node triangles, which bring the slave's moments S (its part of the separation, int psi_i x
+    quadratic facets, which bring the slave's moments S (its part of the separation, int psi_i x
     over the segments); with ``moments`` linear triangles bring theirs too (:func:`slave_moments`)."""
     ns = slave.blk.shape[1]
     nm = ns if slave.quadratic else master_x.shape[1]

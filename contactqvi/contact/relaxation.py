@@ -20,7 +20,8 @@ c_0 is the ratio of the diagonals of the small-strain stiffness and of M, so tha
 is a strongly damped one; after each step that converges c_k is halved, after each that fails it
 is multiplied by 4 (the switched evolution relaxation of pseudo-transient continuation, Kelley
 and Keyes, SIAM J. Numer. Anal. 35 (1998) 508). A step after one that converged starts from the
-extrapolation u_k + (u_k - u_{k-1}) of the flow, any other from u_k (docs/finite_strain.md
+extrapolation u_k + (u_k - u_{k-1}) of the flow, any other from u_k (pairs searched ``"newton"``:
+each step from u_k, by their own predictor; docs/finite_strain.md
 Sect. 15: the seal strips on the 1.0 and 0.5 mm meshes took 1 898 and 2 570 Newton steps in all,
 1 953 and 2 954 from u_k). Once a step changes the displacement by at most :data:`SETTLED` of the
 largest change of the relaxation, the step is solved again without the viscous term (c = 0) from there: its

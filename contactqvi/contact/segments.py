@@ -51,8 +51,8 @@ from contactqvi.contact.facets import (
 )
 
 __all__ = ["AFFINE_DEGREE", "BIQUADRATIC_DEGREE", "QUADRILATERAL_DEGREE", "Surface", "clip_polygons",
-           "curvature_integrals", "diameters", "edge_ties", "exact_surface_integrals", "normal_separation_integrals", "planar_integrals",
-           "plane_coordinates", "quadratic_segment_integrals", "segment_integrals", "slave_moments"]
+           "curvature_integrals", "diameters", "edge_ties", "exact_surface_integrals", "normal_separation_integrals",
+           "planar_integrals", "plane_coordinates", "quadratic_segment_integrals", "segment_integrals", "slave_moments"]
 
 class Surface(typing.Protocol):
     """An exact surface: the signed distance of points (n, 3) and the unit direction away from it
@@ -218,14 +218,17 @@ def _shape_values(x2: np.ndarray, points: np.ndarray) -> np.ndarray:
 
 
 def _slave_values(slave: np.ndarray, s2: np.ndarray, dual: np.ndarray | None,
-                  points: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-    """(P, Q, n) dual basis psi of slave facets at points (P, Q, 2) of their plane, and the
-    ratio of the facet's area element to the plane's there (None: 1, a flat triangle)."""
+                  points: np.ndarray) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """(P, Q, n) dual basis psi of slave facets at points (P, Q, 2) of their plane (of the bilinear
+    or, with ``dual`` (P, 9, 9), the biquadratic functions of a quadrilateral), the ratio of the
+    facet's area element to the plane's there and the points' reference coordinates (None, None:
+    a flat triangle)."""
     if slave.shape[1] == 3:
-        return 4.0 * _barycentric(s2, points) - 1.0, None
+        return 4.0 * _barycentric(s2, points) - 1.0, None, None
     xi = reference_coordinates(s2, points)
     ratio = area_elements(slave, xi) / planar_jacobians(s2, xi)
-    return np.einsum("pik,pqk->pqi", dual, quadrilateral_shapes(xi)), ratio
+    shapes = quadrilateral_shapes(xi) if dual.shape[-1] == 4 else biquadratic_shapes(xi)
+    return np.einsum("pik,pqk->pqi", dual, shapes), ratio, xi
 
 
 def _affine(x: np.ndarray) -> np.ndarray:
@@ -278,7 +281,7 @@ def planar_integrals(slave: np.ndarray, s2: np.ndarray, master: np.ndarray, m2: 
     basis (unchanged by a rigid motion of the facet) and the choice of the rule."""
     P, ns, nm = len(slave), slave.shape[1], master.shape[1]
     D, M = np.zeros((P, ns), like=m2), np.zeros((P, ns, nm), like=m2)
-    for rows, weights, psi, points in _segment_points(slave, s2, master, m2, degree):
+    for rows, weights, psi, points, _ in _segment_points(slave, s2, master, m2, degree):
         phi_m = _shape_values(m2[rows], points)
         D[rows] += np.einsum("pq,pqi->pi", weights, psi)
         M[rows] += np.einsum("pq,pqi,pqj->pij", weights, psi, phi_m)
@@ -300,7 +303,7 @@ def curvature_integrals(slave: np.ndarray, normal: np.ndarray, master: np.ndarra
     """
     s2, m2, _ = plane_coordinates(slave, normal, master)
     Bs, Bm = np.zeros((len(slave), 3, 3)), np.zeros((len(slave), 3, 3))
-    for rows, weights, psi, points in _segment_points(slave, s2, master, m2, 4):
+    for rows, weights, psi, points, _ in _segment_points(slave, s2, master, m2, 4):
         Bs[rows] += np.einsum("pq,pqi,pqk->pik", weights, psi, _edge_bubbles(_barycentric(s2[rows], points)))
         Bm[rows] += np.einsum("pq,pqi,pqk->pik", weights, psi, _edge_bubbles(_barycentric(m2[rows], points)))
     return Bs, Bm
@@ -313,7 +316,7 @@ def slave_moments(slave: np.ndarray, normal: np.ndarray, master: np.ndarray) -> 
     (a rule of degree 2)."""
     s2, m2, _ = plane_coordinates(slave, normal, master)
     S = np.zeros((len(slave), 3, 3))
-    for rows, weights, psi, points in _segment_points(slave, s2, master, m2, None):
+    for rows, weights, psi, points, _ in _segment_points(slave, s2, master, m2, None):
         S[rows] += np.einsum("pq,pqi,pqk->pik", weights, psi, _barycentric(s2[rows], points))
     return S
 
@@ -374,16 +377,13 @@ def _quadratic_points(slave: np.ndarray, s2: np.ndarray, master: np.ndarray,
     triangles take the rule of degree 4; of quadrilaterals :data:`BIQUADRATIC_DEGREE` where both are
     parallelograms, else :data:`QUADRILATERAL_DEGREE`."""
     if slave.shape[1] == 3:
-        for rows, weights, _, points in _segment_points(slave, s2, master, m2, 4):
+        for rows, weights, _, points, _ in _segment_points(slave, s2, master, m2, 4):
             Ls = _barycentric(s2[rows], points)
             yield rows, weights, _QuadraticValues(modified_dual(Ls), quadratic_shapes(Ls),
                                                   quadratic_shapes(_barycentric(m2[rows], points)), Ls)
         return
-    dual = dual_coefficients(slave, 9)
-    for rows, weights, _, points in _segment_points(slave, s2, master, m2, None, BIQUADRATIC_DEGREE):
-        xi = reference_coordinates(s2[rows], points)
-        shapes = biquadratic_shapes(xi)
-        yield rows, weights, _QuadraticValues(np.einsum("pik,pqk->pqi", dual[rows], shapes), shapes,
+    for rows, weights, dual, points, xi in _segment_points(slave, s2, master, m2, None, BIQUADRATIC_DEGREE, 9):
+        yield rows, weights, _QuadraticValues(dual, biquadratic_shapes(xi),
                                               biquadratic_shapes(reference_coordinates(m2[rows], points)), xi)
 
 
@@ -407,7 +407,7 @@ def exact_surface_integrals(slave: np.ndarray, normal: np.ndarray, master: np.nd
     """
     s2, m2, _ = plane_coordinates(slave, normal, master)
     E = np.zeros((len(slave), 6 if quadratic else 3, 3))
-    for rows, weights, psi, points in _segment_points(slave, s2, master, m2, 4):
+    for rows, weights, psi, points, _ in _segment_points(slave, s2, master, m2, 4):
         Ls, Lm = _barycentric(s2[rows], points), _barycentric(m2[rows], points)
         discrete, exact = [], []
         sides = ((Ls, slave, slave_sagitta, surfaces[0]), (Lm, master, master_sagitta, surfaces[1]))
@@ -461,18 +461,20 @@ def _edge_bubbles(L: np.ndarray) -> np.ndarray:
 
 
 def _segment_points(slave: np.ndarray, s2: np.ndarray, master: np.ndarray, m2: np.ndarray, degree: int | None,
-                    affine_degree: int = AFFINE_DEGREE,
-                    ) -> typing.Iterator[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+                    affine_degree: int = AFFINE_DEGREE, nodes: int | None = None,
+                    ) -> typing.Iterator[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]]:
     """The quadrature of the segments of facet pairs in the slave's plane (:func:`planar_integrals`):
     per triangle of the clipped polygons' fans, the pairs that have one (indices), the weights
     (p, Q) (a slave quadrilateral's true area element included), the slave's dual basis psi
-    (p, Q, n) and the points (p, Q, 2); the rules of :func:`_rules`."""
+    (p, Q, n; of a quadrilateral's biquadratic functions with ``nodes`` = 9), the points (p, Q, 2) and
+    their reference coordinates in a slave quadrilateral (None for a triangle); the rules of
+    :func:`_rules`."""
     ns, nm = slave.shape[1], master.shape[1]
     s_ccw, m_ccw, pairs = _overlapping_shadows(s2, m2)
     polygon = np.zeros((len(pairs), ns + nm, 2), like=m_ccw)  # clipping adds at most one vertex per clipping edge
     polygon[:, :nm] = m_ccw[pairs]
     polygon, count = clip_polygons(polygon, np.full(len(pairs), nm), s_ccw[pairs])
-    dual = dual_coefficients(slave[pairs]) if ns == 4 else None
+    dual = dual_coefficients(slave[pairs], nodes) if ns == 4 else None
     for group, rule in _rules(slave[pairs], master[pairs], degree, affine_degree):
         for k in range(1, polygon.shape[1] - 1):  # fan (v0, v_k, v_k+1)
             has = group & (count >= k + 2)
@@ -481,11 +483,12 @@ def _segment_points(slave: np.ndarray, s2: np.ndarray, master: np.ndarray, m2: n
             tri = np.stack([polygon[has, 0], polygon[has, k], polygon[has, k + 1]], axis=1)
             area = magnitude(_signed_area(tri))
             points = np.einsum("qi,pij->pqj", rule[0], tri)
-            psi, ratio = _slave_values(slave[pairs[has]], s2[pairs[has]], None if dual is None else dual[has], points)
+            psi, ratio, xi = _slave_values(slave[pairs[has]], s2[pairs[has]], None if dual is None else dual[has],
+                                           points)
             weights = area[:, None] * rule[1][None, :]
             if ratio is not None:
                 weights = weights * ratio
-            yield pairs[has], weights, psi, points
+            yield pairs[has], weights, psi, points, xi
 
 
 def diameters(x: np.ndarray) -> np.ndarray:

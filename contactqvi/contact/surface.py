@@ -382,7 +382,8 @@ class TributaryPatches:
     """Facets cut into one quadrilateral per vertex (through edge midpoints and centre).
 
     Point values are interpolated to the new points (midpoint: mean of the edge's
-    ends; centre: mean of the facet's vertices, the bilinear/linear value there).
+    ends; centre: mean of the facet's vertices, the bilinear/linear value there), or, for
+    quadratic elements, given there (:meth:`extend`).
 
     Args:
         points: (N, 3) vertices.
@@ -552,10 +553,12 @@ class ContactSurface:
         # quadratic elements: the values at the midside nodes go to the patches' edge midpoints
         self._midside_blk = (None if displacement_degree(V) == 1 else
                              _midside_blocks(V, self._piece, self._patches.edges, vertex_map))
+        self._midside_x = None if self._midside_blk is None else V.tabulate_dof_coordinates()[self._midside_blk]
         # ... and on hexahedra the values at the facets' centre nodes to the patches' centres
         quadratic_hexahedra = self._midside_blk is not None and msh.topology.cell_name() == "hexahedron"
         self._centre_blk = (_centre_blocks(V, facet_of_cell[:self.mesh.topology.index_map(2).size_local])
                             if quadratic_hexahedra else None)
+        self._centre_x = None if self._centre_blk is None else V.tabulate_dof_coordinates()[self._centre_blk]
         self._midside_values: dict[str, np.ndarray] = {}
         self._centre_values: dict[str, np.ndarray] = {}
 
@@ -625,16 +628,15 @@ class ContactSurface:
             bs = f.function_space.dofmap.index_map_bs
             f.x.array.reshape(-1, bs)[blk] = values.reshape(-1, bs)
         if self._midside_blk is not None:
-            self._midside_values = self._point_values_at(table, u_all, self._midside_blk)
+            self._midside_values = self._point_values_at(table, u_all, self._midside_blk, self._midside_x)
         if self._centre_blk is not None:
-            self._centre_values = self._point_values_at(table, u_all, self._centre_blk)
+            self._centre_values = self._point_values_at(table, u_all, self._centre_blk, self._centre_x)
         return fields
 
-    def _point_values_at(self, table: np.ndarray, displacement: np.ndarray,
-                         blocks: np.ndarray) -> dict[str, np.ndarray]:
-        """The point fields' values (by file name) at the nodes ``blocks`` of V (:meth:`_values_at`; the
-        state and pair are cell data, those of the patches' vertices)."""
-        x = self.problem.V.tabulate_dof_coordinates()[blocks]
+    def _point_values_at(self, table: np.ndarray, displacement: np.ndarray, blocks: np.ndarray,
+                         x: np.ndarray) -> dict[str, np.ndarray]:
+        """The point fields' values (by file name) at the nodes ``blocks`` of V at reference positions
+        ``x`` (:meth:`_values_at`; the state and pair are cell data, those of the patches' vertices)."""
         return {labelled(getattr(self.fields, name).name): values for name, values in
                 self._values_at(table, displacement, blocks, x).items() if name not in ("state", "pair")}
 
