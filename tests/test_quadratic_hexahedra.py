@@ -10,7 +10,8 @@ facets' dual mortar (docs/quadratic.md, Sect. 6).
   and S sum to D, and D sums to the linear facets' overlap.
 * The flat non-matching interface of the hexahedral blocks reproduces linear fields; the contact patch
   test holds to 1e-8 (frictionless, Coulomb 0.3, moduli 1 and 3 GPa); the frictional stack rotated by Q
-  gives Q u(Q^T x); all ranks equal each rank alone; a path stopped and restarted continues exactly.
+  gives Q u(Q^T x); all ranks equal each rank alone (a path stopped and restarted continues exactly:
+  tests/test_quadratic_mortar.py).
 * A 27-node block on a rigid plane through the runner, with displacements alone and as the Taylor-Hood
   pair Q2/Q1 at nu = 0.4999: the homogeneous solution at all 27 nodes of every cell of the VTX output;
   under a rigid sphere the contact surface's file shows the body's displacement at every point (facet
@@ -20,7 +21,6 @@ facets' dual mortar (docs/quadratic.md, Sect. 6).
 
 from __future__ import annotations
 
-import dataclasses
 import pathlib
 
 from mpi4py import MPI
@@ -32,7 +32,7 @@ import scipy.spatial
 from dolfinx import fem
 from dolfinx.mesh import exterior_facet_indices
 
-from contactqvi.case import Step, load_case, parse_case
+from contactqvi.case import parse_case
 from contactqvi.contact.facets import (
     area_elements,
     biquadratic_shapes,
@@ -240,28 +240,6 @@ def test_exact_cylinders_on_hexahedra_are_refused(meshes):
                     cylinder=CoaxialCylinders())
     with pytest.raises(ParameterError, match=r"cylinder: exact cylinders take tetrahedra with quadratic elements"):
         assemble_contact_problem(msh, tags, E, NU, {}, [pair], cell_tags=cell_tags, degree=2)
-
-
-def test_a_biquadratic_pair_restarts_exactly(mpi_tmp_path):
-    """cases/hex_patch.toml with Q2, the upper block three times stiffer (the interface slips), the
-    pressure in two steps, stopped after step 1 and restarted: step 2's pair force and Newton count equal
-    the uninterrupted run's to 1e-12."""
-    case = load_case(ROOT / "cases" / "hex_patch.toml")
-    upper = case.bodies[1]
-    stiffer = dataclasses.replace(upper, material=dataclasses.replace(upper.material, young=3e9))
-    case = dataclasses.replace(case, mesh=dataclasses.replace(case.mesh, order=2), bodies=(case.bodies[0], stiffer),
-                               steps=(Step(load=0.5), Step(load=1.0)))
-    whole, code = run_case(case, mpi_tmp_path / "whole", plot=False)
-    assert code == 0
-    _, code = run_case(case, mpi_tmp_path / "cut", plot=False, stop_after=1)
-    assert code == 3
-    resumed, code = run_case(case, mpi_tmp_path / "cut", plot=False, restart=True)
-    assert code == 0
-    a, b = whole["steps"][1], resumed["steps"][1]
-    assert b["iterations"] == a["iterations"]
-    (force,), (again,) = a["pair_forces"].values(), b["pair_forces"].values()
-    assert again == pytest.approx(force, rel=1e-12, abs=1e-12 * np.abs(force).max())
-    assert abs(force[2]) == pytest.approx(P, rel=1e-10)
 
 
 @pytest.mark.parametrize("poisson, formulation", [(NU, "displacement"), (0.4999, "nodal_pressure")])

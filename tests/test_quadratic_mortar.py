@@ -153,20 +153,23 @@ def test_quadratic_pairs_refuse_the_geometry_inside_newton(blocks):
         assemble_contact_problem(msh, tags, 1e9, NU, {}, [pair], cell_tags=cell_tags, degree=2)
 
 
-def _patch_case(order: int = 2):
-    """cases/patch_test.toml with elements of ``order``, the upper block three times stiffer (the
-    interface slips) and the pressure in two steps."""
-    case = load_case(ROOT / "cases" / "patch_test.toml")
+def _patch_case(case_file: str = "patch_test.toml", order: int = 2):
+    """``cases/{case_file}`` (the patch blocks of tetrahedra, or ``hex_patch.toml`` of hexahedra) with
+    elements of ``order``, the upper block three times stiffer (the interface slips) and the pressure
+    in two steps."""
+    case = load_case(ROOT / "cases" / case_file)
     upper = case.bodies[1]
     stiffer = dataclasses.replace(upper, material=dataclasses.replace(upper.material, young=3e9))
     return dataclasses.replace(case, mesh=dataclasses.replace(case.mesh, order=order),
                                bodies=(case.bodies[0], stiffer), steps=(Step(load=0.5), Step(load=1.0)))
 
 
-def test_a_quadratic_pair_restarts_exactly(mpi_tmp_path):
-    """The frictional patch case with P2 (searched before each step), stopped after step 1 and
-    restarted: step 2 equals the uninterrupted run's, pair force and Newton count, to 1e-12."""
-    case = _patch_case()
+@pytest.mark.parametrize("case_file", ["patch_test.toml", "hex_patch.toml"])
+def test_a_quadratic_pair_restarts_exactly(mpi_tmp_path, case_file):
+    """The frictional patch case with quadratic elements (P2 on tetrahedra, Q2 on hexahedra; searched
+    before each step), stopped after step 1 and restarted: step 2 equals the uninterrupted run's, pair
+    force and Newton count, to 1e-12."""
+    case = _patch_case(case_file)
     whole, code = run_case(case, mpi_tmp_path / "whole", plot=False)
     assert code == 0
     _, code = run_case(case, mpi_tmp_path / "cut", plot=False, stop_after=1)
