@@ -48,8 +48,9 @@ CASES = {"rigid": (ROOT / "cases" / "hertz.toml", "hertz_{}.geo"),
 FORMULATIONS = ("displacement", "nodal_pressure", "quadratic", "taylor_hood")
 #: The material formulation of the rows on quadratic elements.
 QUADRATIC = {"quadratic": "displacement", "taylor_hood": "nodal_pressure"}
-#: Meshes by h at the contact: a/4, a/8, a/16, a/32 (rigid sphere); a/4, a/6, a/10, a/16 (two bodies).
-MESHES = ("xcoarse", "coarse", "medium", "fine")
+#: Meshes by h at the contact: a/4, a/8, a/16, a/32 (rigid sphere); a/4, a/6, a/10, a/16 (two bodies);
+#: the two bodies' hexahedral meshes at a/6 and a/10 (``hertz_bodies.py``; 27-node with quadratic rows).
+MESHES = ("xcoarse", "coarse", "medium", "fine", "hex_coarse", "hex_medium")
 KEY = ("case", "poisson", "formulation", "mesh", "pc")
 #: Where the second-order meshes of quadratic rows are written (removed at the end).
 WORK = ROOT / "benchmarks" / "results" / "hertz_incompressible_work"
@@ -143,7 +144,7 @@ def markdown(rows: list[dict]) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", nargs="+", choices=tuple(CASES), default=list(CASES))
-    parser.add_argument("--meshes", nargs="+", choices=MESHES, default=list(MESHES[1:]))
+    parser.add_argument("--meshes", nargs="+", choices=MESHES, default=list(MESHES[1:4]))
     parser.add_argument("--formulations", nargs="+", choices=FORMULATIONS, default=list(FORMULATIONS))
     parser.add_argument("--poisson", type=float, default=0.4999)
     parser.add_argument("--pc", default=None, help="the Newton-step solver ([solver] pc); default: the case's")
@@ -151,6 +152,8 @@ def main() -> None:
     parser.add_argument("--log-level", choices=("DEBUG", "INFO", "WARNING", "ERROR"), default="INFO",
                         help="progress of the runs (INFO: each load step and Newton step, as the case runner)")
     args = parser.parse_args()
+    if "rigid" in args.cases and any(m.startswith("hex") for m in args.meshes):
+        parser.error("--meshes: the hexahedral meshes are the two bodies' (--cases bodies)")
     setup_logging(args.log_level)
     comm = MPI.COMM_WORLD
     path = args.output / "hertz_incompressible.json"
