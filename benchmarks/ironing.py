@@ -2,7 +2,8 @@
 
     .venv/bin/python benchmarks/ironing.py --run                  # runs both cases (1 rank), then the table
     .venv/bin/python benchmarks/ironing.py                        # the table from earlier runs
-    .venv/bin/python benchmarks/ironing.py --kratos DIR [DIR]     # with Kratos' runs (peers/kratos_ironing.py)
+    .venv/bin/python benchmarks/ironing.py --kratos DIR [DIR]     # with Kratos' runs (peers/kratos_ironing.py;
+                                                                  # without: those of the table before)
     .venv/bin/python benchmarks/ironing.py --run --mesh meshes/shallow_ironing_hex.msh \
         --results results/ironing-hex --table benchmarks/results/ironing_hex
                                                                   # the cases on another mesh
@@ -179,6 +180,9 @@ def main() -> int:
         if (directory / "kratos_ironing.json").exists():
             record = kratos(directory)
             peers["frictional" if record["friction"] else "frictionless"] = record
+    earlier = args.table.with_suffix(".json")
+    if not args.kratos and earlier.exists():  # Kratos' runs of the table before (peers/kratos_ironing.py)
+        peers = json.loads(earlier.read_text()).get("kratos", {})
 
     rows = []
     for name, (case, mu) in CASES.items():
