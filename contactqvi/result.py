@@ -53,7 +53,8 @@ class Status(enum.IntEnum):
     #: stopped from outside (SIGTERM, SIGINT) before the stopping test held
     INTERRUPTED = -9
     #: the residual is not defined at the iterate (PETSc's SNES_DIVERGED_FUNCTION_DOMAIN):
-    #: an inverted element (det F <= 0) of a hyperelastic body
+    #: an inverted element (det F <= 0) of a hyperelastic body, or a contact geometry that a
+    #: deformed facet leaves undefined (contact.mortar: a quadrilateral seen edge-on)
     DIVERGED_FUNCTION_DOMAIN = -10
     #: stopped for a new contact search: the iterate's projections left the facets of the last
     #: one (``search = "newton"``); the load path searches and solves on

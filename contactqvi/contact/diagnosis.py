@@ -111,7 +111,9 @@ def _status_cause(result: SCDNewtonResult) -> str:
                                        + (f", and the direct solve after it: {last['direct_reason']}"
                                           if "direct_reason" in last else "")),
         Status.DIVERGED_FUNCTION_DOMAIN: ("the residual is undefined at the step's initial guess: an element is "
-                                          "inverted (det F <= 0); take smaller load steps (solver.max_cuts)"),
+                                          "inverted (det F <= 0), or a deformed contact facet leaves the contact "
+                                          "geometry undefined (the log says so); take smaller load steps "
+                                          "(solver.max_cuts)"),
         Status.DIVERGED_STALLED: f"stalled: ||y^|| did not halve over the last Newton steps ({where}; target "
                                  f"{result.target:.3e} N)",
         Status.INTERRUPTED: "stopped from outside (SIGTERM, SIGINT) or after the step asked for (--stop-after)",

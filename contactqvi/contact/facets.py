@@ -40,7 +40,6 @@ import basix
 import numpy as np
 
 from contactqvi.contact.dual import Dual, primal
-from contactqvi.parameters import ParameterError
 
 __all__ = ["ALPHA", "MODIFIED_AREAS", "MODIFIED_DUAL", "POLYGON_ORDER", "area_elements", "biquadratic_normals",
            "biquadratic_shapes", "dual_coefficients", "facet_areas", "length", "magnitude", "modified_dual",
@@ -142,9 +141,10 @@ def reference_coordinates(x2: np.ndarray, points: np.ndarray) -> np.ndarray:
     the derivatives are those of its solution, -(J^{-1} r)' at the residual r(xi) = 0
     (implicit differentiation; Griewank and Walther, "Evaluating Derivatives", SIAM 2008, Ch. 15).
 
-    Raises:
-        ParameterError: (``mesh``) Newton's method did not converge (a degenerate or
-            non-convex quadrilateral).
+    Points where Newton's method does not converge (a degenerate or non-convex quadrilateral: a
+    deformed facet seen edge-on) get NaN, which the mortar integrals carry to the caller
+    (:func:`~contactqvi.contact.mortar.mortar_coupling`: a mesh error in the reference
+    configuration, an undefined contact geometry in a deformed one).
     """
     if isinstance(x2, Dual) or isinstance(points, Dual):
         xi = reference_coordinates(primal(x2), primal(points))
@@ -152,15 +152,16 @@ def reference_coordinates(x2: np.ndarray, points: np.ndarray) -> np.ndarray:
     b, c, d, target = _bilinear_map(x2, points)
     xi = np.full(points.shape, 0.5)
     previous = np.inf
-    for _ in range(NEWTON_MAX_IT):
-        step = _newton_step(b, c, d, target, xi)
-        xi -= step
-        largest = np.abs(step).max(initial=0.0)
-        if largest <= NEWTON_TOL or (largest <= ROUND_OFF_TOL and largest >= 0.5 * previous):
-            return xi
-        previous = largest
-    raise ParameterError("mesh", "the inverse of a contact facet's bilinear map did not converge in "
-                         f"{NEWTON_MAX_IT} Newton iterations: a degenerate or non-convex quadrilateral")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for _ in range(NEWTON_MAX_IT):
+            step = _newton_step(b, c, d, target, xi)
+            xi -= step
+            largest = np.abs(step).max(initial=0.0)
+            if largest <= NEWTON_TOL or (largest <= ROUND_OFF_TOL and largest >= 0.5 * previous):
+                return xi
+            previous = largest
+    xi[~(np.abs(step).max(axis=-1) <= ROUND_OFF_TOL)] = np.nan
+    return xi
 
 
 #: 8 x 8 Gauss points on the unit square and weights summing to 1: exact for bilinear x bilinear

@@ -43,6 +43,7 @@ reference positions with the C of that configuration.
 from __future__ import annotations
 
 import dataclasses
+import logging
 
 from mpi4py import MPI
 
@@ -59,6 +60,8 @@ from contactqvi.contact.segments import (Surface, curvature_integrals, diameters
                                          normal_separation_integrals, quadratic_segment_integrals,
                                          segment_integrals, slave_moments)
 from contactqvi.parameters import require
+
+logger = logging.getLogger(__name__)
 
 __all__ = ["MortarCoupling", "MortarLayout", "coupling_on_layout", "exterior_facet_cells", "facet_closures",
            "mortar_coupling", "surface_facets"]
@@ -317,6 +320,7 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
     pairs_s, pairs_m = _candidate_pairs(slave.x, slave.normal, mx, search_distance)
     facing = np.einsum("ij,ij->i", slave.normal[pairs_s], mnormal[pairs_m]) < 0.0
     pairs_s, pairs_m, integrals = _overlapping(slave, mx, pairs_s[facing], pairs_m[facing], exact is not None)
+    _check_defined(comm, integrals, reference=displacement is None)
     layout = MortarLayout(np.asarray(slave_facets), pairs_s, mglob[pairs_m],
                           integrals[0].sum(axis=1) / slave.area[pairs_s], np.empty(0, dtype=np.int32))
     added = None if slave.sagitta is None else _bulge(slave, pairs_s, mx[pairs_m], msagitta[0][pairs_m])
@@ -345,8 +349,25 @@ def coupling_on_layout(V: fem.FunctionSpace, layout: MortarLayout, displacement:
     nm = layout.master_glob.shape[1]
     master_x = fetch_rows(comm, index_map, current[:index_map.size_local],
                           layout.master_glob.ravel()).reshape(-1, nm, 3)
+    integrals = _pair_integrals(slave, master_x, layout.pairs_s)
+    _check_defined(comm, integrals, reference=False)
     with np.errstate(divide="ignore", invalid="ignore"):  # a row no pair covers: NaN, a trial the line search rejects
-        return _integrated(V, layout, slave, master_x, current, layout.rows, None, None, linearised)[0]
+        return _integrated(V, layout, slave, master_x, current, layout.rows, None, integrals, linearised)[0]
+
+
+def _check_defined(comm: MPI.Comm, integrals: tuple[np.ndarray, ...], reference: bool) -> None:
+    """Raise (``mesh``: in the reference configuration), or log (in a deformed one), where a facet
+    pair's integrals are not finite: a quadrilateral facet whose bilinear map has no inverse over
+    the pair's points (:func:`~contactqvi.contact.facets.reference_coordinates`). Deformed, the NaN
+    goes on into the coupling: a trial point that the line search rejects, or an iterate whose step
+    fails (``diverged_function_domain``) and is cut. Collective."""
+    undefined = comm.allreduce(int(np.count_nonzero(~np.isfinite(integrals[1]).all(axis=(1, 2)))), op=MPI.SUM)
+    if undefined == 0:
+        return
+    message = (f"the bilinear map of {undefined} contact facet pair(s) has no inverse over their segments' "
+               "points: a degenerate or non-convex quadrilateral")
+    require(not reference, "mesh", message)
+    logger.info("the contact geometry is not defined in this configuration: %s after the deformation", message)
 
 
 def _integrated(V: fem.FunctionSpace, layout: MortarLayout, slave: SurfaceFacets, master_x: np.ndarray,
