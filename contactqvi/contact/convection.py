@@ -14,8 +14,8 @@ so the predictor of such a step is the last solution convected with it:
 t the step's change of translation (:func:`sliding_translation`), the obstacles moved by t as every
 step moves them. A node whose point X - t lies outside its own body keeps u~_n. The values
 u~_n(X - t) are found on the ranks whose cells of the node's body hold the point
-(:func:`_convected_values`); nothing is gathered. The load path puts the prescribed values of the step into the predictor and searches
-the pairs there (:func:`~contactqvi.contact.load_path._predict`).
+(:func:`_convected_values`); nothing is gathered. The load path puts the prescribed values of the
+step into the predictor and searches the pairs there (:func:`~contactqvi.contact.load_path._predict`).
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ from contactqvi.load_steps import LoadStep
 __all__ = ["SLIDING_COSINE", "convected", "sliding_translation"]
 
 #: A step slides when its translation's mean |cos| with the normals of the touching contact nodes is
-#: below this: it moves along the contact (the ironing's slide: 0.05-0.3) rather than into it (a press: 0.9).
+#: below this: it moves along the contact (the ironing's steps along x) rather than into it (its press).
 SLIDING_COSINE = 0.5
 #: Contact states of a node that touches (theta < 0: a contact force).
 TOUCHING = (State.SLIDING, State.STICKING, State.WEAK_STICKING)
