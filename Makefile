@@ -55,7 +55,8 @@ RANK_TESTS ?= tests/test_ranks.py tests/test_output_parallel.py \
 	tests/test_current_geometry.py::test_newton_matrix_against_differences \
 	tests/test_current_geometry.py::test_obstacle_newton_matrix_against_differences \
 	tests/test_quadratic_mortar.py::test_quadratic_two_body_parallel_equals_serial \
-	tests/test_quadratic_hexahedra.py::test_biquadratic_two_body_parallel_equals_serial
+	tests/test_quadratic_hexahedra.py::test_biquadratic_two_body_parallel_equals_serial \
+	tests/test_convection.py::test_convected_follows_each_body_linear_field
 test-ranks: $(PY)
 	$(MPIENV) mpirun -n 3 $(PY) -m mpi4py -m pytest -q --color=no -p no:cacheprovider $(RANK_TESTS)
 	$(MPIENV) mpirun -n 4 $(PY) -m mpi4py -m pytest -q --color=no -p no:cacheprovider $(RANK_TESTS)
