@@ -25,6 +25,7 @@ from mpi4py import MPI
 import numpy as np
 
 from dolfinx import fem, geometry
+from dolfinx import mesh as dmesh
 
 from contactqvi.contact.nodal import State
 from contactqvi.contact.path_state import PathState
@@ -121,12 +122,10 @@ def _convected_values(u: fem.Function, points: np.ndarray, body: np.ndarray,
     holds the other's cell. Collective."""
     comm = u.function_space.mesh.comm
     low, high = _body_boxes(u.function_space.mesh, cell_body, int(body.max(initial=-1)) + 1)
-    near = np.all((points[:, None, :] >= low[:, body].transpose(1, 0, 2))
-                  & (points[:, None, :] <= high[:, body].transpose(1, 0, 2)), axis=2)  # (m, ranks)
-    point, rank = np.nonzero(near)
-    order = np.lexsort((point, rank))  # grouped by rank
-    point, rank = point[order], rank[order]
-    counts = np.bincount(rank, minlength=comm.size)
+    near = [np.flatnonzero(np.all((points >= low[r, body]) & (points <= high[r, body]), axis=1))
+            for r in range(comm.size)]  # the ranks, not the points
+    point = np.concatenate(near)  # grouped by rank
+    counts = np.array([len(p) for p in near])
     received, incoming = _exchange(comm, np.column_stack([points[point], body[point]]), counts)
     values, found = _evaluate(u, received[:, :3], received[:, 3].astype(np.int32), cell_body)
     answered, _ = _exchange(comm, np.column_stack([values, found]), incoming)
@@ -138,7 +137,7 @@ def _convected_values(u: fem.Function, points: np.ndarray, body: np.ndarray,
     return out, found_any
 
 
-def _body_boxes(msh, cell_body: np.ndarray, bodies: int) -> tuple[np.ndarray, np.ndarray]:
+def _body_boxes(msh: dmesh.Mesh, cell_body: np.ndarray, bodies: int) -> tuple[np.ndarray, np.ndarray]:
     """The bounding box of each body's local cells on every rank, padded by :data:`PADDING`: the
     lower and upper corners, (ranks, bodies, 3) each (empty boxes where a rank has none of a body).
     Collective."""
