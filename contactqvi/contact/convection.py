@@ -12,7 +12,10 @@ so the predictor of such a step is the last solution convected with it:
     u~_pred(X) = u~_n(X - t)           on the others (the trough carried along),
 
 t the step's change of translation (:func:`sliding_translation`), the obstacles moved by t as every
-step moves them. A node whose point X - t lies outside its own body keeps u~_n. The values
+step moves them. A node whose point X - t lies outside its own body keeps u~_n. It assumes that the
+contact zone travels with what slides, as under a die or a slider on a longer body; a step that
+moves obstacles alone keeps the tangent's predictor (a plane slid along itself, a plate dragged
+over a seal, moves no contact zone), and so does a path that turns. The values
 u~_n(X - t) are found on the ranks whose cells of the node's body hold the point
 (:func:`_convected_values`); nothing is gathered. The load path puts the prescribed values of the
 step into the predictor and searches the pairs there (:func:`~contactqvi.contact.load_path._predict`).
@@ -45,13 +48,15 @@ PADDING = 1e-10
 
 def sliding_translation(problem: ContactProblem, state: PathState, step: LoadStep) -> np.ndarray | None:
     """The change t of translation from ``state`` (a converged solve) to ``step`` if the step slides
-    (module docstring), else None: a path that turns, a step that does not translate, or one whose
-    translation is not along the contact of the nodes that touched (:data:`SLIDING_COSINE`).
-    Collective."""
+    (module docstring), else None: a path that turns, a step that does not translate, one that moves
+    obstacles only (no body holds a group ``boundary.moved``), or one whose translation is not along
+    the contact of the nodes that touched (:data:`SLIDING_COSINE`). Collective."""
     change = np.asarray(step.translation, dtype=float) - state.translation
     length = float(np.linalg.norm(change))
     if state.solved == 0 or length == 0.0 or step.rotation is not None or state.rotation is not None:
         return None
+    if len(_carried_bodies(problem, _node_body(problem))) == 0:
+        return None  # obstacles alone slide: a plane slid along itself moves no contact zone
     touching = np.isin(state.node_states[problem.contact_blk], TOUCHING)
     cosines = np.abs(problem.frames[touching, 2, :] @ (change / length))
     total, count = problem.comm.allreduce(np.array([cosines.sum(), float(len(cosines))]), op=MPI.SUM)
