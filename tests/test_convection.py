@@ -25,14 +25,17 @@ FIELDS = ((np.array([[1e-3, 2e-3, 0.0], [0.0, -1e-3, 3e-3], [2e-3, 0.0, 1e-3]]),
           (np.array([[-2e-3, 0.0, 1e-3], [1e-3, 1e-3, 0.0], [0.0, 2e-3, -1e-3]]), np.array([0.0, 5e-3, 1e-3])))
 
 
-def sliding_blocks(search: str = "newton") -> dict:
-    """cases/sliding_blocks.toml with neo-Hookean blocks, frictionless, searched ``search``: the upper
-    block (its top moved) pressed 1 mm, slid 0.1 m and 0.2 m along x, then pressed 0.5 mm more."""
+def sliding_blocks(friction: float = 0.0) -> dict:
+    """cases/sliding_blocks.toml with neo-Hookean blocks searched ``"newton"``, frictionless or with
+    Coulomb ``friction``: the upper block (its top moved) pressed 1 mm, slid 0.1 m and 0.2 m along x,
+    then pressed 0.5 mm more."""
     data = tomllib.loads(CASE.read_text())
     for body in data["bodies"]:
         body["material"]["model"] = "neo_hookean"
-    data["contacts"][0].update(law="frictionless", search=search)
-    del data["contacts"][0]["friction"]
+    data["contacts"][0].update(law="coulomb", friction=friction, search="newton")
+    if friction == 0.0:
+        data["contacts"][0]["law"] = "frictionless"
+        del data["contacts"][0]["friction"]
     data["steps"] = [{"translation": t} for t in ([0.0, 0.0, -1e-3], [0.1, 0.0, -1e-3], [0.2, 0.0, -1e-3],
                                                    [0.2, 0.0, -1.5e-3])]
     return data
@@ -72,13 +75,16 @@ def test_convected_follows_each_body_linear_field():
         assert np.array_equal(ghosts, predicted.x.array)
 
 
-def test_slide_steps_start_convected_and_reach_the_same_solution(mpi_tmp_path, monkeypatch):
+@pytest.mark.parametrize("friction", [0.0, 0.2])
+def test_slide_steps_start_convected_and_reach_the_same_solution(mpi_tmp_path, monkeypatch, friction):
     """The sliding blocks searched ``"newton"``: the two slide steps start from the convected predictor,
     the press steps do not (a translation into the contact), and the path's solution is the one without
-    that predictor (frictionless, neo-Hookean: the same equilibria; pair forces to 1e-8 of the normal
-    force). On these flat blocks both predictors start near the solution (measured 3 Newton steps a
-    slide step convected, 3 and 2 without; the die of the shipped ironing, which presses a trough, 3-8
-    against 15-28: docs/finite_strain.md Sect. 21); regression guard: at most 4."""
+    that predictor (neo-Hookean, frictionless or Coulomb 0.2 with the slip of each step measured from
+    its start: the same equilibria; pair forces to 1e-8 of the normal force). Measured Newton steps of
+    the two slide steps: frictionless 3 and 3 convected, 3 and 2 without (on these flat blocks both
+    predictors start near the solution); Coulomb 3 and 3 against 6 and 6 (the die of the shipped
+    ironing, which presses a trough, 3-8 against 15-28: docs/finite_strain.md Sect. 21). Regression
+    guard: at most 4 each."""
     comm = MPI.COMM_WORLD
     slid = []
     original = load_path.convected
@@ -89,12 +95,14 @@ def test_slide_steps_start_convected_and_reach_the_same_solution(mpi_tmp_path, m
 
     monkeypatch.setattr(load_path, "convected", counted)
     runs = {}
-    summary, code = run_case(parse_case(sliding_blocks(), CASE.parent), mpi_tmp_path / "convected", comm, plot=False)
+    summary, code = run_case(parse_case(sliding_blocks(friction), CASE.parent), mpi_tmp_path / "convected", comm,
+                             plot=False)
     assert code == 0, summary["status"]
     runs["convected"] = summary
     assert [list(t) for t in slid] == [[0.1, 0.0, 0.0], [0.1, 0.0, 0.0]]
     monkeypatch.setattr(convection, "SLIDING_COSINE", 0.0)  # no step slides
-    summary, code = run_case(parse_case(sliding_blocks(), CASE.parent), mpi_tmp_path / "tangent", comm, plot=False)
+    summary, code = run_case(parse_case(sliding_blocks(friction), CASE.parent), mpi_tmp_path / "tangent", comm,
+                             plot=False)
     assert code == 0, summary["status"]
     runs["tangent"] = summary
     assert len(slid) == 2
