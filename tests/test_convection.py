@@ -20,6 +20,7 @@ from contactqvi.runner import build_problem, run_case
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 CASE = ROOT / "cases" / "sliding_blocks.toml"
+DATA = ROOT / "tests" / "data"
 #: Per body (lower, upper): u = G X + c, a different linear field in each.
 FIELDS = ((np.array([[1e-3, 2e-3, 0.0], [0.0, -1e-3, 3e-3], [2e-3, 0.0, 1e-3]]), np.array([1e-3, 0.0, -2e-3])),
           (np.array([[-2e-3, 0.0, 1e-3], [1e-3, 1e-3, 0.0], [0.0, 2e-3, -1e-3]]), np.array([0.0, 5e-3, 1e-3])))
@@ -111,6 +112,50 @@ def test_slide_steps_start_convected_and_reach_the_same_solution(mpi_tmp_path, m
         assert np.abs(force - b["contact_force"]).max() <= 1e-8 * abs(force[2])
     newton = {name: [s["iterations"] for s in run["steps"]] for name, run in runs.items()}
     assert max(newton["convected"][1:3]) <= 4, newton
+
+
+def curved_die(law: str) -> dict:
+    """The line contact of ``tests/data/line_contact.geo`` as a die on a rubber block: the half-cylinder
+    (R = 50 mm, neo-Hookean, E = 200 MPa, its flat face a group ``boundary.moved``) pressed 1 mm into
+    the block (neo-Hookean, E = 10 MPa, clamped at its bottom) in two steps and slid 4 mm along x in
+    four, both on y-rollers at their ends, the die's curved face the slave searched ``"newton"``,
+    frictionless or with Coulomb friction 0.3."""
+    friction = {"friction": 0.3} if law == "coulomb" else {}
+    return {
+        "mesh": {"file": "line_contact.geo"},
+        "bodies": [
+            {"name": "block", "material": {"young": 10e6, "poisson": 0.3, "model": "neo_hookean"},
+             "boundary": {"clamped": ["bottom"], "displacement": {"ends": {"y": 0.0}}}},
+            {"name": "cyl", "material": {"young": 200e6, "poisson": 0.3, "model": "neo_hookean"},
+             "boundary": {"moved": ["load"], "displacement": {"ends": {"y": 0.0}}}},
+        ],
+        "contacts": [{"slave": "cyl.curved", "master": "block.top", "law": law, "search": "newton", **friction}],
+        "steps": [{"translation": [0.0, 0.0, -5e-4]}, {"translation": [0.0, 0.0, -1e-3]}]
+        + [{"translation": [k * 1e-3, 0.0, -1e-3]} for k in range(1, 5)],
+    }
+
+
+@pytest.mark.parametrize("law", ["frictionless", "coulomb"])
+def test_a_curved_die_slides_in_fewer_newton_steps(mpi_tmp_path, monkeypatch, law):
+    """A die that presses a trough and slides (the ironing's situation on a small mesh): its four slide
+    steps take at most half the Newton steps from the convected predictor that they take from the
+    tangent's (measured 15 against 47 frictionless, 19 against 57 with Coulomb 0.3), to the same pair
+    forces (1e-8 of the normal force, friction history included). Regression guard: at most 8 a step
+    (measured 3-7)."""
+    comm = MPI.COMM_WORLD
+    runs = {}
+    for predictor in ("convected", "tangent"):
+        if predictor == "tangent":
+            monkeypatch.setattr(convection, "SLIDING_COSINE", 0.0)  # no step slides
+        summary, code = run_case(parse_case(curved_die(law), DATA), mpi_tmp_path / predictor, comm, plot=False)
+        assert code == 0, summary["status"]
+        runs[predictor] = summary["steps"]
+    for a, b in zip(runs["convected"], runs["tangent"], strict=True):
+        force = np.asarray(a["contact_force"])
+        assert np.abs(force - b["contact_force"]).max() <= 1e-8 * abs(force[2])
+    slides = {name: [s["iterations"] for s in steps[2:]] for name, steps in runs.items()}
+    assert 2 * sum(slides["convected"]) <= sum(slides["tangent"]), slides
+    assert max(slides["convected"]) <= 8, slides
 
 
 @pytest.mark.parametrize("translation, slides", [((0.1, 0.0, -1e-3), True), ((0.0, 0.0, -1.5e-3), False)])
