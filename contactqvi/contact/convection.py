@@ -76,7 +76,8 @@ def convected(problem: ContactProblem, last: fem.Function, change: np.ndarray) -
     values[moving] += change
     points = V.tabulate_dof_coordinates()[:n_owned] - change
     still = np.flatnonzero(~moving)
-    shifted, found = _convected_values(last, points[still], body[still], _cell_body(problem))
+    cell_body = body[V.dofmap.list[:, 0]]  # a cell's body: that of its nodes
+    shifted, found = _convected_values(last, points[still], body[still], cell_body)
     values[still[found]] = shifted[found]
     out = fem.Function(V)
     out.x.array[:3 * n_owned] = values.ravel()
@@ -90,19 +91,6 @@ def _node_body(problem: ContactProblem) -> np.ndarray:
         return problem.node_body
     index_map = problem.V.dofmap.index_map
     return np.zeros(index_map.size_local + index_map.num_ghosts, dtype=np.int32)
-
-
-def _cell_body(problem: ContactProblem) -> np.ndarray:
-    """Each local cell's body index, as :attr:`~contactqvi.contact.problem.ContactProblem.node_body`
-    numbers them (0 for a problem of one body)."""
-    msh = problem.V.mesh
-    cell_map = msh.topology.index_map(msh.topology.dim)
-    out = np.zeros(cell_map.size_local + cell_map.num_ghosts, dtype=np.int32)
-    tags = problem.body.cell_tags
-    if problem.node_body is not None:
-        for k, name in enumerate(tags.names):
-            out[tags.find(tags.names[name])] = k
-    return out
 
 
 def _carried_bodies(problem: ContactProblem, body: np.ndarray) -> np.ndarray:
@@ -120,26 +108,26 @@ def _carried_bodies(problem: ContactProblem, body: np.ndarray) -> np.ndarray:
 
 def _convected_values(u: fem.Function, points: np.ndarray, body: np.ndarray,
                       cell_body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """u at ``points`` (m, 3), each found in a cell of its own ``body``, and whether it was found
-    (points outside their body: False). Each point goes to the ranks whose cells of its body have a
-    bounding box around it, and takes the value of the lowest that finds it: a point on the face that
-    two bodies share (a press fit, stacked blocks) belongs to the body of its node, whichever rank
-    holds the other's cell. Collective."""
+    """u at ``points`` (m, 3), each found in a cell of its own ``body`` (``cell_body``: each local
+    cell's), and whether it was found (points outside their body: False). Each point goes to the ranks
+    whose cells of its body have a bounding box around it, and takes the value of the lowest that finds
+    it: a point on the face that two bodies share (a press fit, stacked blocks) belongs to the body of
+    its node, whichever rank holds the other's cell. Collective."""
     comm = u.function_space.mesh.comm
     low, high = _body_boxes(u.function_space.mesh, cell_body, int(body.max(initial=-1)) + 1)
     near = [np.flatnonzero(np.all((points >= low[r, body]) & (points <= high[r, body]), axis=1))
             for r in range(comm.size)]  # the ranks, not the points
-    point = np.concatenate(near)  # grouped by rank
-    counts = np.array([len(p) for p in near])
-    received, incoming = _exchange(comm, np.column_stack([points[point], body[point]]), counts)
-    values, found = _evaluate(u, received[:, :3], received[:, 3].astype(np.int32), cell_body)
-    answered, _ = _exchange(comm, np.column_stack([values, found]), incoming)
-    hit = answered[:, 3] > 0.5
-    located, first = np.unique(point[hit], return_index=True)  # the lowest rank that found each point
-    out, found_any = np.zeros((len(points), 3)), np.zeros(len(points), dtype=bool)
-    out[located] = answered[hit][first, :3]
-    found_any[located] = True
-    return out, found_any
+    requests = comm.alltoall([np.column_stack([points[p], body[p]]) for p in near])
+    asked = np.concatenate(requests)
+    values, found = _evaluate(u, asked[:, :3], asked[:, 3].astype(np.int32), cell_body)
+    bounds = np.cumsum([len(r) for r in requests])[:-1]
+    replies = comm.alltoall(np.split(np.column_stack([values, found]), bounds))
+    out, located = np.zeros((len(points), 3)), np.zeros(len(points), dtype=bool)
+    for p, reply in zip(near, replies):  # by rank: the lowest that found a point gives its value
+        new = (reply[:, 3] > 0.5) & ~located[p]
+        out[p[new]] = reply[new, :3]
+        located[p[new]] = True
+    return out, located
 
 
 def _body_boxes(msh: dmesh.Mesh, cell_body: np.ndarray, bodies: int) -> tuple[np.ndarray, np.ndarray]:
@@ -154,18 +142,6 @@ def _body_boxes(msh: dmesh.Mesh, cell_body: np.ndarray, bodies: int) -> tuple[np
         if len(corners):
             low[k], high[k] = corners.min(axis=0) - PADDING, corners.max(axis=0) + PADDING
     return np.array(msh.comm.allgather(low)), np.array(msh.comm.allgather(high))
-
-
-def _exchange(comm: MPI.Comm, rows: np.ndarray, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The ``rows`` (grouped by destination rank, ``counts`` each) sent to their ranks: the rows
-    received, grouped by source rank, and how many from each."""
-    counts = np.asarray(counts, dtype=np.int64)
-    incoming = np.array(comm.alltoall([int(c) for c in counts]), dtype=np.int64)
-    send = np.ascontiguousarray(rows, dtype=np.float64)
-    width = send.shape[1]
-    recv = np.empty((int(incoming.sum()), width), dtype=np.float64)
-    comm.Alltoallv([send, counts * width], [recv, incoming * width])
-    return recv, incoming
 
 
 def _evaluate(u: fem.Function, points: np.ndarray, body: np.ndarray,

@@ -413,11 +413,11 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
     shipped ironing's slide steps 3-8 Newton steps instead of 15-28).
     ``pc``: the Newton-step solver's preset."""
     factor = state.extrapolation(step.load, step.translation, step.rotation, turns_only=True)
-    slide = sliding_translation(problem, state, step) if factor == 0.0 else None
     if factor > 0.0:
         predicted = _extrapolated(problem, step, state, factor)
     else:
         predicted = fem.Function(problem.V)
+        slide = sliding_translation(problem, state, step)
         if slide is not None:
             change = problem.solver_variables(convected(problem, state.displacement, slide),
                                               problem.A.createVecRight())
