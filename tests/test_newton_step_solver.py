@@ -199,6 +199,34 @@ def test_the_krylov_test_is_relative_to_the_rhs_of_5_4():
             options.delValue("nss_rtol_ksp_converged_use_initial_residual_norm")
 
 
+def test_a_start_that_meets_the_test_alone_still_solves_the_free_rows():
+    """An eliminated row (here every rank's first: an identity row) whose exact value dominates
+    ||rhs|| lets the start du_0 (that value, zero elsewhere) meet tol ||rhs||: the free rows are then
+    solved to tol of their own residual ||rhs - J du_0||, not left at zero (0 Krylov iterations);
+    with a start that does not meet the test the rtol is the paper's."""
+    with _System.create() as system, _solver("gamg", "nss_free_rows_") as solver:
+        J, rhs, du = system.J, system.rhs, system.du
+        first = J.getOwnershipRange()[0]
+        J.zeroRowsColumns([first], diag=1.0)  # the eliminated row: identity, its column moved to the rhs
+        rhs.setValue(first, 1e6)
+        rhs.assemble()
+        free = rhs.copy()
+        free.setValue(first, 0.0)  # the free rows' part of the rhs, whose size the start leaves
+        free.assemble()
+        start = free.norm()
+        for exact, paper in ((1e6, False), (1.0, True)):
+            rhs.setValue(first, exact)
+            rhs.assemble()
+            du.set(0.0)
+            du.setValue(first, exact)
+            du.assemble()
+            assert solver.solve(J, system.change, np.zeros(0, np.int8), rhs, du, 0.1) > 0
+            assert solver.ksp.getTolerances()[0] == pytest.approx(0.1 if paper else 0.1 * start / rhs.norm())
+            assert solver.iterations > 0 and system.relative_residual() * rhs.norm() <= 0.1 * (rhs.norm() if paper
+                                                                                                 else start)
+        free.destroy()
+
+
 @pytest.mark.parametrize("pc", ["gamg", "paper", "lu"])
 def test_the_newton_step_solver_frees_its_petsc_objects(pc, mpi_tmp_path):
     """Every policy (a multigrid set-up replaced after a slow solve included) leaves nothing alive."""
