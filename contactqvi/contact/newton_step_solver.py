@@ -153,8 +153,9 @@ class NewtonStepSolver(PETScOwner):
             self._set_operator(J, kinds, multigrid)
         start = self.initial_guess and self.ksp.getType() != "preonly"
         rtol = self.krylov_rtol(tol, rhs_ratio)
-        self.ksp.setTolerances(rtol=self._free_rows_rtol(J, rhs, du, tol, rtol) if start and self.pressure is None
-                               else rtol)
+        if start and self.pressure is None and not self._relative_to_start():
+            rtol = self._free_rows_rtol(J, rhs, du, tol, rtol)
+        self.ksp.setTolerances(rtol=rtol)
         self.ksp.setInitialGuessNonzero(start)
         # Options read at set-up (GAMG: multigrid options; block Jacobi: sub_*) come from the preset.
         with default_options(self.ksp.getOptionsPrefix(), self._options):
@@ -283,14 +284,18 @@ class NewtonStepSolver(PETScOwner):
         scaled) the Mindlin steps converge alike, but Table 2 at lev 3-6 needs 2 Newton and 8
         Krylov iterations more.
         """
+        return tol if self._relative_to_start() else tol * rhs_ratio
+
+    def _relative_to_start(self) -> bool:
+        """Whether the KSP's test is relative to the initial residual (the preset's or the command line's
+        ``-{prefix}ksp_converged_use_initial_residual_norm``)."""
         name = "ksp_converged_use_initial_residual_norm"
-        initial = self._options.get(name, False) or PETSc.Options().getBool(self.ksp.getOptionsPrefix() + name, False)
-        return tol if initial else tol * rhs_ratio
+        return self._options.get(name, False) or PETSc.Options().getBool(self.ksp.getOptionsPrefix() + name, False)
 
     @staticmethod
     def _free_rows_rtol(J: PETSc.Mat, rhs: PETSc.Vec, du: PETSc.Vec, tol: float, rtol: float) -> float:
         """The KSP's rtol when the solve starts from ``du`` (exact on the eliminated rows, zero
-        elsewhere): ``rtol`` (the paper's test), unless that start meets it already. Then the
+        elsewhere) and its test is the paper's: ``rtol``, unless that start meets it already. Then the
         eliminated rows' share of ||rhs|| alone passed the test and the step would move them
         alone (zero Krylov iterations, zero on every free row): the free rows are solved to
         ``tol`` of their own residual, ||rhs - J du|| <= tol ||rhs - J du_0||.
