@@ -61,7 +61,8 @@ class NewtonStepSolver(PETScOwner):
       contact node changes its kind (:meth:`_set_operator`);
     * direct solvers (``preonly``): a new factorisation at every step.
 
-    The Krylov test is the paper's, ||rhs - J du|| <= tol ||rhs of (5.4)|| (:meth:`krylov_rtol`).
+    The Krylov test is the paper's, ||rhs - J du|| <= tol ||rhs of (5.4)|| (:meth:`krylov_rtol`), and
+    at least tol of the start's own residual where the start meets the paper's (:meth:`_free_rows_rtol`).
 
     Args:
         comm: the problem's communicator.
