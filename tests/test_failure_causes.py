@@ -163,3 +163,50 @@ def test_a_relaxation_without_equilibrium_says_so():
     assert "never slowed down" in _relaxation_end(dataclasses.replace(result, history=history[:3]))
     assert _relaxation_end(dataclasses.replace(result, history=history[:1])) is None
     assert _relaxation_end(dataclasses.replace(result, status=Status.INTERRUPTED)) is None
+
+
+@pytest.mark.one_rank(reason="a function of the states of one rank's nodes")
+def test_each_node_counts_its_changes_of_state():
+    """:meth:`SCDNewtonResult.record_states`: a node's changes from one iterate to the next, and the
+    state it left last; a new set of contact nodes (a search) starts the count again."""
+    from contactqvi.contact.nodal import State
+    from contactqvi.contact.scd_newton import SCDNewtonResult
+    from contactqvi.result import Status
+
+    result = SCDNewtonResult(status=Status.DIVERGED_MAX_IT, iterations=0, gamma=1.0, target=1.0,
+                             states=np.empty(0, np.int8), normal_force=np.empty(0), friction_force=np.empty((0, 2)))
+    open_, sliding, sticking = State.NO_CONTACT, State.SLIDING, State.STICKING
+    for states in ([open_, sliding, sticking], [sliding, sliding, sticking], [open_, sliding, sliding],
+                   [sliding, sliding, sliding]):
+        result.record_states(np.array(states, np.int8))
+    assert result.switches.tolist() == [3, 0, 1] and result.switched_from.tolist() == [open_, sliding, sticking]
+    result.record_states(np.array([open_, sliding], np.int8))
+    assert result.switches.tolist() == [0, 0]
+
+
+def test_a_node_that_cycles_is_named(mpi_tmp_path):
+    """A stalled solve whose contact node changed its state 7 times (``CYCLING`` = 5 or more): the
+    cause names the node by its reference position and pair, the count and the two states; with
+    every node changing less than 5 times nothing is added. Collective: the node may lie on any rank."""
+    from contactqvi.contact.diagnosis import CYCLING, _cycling, _point
+    from contactqvi.contact.nodal import State
+    from contactqvi.contact.scd_newton import SCDNewtonResult
+    from contactqvi.result import Status
+
+    with build_problem(load_case(PUSHED), MPI.COMM_WORLD) as problem:
+        comm, m = problem.comm, len(problem.contact_blk)
+        x = problem.V.tabulate_dof_coordinates()[problem.contact_blk]
+        key = x @ np.array([1.0, 10.0, 100.0])  # one node, the same on any number of ranks
+        chosen = key == comm.allreduce(float(key.max(initial=-np.inf)), op=MPI.MAX)
+        switches = np.where(chosen, 7, CYCLING - 1).astype(np.int32)
+        result = SCDNewtonResult(status=Status.DIVERGED_MAX_IT, iterations=40, gamma=1.0, target=1.0,
+                                 states=np.full(m, State.SLIDING, np.int8), normal_force=np.zeros(m),
+                                 friction_force=np.zeros((m, 2)), history=[{"k": 40}], switches=switches,
+                                 switched_from=np.full(m, State.NO_CONTACT, np.int8))
+        text = _cycling(problem, result)
+        where = comm.allreduce([tuple(point) for point in x[chosen]], op=MPI.SUM)[0]
+        assert text == (f"; the contact state cycles: the node at {_point(np.array(where))} m of "
+                        "bottom/obstacle changed its state 7 times in its last 40 Newton steps, between no contact and "
+                        "sliding")
+        assert _cycling(problem, dataclasses.replace(result, switches=np.full(m, CYCLING - 1, np.int32))) == ""
+    assert _point(np.array([9.634e-3, 3.66e-4, 1.99e-20])) == "(0.009634, 0.000366, 0)"

@@ -187,6 +187,9 @@ class SCDNewtonResult(Result):
         normal_force: lambda = -theta >= 0 per owned contact node (N).
         friction_force: (m, 2) tangential force of the obstacle on the body in the
             nodes' frames (N).
+        switches: how often each owned contact node changed its state from one Newton
+            iterate to the next (since the last search: the solve's own contact nodes).
+        switched_from: each node's state before its last change (its state where it never changed).
     """
 
     gamma: float
@@ -195,6 +198,18 @@ class SCDNewtonResult(Result):
     normal_force: np.ndarray
     friction_force: np.ndarray
     forcing: Forcing | None = None
+    switches: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, np.int32))
+    switched_from: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, np.int8))
+
+    def record_states(self, states: np.ndarray) -> None:
+        """Take the Newton iterate's contact ``states`` (Table 1), counting each node's changes."""
+        if len(self.switches) != len(states) or len(self.states) != len(states):
+            self.switches, self.switched_from = np.zeros(len(states), np.int32), states.copy()
+        else:
+            changed = states != self.states
+            self.switches[changed] += 1
+            self.switched_from[changed] = self.states[changed]
+        self.states = states
 
 
 @dataclasses.dataclass(frozen=True)
@@ -786,7 +801,7 @@ class SCDNewtonSolver(PETScOwner):
             v_forward_backward = point.v
             normal, tangential, moved = self.classify(point, v_previous)
             v_previous = v_forward_backward
-            result.states = contact_states(normal, tangential)
+            result.record_states(contact_states(normal, tangential))
             entry = {"k": k, "residual": point.norm, "relative_residual": point.norm / norm0 if norm0 else 0.0,
                      "states": _state_counts(comm, result.states), "reversed": moved}
             result.history.append(entry)
