@@ -188,7 +188,7 @@ class SCDNewtonResult(Result):
         friction_force: (m, 2) tangential force of the obstacle on the body in the
             nodes' frames (N).
         switches: how often each owned contact node changed its state from one Newton
-            iterate to the next (since the last search: the solve's own contact nodes).
+            iterate to the next in this solve.
         switched_from: each node's state before its last change (its state where it never changed).
     """
 
