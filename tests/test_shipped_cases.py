@@ -118,12 +118,14 @@ DYNAMIC_NEWTON_STEPS = {
 #: three or four solves of 3-8 Newton steps at finite strain).
 MAX_NEWTON = {"hertz": 15}
 
-#: Force balance allowed (``equilibrium_error``, and each body's): the stopping test's floor,
-#: 1e-14 ||l||, is about 1e-8 of the Hertz contact force (the load in the shifted variables
-#: holds the gaps of metres of the far nodes). The two-body cases balance to 1e-10 since the
+#: Force balance allowed (``equilibrium_error``, and each body's): 1e-7, and for the Hertz case
+#: ten times its stopping test's floor, 1e-14 ||l|| = 1e-2 N (the load in the shifted variables
+#: holds the gaps of metres of the far nodes), 9.4e-8 of its contact force: a step that stops just
+#: below the floor balances to 1.6e-7 (the coarse variant on 3 ranks, step 1: ||y^|| 1.3e-2 N; on 1
+#: and 2 ranks 1.7e-8 ... 8.3e-8). The two-body cases balance to 1e-10 since the
 #: prescribed values are taken exactly and the contact forces on prescribed master components
 #: go to the supports (before: 2e-4 - 1.1e-3).
-IMBALANCE = 1e-7
+IMBALANCE = {"hertz": 1e-6}
 
 
 @pytest.mark.one_rank(reason="case-file contents, no run")
@@ -152,8 +154,9 @@ def test_shipped_case_converges_in_equilibrium(shipped_runs, name):
     assert len(steps) == len(shipped_case(name).steps)
     assert all(step["converged"] for step in steps)
     assert max(step["iterations"] for step in steps) <= MAX_NEWTON.get(name, 25)
-    assert max(step["equilibrium_error"] for step in steps) < IMBALANCE
-    assert all(error < IMBALANCE for step in steps for error in step.get("body_equilibrium_errors", {}).values())
+    imbalance = IMBALANCE.get(name, 1e-7)
+    assert max(step["equilibrium_error"] for step in steps) < imbalance
+    assert all(error < imbalance for step in steps for error in step.get("body_equilibrium_errors", {}).values())
 
 
 @pytest.mark.parametrize("name", of_case(*sorted(NEWTON_STEPS)))
