@@ -56,7 +56,7 @@ SPHERE_MESH = f"""DefineConstant[ refinement = 3, extent = 20, symmetry_planes =
 Include "{ROOT / 'meshes' / 'sphere_indentation.geo'}";
 """
 #: The paths: shipped case, the law or search that replaces its own.
-PATHS = {
+CASES = {
     "sphere_coulomb": ("cattaneo_mindlin.toml", {}),
     "sphere_pressure_coulomb": ("cattaneo_mindlin.toml", {"law": "pressure_coulomb", "friction": 0.3,
                                                           "friction_limit": 0.15, "pressure_scale": 1e9}),
@@ -66,6 +66,8 @@ PATHS = {
     "sphere_spun": ("cattaneo_mindlin.toml", {"search": "every_step"}),
     "oring_mixed": ("../benchmarks/data/oring/oring.toml", {}),
 }
+#: The paths the restart tests run on this number of ranks.
+PATHS = dict(CASES)
 #: The twisted path's steps: pressed 1 mm, then turned about the vertical through the top's centre.
 TWISTED = (Step(translation=(0.0, 0.0, -1e-3)),
            *(Step(translation=(0.0, 0.0, -1e-3), rotation=Rotation((0.0, 0.0, 1.0), float(k), (0.5, 0.5, 1.0)))
@@ -97,8 +99,8 @@ def work() -> pathlib.Path:
 
 
 def _case(name: str, work: pathlib.Path) -> ContactCase:
-    """Path ``name`` of :data:`PATHS`: six steps, exact Newton steps."""
-    file, law = PATHS[name]
+    """Path ``name`` of :data:`CASES`: six steps, exact Newton steps."""
+    file, law = CASES[name]
     case = load_case(ROOT / "cases" / file)
     if name == "oring_mixed":
         case = dataclasses.replace(case, material=dataclasses.replace(case.material, poisson=0.4999,

@@ -95,6 +95,12 @@ TOUCHING = (State.SLIDING, State.STICKING, State.WEAK_STICKING)
 HYPERELASTIC_CUTS = 4
 #: Relative residual of the linear solve of the elastic predictor (:func:`_elastic_change`).
 PREDICTOR_RTOL = 1e-8
+#: A gap at rest of at most this times the largest coordinate touches (:func:`_elastic_change`): a gap
+#: is a difference of positions, resolved to a few eps of their size (a block on a plane through its
+#: bottom: -6e-17 ... 2.3e-17 m, each rank's last node negative; with ``gap <= 0`` the held nodes were
+#: as many as the ranks, and half the block's height in one step took 6 Newton steps on 1 and 2
+#: ranks, 9 on 3, 7 on 4).
+GAP_ROUNDOFF = 1e-12
 #: The step of the central difference of r_K along the change of the prescribed values, relative
 #: to it (:func:`_tangent_change`).
 FINITE_DIFFERENCE = 1e-6
@@ -469,7 +475,7 @@ def _elastic_change(problem: ContactProblem, state: PathState, pc: str, prefix: 
     normal one at a node of a frictionless pair, whose tangential variables carry no force (held,
     they sheared an ironing die by its whole slide step; :func:`_predict`). After a converged solve
     every contact node is held; at the path's start (``state`` at rest) those whose gap at the step
-    is not positive, the others are free (held, a block on a wavy foundation was pressed against it
+    is not positive (to round-off, :data:`GAP_ROUNDOFF`), the others are free (held, a block on a wavy foundation was pressed against it
     at every node, and at nu = 0.4999 its first step stalled after 38 Newton steps where it now takes
     6; docs/finite_strain.md Sect. 17). Zero where nothing changes, and where the solve
     fails (logged; with the open nodes free, a body that only contact holds has no unique
@@ -484,7 +490,9 @@ def _elastic_change(problem: ContactProblem, state: PathState, pc: str, prefix: 
     frictional = np.array([i.pair.law.frictional for i in problem.interfaces], dtype=bool)[problem.interface_of_node]
     rows = np.where(frictional[:, None], [[True, True, True]], [[False, False, True]])
     if state.solved == 0:
-        rows &= (problem.gap(problem.translation, problem.step_rotation, problem.fit) <= 0.0)[:, None]
+        size = float(np.abs(problem.V.tabulate_dof_coordinates()).max(initial=0.0))
+        touching = GAP_ROUNDOFF * problem.comm.allreduce(size, op=MPI.MAX)
+        rows &= (problem.gap(problem.translation, problem.step_rotation, problem.fit) <= touching)[:, None]
     held = (3 * problem.contact_blk[:, None] + np.arange(3))[rows]
     A = problem.A.copy() if state.solved == 0 or problem.hyperelastic is None else _tangent_change(problem, state,
                                                                                                    change)
