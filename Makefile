@@ -59,7 +59,8 @@ RANK_TESTS ?= tests/test_ranks.py tests/test_output_parallel.py \
 	tests/test_convection.py::test_convected_follows_each_body_linear_field \
 	tests/test_press_fit.py::test_push_out_slides_at_the_coulomb_force \
 	tests/test_press_fit.py::test_a_uniform_table_is_the_number \
-	tests/test_dynamics.py::test_restart_mid_tilt
+	tests/test_dynamics.py::test_restart_mid_tilt \
+	tests/test_finite_strain.py::test_half_the_height_from_rest_in_one_step
 test-ranks: $(PY)
 	$(MPIENV) mpirun -n 3 $(PY) -m mpi4py -m pytest -q --color=no -p no:cacheprovider $(RANK_TESTS)
 	$(MPIENV) mpirun -n 4 $(PY) -m mpi4py -m pytest -q --color=no -p no:cacheprovider $(RANK_TESTS)
