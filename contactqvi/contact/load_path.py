@@ -475,9 +475,9 @@ def _elastic_change(problem: ContactProblem, state: PathState, pc: str, prefix: 
     normal one at a node of a frictionless pair, whose tangential variables carry no force (held,
     they sheared an ironing die by its whole slide step; :func:`_predict`). After a converged solve
     every contact node is held; at the path's start (``state`` at rest) those whose gap at the step
-    is not positive (to round-off, :data:`GAP_ROUNDOFF`), the others are free (held, a block on a wavy foundation was pressed against it
-    at every node, and at nu = 0.4999 its first step stalled after 38 Newton steps where it now takes
-    6; docs/finite_strain.md Sect. 17). Zero where nothing changes, and where the solve
+    is not positive (to round-off, :data:`GAP_ROUNDOFF`), the others are free (held, a block on a
+    wavy foundation was pressed against it at every node, and at nu = 0.4999 its first step stalled
+    after 38 Newton steps where it now takes 6; docs/finite_strain.md Sect. 17). Zero where nothing changes, and where the solve
     fails (logged; with the open nodes free, a body that only contact holds has no unique
     response)."""
     change, before = problem.A.createVecRight(), problem.A.createVecRight()
