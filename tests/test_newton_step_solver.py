@@ -203,7 +203,7 @@ def test_a_start_that_meets_the_test_alone_still_solves_the_free_rows():
     """An eliminated row (here every rank's first: an identity row) whose exact value dominates
     ||rhs|| lets the start du_0 (that value, zero elsewhere) meet tol ||rhs||: the free rows are then
     solved to tol of their own residual ||rhs - J du_0||, not left at zero (0 Krylov iterations);
-    with a start that does not meet the test the rtol is the paper's."""
+    with a start that does not meet the test, or whose free rows are round-off, the rtol is the paper's."""
     with _System.create() as system, _solver("gamg", "nss_free_rows_") as solver:
         J, rhs, du = system.J, system.rhs, system.du
         first = J.getOwnershipRange()[0]
@@ -224,6 +224,14 @@ def test_a_start_that_meets_the_test_alone_still_solves_the_free_rows():
             assert solver.ksp.getTolerances()[0] == pytest.approx(0.1 if paper else 0.1 * start / rhs.norm())
             assert solver.iterations > 0 and system.relative_residual() * rhs.norm() <= 0.1 * (rhs.norm() if paper
                                                                                                  else start)
+        rhs.scale(1e-20)  # free rows at round-off of the eliminated row's 1e6: solved already, the paper's test
+        rhs.setValue(first, 1e6)
+        rhs.assemble()
+        du.set(0.0)
+        du.setValue(first, 1e6)
+        du.assemble()
+        assert solver.solve(J, system.change, np.zeros(0, np.int8), rhs, du, 0.1) > 0
+        assert solver.ksp.getTolerances()[0] == 0.1 and solver.iterations == 0
         free.destroy()
 
 

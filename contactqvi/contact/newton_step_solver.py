@@ -29,6 +29,10 @@ logger = logging.getLogger(__name__)
 #: fails (:data:`contactqvi.linalg.KSP_PRESETS`; options prefix ``{prefix}fallback_``).
 FALLBACK = "lu"
 
+#: A start whose residual is below this fraction of the right-hand side's norm has its free rows
+#: solved to round-off (:meth:`NewtonStepSolver._free_rows_rtol`).
+RESOLVED = 1e-12
+
 #: Newton-step solvers selectable by the SCD parameter ``pc``, each a preset of
 #: :data:`contactqvi.linalg.KSP_PRESETS` applied under the solver's options prefix
 #: (``-{prefix}ksp_*``/``-{prefix}pc_*`` on the command line win). ``gamg``
@@ -299,7 +303,8 @@ class NewtonStepSolver(PETScOwner):
         elsewhere) and its test is the paper's: ``rtol``, unless that start meets it already. Then the
         eliminated rows' share of ||rhs|| alone passed the test and the step would move them
         alone (zero Krylov iterations, zero on every free row): the free rows are solved to
-        ``tol`` of their own residual, ||rhs - J du|| <= tol ||rhs - J du_0||.
+        ``tol`` of their own residual, ||rhs - J du|| <= tol ||rhs - J du_0||, unless that residual is
+        round-off already (below :data:`RESOLVED` ||rhs||, which a Krylov method could not reduce).
 
         Measured (cases/push_out.toml on 3 ranks, step 1, the fit of a Coulomb pair): the
         nodes whose slip reversed stick (:meth:`SCDNewtonSolver.classify`), their tangential
@@ -312,7 +317,7 @@ class NewtonStepSolver(PETScOwner):
         residual.aypx(-1.0, rhs)
         start, norm = residual.norm(), rhs.norm()
         residual.destroy()
-        return tol * start / norm if 0.0 < start <= rtol * norm else rtol
+        return tol * start / norm if RESOLVED * norm < start <= rtol * norm else rtol
 
 
 def _smoothed_aggregation(prefix: str, options: OptionsDict) -> bool:
