@@ -30,7 +30,7 @@ import numpy as np
 from dolfinx import fem, geometry
 from dolfinx import mesh as dmesh
 
-from contactqvi.contact.nodal import State
+from contactqvi.contact.nodal import TOUCHING
 from contactqvi.contact.path_state import PathState
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.load_steps import LoadStep
@@ -40,8 +40,6 @@ __all__ = ["SLIDING_COSINE", "convected", "sliding_translation"]
 #: A step slides when its translation's mean |cos| with the normals of the touching contact nodes is
 #: below this: it moves along the contact (the ironing's steps along x) rather than into it (its press).
 SLIDING_COSINE = 0.5
-#: Contact states of a node that touches (theta < 0: a contact force).
-TOUCHING = (State.SLIDING, State.STICKING, State.WEAK_STICKING)
 #: Bounding-box padding (m) of the point location.
 PADDING = 1e-10
 
@@ -57,7 +55,7 @@ def sliding_translation(problem: ContactProblem, state: PathState, step: LoadSte
         return None
     if len(_carried_bodies(problem, _node_body(problem))) == 0:
         return None  # obstacles alone slide: a plane slid along itself moves no contact zone
-    touching = np.isin(state.node_states[problem.contact_blk], TOUCHING)
+    touching = np.isin(state.contact_states(problem), TOUCHING)
     cosines = np.abs(problem.frames[touching, 2, :] @ (change / length))
     total, count = problem.comm.allreduce(np.array([cosines.sum(), float(len(cosines))]), op=MPI.SUM)
     return change if count > 0 and total / count < SLIDING_COSINE else None

@@ -68,7 +68,7 @@ from dolfinx import fem
 
 from contactqvi.contact.convection import convected, sliding_translation
 from contactqvi.contact.newton_step_solver import NEWTON_STEP_SOLVERS, NewtonStepSolver
-from contactqvi.contact.nodal import State
+from contactqvi.contact.nodal import TOUCHING
 from contactqvi.contact.path_state import PathState
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.relaxation import relax
@@ -89,8 +89,6 @@ logger = logging.getLogger(__name__)
 
 StepCallback = typing.Callable[[int, LoadStep, PETSc.Vec, SCDNewtonResult, PathState], None]
 
-#: The states of a contact node that touches its master surface.
-TOUCHING = (State.SLIDING, State.STICKING, State.WEAK_STICKING)
 #: ``max_cuts`` of a hyperelastic body when not given (Code_Aster's SUBD_NIVEAU counts alike).
 HYPERELASTIC_CUTS = 4
 #: Relative residual of the linear solve of the elastic predictor (:func:`_elastic_change`).
@@ -477,9 +475,9 @@ def _elastic_change(problem: ContactProblem, state: PathState, pc: str, prefix: 
     every contact node is held; at the path's start (``state`` at rest) those whose gap at the step
     is not positive (to round-off, :data:`GAP_ROUNDOFF`), the others are free (held, a block on a
     wavy foundation was pressed against it at every node, and at nu = 0.4999 its first step stalled
-    after 38 Newton steps where it now takes 6; docs/finite_strain.md Sect. 17). Zero where nothing changes, and where the solve
-    fails (logged; with the open nodes free, a body that only contact holds has no unique
-    response)."""
+    after 38 Newton steps where it now takes 6; docs/finite_strain.md Sect. 17). Zero where nothing
+    changes, and where the solve fails (logged; with the open nodes free, a body that only contact
+    holds has no unique response)."""
     change, before = problem.A.createVecRight(), problem.A.createVecRight()
     problem.step_load(problem.load_factor, problem.translation, problem.step_rotation, change)
     problem.step_load(state.load, state.translation, state.rotation, before)

@@ -156,12 +156,12 @@ class NewtonStepSolver(PETScOwner):
             self.galerkin.update(change)
         elif self.pressure is None:  # the block preconditioner's KSP takes the uncondensed system
             self._set_operator(J, kinds, multigrid)
-        start = self.initial_guess and self.ksp.getType() != "preonly"
+        from_guess = self.initial_guess and self.ksp.getType() != "preonly"
         rtol = self.krylov_rtol(tol, rhs_ratio)
-        if start and self.pressure is None and not self._relative_to_start():
+        if from_guess and self.pressure is None and not self._relative_to_start():
             rtol = self._free_rows_rtol(J, rhs, du, tol, rtol)
         self.ksp.setTolerances(rtol=rtol)
-        self.ksp.setInitialGuessNonzero(start)
+        self.ksp.setInitialGuessNonzero(from_guess)
         # Options read at set-up (GAMG: multigrid options; block Jacobi: sub_*) come from the preset.
         with default_options(self.ksp.getOptionsPrefix(), self._options):
             if multigrid and self.galerkin is None:

@@ -31,6 +31,7 @@ from contactqvi.laws import NodalLaw
 __all__ = [
     "Normal",
     "State",
+    "TOUCHING",
     "Tangential",
     "classify",
     "contact_states",
@@ -51,6 +52,10 @@ class State(enum.IntEnum):
     WEAK_STICKING = 4  # M3-: v3 = 0, theta < 0, v12 = 0, ||g|| = b
     WEAK_CONTACT_STICKING = 5  # M4: v = 0, z = 0
     SEPARATED_STICKING = 6  # Tresca only: theta = 0, v12 = 0, 0 < ||g|| <= s
+
+
+#: The states of a contact node that touches its master surface (theta < 0: a contact force).
+TOUCHING = (State.SLIDING, State.STICKING, State.WEAK_STICKING)
 
 
 class Normal(enum.IntEnum):

@@ -203,7 +203,7 @@ class SCDNewtonResult(Result):
 
     def record_states(self, states: np.ndarray) -> None:
         """Take the Newton iterate's contact ``states`` (Table 1), counting each node's changes."""
-        if len(self.switches) != len(states) or len(self.states) != len(states):
+        if len(self.states) != len(states):  # the first iterate (or new contact nodes)
             self.switches, self.switched_from = np.zeros(len(states), np.int32), states.copy()
         else:
             changed = states != self.states
