@@ -210,3 +210,45 @@ def test_a_node_that_cycles_is_named(mpi_tmp_path):
                         "sliding")
         assert _cycling(problem, dataclasses.replace(result, switches=np.full(m, CYCLING - 1, np.int32))) == ""
     assert _point(np.array([9.634e-3, 3.66e-4, 1.99e-20])) == "(0.009634, 0.000366, 0)"
+
+
+def test_slave_nodes_past_the_masters_edge_are_named():
+    """The stacked blocks' wider-to-be face as the slave, searched ``"newton"`` at rest: no node at
+    the rim. Its nodes moved out by 2 % of their distance from the symmetry planes (0.02 m at the
+    outer edges, a seventh of its facets' width) past the master's edge: the rim nodes are exactly the
+    slave nodes on the outer edges x = 1, y = 1 (a covered share of about 0.9 of their areas, by the
+    dual basis below 0.5), the least weighted one there; each converged step says so in a
+    ``slave_rim`` warning, and a stalled one in its cause."""
+    import tomllib
+
+    from dolfinx import fem
+
+    from contactqvi.case import parse_case
+    from contactqvi.contact.diagnosis import RIM_ADVICE, _rim, rim_nodes, warn_rim
+    from contactqvi.records import Recorder
+
+    data_dir = ROOT / "benchmarks" / "data" / "homogeneous_compression"
+    data = tomllib.loads((data_dir / "stacked_50.toml").read_text())
+    data["contacts"][0]["search"] = "newton"
+    case = parse_case(data, data_dir)
+    with build_problem(case, MPI.COMM_WORLD) as problem:
+        comm = problem.comm
+        problem.set_step(1.0, case.steps[0].translation)
+        problem.search(fem.Function(problem.V))
+        assert rim_nodes(problem) == [] and _rim(problem) == ""
+        slave = problem.interfaces[0].coupling.slave_blk
+        x = problem.V.tabulate_dof_coordinates()[slave]
+        moved = fem.Function(problem.V)
+        moved.x.array.reshape(-1, 3)[slave, :2] = 0.02 * x[:, :2]
+        moved.x.scatter_forward()
+        problem.follow(moved)
+        (rim,) = rim_nodes(problem)
+        outer = comm.allreduce(int(np.count_nonzero(np.isclose(x[:, :2], 1.0).any(axis=1))), op=MPI.SUM)
+        assert rim.count == outer > 0 and rim.pair == "upper.interface/lower.interface"
+        assert 0.0 < rim.least < 0.5 and np.isclose(rim.where[:2], 1.0).any()
+        assert _rim(problem) == f"; {rim}: {RIM_ADVICE}"
+        with Recorder() as recorder:
+            warn_rim(problem, 3)
+        (record,) = recorder.records
+        assert record["key"] == "slave_rim" and record["numbers"]["nodes"] == outer
+        assert record["message"] == f"step 3: {rim}: {RIM_ADVICE}"
