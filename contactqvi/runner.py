@@ -33,7 +33,7 @@ from dolfinx import mesh as dmesh
 from contactqvi import tables
 from contactqvi.case import Body, ContactCase, ContactPair, check_bodies, check_groups, check_solver
 from contactqvi.contact.checkpoint import Checkpoint, CheckpointWriter, read_checkpoint, remove_checkpoints
-from contactqvi.contact.diagnosis import failure_cause, warn_rim
+from contactqvi.contact.diagnosis import failure_cause
 from contactqvi.contact.load_path import SOLVER_PARAMETERS, LoadStep, solve_load_path
 from contactqvi.contact.path_state import PathState
 from contactqvi.contact.figure_data import ShownStep
@@ -305,7 +305,6 @@ class _StepRecorder:
                 entry.update(writer.write(self.problem, u, result, t=index + 1))
                 if index == self._fit_step:
                     warn_solved_fits(self.problem, u)
-                warn_rim(self.problem, index + 1)
                 tables.write_solution_npz(writer.out / "solution.npz", writer.last.displacement)
             summary["steps"].append(entry)
             summary["status"] = str(result.status)

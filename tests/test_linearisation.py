@@ -89,8 +89,9 @@ def _distortion(x: np.ndarray, size: float) -> np.ndarray:
     return u
 
 
+@pytest.mark.parametrize("projecting", [False, True])
 @pytest.mark.parametrize("mesh", ["hertz_bodies_coarse.geo", "hertz_bodies_hex_coarse.geo"])
-def test_nodal_geometry_derivatives(mesh):
+def test_nodal_geometry_derivatives(mesh, projecting):
     """(L.1)-(L.3) of every coupled slave node (the block's top against the sphere, deformed by
     :func:`_distortion`) against central differences in coordinates of slave and master nodes
     that its rows depend on."""
@@ -106,7 +107,7 @@ def test_nodal_geometry_derivatives(mesh):
 
     def coupling_at(displacement: np.ndarray, linearised: bool = False) -> MortarCoupling:
         return mortar_coupling(V, slave, master, search_distance=0.02 * size, displacement=displacement,
-                               linearised=linearised)
+                               linearised=linearised, projecting=projecting)
 
     base = coupling_at(u, linearised=True)
     # the step's start: the configuration half-way, restricted to the slave nodes coupled in both

@@ -65,6 +65,40 @@ def test_clipping_and_segment_integrals_of_one_pair():
     assert np.allclose(M[0][:, [2, 0, 1]], np.eye(3) / 6.0, atol=1e-15)  # master vertex k is slave vertex (k+1) % 3
 
 
+@pytest.mark.one_rank(reason="segment integrals of given triangles (numpy), no search")
+def test_a_partly_covered_facet_takes_the_dual_basis_of_its_covered_part():
+    """The slave triangle (0,0), (1,0), (0,1) covered for x >= 1/2 only (the triangle S of area 1/8,
+    its centroid (2/3, 1/6)), by two master triangles: the whole facet's dual basis 4 phi_i - 1 gives
+    D = 4 int_S phi_i - 1/8 = (-1/24, 5/24, -1/24); the covered part's basis gives D = int_S phi_i =
+    (1/48, 1/12, 1/48), the rows of M sum to D, and a linear field p is reproduced,
+    sum_j M_ij p(x_j) = D_i p(x_i) (biorthogonality over S: the patch test of a partly covered facet),
+    which the whole facet's basis does not. A facet covered whole keeps the whole facet's basis."""
+    from contactqvi.contact.mortar import SurfaceFacets, _covered_basis
+
+    slave_x = np.array([[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]])
+    slave = SurfaceFacets(np.array([[0, 1, 2]]), slave_x, np.array([[0.0, 0.0, -1.0]]))
+    below = -0.1
+    master_x = np.array([[[0.5, -1.0, below], [3.0, -1.0, below], [0.5, 1.0, below]],
+                         [[3.0, -1.0, below], [3.0, 3.0, below], [0.5, 1.0, below]]])
+    pairs_s = np.array([0, 0])
+    D, M = segment_integrals(slave_x[pairs_s], -slave.normal[pairs_s], master_x)
+    assert np.allclose(D.sum(axis=0), [-1.0 / 24.0, 5.0 / 24.0, -1.0 / 24.0], rtol=0.0, atol=1e-15)
+    D_c, M_c, covered = _covered_basis(slave, master_x, pairs_s, D, M)
+    assert covered is not None and covered.pairs.tolist() == [0, 1]
+    assert np.allclose(D_c.sum(axis=0), [1.0 / 48.0, 1.0 / 12.0, 1.0 / 48.0], rtol=0.0, atol=1e-15)
+    assert np.allclose(M_c.sum(axis=2), D_c, rtol=0.0, atol=1e-15)
+    p = master_x[..., :2] + [0.3, -0.7]  # the field p(x) = (x + 0.3, y - 0.7) at the master vertices
+    reproduced = np.einsum("paj,pjk->ak", M_c, p)
+    assert np.allclose(reproduced, D_c.sum(axis=0)[:, None] * (slave_x[0, :, :2] + [0.3, -0.7]), rtol=0.0,
+                       atol=1e-15)
+    whole = np.einsum("paj,pjk->ak", M, p)
+    assert np.abs(whole - D.sum(axis=0)[:, None] * (slave_x[0, :, :2] + [0.3, -0.7])).max() > 1e-3
+    covering = np.array([[[-1.0, -1.0, below], [3.0, -1.0, below], [-1.0, 3.0, below]]])
+    D, M = segment_integrals(slave_x, -slave.normal, covering)
+    D_c, M_c, covered = _covered_basis(slave, covering, np.array([0]), D, M)
+    assert covered is None and D_c is D and M_c is M
+
+
 @pytest.mark.one_rank(reason="clipping and segment integrals of given triangles (numpy), no search")
 def test_segment_integrals_of_random_pairs_sum_to_the_slave_weights():
     """Random slave and master triangles (about a third overlap, some touch at an edge): the

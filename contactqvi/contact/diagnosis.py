@@ -14,7 +14,6 @@ path's likely end at a limit point, docs/finite_strain.md Sect. 11). Collective.
 from __future__ import annotations
 
 import dataclasses
-import logging
 import typing
 
 from mpi4py import MPI
@@ -22,17 +21,13 @@ from mpi4py import MPI
 import numpy as np
 
 from contactqvi.contact.interface import Interface
-from contactqvi.contact.mortar import MIN_COVERAGE
 from contactqvi.contact.nodal import State
 from contactqvi.contact.problem import ContactProblem
 from contactqvi.contact.scd_newton import SCDNewtonResult
 from contactqvi.postprocess import ElasticBody, applied_force
-from contactqvi.records import warn
 from contactqvi.result import Status
 
-__all__ = ["RIM_ADVICE", "Rim", "failure_cause", "rim_nodes", "tangential_load", "warn_rim"]
-
-logger = logging.getLogger(__name__)
+__all__ = ["failure_cause", "tangential_load"]
 
 #: Statuses of a Newton iteration that ran without getting near the solution.
 STALLED = (Status.DIVERGED_LINE_SEARCH, Status.DIVERGED_MAX_IT, Status.DIVERGED_STALLED)
@@ -55,7 +50,7 @@ def failure_cause(problem: ContactProblem, result: SCDNewtonResult) -> str | Non
             if overload is not None:
                 return overload
     stalled = result.status in STALLED
-    return _status_cause(result) + (_cycling(problem, result) + _rim(problem) + _path_end(result) if stalled else "")
+    return _status_cause(result) + (_cycling(problem, result) + _path_end(result) if stalled else "")
 
 
 def _relaxation_end(result: SCDNewtonResult) -> str | None:
@@ -130,75 +125,6 @@ def _cycling(problem: ContactProblem, result: SCDNewtonResult) -> str:
     return (f"; the contact state cycles: the node at {_point(x)} m of {pair} changed its "
             f"state {count} times in its last {result.history[-1]['k']} Newton steps, between "
             f"{before.lower().replace('_', ' ')} and {now.lower().replace('_', ' ')}{others}")
-
-
-@dataclasses.dataclass(frozen=True)
-class Rim:
-    """The slave nodes of one pair at the rim of the master's shadow (:func:`rim_nodes`).
-
-    Attributes:
-        pair: the pair's name; count: its rim nodes (all ranks); least: the smallest D_ii over the
-        node's deformed lumped area; where: that node's reference position (m).
-    """
-
-    pair: str
-    count: int
-    least: float
-    where: np.ndarray
-
-    def __str__(self) -> str:
-        return (f"{self.count} slave node{'s' * (self.count > 1)} of {self.pair} at the rim of the master "
-                f"surface's shadow, mortar weights D_ii down to {self.least:.2g} of their areas (at "
-                f"{_point(self.where)} m)")
-
-
-#: What a rim means and what to do, after the :class:`Rim` of each pair.
-RIM_ADVICE = ("the slave surface reaches past the master's edge, where the dual basis of a partly covered facet "
-              "weights its nodes by little, nothing or less, and their contact forces and normals are unreliable "
-              "(docs/finite_strain.md Sect. 22); make the surface that stays within the other the slave")
-
-
-def rim_nodes(problem: ContactProblem) -> list[Rim]:
-    """The slave nodes of the pairs searched ``"newton"`` that lie at the rim of the master's shadow in
-    the current geometry: a mortar weight D_ii below :data:`~contactqvi.contact.mortar.MIN_COVERAGE` of
-    the node's deformed lumped area; one :class:`Rim` per pair that has any. Collective.
-
-    A search couples no such node, but a geometry that follows the iterate keeps its nodes (down to
-    :data:`~contactqvi.contact.mortar.KEPT_COVERAGE`). Where the slave surface reaches past the
-    master's edge, the dual basis psi_i = 4 phi_i - 1 integrated over the covered part of a facet gives
-    D_ii far below the covered share of the node's area, zero or negative, and C = D^-1 M unbounded.
-    Measured (docs/finite_strain.md Sect. 22): the stacked blocks compressed 50 % with the wider face
-    as the slave, rim nodes at 0.25 ... 0.35 of their areas at the start of the step to 80 % of the travel."""
-    comm, current = problem.comm, problem.current
-    rims = []
-    for interface in problem.interfaces:
-        coupling = interface.coupling
-        if not interface.follows or coupling is None:
-            continue
-        area = current.deformed_areas(problem.body.facet_tags, interface.pair.slave)[coupling.slave_blk]
-        share = coupling.weight / area
-        count = comm.allreduce(int(np.count_nonzero(share < MIN_COVERAGE)), op=MPI.SUM)
-        if count == 0:
-            continue
-        i = int(np.argmin(share)) if len(share) else -1
-        least, owner = comm.allreduce((float(share[i]) if i >= 0 else np.inf, comm.rank), op=MPI.MINLOC)
-        where = problem.V.tabulate_dof_coordinates()[coupling.slave_blk[i]] if comm.rank == owner else None
-        rims.append(Rim(interface.pair.name, count, least, comm.bcast(where, root=owner)))
-    return rims
-
-
-def warn_rim(problem: ContactProblem, step: int) -> None:
-    """Warn (``slave_rim``) where a converged step's slave nodes lie at the rim of the master's
-    shadow (:func:`rim_nodes`). Collective."""
-    for rim in rim_nodes(problem):
-        warn(problem.comm, logger, "slave_rim", f"step {step}: {rim}: {RIM_ADVICE}", step=step, nodes=rim.count,
-             least=rim.least)
-
-
-def _rim(problem: ContactProblem) -> str:
-    """:func:`rim_nodes` at a stalled step's last iterate, for its cause; "" if none."""
-    rims = rim_nodes(problem)
-    return "".join(f"; {rim}" for rim in rims) + (f": {RIM_ADVICE}" if rims else "")
 
 
 def _point(x: np.ndarray) -> str:

@@ -86,6 +86,13 @@ class ObstaclePair:
         return self.surface
 
 
+#: The searches of a body pair whose solutions are those of the contact in the current configuration:
+#: their slave facets covered in part take the dual basis of their covered part
+#: (:class:`~contactqvi.contact.mortar.CoveredBasis`; docs/finite_strain.md Sect. 22), the others
+#: that of the whole facet.
+CURRENT_CONFIGURATION = ("until_settled", "newton")
+
+
 @dataclasses.dataclass(frozen=True)
 class BodyPair:
     """A slave surface against a master surface of another (or the same) meshed body.
@@ -105,7 +112,9 @@ class BodyPair:
             contact geometry (D, M, normals, frames, gaps and the objective slip) a function of
             the displacement inside the Newton iteration, linearised in its steps
             (:mod:`contactqvi.contact.current_geometry`; hyperelastic bodies); ``"once"``: only
-            in the reference configuration (small sliding over the whole load path).
+            in the reference configuration (small sliding over the whole load path). With
+            ``"until_settled"`` and ``"newton"`` a slave facet that the master covers in part
+            takes the dual basis of its covered part (:data:`CURRENT_CONFIGURATION`).
         interference: the declared overlap of the two surfaces as meshed (m, >= 0; a press or
             shrink fit), a number or an :class:`~contactqvi.interference.Interference` linear in
             position (a taper), read at each slave node's reference position: slave nodes may
@@ -400,7 +409,7 @@ def _body_interface(V: fem.FunctionSpace, facet_tags: dmesh.MeshTags, pair: Body
     comm = V.mesh.comm
     exact = None if pair.cylinder is None else _exact_cylinders(V, slave, master, pair)
     coupling = mortar_coupling(V, slave, master, distance, np.flatnonzero(constrained.all(axis=1)), displacement,
-                               linearised, kept_blk, exact)
+                               linearised, kept_blk, exact, projecting=pair.search in CURRENT_CONFIGURATION)
     if displacement is None:
         found = comm.allreduce(len(coupling.slave_blk), op=MPI.SUM)
         reach = "one facet size" if distance is None else f"{distance:.3g} m"

@@ -30,6 +30,7 @@ import dataclasses
 
 import numpy as np
 
+from contactqvi.contact.linearisation import PairDerivatives
 from contactqvi.contact.mortar import MortarCoupling
 from contactqvi.contact.owners import fetch_rows
 from contactqvi.obstacles import frame_axes, tangent_frames
@@ -233,8 +234,33 @@ def master_shares(comm: MPI.Comm, index_map, coupling: MortarCoupling,
     shape = pair_values.shape[:-1]
     pair_rows = np.broadcast_to(p.master_glob[:, :, None, None], shape).ravel()
     pair_dofs = np.broadcast_to(p.dofs[:, None], shape).ravel()
-    return (np.concatenate([node_rows, pair_rows]), np.concatenate([node_dofs, pair_dofs]),
-            np.concatenate([node_values, pair_values.reshape(-1, 3)]))
+    cross = _covered_shares(p, at_slaves)
+    return (np.concatenate([node_rows, pair_rows, cross[0]]), np.concatenate([node_dofs, pair_dofs, cross[1]]),
+            np.concatenate([node_values, pair_values.reshape(-1, 3), cross[2]]))
+
+
+def _covered_shares(pairs: PairDerivatives, at_slaves: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """What the derivative of a partly covered facet's A, (L.5), adds to the first term of (L.4):
+    sum_i (v_i / D_i) dA_ia G_p,aj for the master node j of each pair p and the vertices of each pair
+    q of the same facet, whose dF_q and dH_q make dA's term (``at_slaves``: v / D at the pairs' slave
+    nodes); the entries of :func:`master_shares`."""
+    c = pairs.covered
+    if c is None or len(c.pairs) == 0:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 3))
+    s = at_slaves[c.pairs]  # (Q, n_s, 3)
+    As = np.einsum("pab,pak->pbk", c.A, s)
+    r = s[:, :, None, None, :] * c.dF[..., None] - np.einsum("pbk,pbdvc->pdvck", As, c.dH)  # s^T dA_q H
+    w = np.einsum("pdvck,pde->pevck", r, c.Hinv)
+    # every ordered pair (p, q) of pairs of one facet
+    order = np.argsort(c.facet, kind="stable")
+    sizes = np.bincount(c.facet)[c.facet[order]]
+    starts = np.concatenate([[0], np.cumsum(np.bincount(c.facet))])[c.facet[order]]
+    p_of, q_of = np.repeat(order, sizes), order[np.repeat(starts, sizes) + _ranges(sizes)]
+    values = np.einsum("xevck,xej->xjvck", w[q_of], c.G[p_of])  # (X, n_m, N, 3, 3)
+    shape = values.shape[:-1]
+    rows = np.broadcast_to(pairs.master_glob[c.pairs[p_of]][:, :, None, None], shape).ravel()
+    dofs = np.broadcast_to(pairs.dofs[c.pairs[q_of]][:, None], shape).ravel()
+    return rows, dofs, values.reshape(-1, 3)
 
 
 def _ranges(lengths: np.ndarray) -> np.ndarray:

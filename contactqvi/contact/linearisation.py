@@ -35,6 +35,7 @@ derivatives are summed as the values are (:mod:`contactqvi.contact.owners`) and 
 from __future__ import annotations
 
 import dataclasses
+import typing
 
 from mpi4py import MPI
 
@@ -43,10 +44,14 @@ import numpy as np
 from contactqvi.contact.dual import Dual, primal
 from contactqvi.contact.facets import facet_areas, unit_normals
 from contactqvi.contact.owners import owner_ranges, sum_to_owners
-from contactqvi.contact.segments import diameters, edge_ties, planar_integrals, plane_coordinates
+from contactqvi.contact.segments import (diameters, edge_ties, planar_basis_integrals, planar_integrals,
+                                         plane_coordinates)
 
-__all__ = ["KINK", "KINK_OFFSET", "CouplingDerivatives", "PairDerivatives", "coupling_derivatives",
-           "segment_jacobians"]
+__all__ = ["KINK", "KINK_OFFSET", "CouplingDerivatives", "CoveredDerivatives", "PairDerivatives", "basis_jacobians",
+           "coupling_derivatives", "segment_jacobians"]
+
+if typing.TYPE_CHECKING:
+    from contactqvi.contact.mortar import CoveredBasis
 
 #: A pair whose dD or dM exceed this times its slave facet's diameter (they are of
 #: the order of it: D is an area) is at a kink (:func:`segment_jacobians`).
@@ -80,28 +85,47 @@ def segment_jacobians(slave: np.ndarray, normal: np.ndarray,
         ``(D, M, dD, dM)``: (P, n_s), (P, n_s, n_m), and their derivatives (P, n_s, N, 3),
         (P, n_s, n_m, N, 3) with respect to the pair's N = n_s + n_m vertices, slave first.
     """
+    (D, M), (dD, dM) = _jacobians(slave, normal, master, planar_integrals)
+    return D, M, dD, dM
+
+
+def basis_jacobians(slave: np.ndarray, normal: np.ndarray, master: np.ndarray) -> tuple[tuple, tuple]:
+    """:func:`~contactqvi.contact.segments.basis_integrals` (F, G, H) of facet pairs and their
+    derivatives with respect to the pair's vertices (the arguments and the derivatives' trailing
+    axes of :func:`segment_jacobians`): ``((F, G, H), (dF, dG, dH))``."""
+    return _jacobians(slave, normal, master, planar_basis_integrals)
+
+
+def _jacobians(slave: np.ndarray, normal: np.ndarray, master: np.ndarray,
+               integrals: typing.Callable) -> tuple[tuple, tuple]:
+    """The values of the planar ``integrals`` of facet pairs and their derivatives with respect to the
+    pair's vertices (:func:`segment_jacobians`)."""
     orientation = _orientation(slave, normal)
-    D, M, dD, dM, kinked = _integral_jacobians(slave, master, orientation)
-    # At a kink of D and M (facets that coincide: conforming parts of two meshes, whose clipped
+    values, derivatives, kinked = _integral_jacobians(slave, master, orientation, integrals)
+    # At a kink of the integrals (facets that coincide: conforming parts of two meshes, whose clipped
     # polygons have vertices on two edges at once) the clipping ties (a vertex exactly on an edge's
     # line, where each pair would take the side its own values take) or its crossings are near 0/0
     # forms (derivatives far beyond the facet's size); there the one-sided derivative of the master
     # facet moved by KINK_OFFSET of its size along _KINK_DIRECTION serves, an element of the
     # generalized derivative of the semismooth Newton step (docs/finite_strain.md, Sect. 14).
     size = diameters(slave)
-    kinked |= ~(np.isfinite(dD).all(axis=(1, 2, 3)) & np.isfinite(dM).all(axis=(1, 2, 3, 4)))
-    kinked |= np.abs(dD).max(axis=(1, 2, 3), initial=0.0) > KINK * size
-    kinked |= np.abs(dM).max(axis=(1, 2, 3, 4), initial=0.0) > KINK * size
+    for d in derivatives:
+        axes = tuple(range(1, d.ndim))
+        kinked |= ~np.isfinite(d).all(axis=axes) | (np.abs(d).max(axis=axes, initial=0.0) > KINK * size)
     if kinked.any():
         moved = master[kinked] + KINK_OFFSET * size[kinked, None, None] * _KINK_DIRECTION
-        dD[kinked], dM[kinked] = _integral_jacobians(slave[kinked], moved, orientation[kinked])[2:4]
-    return D, M, dD, dM
+        for d, one_sided in zip(derivatives, _integral_jacobians(slave[kinked], moved, orientation[kinked],
+                                                                integrals)[1]):
+            d[kinked] = one_sided
+    return values, derivatives
 
 
-def _integral_jacobians(slave: np.ndarray, master: np.ndarray, orientation: np.ndarray) -> tuple[np.ndarray, ...]:
-    """The segment integrals D, M of facet pairs and their derivatives dD, dM (the shapes of
-    :func:`segment_jacobians`), the projection direction the slave facets' :func:`unit_normals`
-    times ``orientation`` (P,), and (P,) whether the pair's clipping ties
+def _integral_jacobians(slave: np.ndarray, master: np.ndarray, orientation: np.ndarray,
+                        integrals: typing.Callable) -> tuple[tuple, tuple, np.ndarray]:
+    """The planar ``integrals`` of facet pairs (:func:`~contactqvi.contact.segments.planar_integrals`
+    or :func:`~contactqvi.contact.segments.planar_basis_integrals`), their derivatives with respect to
+    the pair's N vertices (each (P, ..., N, 3)), the projection direction the slave facets'
+    :func:`unit_normals` times ``orientation`` (P,), and (P,) whether the pair's clipping ties
     (:func:`~contactqvi.contact.segments.edge_ties`).
 
     Two forward sweeps, the Jacobian of the first accumulated and multiplied onto the second's
@@ -120,11 +144,10 @@ def _integral_jacobians(slave: np.ndarray, master: np.ndarray, orientation: np.n
         heights = np.broadcast_to(_warp_seed(jacobian.shape[1]), (len(slave), 4, 1, jacobian.shape[1]))
         local = np.concatenate([planar.tangent[:, :ns], heights], axis=2)
         slave = Dual(slave, np.einsum("pvaj,pac->pvcj", local, frame))
-    D, M = planar_integrals(slave, planar[:, :ns], master, planar[:, ns:])
-    chained = [np.matmul(out.tangent.reshape(len(slave), np.prod(out.shape[1:]), jacobian.shape[1]), jacobian)
-               for out in (D, M)]
-    ties = edge_ties(s2.value, m2.value)
-    return D.value, M.value, chained[0].reshape(*D.shape, N, 3), chained[1].reshape(*M.shape, N, 3), ties
+    outputs = integrals(slave, planar[:, :ns], master, planar[:, ns:])
+    chained = tuple(np.matmul(out.tangent.reshape(len(slave), np.prod(out.shape[1:]), jacobian.shape[1]),
+                              jacobian).reshape(*out.shape, N, 3) for out in outputs)
+    return tuple(out.value for out in outputs), chained, edge_ties(s2.value, m2.value)
 
 
 #: The plane coordinates of a slave facet that are zero whatever its position (vertex 0 at the
@@ -174,6 +197,31 @@ def _area_normal_jacobians(x: np.ndarray, outward: np.ndarray) -> np.ndarray:
 
 
 @dataclasses.dataclass(frozen=True)
+class CoveredDerivatives:
+    """What the derivative of A = diag(F) H^-1 of a partly covered slave facet
+    (:class:`~contactqvi.contact.mortar.CoveredBasis`) adds to dM of its pairs,
+
+        dA = sum_p (diag(dF_p) - A dH_p) H^-1,                                                 (L.5)
+
+    each term of one pair's own vertices: M_ij of one pair depends on the vertices of every pair
+    of its facet (:func:`~contactqvi.contact.kinematics.master_shares`).
+
+    Attributes:
+        pairs: (Q,) the pairs' indices among the rank's pairs; facet: (Q,) their facet's index.
+        dF: (Q, n_s, N, 3), dH: (Q, n_s, n_s, N, 3) derivatives of the pairs' F and H.
+        A, Hinv: (Q, n_s, n_s) A and H^-1 of each pair's facet; G: (Q, n_s, n_m) the pair's G.
+    """
+
+    pairs: np.ndarray
+    facet: np.ndarray
+    dF: np.ndarray
+    dH: np.ndarray
+    A: np.ndarray
+    Hinv: np.ndarray
+    G: np.ndarray
+
+
+@dataclasses.dataclass(frozen=True)
 class PairDerivatives:
     """dM of the facet pairs a rank integrated (its own slave facets), for the derivative of
     the force the slave nodes pass to the master nodes (:func:`~contactqvi.contact.kinematics.master_shares`).
@@ -181,12 +229,16 @@ class PairDerivatives:
     Attributes:
         slave_glob: (P, n_s), master_glob: (P, n_m) global node indices of the pairs' facets.
         dM: (P, n_s, n_m, N, 3) derivatives of the pairs' M with respect to their N = n_s + n_m
-            vertices (slave first).
+            vertices (slave first); for the pairs of a partly covered facet (``covered``) the part
+            at fixed A, A dG_p.
+        covered: the pairs of partly covered facets and what the derivative of their facet's A
+            needs (:class:`CoveredDerivatives`); None if there are none.
     """
 
     slave_glob: np.ndarray
     master_glob: np.ndarray
     dM: np.ndarray
+    covered: CoveredDerivatives | None = None
 
     @property
     def dofs(self) -> np.ndarray:
@@ -228,8 +280,17 @@ class CouplingDerivatives:
 def coupling_derivatives(comm: MPI.Comm, index_map, slave_glob: np.ndarray, slave_x: np.ndarray,
                          slave_normal: np.ndarray, pairs_s: np.ndarray, master_x: np.ndarray,
                          master_glob: np.ndarray, coupled_glob: np.ndarray, weight: np.ndarray,
-                         normal_sum: np.ndarray, projected: np.ndarray) -> CouplingDerivatives:
+                         normal_sum: np.ndarray, projected: np.ndarray,
+                         covered: CoveredBasis | None = None) -> CouplingDerivatives:
     """(L.1)-(L.2) of the coupled slave nodes a rank owns. Collective.
+
+    The pairs of partly covered facets (``covered``, a ``projecting`` layout) have
+    D_i = sum_p F_p,i and sum_j M_ij x_j = A sum_p G_p x_p^m (:class:`~contactqvi.contact.mortar.CoveredBasis`),
+    so with (L.5) their entries are dD = dF_p and
+
+        dM x = A dG_p x^m + diag(dF_p) Y - A dH_p Y,   Y = H^-1 sum_p G_p x_p^m,                 (L.6)
+
+    per pair, of its own vertices.
 
     Args:
         slave_glob, slave_x, slave_normal: the rank's slave facets: (f, n_s) global node
@@ -238,20 +299,37 @@ def coupling_derivatives(comm: MPI.Comm, index_map, slave_glob: np.ndarray, slav
             (P, n_m): its master facet.
         coupled_glob: (m,) sorted global indices of the owned coupled slave nodes, the rows;
             weight (m,) their D_i, normal_sum (m, 3) their a_i, projected (m, 3) their p_i.
+        covered: the dual basis of the partly covered facets' covered parts, or None.
     """
     ns, nm = slave_x.shape[1], master_x.shape[1]
     chunk = _CHUNK if ns == nm == 3 else _QUADRILATERAL_CHUNK
     # entries (row node, column node), per coordinate c of the column node: dD, dM x (3) of the pairs
     rows, cols = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)]  # a rank may have no pairs
     values, pair_dM = [np.zeros((0, 12))], [np.zeros((0, ns, nm, ns + nm, 3))]
+    of_covered = np.full(len(pairs_s), -1)
+    if covered is not None:
+        of_covered[covered.pairs] = np.arange(len(covered.pairs))
+    covered_dF, covered_dH = [np.zeros((0, ns, ns + nm, 3))], [np.zeros((0, ns, ns, ns + nm, 3))]
     for start in range(0, len(pairs_s), chunk):
         s = pairs_s[start:start + chunk]
         m_x, m_glob = master_x[start:start + chunk], master_glob[start:start + chunk]
         _, _, dD, dM = segment_jacobians(slave_x[s], -slave_normal[s], m_x)
-        pair_dM.append(dM)
         # dM x: sum_b dM_ab x_b, (P, n_s, N, 3, 3) (a batched product, einsum is slow here)
         dMx = np.matmul(np.swapaxes(m_x, 1, 2)[:, None], dM.reshape(*dM.shape[:3], -1))
         dMx = dMx.reshape(*dM.shape[:2], 3, *dM.shape[3:]).transpose(0, 1, 3, 4, 2)
+        here = np.flatnonzero(of_covered[start:start + chunk] >= 0)
+        if len(here):  # (L.6)
+            k = of_covered[start + here]
+            _, (dF, dG, dH) = basis_jacobians(slave_x[s[here]], -slave_normal[s[here]], m_x[here])
+            A, Y = covered.A[k], covered.Y[k]
+            dD[here] = dF * A.any(axis=(1, 2))[:, None, None, None]
+            dM[here] = np.einsum("pab,pbjvc->pajvc", A, dG)
+            dGx = np.einsum("pbjvc,pjk->pbvck", dG, m_x[here])
+            dMx[here] = (np.einsum("pab,pbvck->pavck", A, dGx) + dF[..., None] * Y[:, :, None, None, :]
+                         - np.einsum("pab,pbdvc,pdk->pavck", A, dH, Y))
+            covered_dF.append(dF)
+            covered_dH.append(dH)
+        pair_dM.append(dM)
         nodes = np.concatenate([slave_glob[s], m_glob], axis=1)  # (P, N): the pair's vertices
         rows.append(np.broadcast_to(slave_glob[s][:, :, None], dD.shape[:3]).ravel())
         cols.append(np.broadcast_to(nodes[:, None, :], dD.shape[:3]).ravel())
@@ -275,7 +353,10 @@ def coupling_derivatives(comm: MPI.Comm, index_map, slave_glob: np.ndarray, slav
     n = normal_sum / size[:, None]
     da = summed[:, 4:]
     normal = (da - np.einsum("ij,ij->i", n[row], da)[:, None] * n[row]) / size[row, None]
-    pairs = PairDerivatives(slave_glob[pairs_s], master_glob, np.concatenate(pair_dM))
+    cross = None if covered is None else CoveredDerivatives(covered.pairs, covered.facet, np.concatenate(covered_dF),
+                                                            np.concatenate(covered_dH), covered.A, covered.Hinv,
+                                                            covered.G)
+    pairs = PairDerivatives(slave_glob[pairs_s], master_glob, np.concatenate(pair_dM), cross)
     return CouplingDerivatives(row, dofs, separation, normal, summed[:, 0], pairs)
 
 

@@ -50,9 +50,10 @@ from contactqvi.contact.facets import (
     triangle_rule,
 )
 
-__all__ = ["AFFINE_DEGREE", "BIQUADRATIC_DEGREE", "QUADRILATERAL_DEGREE", "Surface", "clip_polygons",
-           "curvature_integrals", "diameters", "edge_ties", "exact_surface_integrals", "normal_separation_integrals",
-           "planar_integrals", "plane_coordinates", "quadratic_segment_integrals", "segment_integrals", "slave_moments"]
+__all__ = ["AFFINE_DEGREE", "BIQUADRATIC_DEGREE", "QUADRILATERAL_DEGREE", "Surface", "basis_integrals",
+           "clip_polygons", "curvature_integrals", "diameters", "edge_ties", "exact_surface_integrals",
+           "normal_separation_integrals", "planar_basis_integrals", "planar_integrals", "plane_coordinates",
+           "quadratic_segment_integrals", "segment_integrals", "slave_moments"]
 
 class Surface(typing.Protocol):
     """An exact surface: the signed distance of points (n, 3) and the unit direction away from it
@@ -286,6 +287,36 @@ def planar_integrals(slave: np.ndarray, s2: np.ndarray, master: np.ndarray, m2: 
         D[rows] += np.einsum("pq,pqi->pi", weights, psi)
         M[rows] += np.einsum("pq,pqi,pqj->pij", weights, psi, phi_m)
     return D, M
+
+
+def basis_integrals(slave: np.ndarray, normal: np.ndarray, master: np.ndarray,
+                    degree: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The integrals of the slave facet's own (Lagrange) basis phi over the segments of facet pairs,
+    from which the dual basis of the covered part of a facet is built (:mod:`contactqvi.contact.mortar`,
+    ``projecting``): the arguments of :func:`segment_integrals`.
+
+    Returns:
+        ``(F, G, H)``: (P, n) int phi_a, (P, n, m) int phi_a phi_j^m, (P, n, n) int phi_a phi_b over the
+        part of the slave facet that the master facet covers; the rules of :func:`segment_integrals`,
+        exact on flat pairs of triangles or parallelograms.
+    """
+    s2, m2, _ = plane_coordinates(slave, normal, master)
+    return planar_basis_integrals(slave, s2, master, m2, degree)
+
+
+def planar_basis_integrals(slave: np.ndarray, s2: np.ndarray, master: np.ndarray, m2: np.ndarray,
+                           degree: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`basis_integrals` of facet pairs from their :func:`plane_coordinates` (as
+    :func:`planar_integrals`)."""
+    P, ns, nm = len(slave), slave.shape[1], master.shape[1]
+    F, G, H = np.zeros((P, ns), like=m2), np.zeros((P, ns, nm), like=m2), np.zeros((P, ns, ns), like=m2)
+    for rows, weights, _, points, xi in _segment_points(slave, s2, master, m2, degree):
+        phi = _barycentric(s2[rows], points) if xi is None else quadrilateral_shapes(xi)
+        phi_m = _shape_values(m2[rows], points)
+        F[rows] += np.einsum("pq,pqi->pi", weights, phi)
+        G[rows] += np.einsum("pq,pqi,pqj->pij", weights, phi, phi_m)
+        H[rows] += np.einsum("pq,pqi,pqj->pij", weights, phi, phi)
+    return F, G, H
 
 
 def curvature_integrals(slave: np.ndarray, normal: np.ndarray, master: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
