@@ -73,17 +73,22 @@ def test_a_partly_covered_facet_takes_the_dual_basis_of_its_covered_part():
     (1/48, 1/12, 1/48), the rows of M sum to D, and a linear field p is reproduced,
     sum_j M_ij p(x_j) = D_i p(x_i) (biorthogonality over S: the patch test of a partly covered facet),
     which the whole facet's basis does not. A facet covered whole keeps the whole facet's basis."""
-    from contactqvi.contact.mortar import SurfaceFacets, _covered_basis
+    from contactqvi.contact.covered import covered_basis
+    from contactqvi.contact.segments import basis_integrals
 
     slave_x = np.array([[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]])
-    slave = SurfaceFacets(np.array([[0, 1, 2]]), slave_x, np.array([[0.0, 0.0, -1.0]]))
+    up = np.array([[0.0, 0.0, 1.0]])  # the projection direction (the slave's inward normal)
     below = -0.1
     master_x = np.array([[[0.5, -1.0, below], [3.0, -1.0, below], [0.5, 1.0, below]],
                          [[3.0, -1.0, below], [3.0, 3.0, below], [0.5, 1.0, below]]])
     pairs_s = np.array([0, 0])
-    D, M = segment_integrals(slave_x[pairs_s], -slave.normal[pairs_s], master_x)
+
+    def integrals(facets: np.ndarray, master: np.ndarray) -> tuple[np.ndarray, ...]:
+        return basis_integrals(slave_x[facets], up[facets], master)
+
+    D, M = segment_integrals(slave_x[pairs_s], up[pairs_s], master_x)
     assert np.allclose(D.sum(axis=0), [-1.0 / 24.0, 5.0 / 24.0, -1.0 / 24.0], rtol=0.0, atol=1e-15)
-    D_c, M_c, covered = _covered_basis(slave, master_x, pairs_s, D, M)
+    D_c, M_c, covered = covered_basis(slave_x, master_x, pairs_s, D, M, integrals)
     assert covered is not None and covered.pairs.tolist() == [0, 1]
     assert np.allclose(D_c.sum(axis=0), [1.0 / 48.0, 1.0 / 12.0, 1.0 / 48.0], rtol=0.0, atol=1e-15)
     assert np.allclose(M_c.sum(axis=2), D_c, rtol=0.0, atol=1e-15)
@@ -94,8 +99,8 @@ def test_a_partly_covered_facet_takes_the_dual_basis_of_its_covered_part():
     whole = np.einsum("paj,pjk->ak", M, p)
     assert np.abs(whole - D.sum(axis=0)[:, None] * (slave_x[0, :, :2] + [0.3, -0.7])).max() > 1e-3
     covering = np.array([[[-1.0, -1.0, below], [3.0, -1.0, below], [-1.0, 3.0, below]]])
-    D, M = segment_integrals(slave_x, -slave.normal, covering)
-    D_c, M_c, covered = _covered_basis(slave, covering, np.array([0]), D, M)
+    D, M = segment_integrals(slave_x, up, covering)
+    D_c, M_c, covered = covered_basis(slave_x, covering, np.array([0]), D, M, integrals)
     assert covered is None and D_c is D and M_c is M
 
 

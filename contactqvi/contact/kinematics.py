@@ -240,7 +240,8 @@ def master_shares(comm: MPI.Comm, index_map, coupling: MortarCoupling,
 
 
 def _covered_shares(pairs: PairDerivatives, at_slaves: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """What the derivative of a partly covered facet's A, (L.5), adds to the first term of (L.4):
+    """What the derivative of a partly covered facet's A, (L.5) of :mod:`contactqvi.contact.covered`,
+    adds to the first term of (L.4):
     sum_i (v_i / D_i) dA_ia G_p,aj for the master node j of each pair p and the vertices of each pair
     q of the same facet, whose dF_q and dH_q make dA's term (``at_slaves``: v / D at the pairs' slave
     nodes); the entries of :func:`master_shares`."""

@@ -41,17 +41,16 @@ from mpi4py import MPI
 
 import numpy as np
 
+from contactqvi.contact.covered import CoveredBasis, CoveredDerivatives, covered_entries
 from contactqvi.contact.dual import Dual, primal
 from contactqvi.contact.facets import facet_areas, unit_normals
 from contactqvi.contact.owners import owner_ranges, sum_to_owners
 from contactqvi.contact.segments import (diameters, edge_ties, planar_basis_integrals, planar_integrals,
                                          plane_coordinates)
 
-__all__ = ["KINK", "KINK_OFFSET", "CouplingDerivatives", "CoveredDerivatives", "PairDerivatives", "basis_jacobians",
-           "coupling_derivatives", "segment_jacobians"]
+__all__ = ["KINK", "KINK_OFFSET", "CouplingDerivatives", "PairDerivatives", "basis_jacobians", "coupling_derivatives",
+           "segment_jacobians"]
 
-if typing.TYPE_CHECKING:
-    from contactqvi.contact.mortar import CoveredBasis
 
 #: A pair whose dD or dM exceed this times its slave facet's diameter (they are of
 #: the order of it: D is an area) is at a kink (:func:`segment_jacobians`).
@@ -197,31 +196,6 @@ def _area_normal_jacobians(x: np.ndarray, outward: np.ndarray) -> np.ndarray:
 
 
 @dataclasses.dataclass(frozen=True)
-class CoveredDerivatives:
-    """What the derivative of A = diag(F) H^-1 of a partly covered slave facet
-    (:class:`~contactqvi.contact.mortar.CoveredBasis`) adds to dM of its pairs,
-
-        dA = sum_p (diag(dF_p) - A dH_p) H^-1,                                                 (L.5)
-
-    each term of one pair's own vertices: M_ij of one pair depends on the vertices of every pair
-    of its facet (:func:`~contactqvi.contact.kinematics.master_shares`).
-
-    Attributes:
-        pairs: (Q,) the pairs' indices among the rank's pairs; facet: (Q,) their facet's index.
-        dF: (Q, n_s, N, 3), dH: (Q, n_s, n_s, N, 3) derivatives of the pairs' F and H.
-        A, Hinv: (Q, n_s, n_s) A and H^-1 of each pair's facet; G: (Q, n_s, n_m) the pair's G.
-    """
-
-    pairs: np.ndarray
-    facet: np.ndarray
-    dF: np.ndarray
-    dH: np.ndarray
-    A: np.ndarray
-    Hinv: np.ndarray
-    G: np.ndarray
-
-
-@dataclasses.dataclass(frozen=True)
 class PairDerivatives:
     """dM of the facet pairs a rank integrated (its own slave facets), for the derivative of
     the force the slave nodes pass to the master nodes (:func:`~contactqvi.contact.kinematics.master_shares`).
@@ -231,8 +205,8 @@ class PairDerivatives:
         dM: (P, n_s, n_m, N, 3) derivatives of the pairs' M with respect to their N = n_s + n_m
             vertices (slave first); for the pairs of a partly covered facet (``covered``) the part
             at fixed A, A dG_p.
-        covered: the pairs of partly covered facets and what the derivative of their facet's A
-            needs (:class:`CoveredDerivatives`); None if there are none.
+        covered: the pairs of partly covered facets and what the derivative (L.5) of their facet's
+            A needs (:class:`~contactqvi.contact.covered.CoveredDerivatives`); None if there are none.
     """
 
     slave_glob: np.ndarray
@@ -284,13 +258,8 @@ def coupling_derivatives(comm: MPI.Comm, index_map, slave_glob: np.ndarray, slav
                          covered: CoveredBasis | None = None) -> CouplingDerivatives:
     """(L.1)-(L.2) of the coupled slave nodes a rank owns. Collective.
 
-    The pairs of partly covered facets (``covered``, a ``projecting`` layout) have
-    D_i = sum_p F_p,i and sum_j M_ij x_j = A sum_p G_p x_p^m (:class:`~contactqvi.contact.mortar.CoveredBasis`),
-    so with (L.5) their entries are dD = dF_p and
-
-        dM x = A dG_p x^m + diag(dF_p) Y - A dH_p Y,   Y = H^-1 sum_p G_p x_p^m,                 (L.6)
-
-    per pair, of its own vertices.
+    The pairs of partly covered facets (``covered``) take the entries (L.6) of
+    :mod:`contactqvi.contact.covered`, each of its own pair's vertices.
 
     Args:
         slave_glob, slave_x, slave_normal: the rank's slave facets: (f, n_s) global node
@@ -301,9 +270,38 @@ def coupling_derivatives(comm: MPI.Comm, index_map, slave_glob: np.ndarray, slav
             weight (m,) their D_i, normal_sum (m, 3) their a_i, projected (m, 3) their p_i.
         covered: the dual basis of the partly covered facets' covered parts, or None.
     """
+    ns = slave_x.shape[1]
+    rows, cols, values, pairs = _pair_entries(slave_glob, slave_x, slave_normal, pairs_s, master_x, master_glob,
+                                              covered)
+    # ... and da (3) of every slave facet at the row, paired or not
+    da = np.moveaxis(_area_normal_jacobians(slave_x, slave_normal), 1, -1)  # (f, n_s, 3, 3)
+    shape = (len(slave_x), ns, ns)
+    facet_entries = (np.broadcast_to(slave_glob[:, :, None], shape).ravel(),
+                     np.broadcast_to(slave_glob[:, None, :], shape).ravel(),
+                     np.broadcast_to(da[:, None], (*shape, 3, 3)).reshape(-1, 9))
+    owned_rows, nodes, summed = _summed_on_owners(comm, index_map, (rows, cols, values), facet_entries)
+    owned_rows, summed = np.repeat(owned_rows, 3), summed.reshape(-1, 7)
+    dofs = (3 * nodes[:, None] + np.arange(3)).ravel()
+    position = np.searchsorted(coupled_glob, owned_rows)
+    coupled = position < len(coupled_glob)
+    coupled[coupled] = coupled_glob[position[coupled]] == owned_rows[coupled]
+    row, dofs, summed = position[coupled], dofs[coupled], summed[coupled]
+    separation = -(summed[:, 1:4] - summed[:, :1] * projected[row]) / weight[row, None]
+    size = np.linalg.norm(normal_sum, axis=1)
+    n = normal_sum / size[:, None]
+    da = summed[:, 4:]
+    normal = (da - np.einsum("ij,ij->i", n[row], da)[:, None] * n[row]) / size[row, None]
+    return CouplingDerivatives(row, dofs, separation, normal, summed[:, 0], pairs)
+
+
+def _pair_entries(slave_glob: np.ndarray, slave_x: np.ndarray, slave_normal: np.ndarray, pairs_s: np.ndarray,
+                  master_x: np.ndarray, master_glob: np.ndarray,
+                  covered: CoveredBasis | None) -> tuple[np.ndarray, np.ndarray, np.ndarray, PairDerivatives]:
+    """The pairs' entries of :func:`coupling_derivatives` (its arguments): (row node, column node) and,
+    per coordinate of the column node, dD and dM x (E, 3, 4), in chunks of :data:`_CHUNK` pairs; and the
+    pairs' dM (:class:`PairDerivatives`)."""
     ns, nm = slave_x.shape[1], master_x.shape[1]
     chunk = _CHUNK if ns == nm == 3 else _QUADRILATERAL_CHUNK
-    # entries (row node, column node), per coordinate c of the column node: dD, dM x (3) of the pairs
     rows, cols = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)]  # a rank may have no pairs
     values, pair_dM = [np.zeros((0, 12))], [np.zeros((0, ns, nm, ns + nm, 3))]
     of_covered = np.full(len(pairs_s), -1)
@@ -318,15 +316,9 @@ def coupling_derivatives(comm: MPI.Comm, index_map, slave_glob: np.ndarray, slav
         dMx = np.matmul(np.swapaxes(m_x, 1, 2)[:, None], dM.reshape(*dM.shape[:3], -1))
         dMx = dMx.reshape(*dM.shape[:2], 3, *dM.shape[3:]).transpose(0, 1, 3, 4, 2)
         here = np.flatnonzero(of_covered[start:start + chunk] >= 0)
-        if len(here):  # (L.6)
-            k = of_covered[start + here]
+        if len(here):  # the pairs of partly covered facets: (L.6)
             _, (dF, dG, dH) = basis_jacobians(slave_x[s[here]], -slave_normal[s[here]], m_x[here])
-            A, Y = covered.A[k], covered.Y[k]
-            dD[here] = dF * A.any(axis=(1, 2))[:, None, None, None]
-            dM[here] = np.einsum("pab,pbjvc->pajvc", A, dG)
-            dGx = np.einsum("pbjvc,pjk->pbvck", dG, m_x[here])
-            dMx[here] = (np.einsum("pab,pbvck->pavck", A, dGx) + dF[..., None] * Y[:, :, None, None, :]
-                         - np.einsum("pab,pbdvc,pdk->pavck", A, dH, Y))
+            dD[here], dM[here], dMx[here] = covered_entries(covered, of_covered[start + here], m_x[here], (dF, dG, dH))
             covered_dF.append(dF)
             covered_dH.append(dH)
         pair_dM.append(dM)
@@ -334,30 +326,11 @@ def coupling_derivatives(comm: MPI.Comm, index_map, slave_glob: np.ndarray, slav
         rows.append(np.broadcast_to(slave_glob[s][:, :, None], dD.shape[:3]).ravel())
         cols.append(np.broadcast_to(nodes[:, None, :], dD.shape[:3]).ravel())
         values.append(np.concatenate([dD[..., None], dMx], axis=-1).reshape(-1, 12))
-    # ... and da (3) of every slave facet at the row, paired or not
-    da = np.moveaxis(_area_normal_jacobians(slave_x, slave_normal), 1, -1)  # (f, n_s, 3, 3)
-    shape = (len(slave_x), ns, ns)
-    facet_entries = (np.broadcast_to(slave_glob[:, :, None], shape).ravel(),
-                     np.broadcast_to(slave_glob[:, None, :], shape).ravel(),
-                     np.broadcast_to(da[:, None], (*shape, 3, 3)).reshape(-1, 9))
-    owned_rows, nodes, summed = _summed_on_owners(comm, index_map, tuple(map(np.concatenate, (rows, cols, values))),
-                                                  facet_entries)
-    owned_rows, summed = np.repeat(owned_rows, 3), summed.reshape(-1, 7)
-    dofs = (3 * nodes[:, None] + np.arange(3)).ravel()
-    position = np.searchsorted(coupled_glob, owned_rows)
-    coupled = position < len(coupled_glob)
-    coupled[coupled] = coupled_glob[position[coupled]] == owned_rows[coupled]
-    row, dofs, summed = position[coupled], dofs[coupled], summed[coupled]
-    separation = -(summed[:, 1:4] - summed[:, :1] * projected[row]) / weight[row, None]
-    size = np.linalg.norm(normal_sum, axis=1)
-    n = normal_sum / size[:, None]
-    da = summed[:, 4:]
-    normal = (da - np.einsum("ij,ij->i", n[row], da)[:, None] * n[row]) / size[row, None]
     cross = None if covered is None else CoveredDerivatives(covered.pairs, covered.facet, np.concatenate(covered_dF),
                                                             np.concatenate(covered_dH), covered.A, covered.Hinv,
                                                             covered.G)
     pairs = PairDerivatives(slave_glob[pairs_s], master_glob, np.concatenate(pair_dM), cross)
-    return CouplingDerivatives(row, dofs, separation, normal, summed[:, 0], pairs)
+    return np.concatenate(rows), np.concatenate(cols), np.concatenate(values), pairs
 
 
 def _summed_on_owners(comm: MPI.Comm, index_map, pair_entries: tuple, facet_entries: tuple) -> tuple:

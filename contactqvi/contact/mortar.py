@@ -25,7 +25,7 @@ that have a master facet, as int psi_i sum_k phi_k; with full coverage this is
 int phi_i (the lumped area), and sum_j C_ij = 1 always, so rigid translations
 of both bodies never open or close the interface. With ``projecting`` (the pairs searched in
 the current configuration) a slave facet covered in part takes the dual basis of its covered
-part instead (:class:`CoveredBasis`), and D_ii = int phi_i over that part.
+part instead (:mod:`contactqvi.contact.covered`), and D_ii = int phi_i over that part.
 
 The integrals of one pair of facets (segment-to-segment, Puso-Laursen) are those of
 :mod:`contactqvi.contact.segments`; with ``linearised`` their derivatives with respect to
@@ -55,6 +55,7 @@ import scipy.spatial
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 
+from contactqvi.contact.covered import covered_basis
 from contactqvi.contact.facets import MODIFIED_AREAS, facet_areas, nodal_integrals, unit_normals
 from contactqvi.contact.linearisation import CouplingDerivatives, coupling_derivatives
 from contactqvi.contact.owners import fetch_rows, owner_ranges, sum_to_owners
@@ -65,7 +66,7 @@ from contactqvi.parameters import require
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["CoveredBasis", "MortarCoupling", "MortarLayout", "coupling_on_layout", "exterior_facet_cells",
+__all__ = ["MortarCoupling", "MortarLayout", "coupling_on_layout", "exterior_facet_cells",
            "facet_closures", "mortar_coupling", "surface_facets"]
 
 #: A facet pair a search finds that overlaps by no more than this fraction of its slave facet's
@@ -77,12 +78,6 @@ KEPT_COVERAGE = 0.1
 #: Slave nodes whose mortar segments give D_ii below this fraction of their lumped
 #: area are not coupled (they lie at the rim of the master's shadow).
 MIN_COVERAGE = 0.5
-#: A slave facet whose segments cover less than 1 - this of its area is partly covered: with
-#: ``projecting`` it takes the dual basis of its covered part (:class:`CoveredBasis`) ...
-FULL_COVER = 1e-9
-#: ... and one covered by less than this fraction of its area couples nothing (its covered part's
-#: mass matrix is singular to round-off).
-NO_COVER = 1e-6
 
 
 @dataclasses.dataclass(frozen=True)
@@ -186,40 +181,6 @@ def _sagittas(msh: dmesh.Mesh, cells: np.ndarray, local: np.ndarray) -> np.ndarr
 
 
 @dataclasses.dataclass(frozen=True)
-class CoveredBasis:
-    """The dual basis of the covered part of the partly covered slave facets of a search
-    (a ``projecting`` layout; the boundary treatment of Cichosz and Bischoff, CMAME 2011, for partially
-    projecting slave elements in 3D in Popp, Seitz, Gee and Wall, CMAME 2013; docs/finite_strain.md
-    Sect. 22).
-
-    The dual basis psi = A phi of a whole facet is biorthogonal over the facet: on a linear triangle
-    psi_i = 4 phi_i - 1, negative where phi_i < 1/4, so over a part of it D_ii = int psi_i falls
-    through zero while most of the facet is covered. Biorthogonal over the covered part S instead,
-    psi_i = sum_a A_ia phi_a with A = diag(F) H^-1, F = int_S phi, H = int_S phi phi^T (the sums of
-    the facet's pairs' :func:`~contactqvi.contact.segments.basis_integrals`), every pair's
-    D = A F_p and M = A G_p, and D_ii = int_S phi_i >= 0: the covered share of the node's area. A
-    facet covered whole has the whole facet's basis. Per pair of a partly covered facet:
-
-    Attributes:
-        pairs: (Q,) the pairs' indices among the layout's.
-        facet: (Q,) their facet's index among the partly covered facets (the pairs of one facet
-            share A, H^-1 and Y).
-        A, Hinv: (Q, n, n) A and H^-1 of the pair's facet (zero for a facet covered by less than
-            :data:`NO_COVER`).
-        Y: (Q, n, 3) H^-1 sum_p G_p x_p^m over the facet's pairs (the master vertices' current
-            positions): what the derivative of A carries into sum_j M_ij x_j.
-        G: (Q, n, n_m) the pair's int phi_a phi_j^m.
-    """
-
-    pairs: np.ndarray
-    facet: np.ndarray
-    A: np.ndarray
-    Hinv: np.ndarray
-    Y: np.ndarray
-    G: np.ndarray
-
-
-@dataclasses.dataclass(frozen=True)
 class MortarLayout:
     """What a search found, to be integrated again at other positions (:func:`coupling_on_layout`):
     the facet pairs whose projections overlapped and the slave nodes coupled then.
@@ -231,7 +192,7 @@ class MortarLayout:
         overlap: (P,) each pair's mortar segment area over its slave facet's area, at the search.
         rows: (m,) owned local node indices of the coupled slave nodes, sorted.
         projecting: partly covered slave facets take the dual basis of their covered part
-            (:class:`CoveredBasis`).
+            (:mod:`contactqvi.contact.covered`).
     """
 
     slave_facets: np.ndarray
@@ -332,23 +293,20 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
     Args:
         V: vector P1 or P2 (tetrahedra) or Q1 (hexahedra) space on the mesh holding both bodies.
         slave_facets, master_facets: local facet indices of the two surfaces.
-        search_distance: master facets farther than this from a slave facet
-            (between bounding boxes, m) are not paired with it; None: the slave
-            facet's longest edge.
+        search_distance: master facets farther than this from a slave facet (between bounding boxes, m)
+            are not paired with it; None: the slave facet's longest edge.
         excluded_blk: local node indices never coupled (e.g. clamped slave nodes).
         displacement: (local nodes, 3) displacement of the configuration searched
             (ghosts included); None: the reference configuration.
         linearised: also the derivatives of the rows with respect to the searched positions
             (:func:`~contactqvi.contact.linearisation.coupling_derivatives`).
-        kept_blk: owned local nodes coupled by the last search, which stay coupled down to
-            :data:`KEPT_COVERAGE` (a geometry that follows the Newton iterate: a node at the rim
-            of the master's shadow does not come and go from one iterate to the next).
+        kept_blk: owned local nodes coupled by the last search, which stay coupled down to :data:`KEPT_COVERAGE`
+            (a geometry that follows the Newton iterate: a node at the master's rim does not come and go).
         exact: the exact slave and master surfaces of the reference configuration (e.g. the
             cylinders of a press fit), between which the weighted gap is then measured
             (:func:`_exact_correction`); None: between the discrete ones.
-        projecting: partly covered slave facets of linear elements take the dual basis of their
-            covered part (:class:`CoveredBasis`; the pairs searched ``"newton"``); else the dual
-            basis of the whole facet.
+        projecting: slave facets covered in part take the dual basis of their covered part
+            (:mod:`~contactqvi.contact.covered`; flat facets of linear elements, no ``exact``).
 
     Collective. Slave nodes with less than :data:`MIN_COVERAGE` of their lumped area
     in the master's shadow (:data:`KEPT_COVERAGE` for ``kept_blk``) are left out, and so are
@@ -372,7 +330,7 @@ def mortar_coupling(V: fem.FunctionSpace, slave_facets: np.ndarray, master_facet
     _check_defined(comm, integrals, reference=displacement is None)
     layout = MortarLayout(np.asarray(slave_facets), pairs_s, mglob[pairs_m],
                           integrals[0].sum(axis=1) / slave.area[pairs_s], np.empty(0, dtype=np.int32),
-                          projecting and not slave.quadratic and exact is None)
+                          projecting and exact is None and slave.sagitta is None and not slave.quadratic)
     added = None if slave.sagitta is None else _bulge(slave, pairs_s, mx[pairs_m], msagitta[0][pairs_m])
     if exact is not None:
         correction = _exact_correction(V, slave_facets, pairs_s, mglob[pairs_m],
@@ -433,16 +391,16 @@ def _integrated(V: fem.FunctionSpace, layout: MortarLayout, slave: SurfaceFacets
     per pair, what the curvature of a second-order mesh with linear displacements (:func:`_bulge`)
     and exact surfaces (:func:`_exact_correction`) add to D_ii times the separation. Quadratic facets
     take the slave's part of the separation from their integrals' third array,
-    int Φ_i x = sum_k S_ik x_k (:func:`~contactqvi.contact.segments.quadratic_segment_integrals`).
-    A ``projecting`` layout's partly covered facets take the dual basis of their covered part
-    (:func:`_covered_basis`)."""
+    int Φ_i x = sum_k S_ik x_k (:func:`~contactqvi.contact.segments.quadratic_segment_integrals`). A
+    ``projecting`` layout's partly covered facets take the basis of :mod:`contactqvi.contact.covered`."""
     comm, index_map, x = V.mesh.comm, V.dofmap.index_map, V.tabulate_dof_coordinates()
     pairs_s = layout.pairs_s
     if integrals is None:
         integrals = _pair_integrals(slave, master_x, pairs_s)
     covered = None
     if layout.projecting:
-        *integrals, covered = _covered_basis(slave, master_x, pairs_s, *integrals)
+        *integrals, covered = covered_basis(slave.x, master_x, pairs_s, *integrals,
+                                            lambda s, m: basis_integrals(slave.x[s], -slave.normal[s], m))
     weight, lumped_area, normal, M = _owned_sums(comm, index_map, slave, pairs_s, layout.master_glob, *integrals[:2])
     coupled = np.zeros(index_map.size_local, dtype=bool)
     if rows is None:
@@ -480,36 +438,6 @@ def _integrated(V: fem.FunctionSpace, layout: MortarLayout, slave: SurfaceFacets
     coupling = MortarCoupling(slave_blk, weight[slave_blk], indptr, cols.astype(np.int64), values, n,
                               separation[:, :3], derivatives, layout)
     return coupling, lumped_area, np.einsum("ij,ij->i", n, separation[:, 3:])
-
-
-def _covered_basis(slave: SurfaceFacets, master_x: np.ndarray, pairs_s: np.ndarray, D: np.ndarray,
-                   M: np.ndarray) -> tuple[np.ndarray, np.ndarray, CoveredBasis | None]:
-    """The segment integrals ``D``, ``M`` of facet pairs (:func:`segment_integrals`) with the partly
-    covered slave facets' pairs integrated in the dual basis of the facet's covered part, and that
-    basis (:class:`CoveredBasis`; None where every facet is covered whole). A facet covered by less
-    than :data:`NO_COVER` of its area couples nothing."""
-    area = slave.area
-    covered = np.zeros(len(area))
-    np.add.at(covered, pairs_s, D.sum(axis=1))  # sum_i psi_i = 1: the segments' area
-    partly = np.flatnonzero(covered[pairs_s] < (1.0 - FULL_COVER) * area[pairs_s])
-    if len(partly) == 0:
-        return D, M, None
-    F, G, H = basis_integrals(slave.x[pairs_s[partly]], -slave.normal[pairs_s[partly]], master_x[partly])
-    facets, facet = np.unique(pairs_s[partly], return_inverse=True)
-    n = F.shape[1]
-    Fe, He, GX = np.zeros((len(facets), n)), np.zeros((len(facets), n, n)), np.zeros((len(facets), n, 3))
-    np.add.at(Fe, facet, F)
-    np.add.at(He, facet, H)
-    np.add.at(GX, facet, np.einsum("paj,pjk->pak", G, master_x[partly]))
-    some = Fe.sum(axis=1) > NO_COVER * area[facets]
-    Hinv = np.zeros_like(He)
-    Hinv[some] = np.linalg.inv(He[some])
-    A = Fe[:, :, None] * Hinv
-    D, M = D.copy(), M.copy()
-    D[partly] = np.einsum("pab,pb->pa", A[facet], F)
-    M[partly] = np.einsum("pab,pbj->paj", A[facet], G)
-    Y = np.einsum("fab,fbk->fak", Hinv, GX)
-    return D, M, CoveredBasis(partly, facet, A[facet], Hinv[facet], Y[facet], G)
 
 
 def _bulge(slave: SurfaceFacets, pairs_s: np.ndarray, master_x: np.ndarray, master_sagitta: np.ndarray) -> np.ndarray:
