@@ -122,8 +122,8 @@ PATH_PARAMETERS = Parameters(
                            "end at a limit point, where a part has to snap): 'relax' follows the body's overdamped "
                            "motion at the step's loads to an equilibrium and goes on from there "
                            "(docs/finite_strain.md Sect. 15), 'stop' ends the path; None: 'relax' for a hyperelastic "
-                           "body whose pairs are searched once or every step, 'stop' otherwise ('relax' may be "
-                           "asked for pairs searched 'newton' too)", type=str,
+                           "body whose pairs are searched once, every step or inside the Newton iteration ('newton'), "
+                           "'stop' otherwise", type=str,
                            choices=LIMIT_POINTS, optional=True),
 )
 #: A step whose displacement increment is below this fraction of the displacement has not
@@ -257,9 +257,7 @@ class _StepSolver(PETScOwner):
         default_cuts = HYPERELASTIC_CUTS if problem.hyperelastic is not None else 0
         self.cuts_allowed = path["max_cuts"] if path["max_cuts"] is not None else default_cuts
         relaxable = problem.hyperelastic is not None and not problem.settles_geometry
-        # pairs searched "newton" relax when asked: by default their stalled steps are cut (the 50 %
-        # compression: relaxing step 8 at once ended the path there, cutting it reaches step 9)
-        limit_points = path["limit_points"] or ("relax" if relaxable and not problem.follows_geometry else "stop")
+        limit_points = path["limit_points"] or ("relax" if relaxable else "stop")
         require(limit_points == "stop" or relaxable, "solver.limit_points",
                 "'relax' takes a hyperelastic body whose pairs are searched once, every step or inside the Newton "
                 "iteration ('newton'), not 'until_settled'")
