@@ -79,10 +79,11 @@ slave surface with a master surface (``"body.group"``) or with a rigid obstacle
     law = "coulomb"                     # as in [contact]
     friction = 0.3
     # search_distance = 0.01            # m; default: each slave facet's longest edge
-    # search = "every_step"             # "until_settled": also after each step, solved again
-    #                                   # until it settles; "newton": the geometry inside the
-    #                                   # Newton iteration (hyperelastic bodies); "once": the
-    #                                   # reference configuration
+    # search = "newton"                 # the geometry inside the Newton iteration (default for
+    #                                   # hyperelastic bodies of linear elements, quasi-static);
+    #                                   # "every_step" (default otherwise): before each step;
+    #                                   # "until_settled": also after each step, solved again
+    #                                   # until it settles; "once": the reference configuration
     # interference = 1e-4               # m: the surfaces overlap by this as meshed (a press fit), or
     #                                   # linear in x (a taper): {value = 1e-4, at = [0, 0, 0],
     #                                   # slope = [0, 0, 2e-3]}, delta(x) = value + slope . (x - at)
@@ -432,7 +433,8 @@ class ContactPair:
             configuration settles), ``"newton"`` (the geometry a function of the iterate
             inside the Newton iteration, hyperelastic bodies; docs/finite_strain.md, Sects. 14
             and 18) or ``"once"`` (in the reference configuration
-            only); None: ``"every_step"`` for a ``master``, ``"once"`` for an obstacle.
+            only); None: ``"once"`` for an obstacle, and for a ``master`` ``"newton"`` where the bodies are
+            hyperelastic, of linear elements and on a quasi-static path, ``"every_step"`` otherwise.
         interference: the overlap of the slave and master surfaces as meshed (m, >= 0;
             a press or shrink fit), or an :class:`~contactqvi.interference.Interference`
             linear in position (a taper); resolved in the first load step, or over the
@@ -493,7 +495,8 @@ class ContactCase:
             require(self.mesh.file is not None, "mesh.file", "several bodies need a gmsh file with one "
                     "physical volume per body")
             checked["bodies"] = _check_bodies(self.bodies, held=self.dynamics is None)
-            checked["contacts"] = _check_contacts(self.contacts)
+            checked["contacts"] = _check_contacts(self.contacts, _body_pair_search(checked["bodies"], checked["mesh"],
+                                                                                   self.dynamics))
         else:
             for name in ("material", "boundary", "contact", "obstacle"):
                 require(getattr(self, name) is not None, name, f"required table [{name}] missing")
@@ -841,7 +844,16 @@ def _check_bodies(bodies: typing.Sequence[Body], held: bool = True) -> tuple[Bod
     return tuple(checked)
 
 
-def _check_contacts(contacts: typing.Sequence[ContactPair]) -> tuple[ContactPair, ...]:
+def _body_pair_search(bodies: tuple[Body, ...], mesh: MeshSource, dynamics: Dynamics | None) -> str:
+    """The search of a pair of meshed bodies that does not name one: ``"newton"`` (the contact geometry
+    of the current configuration inside the Newton iteration, docs/finite_strain.md Sects. 14 and 22)
+    for hyperelastic bodies of linear elements on a quasi-static path, ``"every_step"`` otherwise
+    (linear elasticity, quadratic elements, a time integration)."""
+    hyperelastic = bool(bodies) and bodies[0].material.model is not None
+    return "newton" if hyperelastic and mesh.order == 1 and dynamics is None else "every_step"
+
+
+def _check_contacts(contacts: typing.Sequence[ContactPair], body_search: str) -> tuple[ContactPair, ...]:
     """The ``[[contacts]]`` pairs checked; their bodies are checked with the mesh (:func:`check_bodies`)."""
     require(_is_list(contacts) and len(contacts) > 0, "contacts", "give at least one [[contacts]] pair")
     checked = []
@@ -860,7 +872,9 @@ def _check_contacts(contacts: typing.Sequence[ContactPair]) -> tuple[ContactPair
         if distance is not None:
             distance = require_number(f"{path}.search_distance", distance)
             require_positive(f"{path}.search_distance", distance)
-        search = pair.search if pair.search is not None else ("once" if obstacle is not None else "every_step")
+        search = pair.search
+        if search is None:  # an obstacle's default; a body pair's (exact cylinders: of the reference configuration)
+            search = "once" if obstacle is not None else body_search if pair.cylinder is None else "every_step"
         require_choice(f"{path}.search", search, SEARCHES)
         checked.append(ContactPair(pair.slave, pair.master, obstacle, law, distance, search,
                                    _check_interference(pair, path), _check_cylinder(pair, search, path)))

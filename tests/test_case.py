@@ -5,6 +5,7 @@ from __future__ import annotations
 import copy
 import pathlib
 import re
+import typing
 
 from mpi4py import MPI
 
@@ -431,3 +432,24 @@ def test_material_model_is_the_default_of_every_body():
     data["bodies"][1]["material"]["model"] = "saint_venant_kirchhoff"
     with pytest.raises(ParameterError, match=re.escape("bodies[1].material.model: all bodies take the same model")):
         parse_case(data, ROOT / "cases")
+
+
+@pytest.mark.one_rank(reason="case-file parsing and checks on dataclasses: no mesh")
+def test_a_pair_of_hyperelastic_bodies_is_searched_newton_by_default():
+    """A pair of meshed bodies that names no search is searched ``"newton"`` (the geometry of the current
+    configuration inside the Newton iteration) where the bodies are hyperelastic and of linear elements on
+    a quasi-static path, ``"every_step"`` otherwise (linear elasticity, quadratic elements); a search the
+    pair names stays."""
+    def search(*changes: typing.Callable[[dict], typing.Any]) -> str:
+        data = copy.deepcopy(BODIES)
+        for change in changes:
+            change(data)
+        return parse_case(data, ROOT / "cases").contacts[0].search
+
+    def hyperelastic(data: dict) -> None:
+        data["material"] = {"model": "neo_hookean"}
+
+    assert search() == "every_step"
+    assert search(hyperelastic) == "newton"
+    assert search(hyperelastic, lambda d: d["mesh"].update(order=2)) == "every_step"
+    assert search(hyperelastic, lambda d: d["contacts"][0].update(search="once")) == "once"
