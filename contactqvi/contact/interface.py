@@ -88,7 +88,7 @@ class ObstaclePair:
 
 #: The searches of a body pair whose solutions are those of the contact in the current configuration:
 #: their slave facets covered in part take the dual basis of their covered part
-#: (:class:`~contactqvi.contact.mortar.CoveredBasis`; docs/finite_strain.md Sect. 22), the others
+#: (:class:`~contactqvi.contact.covered.CoveredBasis`; docs/finite_strain.md Sect. 22), the others
 #: that of the whole facet.
 CURRENT_CONFIGURATION = ("until_settled", "newton")
 

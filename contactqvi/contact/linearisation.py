@@ -311,14 +311,19 @@ def _pair_entries(slave_glob: np.ndarray, slave_x: np.ndarray, slave_normal: np.
     for start in range(0, len(pairs_s), chunk):
         s = pairs_s[start:start + chunk]
         m_x, m_glob = master_x[start:start + chunk], master_glob[start:start + chunk]
-        _, _, dD, dM = segment_jacobians(slave_x[s], -slave_normal[s], m_x)
-        # dM x: sum_b dM_ab x_b, (P, n_s, N, 3, 3) (a batched product, einsum is slow here)
-        dMx = np.matmul(np.swapaxes(m_x, 1, 2)[:, None], dM.reshape(*dM.shape[:3], -1))
-        dMx = dMx.reshape(*dM.shape[:2], 3, *dM.shape[3:]).transpose(0, 1, 3, 4, 2)
-        here = np.flatnonzero(of_covered[start:start + chunk] >= 0)
-        if len(here):  # the pairs of partly covered facets: (L.6)
+        dD, dM = np.empty((len(s), ns, ns + nm, 3)), np.empty((len(s), ns, nm, ns + nm, 3))
+        dMx = np.empty((len(s), ns, ns + nm, 3, 3))
+        here = of_covered[start:start + chunk] >= 0  # the pairs of partly covered facets: (L.6)
+        whole = ~here
+        if whole.any():
+            _, _, dD[whole], dM[whole] = segment_jacobians(slave_x[s[whole]], -slave_normal[s[whole]], m_x[whole])
+            # dM x: sum_b dM_ab x_b, (P, n_s, N, 3, 3) (a batched product, einsum is slow here)
+            product = np.matmul(np.swapaxes(m_x[whole], 1, 2)[:, None], dM[whole].reshape(-1, ns, nm, 3 * (ns + nm)))
+            dMx[whole] = product.reshape(-1, ns, 3, ns + nm, 3).transpose(0, 1, 3, 4, 2)
+        if here.any():
             _, (dF, dG, dH) = basis_jacobians(slave_x[s[here]], -slave_normal[s[here]], m_x[here])
-            dD[here], dM[here], dMx[here] = covered_entries(covered, of_covered[start + here], m_x[here], (dF, dG, dH))
+            dD[here], dM[here], dMx[here] = covered_entries(covered, of_covered[start:start + chunk][here], m_x[here],
+                                                            (dF, dG, dH))
             covered_dF.append(dF)
             covered_dH.append(dH)
         pair_dM.append(dM)
