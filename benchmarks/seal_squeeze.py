@@ -18,6 +18,8 @@ Sects. 11 and 15, read the tables (the tables of Sect. 11, before relaxation exi
         --meshes h1.0 h0.5 --table seal_relaxed
     .venv/bin/python benchmarks/seal_squeeze.py --poisson 0.3 0.4 0.45 0.49 --friction 0.2 0.3 0.4 0.5 \
         --limit-points stop
+    .venv/bin/python benchmarks/seal_squeeze.py --poisson 0.45 0.49 0.499 --friction 0.3 0.4 0.5 --meshes h0.25 \
+        --table seal_relaxed_h025
     .venv/bin/python benchmarks/seal_squeeze.py --poisson 0.45 0.499 --friction 0.4 --squeeze 0.45 --table seal_45
     .venv/bin/python benchmarks/seal_squeeze.py --poisson 0.45 --friction 0.4 --max-cuts 14 --limit-points stop \
         --table seal_path_end

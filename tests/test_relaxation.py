@@ -3,6 +3,7 @@ docs/finite_strain.md Sect. 15): the frictional rubber seal of issue 45 goes on 
 
 from __future__ import annotations
 
+import itertools
 import pathlib
 
 import numpy as np
@@ -12,6 +13,7 @@ from mpi4py import MPI
 
 from contactqvi.case import check_solver, parse_case
 from contactqvi.contact.load_path import SOLVER_PARAMETERS, solve_load_path
+from contactqvi.contact.relaxation import STEP_PARAMETERS
 from contactqvi.parameters import ParameterError
 from contactqvi.runner import build_problem, run_case
 
@@ -39,8 +41,8 @@ def seal(limit_points: str | None = None) -> dict:
 def test_the_seal_relaxes_past_its_limit_point(mpi_tmp_path):
     """Default settings: step 18 (25.5 % to 27 %) has no equilibrium near step 17's (the path ends at
     25.99 %, docs/finite_strain.md Sect. 11): its attempt stalls (``stall_iterations`` 20 of a
-    path that relaxes), and the strip relaxes there at once, uncut (measured 11 relaxation steps) to
-    an equilibrium, and the path goes on to 30 % with 4-5 Newton steps per step as before the limit
+    path that relaxes), and the strip relaxes there at once, uncut (measured 11 relaxation steps,
+    each solved to 1e-6 of its start, :data:`STEP_PARAMETERS`) to an equilibrium, and the path goes on to 30 % with 4-5 Newton steps per step as before the limit
     point. Every step is in equilibrium (reactions = contact force to 1e-12 of it), the relaxation's
     last solve is a plain one, and the steps after it need no more Newton steps than the steps
     before the limit point."""
@@ -54,6 +56,11 @@ def test_the_seal_relaxes_past_its_limit_point(mpi_tmp_path):
     marks = [entry for entry in steps[17]["history"] if "relaxation" in entry]
     assert 2 <= max(entry["relaxation"] for entry in marks) <= 20  # regression guard: measured 11
     assert marks[-1]["viscosity"] == 0.0 and marks[-1]["substep_status"].startswith("converged")
+    # a relaxation step (viscosity > 0) is solved to STEP_PARAMETERS' 1e-6 of its start, not further
+    flow = [entry for entry in marks if entry["viscosity"] > 0.0]
+    for _, solve in itertools.groupby(flow, key=lambda entry: entry["relaxation"]):
+        residuals = [entry["residual"] for entry in solve]
+        assert len(residuals) == 1 or residuals[-2] > STEP_PARAMETERS["rtol"] * residuals[0], residuals
     # the attempt that failed before the relaxation ended when it stalled, not after 100 Newton steps
     failed = {entry["substep"] for entry in steps[17]["history"]
               if entry["substep_status"] == "diverged_stalled" and "relaxation" not in entry}

@@ -269,11 +269,29 @@ class _StepSolver(PETScOwner):
         return [self.solver, self.carried, self.initial]
 
     def __call__(self, step: LoadStep, u: PETSc.Vec, state: PathState, from_rest: bool,
-                 extrapolate: float = 0.0) -> SCDNewtonResult:
+                 extrapolate: float = 0.0, overrides: dict[str, typing.Any] | None = None) -> SCDNewtonResult:
         """Solve ``step`` after ``state``'s (the predictor of :func:`_start`; a problem searched
         each step searched first, and settled after); its solution in ``u``. ``extrapolate`` > 0:
         the predictor is the last solve's increment extrapolated by that factor (a relaxation step
-        after one that converged)."""
+        after one that converged). ``overrides``: SCD parameters of this solve alone (a relaxation
+        step's, :data:`~contactqvi.contact.relaxation.STEP_PARAMETERS`)."""
+        if not overrides:
+            return self._solve(step, u, state, from_rest, extrapolate)
+        saved = self.parameters
+        self.parameters = {**saved, **overrides}
+        if self.solver is not None:
+            self.solver.parameters.update(overrides)
+        try:
+            return self._solve(step, u, state, from_rest, extrapolate)
+        finally:
+            self.parameters = saved
+            if self.solver is not None:  # the one the solve ended with (a search makes a new one)
+                own = checked_parameters(self.problem, saved)
+                self.solver.parameters.update({name: own[name] for name in overrides})
+
+    def _solve(self, step: LoadStep, u: PETSc.Vec, state: PathState, from_rest: bool,
+               extrapolate: float) -> SCDNewtonResult:
+        """:meth:`__call__` with the path's own parameters."""
         problem = self.problem
         if problem.searched_each_step and self.solver is not None:
             self.carried, self.solver = _released(self.solver), None

@@ -19,7 +19,9 @@ are the equilibria of the step.
 c_0 is the ratio of the diagonals of the small-strain stiffness and of M, so that the first step
 is a strongly damped one; after each step that converges c_k is halved, after each that fails it
 is multiplied by 4 (the switched evolution relaxation of pseudo-transient continuation, Kelley
-and Keyes, SIAM J. Numer. Anal. 35 (1998) 508). A step after one that converged starts from the
+and Keyes, SIAM J. Numer. Anal. 35 (1998) 508). A relaxation step is a point of the flow, not an
+equilibrium: it is solved to 1e-6 of its start, and given up (c too small) when ||y^|| has not fallen by
+a quarter over 8 Newton steps (:data:`STEP_PARAMETERS`). A step after one that converged starts from the
 extrapolation u_k + (u_k - u_{k-1}) of the flow, any other from u_k (pairs searched ``"newton"``:
 each step from u_k, by their own predictor; docs/finite_strain.md
 Sect. 15: the seal strips on the 1.0 and 0.5 mm meshes took 1 898 and 2 570 Newton steps in all,
@@ -49,7 +51,7 @@ from contactqvi.contact.scd_newton import SCDNewtonResult
 from contactqvi.load_steps import LoadStep
 from contactqvi.result import Status
 
-__all__ = ["MAX_STEPS", "SETTLED", "relax"]
+__all__ = ["MAX_STEPS", "SETTLED", "STEP_PARAMETERS", "relax"]
 
 logger = logging.getLogger(__name__)
 
@@ -61,14 +63,20 @@ MAX_STEPS = 60
 SETTLED = 0.1
 #: c_k after a converged relaxation step is c_{k-1} / GROWTH; after a failed one, c_{k-1} * 4.
 GROWTH = 2.0
+#: The SCD parameters of a relaxation step (the last, plain solve takes the path's): a step of the
+#: flow is no equilibrium, so it is solved to 1e-6 of its start, and it has failed (c too small: the
+#: damped step's problem lost its definiteness at the snap) once ||y^|| has not fallen by a quarter
+#: over 8 Newton steps (docs/finite_strain.md Sect. 15, session 48).
+STEP_PARAMETERS = {"rtol": 1e-6, "stall_iterations": 8, "stall_factor": 0.75}
 
 
 class Solve(typing.Protocol):
     """Solves a step after ``state`` into ``u`` (the load path's step solver), its predictor the
-    last solve's increment extrapolated by ``extrapolate`` where that is > 0."""
+    last solve's increment extrapolated by ``extrapolate`` where that is > 0, with the SCD
+    parameters ``overrides`` for this solve alone."""
 
     def __call__(self, step: LoadStep, u: PETSc.Vec, state: PathState, from_rest: bool,
-                 extrapolate: float = 0.0) -> SCDNewtonResult: ...
+                 extrapolate: float = 0.0, overrides: dict[str, typing.Any] | None = None) -> SCDNewtonResult: ...
 
 
 def relax(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathState,
@@ -92,7 +100,7 @@ def relax(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathStat
             problem.hyperelastic = viscous
             mass.mult(state.displacement.x.petsc_vec, inertia)
             inertia.scale(-viscous.coefficient)
-            result = solve(step, u, state, False, extrapolate=1.0 if moving else 0.0)
+            result = solve(step, u, state, False, extrapolate=1.0 if moving else 0.0, overrides=STEP_PARAMETERS)
             solves.append((step, result, {"relaxation": k + 1, "viscosity": viscous.coefficient}))
             if result.status == Status.INTERRUPTED:
                 break

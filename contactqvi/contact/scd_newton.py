@@ -114,9 +114,11 @@ PARAMETERS = Parameters(
                     "(gamma u to eps of it; 0: off)", minimum=0.0, maximum=1.0),
     atol=Parameter(0.0, "... or when ||y^(k)|| <= atol (N)", minimum=0.0),
     max_iterations=Parameter(100, "Newton iterations before giving up", type=int, minimum=1),
-    stall_iterations=Parameter(None, "a solve whose ||y^|| has not halved over this many Newton steps has stalled "
-                               "(diverged_stalled); None: never (a load path that relaxes past limit points takes "
-                               "20)", type=int, minimum=1, optional=True),
+    stall_iterations=Parameter(None, "a solve whose ||y^|| has not fallen to stall_factor of its value this many "
+                               "Newton steps before has stalled (diverged_stalled); None: never (a load path that "
+                               "relaxes past limit points takes 20)", type=int, minimum=1, optional=True),
+    stall_factor=Parameter(0.5, "the fraction in stall_iterations' test (0.5: ||y^|| has not halved)", minimum=0.0,
+                           maximum=1.0, exclusive=True),
     tol=Parameter(None, "relative residual reduction of the inner Krylov solve (tol, Sect. 7); None: "
                   f"{LINEAR_TOL:g} (Sect. 7) for linear elasticity, {HYPERELASTIC_TOL:g} for a hyperelastic body "
                   "or pc = 'pressure_schur'",
@@ -744,8 +746,8 @@ class SCDNewtonSolver(PETScOwner):
             return Status.CONVERGED_RTOL if norm <= self.parameters["rtol"] * norm0 else Status.CONVERGED_ATOL
         if k == self.parameters["max_iterations"]:
             return Status.DIVERGED_MAX_IT
-        window = self.parameters["stall_iterations"]
-        if window is not None and k >= window and norm > 0.5 * history[k - window]["residual"]:
+        window, factor = self.parameters["stall_iterations"], self.parameters["stall_factor"]
+        if window is not None and k >= window and norm > factor * history[k - window]["residual"]:
             return Status.DIVERGED_STALLED
         if stop is not None and stop():
             return Status.INTERRUPTED
