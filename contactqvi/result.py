@@ -59,7 +59,8 @@ class Status(enum.IntEnum):
     #: stopped for a new contact search: the iterate's projections left the facets of the last
     #: one (``search = "newton"``); the load path searches and solves on
     SEARCH_AGAIN = -11
-    #: the residual did not fall to ``stall_factor`` (a half) of its value ``stall_iterations`` Newton steps before
+    #: the residual did not fall to ``stall_factor`` (a half) of its value ``stall_iterations``
+    #: Newton steps before
     DIVERGED_STALLED = -12
 
     @property

@@ -42,8 +42,8 @@ def test_the_seal_relaxes_past_its_limit_point(mpi_tmp_path):
     """Default settings: step 18 (25.5 % to 27 %) has no equilibrium near step 17's (the path ends at
     25.99 %, docs/finite_strain.md Sect. 11): its attempt stalls (``stall_iterations`` 20 of a
     path that relaxes), and the strip relaxes there at once, uncut (measured 11 relaxation steps,
-    each solved to 1e-6 of its start, :data:`STEP_PARAMETERS`) to an equilibrium, and the path goes on to 30 % with 4-5 Newton steps per step as before the limit
-    point. Every step is in equilibrium (reactions = contact force to 1e-12 of it), the relaxation's
+    each solved to 1e-6 of its start, :data:`STEP_PARAMETERS`) to an equilibrium, and the path goes
+    on to 30 % with 4-5 Newton steps per step as before the limit point. Every step is in equilibrium (reactions = contact force to 1e-12 of it), the relaxation's
     last solve is a plain one, and the steps after it need no more Newton steps than the steps
     before the limit point."""
     summary, code = run_case(parse_case(seal()), mpi_tmp_path / "relax", plot=False)
