@@ -55,8 +55,8 @@ __all__ = ["MAX_STEPS", "SETTLED", "STEP_PARAMETERS", "relax"]
 
 logger = logging.getLogger(__name__)
 
-#: Relaxation steps (15.1), converged or not, before the load step fails (60 up to session 47,
-#: whose slower relaxation steps the 0.25 mm seal at nu 0.45, mu 0.3 needed all of; now 69 of them).
+#: Relaxation steps (15.1), converged or not, before the load step fails (60 before the steps took
+#: :data:`STEP_PARAMETERS`; the 0.25 mm seal at nu 0.45, mu 0.3 then took all 60, now 69: Sect. 15).
 MAX_STEPS = 100
 #: A relaxation step that changes the displacement by at most this fraction of the relaxation's
 #: largest change (max norms; after a plain solve that failed, of that step's change) has settled:
