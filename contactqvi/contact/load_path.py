@@ -129,6 +129,9 @@ PATH_PARAMETERS = Parameters(
 #: A step whose displacement increment is below this fraction of the displacement has not
 #: moved (round-off): its configuration is the settled one of the step before.
 STILL = 1e-9
+#: :func:`_turned_on`: the last solution turned on rigidly meets the step's prescribed values to this
+#: fraction of the largest of them and of the positions (round-off of the turn), or is not taken.
+TURNED_WHOLE = 1e-9
 #: Everything the ``[solver]`` table of a case file may hold: the SCD solver's parameters and the path's.
 SOLVER_PARAMETERS = Parameters({**PARAMETERS, **PATH_PARAMETERS})
 
@@ -426,6 +429,7 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
     out, and is cut. A step that continues the last solve (along its change of load,
     translation and rotation), which continued the one before, extrapolates its increment
     (:meth:`PathState.extrapolation`; Abaqus' default, Code_Aster's ``PREDICTION = 'EXTRAPOLE'``);
+    one that begins to turn bodies that turn whole turns the last solution on (:func:`_turned_on`);
     any other, the first from rest too, adds the response of the stiffness to the change of its
     loads and prescribed values (:func:`_elastic_change`: at rest, or the tangent at the last
     solution; Code_Aster's ``'TANGENTE'``), but a step that slides along the contact starts from
@@ -435,6 +439,8 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
     factor = state.extrapolation(step.load, step.translation, step.rotation, turns_only=True)
     if factor > 0.0:
         predicted = _extrapolated(problem, step, state, factor)
+    elif (turned := _turned_on(problem, step, state)) is not None:
+        predicted = turned
     else:
         predicted = fem.Function(problem.V)
         slide = sliding_translation(problem, state, step)
@@ -451,6 +457,27 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
         problem.physical_displacement(change, predicted)
         change.destroy()
     _search_at(problem, step, u, state, predicted, step_solver, start=False)
+
+
+def _turned_on(problem: ContactProblem, step: LoadStep, state: PathState) -> fem.Function | None:
+    """The last solution turned on rigidly with the moved groups (:meth:`PathState.turned`) as the
+    predictor of a step that begins to turn them, if that meets every prescribed value of the step (no
+    support stays behind: the bodies turn whole), else None. A rigid turn of the whole is predicted
+    exactly; the tangent's response (:func:`_elastic_change`) turns by the chord and strains the bodies
+    by about half the angle squared (the pressed blocks of tests/test_rotation.py: 103 Newton steps
+    for their first 9-degree turn)."""
+    if not state.turns_to(step.rotation):
+        return None
+    turned = fem.Function(problem.V)
+    turned.x.array[:] = state.turned(step.translation, step.rotation, problem.V.tabulate_dof_coordinates()).ravel()
+    u = problem.solver_variables(turned, problem.A.createVecRight())
+    u.axpy(1.0, problem.shift)
+    rows = problem.hyperelastic.prescribed
+    prescribed = problem.load.array_r[rows]
+    off = problem.comm.allreduce(float(np.abs(u.array_r[rows] - prescribed).max(initial=0.0)), op=MPI.MAX)
+    u.destroy()
+    size = problem.comm.allreduce(float(np.abs(prescribed).max(initial=0.0)), op=MPI.MAX)
+    return turned if off <= TURNED_WHOLE * max(size, problem.position_scale()) else None
 
 
 def _add_elastic_change(problem: ContactProblem, u: PETSc.Vec, state: PathState, pc: str, prefix: str) -> bool:
@@ -717,7 +744,8 @@ def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: Path
     """Set ``step`` after ``state``'s step, the slip measured from it; ``u`` gets the predictor.
     A hyperelastic body's step that continues the last solve (along its change of load,
     translation and rotation) extrapolates it, slip increments included, a turning node turned on
-    (:meth:`PathState.extrapolated`; Abaqus' default, Code_Aster's ``PREDICTION = 'EXTRAPOLE'``).
+    (:meth:`PathState.extrapolated`; Abaqus' default, Code_Aster's ``PREDICTION = 'EXTRAPOLE'``); one
+    that begins to turn bodies that turn whole turns the last solution on (:func:`_turned_on`).
     The pressed blocks of tests/test_rotation.py take 3 Newton steps per turn instead of 7 with
     ``until_settled``, 0-1 instead of 6 with ``every_step``; the seal strip of docs/finite_strain.md
     Sect. 15 (nu 0.499, Coulomb 0.3) 5.1 a step instead of 12.8. Any other step starts from u~ of
@@ -728,10 +756,12 @@ def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: Path
     problem.set_step(step.load, step.translation, state.variables, state.translation, step.rotation, state.rotation,
                      step.fit_fraction)
     factor = extrapolate or state.extrapolation(step.load, step.translation, step.rotation, turns_only=False)
-    if factor > 0.0 and problem.hyperelastic is not None and not problem.follows_geometry:
-        problem.solver_variables(_extrapolated(problem, step, state, factor), u)
-        u.axpy(1.0, problem.shift)
-        return True
+    if problem.hyperelastic is not None and not problem.follows_geometry:
+        predicted = _extrapolated(problem, step, state, factor) if factor > 0.0 else _turned_on(problem, step, state)
+        if predicted is not None:
+            problem.solver_variables(predicted, u)
+            u.axpy(1.0, problem.shift)
+            return True
     _carried(problem, u, state)
     return False
 

@@ -169,19 +169,32 @@ class PathState(PETScOwner):
         2.5 cm off its arc (docs/finite_strain.md Sect. 14). A path without rotation (``rotation`` None)
         translates: a node carried by the moved groups or an obstacle is moved on with them."""
         rotation = Rotation() if rotation is None else rotation
-        turn_now = _turn(self.position[4:])
-        last = turn_now @ _turn(self.position[4:] - self.stride[4:]).T
-        next_ = rotation.matrix() @ turn_now.T
         centre = np.asarray(rotation.centre, dtype=float)
-        t_now = np.asarray(self.translation, dtype=float)
-        t_last = t_now - self.stride[1:4]
+        t_last = np.asarray(self.translation, dtype=float) - self.stride[1:4]
+        last = _turn(self.position[4:]) @ _turn(self.position[4:] - self.stride[4:]).T
         x = points + self.displacement.x.array.reshape(-1, 3)
         increment = self.increment.x.array.reshape(-1, 3)
-        rest = x - ((x - increment - centre - t_last) @ last.T + centre + t_now)
-        turned = (x - centre - t_now + factor * rest) @ next_.T + centre + np.asarray(translation, dtype=float)
+        rest = x - ((x - increment - centre - t_last) @ last.T + centre + self.translation)
+        turned = self.turned(translation, rotation, points, factor * rest) + points
         linear = x + factor * increment
         rigid = np.linalg.norm(rest, axis=1) < np.linalg.norm(increment, axis=1)
         return np.where(rigid[:, None], turned, linear) - points
+
+    def turns_to(self, rotation: Rotation | None) -> bool:
+        """Whether a step to ``rotation`` turns the moved groups on from the last solve."""
+        return bool(np.any(_position(0.0, np.zeros(3), rotation)[4:] != self.position[4:]))
+
+    def turned(self, translation: typing.Sequence[float], rotation: Rotation | None, points: np.ndarray,
+               along: np.ndarray | float = 0.0) -> np.ndarray:
+        """u~ (local nodes, (N, 3)) of the last solve turned on rigidly with the moved groups to a step
+        to ``translation``, ``rotation``: x_pred = Q_next (x_n - c - t_n + ``along``) + c + t_next
+        (:meth:`extrapolated`'s turned node; ``points`` the reference positions X)."""
+        rotation = Rotation() if rotation is None else rotation
+        centre = np.asarray(rotation.centre, dtype=float)
+        next_ = rotation.matrix() @ _turn(self.position[4:]).T
+        x = points + self.displacement.x.array.reshape(-1, 3)
+        moved = (x - centre - self.translation + along) @ next_.T + centre + np.asarray(translation, dtype=float)
+        return moved - points
 
     def contact_states(self, problem: ContactProblem) -> np.ndarray:
         """The states of ``problem``'s contact nodes (a node without one is not in contact)."""
