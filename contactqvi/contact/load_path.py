@@ -464,8 +464,8 @@ def _turned_on(problem: ContactProblem, step: LoadStep, state: PathState) -> fem
     predictor of a step that begins to turn them, if that meets every prescribed value of the step (no
     support stays behind: the bodies turn whole), else None. A rigid turn of the whole is predicted
     exactly; the tangent's response (:func:`_elastic_change`) turns by the chord and strains the bodies
-    by about half the angle squared (the pressed blocks of tests/test_rotation.py: 103 Newton steps
-    for their first 9-degree turn)."""
+    by about half the angle squared (the pressed blocks of tests/test_rotation.py searched ``"newton"``:
+    104 Newton steps for their first 9-degree turn, 0 now; docs/finite_strain.md Sect. 14)."""
     if not state.turns_to(step.rotation):
         return None
     turned = fem.Function(problem.V)
