@@ -76,12 +76,24 @@ AFFINE_DEGREE = 4
 #: (meshes/hex_on_split_tets.geo, as slave) to 3e-7 (12), 6e-9 (16), 5e-11 (20, 79 points),
 #: 3e-14 (30), and the patch test on them as master to 3e-8, 6e-10, 4e-12 (tests/test_hex_mortar.py).
 QUADRILATERAL_DEGREE = 20
+#: :func:`clip_polygons`: a clipping edge with the whole polygon on its inner side up to this fraction
+#: of its length does not clip it. Where a slave's and a master's facets meet edge on edge on a symmetry
+#: plane through a flat interface (both ends held on the plane, the facets' tilt across it and the gap
+#: vanishing at the solution), the master's edge lies off the slave's by their product, round-off and
+#: below: cut by the sign of that, the segment was bounded by the master's edge or by the slave's, the
+#: same polygon with other derivatives, so the Newton matrix was the derivative of the other side at
+#: random (the 50 % compression's last step: 7 / 14 / 10 Newton steps on 1 / 2 / 3 ranks, a linear
+#: tail; docs/finite_strain.md Sect. 22). A sliver of 1e-10 of an edge is below the coverage that
+#: takes a facet for covered whole (``covered.FULL_COVER``, 1e-9 of its area).
+CLIP_BAND = 1e-10
 #: Degree of the rule for a pair of biquadratic (9-node) parallelograms: Φ_i N_j^m is of degree 4 in
 #: each facet's reference coordinates, affine in the plane's, so of degree 8 on a flat pair (exact).
 BIQUADRATIC_DEGREE = 8
 
 def clip_polygons(polygon: np.ndarray, count: np.ndarray, clip: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Sutherland-Hodgman: convex polygons clipped by convex counter-clockwise polygons, vectorised.
+    """Sutherland-Hodgman: convex polygons clipped by convex counter-clockwise polygons, vectorised;
+    an edge of ``clip`` with the whole polygon within :data:`CLIP_BAND` of its inner side leaves it
+    whole (its vertices, not crossings, whichever side of the edge round-off puts them).
 
     Args:
         polygon: (P, K, 2) vertices, counter-clockwise, the first ``count`` valid; K must
@@ -107,7 +119,9 @@ def clip_polygons(polygon: np.ndarray, count: np.ndarray, clip: np.ndarray) -> t
         s_cur = _side(primal(a)[:, None], primal(edge)[:, None], primal(polygon))  # the decisions: on values
         s_nxt = s_cur[rows[:, None], nxt_index]
         valid = np.arange(K)[None, :] < count[:, None]
-        in_cur, in_nxt = s_cur >= 0.0, s_nxt >= 0.0
+        band = CLIP_BAND * np.sum(primal(edge) ** 2, axis=1)  # _side is |edge| times the distance
+        inner = np.all((s_cur >= -band[:, None]) | ~valid, axis=1)[:, None]  # not clipped
+        in_cur, in_nxt = (s_cur >= 0.0) | inner, (s_nxt >= 0.0) | inner
         # emitted per input vertex i: [crossing if the edge i -> i+1 crosses] then [nxt if nxt inside]
         emit_cross = valid & (in_cur != in_nxt)
         emit_next = valid & in_nxt
