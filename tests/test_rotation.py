@@ -164,7 +164,7 @@ def test_a_rigid_rotation_of_a_pressed_frictional_pair_is_objective(mesh, search
     non-matching nodes; sticking nodes hold that spurious slip (docs/finite_strain.md).
     Every turn is predicted by turning the last solution on and takes at most 2 Newton steps
     (measured 0-1 with either search): the first by the rigid turn of the pressed blocks
-    (load_path._turned_on; before, from the tangent's response with ``"newton"``: 103 Newton steps,
+    (load_path._turned_on; before, from the tangent's response with ``"newton"``: 104 Newton steps,
     the searches at its iterates alternating between two layouts for 40 of them; 6 from the last
     solution with ``until_settled``), the others by extrapolating the last turn
     (PathState.extrapolated; before, ``until_settled`` took 6 per turn from the last solution, 7 on

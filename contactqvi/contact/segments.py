@@ -81,9 +81,9 @@ QUADRILATERAL_DEGREE = 20
 #: plane through a flat interface (both ends held on the plane, the facets' tilt across it and the gap
 #: vanishing at the solution), the master's edge lies off the slave's by their product, round-off and
 #: below: cut by the sign of that, the segment was bounded by the master's edge or by the slave's, the
-#: same polygon with other derivatives, so the Newton matrix was the derivative of the other side at
-#: random (the 50 % compression's last step: 7 / 14 / 10 Newton steps on 1 / 2 / 3 ranks, a linear
-#: tail; docs/finite_strain.md Sect. 22). A sliver of 1e-10 of an edge is below the coverage that
+#: same polygon with other derivatives, a kink every iterate sat on with its side picked by round-off
+#: (the 50 % compression's last step: a linear tail, 7 / 14 / 10 Newton steps on 1 / 2 / 3 ranks, now
+#: 9 / 7 / 9; docs/finite_strain.md Sect. 22). A sliver of 1e-10 of an edge is below the coverage that
 #: takes a facet for covered whole (``covered.FULL_COVER``, 1e-9 of its area).
 CLIP_BAND = 1e-10
 #: Degree of the rule for a pair of biquadratic (9-node) parallelograms: Φ_i N_j^m is of degree 4 in
