@@ -439,7 +439,7 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
     factor = state.extrapolation(step.load, step.translation, step.rotation, turns_only=True)
     if factor > 0.0:
         predicted = _extrapolated(problem, step, state, factor)
-    elif (turned := _turned_on(problem, step, state)) is not None:
+    elif (turned := _turned_on(problem, step, state, u)) is not None:
         predicted = turned
     else:
         predicted = fem.Function(problem.V)
@@ -459,23 +459,23 @@ def _predict(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: PathS
     _search_at(problem, step, u, state, predicted, step_solver, start=False)
 
 
-def _turned_on(problem: ContactProblem, step: LoadStep, state: PathState) -> fem.Function | None:
+def _turned_on(problem: ContactProblem, step: LoadStep, state: PathState, u: PETSc.Vec) -> fem.Function | None:
     """The last solution turned on rigidly with the moved groups (:meth:`PathState.turned`) as the
-    predictor of a step that begins to turn them, if that meets every prescribed value of the step (no
-    support stays behind: the bodies turn whole), else None. A rigid turn of the whole is predicted
-    exactly; the tangent's response (:func:`_elastic_change`) turns by the chord and strains the bodies
-    by about half the angle squared (the pressed blocks of tests/test_rotation.py searched ``"newton"``:
-    104 Newton steps for their first 9-degree turn, 0 now; docs/finite_strain.md Sect. 14)."""
+    predictor of a step that begins to turn them (u~, and ``u`` in the solver's variables), if that
+    meets every prescribed value of the step (no support stays behind: the bodies turn whole), else
+    None (``u`` then holds nothing of use). A rigid turn of the whole is predicted exactly; the
+    tangent's response (:func:`_elastic_change`) turns by the chord and strains the bodies by about
+    half the angle squared (the pressed blocks of tests/test_rotation.py searched ``"newton"``: 104
+    Newton steps for their first 9-degree turn, 0 now; docs/finite_strain.md Sect. 14)."""
     if not state.turns_to(step.rotation):
         return None
     turned = fem.Function(problem.V)
     turned.x.array[:] = state.turned(step.translation, step.rotation, problem.V.tabulate_dof_coordinates()).ravel()
-    u = problem.solver_variables(turned, problem.A.createVecRight())
+    problem.solver_variables(turned, u)
     u.axpy(1.0, problem.shift)
     rows = problem.hyperelastic.prescribed
     prescribed = problem.load.array_r[rows]
     off = problem.comm.allreduce(float(np.abs(u.array_r[rows] - prescribed).max(initial=0.0)), op=MPI.MAX)
-    u.destroy()
     size = problem.comm.allreduce(float(np.abs(prescribed).max(initial=0.0)), op=MPI.MAX)
     return turned if off <= TURNED_WHOLE * max(size, problem.position_scale()) else None
 
@@ -757,10 +757,11 @@ def _continue(problem: ContactProblem, step: LoadStep, u: PETSc.Vec, state: Path
                      step.fit_fraction)
     factor = extrapolate or state.extrapolation(step.load, step.translation, step.rotation, turns_only=False)
     if problem.hyperelastic is not None and not problem.follows_geometry:
-        predicted = _extrapolated(problem, step, state, factor) if factor > 0.0 else _turned_on(problem, step, state)
-        if predicted is not None:
-            problem.solver_variables(predicted, u)
+        if factor > 0.0:
+            problem.solver_variables(_extrapolated(problem, step, state, factor), u)
             u.axpy(1.0, problem.shift)
+            return True
+        if _turned_on(problem, step, state, u) is not None:
             return True
     _carried(problem, u, state)
     return False
