@@ -170,12 +170,13 @@ def test_the_50_percent_compression_with_the_wider_face_as_slave_searched_newton
     the wider one, so its face, the slave, reaches past the lower block's edge (by 4-16 mm; facets
     0.14 m wide), and the facets there are covered in part. With the dual basis of the whole facet
     their nodes' weights D_ii fell through zero and the path failed at its ninth step
-    (docs/finite_strain.md Sect. 22); with that of the covered part no step is cut, every step but the
-    last takes at most 8 Newton steps (the issue's bound; measured 3-5 on 1-3 ranks), and the last one
-    is the closed form to 1e-8 of the travel with no tangential force (1e-10 of the normal). The last
-    step ends where the faces' edges coincide, a kink of D and M; with the clipping band
-    (segments.CLIP_BAND) its count is 9, 7, 9 on 1, 2, 3 ranks (before 7, 14, 10: the symmetry edges'
-    side picked by round-off), held by a regression guard of 10 (the issue's 8 not met on 1 and 3)."""
+    (docs/finite_strain.md Sect. 22); with that of the covered part no step is cut and every step takes
+    at most 8 Newton steps (the issue's bound), and the last one is the closed form to 1e-8 of the
+    travel with no tangential force (1e-10 of the normal). The last step ends where the faces' edges
+    coincide, a kink of D and M: it took 7, 14, 10 Newton steps on 1, 2, 3 ranks with the symmetry
+    edges' side picked by round-off, 9, 7, 9 with the clipping band (segments.CLIP_BAND), and takes
+    7, 8, 8 (steps before it 3-5) with the covered part's basis for every facet short of whole cover
+    (before, not within 1e-9 of its area: a jump of D and M that the tail's iterates crossed)."""
     comm = MPI.COMM_WORLD
     data = tomllib.loads((DATA / "stacked_50.toml").read_text())
     data["contacts"][0]["search"] = "newton"
@@ -183,7 +184,7 @@ def test_the_50_percent_compression_with_the_wider_face_as_slave_searched_newton
     assert code == 0, summary["status"]
     newton = [step["iterations"] for step in summary["steps"]]
     cut = [step["step"] for step in summary["steps"] if any("substep" in e for e in step["history"])]
-    assert max(newton[:-1]) <= 8 and newton[-1] <= 10 and not cut, (newton, cut)
+    assert max(newton) <= 8 and not cut, (newton, cut)
     _check_the_end(summary, mpi_tmp_path, "stacked_50.toml")
 
 

@@ -12,8 +12,11 @@ CMAME 2013),
     D_p = A F_p,   M_p = A G_p   (per facet pair p of the facet, S the union of its segments S_p),
 
 so that int_S psi_i phi_k = delta_ik F_k: D_ii = int_S phi_i, the covered share of the node's area,
-the rows of M sum to D, and a linear field is reproduced over S. A facet covered whole keeps the
-whole facet's basis. F, G, H are :func:`~contactqvi.contact.segments.basis_integrals`.
+the rows of M sum to D, and a linear field is reproduced over S. A facet whose segments add up to
+its whole area keeps the whole facet's basis; one short of it by any amount, round-off included,
+takes (22.1), which tends to the whole facet's basis as the cover closes: no switch of basis at a
+sliver (one counted whole below 1e-9 of its area left the 50 % compression's last step a linear
+tail, docs/finite_strain.md Sect. 22). F, G, H are :func:`~contactqvi.contact.segments.basis_integrals`.
 
 A depends on every pair of its facet; its derivative is a sum of one term per pair, of that pair's
 own vertices,
@@ -38,11 +41,9 @@ import numpy as np
 
 from contactqvi.contact.facets import facet_areas
 
-__all__ = ["FULL_COVER", "NO_COVER", "CoveredBasis", "CoveredDerivatives", "covered_basis", "covered_entries"]
+__all__ = ["NO_COVER", "CoveredBasis", "CoveredDerivatives", "covered_basis", "covered_entries"]
 
-#: A slave facet whose segments cover less than 1 - this of its area is covered in part ...
-FULL_COVER = 1e-9
-#: ... and one covered by less than this fraction of its area couples nothing (its covered part's
+#: A slave facet covered by less than this fraction of its area couples nothing (its covered part's
 #: mass matrix is singular to round-off).
 NO_COVER = 1e-6
 
@@ -103,7 +104,7 @@ def covered_basis(slave_x: np.ndarray, master_x: np.ndarray, pairs_s: np.ndarray
     area = facet_areas(slave_x)
     covered = np.zeros(len(area))
     np.add.at(covered, pairs_s, D.sum(axis=1))  # sum_i psi_i = 1: the segments' area
-    partly = np.flatnonzero(covered[pairs_s] < (1.0 - FULL_COVER) * area[pairs_s])
+    partly = np.flatnonzero(covered[pairs_s] < area[pairs_s])
     if len(partly) == 0:
         return D, M, None
     F, G, H = integrals(pairs_s[partly], master_x[partly])
