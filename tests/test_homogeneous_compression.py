@@ -176,7 +176,8 @@ def test_the_50_percent_compression_with_the_wider_face_as_slave_searched_newton
     coincide, a kink of D and M: it took 7, 14, 10 Newton steps on 1, 2, 3 ranks with the symmetry
     edges' side picked by round-off, 9, 7, 9 with the clipping band (segments.CLIP_BAND), and takes
     7, 8, 8 (steps before it 3-5) with the covered part's basis for every facet short of whole cover
-    (before, not within 1e-9 of its area: a jump of D and M that the tail's iterates crossed)."""
+    (before, a facet covered to within 1e-9 of its area took the whole facet's basis: a jump of D and M
+    that the tail's iterates crossed)."""
     comm = MPI.COMM_WORLD
     data = tomllib.loads((DATA / "stacked_50.toml").read_text())
     data["contacts"][0]["search"] = "newton"

@@ -83,8 +83,9 @@ QUADRILATERAL_DEGREE = 20
 #: below: cut by the sign of that, the segment was bounded by the master's edge or by the slave's, the
 #: same polygon with other derivatives, a kink every iterate sat on with its side picked by round-off
 #: (the 50 % compression's last step: a linear tail, 7 / 14 / 10 Newton steps on 1 / 2 / 3 ranks, now
-#: 9 / 7 / 9; docs/finite_strain.md Sect. 22). The sliver a polygon left whole can reach past the edge
-#: is 1e-10 of it: an overlap of that much changes D and M by that share of a facet.
+#: 9 / 7 / 9, and 7 / 8 / 8 with covered.covered_basis taken at any sliver; docs/finite_strain.md
+#: Sect. 22). The sliver a polygon left whole can reach past the edge is 1e-10 of it: an overlap of
+#: that much changes D and M by that share of a facet.
 CLIP_BAND = 1e-10
 #: Degree of the rule for a pair of biquadratic (9-node) parallelograms: Φ_i N_j^m is of degree 4 in
 #: each facet's reference coordinates, affine in the plane's, so of degree 8 on a flat pair (exact).
