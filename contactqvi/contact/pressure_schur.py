@@ -143,6 +143,9 @@ class PressureSchur(PETScOwner):
         self._condensed: PETSc.KSP | None = None  # J's own solver (:meth:`solve`)
         self._padded: tuple[PETSc.Vec, PETSc.Vec] = ()
         self._constrained = False
+        self._held = np.empty(0, dtype=np.int32)  # J's layout: the contact rows (:meth:`set_constraint`)
+        #: the Krylov iterations of each solve of the uncondensed system in the last :meth:`solve`
+        self.rounds: list[int] = []
         #: after a constrained :meth:`solve`: the linearised constraint's residual e_p / V_a that the
         #: solve left at the owned nodes (the Newton step's volume ratios take it, Sect. 7)
         self.missed = np.empty(0)
@@ -241,14 +244,16 @@ class PressureSchur(PETScOwner):
         self.augmented.setUp()
         self._rhs, self._solution = self.augmented.createVecs()
 
-    def set_constraint(self, pressure: np.ndarray | None) -> None:
+    def set_constraint(self, pressure: np.ndarray | None, contact: np.ndarray) -> None:
         """The mixed Newton method's linearised constraint for the next :meth:`solve`: ``pressure`` =
         U''(theta_a) (Jbar_a - theta_a) at the owned nodes, the pressure that its force g = L ``pressure``
         in the right-hand side stands for (docs/nearly_incompressible.md, Sect. 7), or None (the
-        condensed method, linear bodies)."""
+        condensed method, linear bodies); ``contact``: the owned local blocks (nodes) of the contact
+        rows, where J's residual must meet the test as well."""
         self._constrained = pressure is not None
         if self._constrained:
             self._pressure.c.array[:] = pressure
+            self._held = (3 * np.asarray(contact, dtype=np.int32)[:, None] + np.arange(3, dtype=np.int32)).ravel()
 
     def solve(self, ksp: PETSc.KSP, rhs: PETSc.Vec, du: PETSc.Vec) -> tuple[PETSc.KSP, int]:
         """du of J du = rhs (after :meth:`update`) by ``ksp`` (whose PC :meth:`context` is) on the
@@ -259,14 +264,16 @@ class PressureSchur(PETScOwner):
         rhs = (rhs + L c_p, -Lambda D^-1 c_p) with c_p = U''(theta) (Jbar - theta), so the uncondensed
         residual is that of the (u, theta) Newton system with the constraint's rows in the merit
         function's weights (Lambda D^-1 c_p = w (Jbar - theta), w_a = mu_a V_a^(2/3), (7.3)), and rtol
-        is the inexact Newton test in the merit's own norm. One solve, from (du, D P du + c_p).
+        is the inexact Newton test in the merit's own norm, from (du, D P du + c_p); J's residual must
+        meet it as well at the contact rows (below), whose laws take their forces from it.
 
         *Otherwise* the test is ||rhs - J du|| <= rtol ||rhs|| on the condensed residual, from (du, D P du).
 
         The uncondensed residual (e_u, Lambda e_p) leaves J's residual e_u + L D e_p: the pressure rows'
         residual e_p comes back multiplied by the bulk modulus. So the solve goes on, from where it
         stopped, with the uncondensed tolerance cut by what J's residual still misses (times
-        :data:`MARGIN`), until J's residual meets rtol (at most :data:`ROUNDS` times).
+        :data:`MARGIN`), until J's residual meets rtol (at most :data:`ROUNDS` times): over every row,
+        or in the mixed method over the contact rows (docs/nearly_incompressible.md, Sect. 7).
 
         If the uncondensed solve fails, J itself is solved with the same sweep (:meth:`apply` to (r, 0),
         the Woodbury formula with S~), from ``du`` as given: an iterate far from equilibrium can carry a
@@ -279,23 +286,24 @@ class PressureSchur(PETScOwner):
         self._set_start(rhs, du)
         ksp.setOperators(self.augmented)
         rtol = ksp.getTolerances()[0]
-        target, iterations = rtol * rhs.norm(), 0
+        target, self.rounds = rtol * rhs.norm(), []
         for _ in range(ROUNDS):
             ksp.solve(self._rhs, self._solution)
-            iterations += ksp.getIterationNumber()
+            self.rounds.append(ksp.getIterationNumber())
             self._split(self._solution, du, q.x)
-            if self._constrained:
-                self._set_missed(du, q.x, ksp.getConvergedReason() >= 0)
-            if ksp.getConvergedReason() < 0 or self._constrained:
+            if ksp.getConvergedReason() < 0:
                 break
             self._J.mult(du, d.y)
             d.y.aypx(-1.0, rhs)
-            missed = d.y.norm()
+            missed = self._held_norm(d.y) if self._constrained else d.y.norm()
             if missed <= target:
                 break
             ksp.setTolerances(rtol=ksp.getTolerances()[0] * MARGIN * target / missed)
             ksp.setInitialGuessNonzero(True)
         ksp.setTolerances(rtol=rtol)
+        if self._constrained:
+            self._set_missed(du, q.x, ksp.getConvergedReason() >= 0)
+        iterations = sum(self.rounds)
         if ksp.getConvergedReason() >= 0:
             return ksp, iterations
         condensed = self._condensed_solver(ksp)
@@ -305,6 +313,11 @@ class PressureSchur(PETScOwner):
         d.start.copy(du)
         condensed.solve(rhs, du)
         return condensed, iterations + condensed.getIterationNumber()
+
+    def _held_norm(self, residual: PETSc.Vec) -> float:
+        """||J's residual|| over the contact rows of :meth:`set_constraint` (collective)."""
+        local = float(np.sum(residual.array_r[self._held] ** 2))
+        return float(np.sqrt(residual.getComm().tompi4py().allreduce(local)))
 
     def _set_start(self, rhs: PETSc.Vec, du: PETSc.Vec) -> None:
         """The uncondensed right-hand side and start of :meth:`solve` (``du`` kept in the work vector

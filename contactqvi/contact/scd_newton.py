@@ -593,8 +593,7 @@ class SCDNewtonSolver(PETScOwner):
         self._constraint = None
         if self._carried is not None:
             self._newton.mult_add_D(self._constraint_force(u), w.rhs)
-            if not self.problem.law.frictional:  # docs/nearly_incompressible.md, Sect. 7: J's test with friction
-                self._constraint = self._carried.constraint_pressure()
+            self._constraint = self._carried.constraint_pressure()
         w.rhs.scale(-1.0)
         w.du.set(0.0)
         self._rhs_ratio = 1.0
@@ -646,7 +645,7 @@ class SCDNewtonSolver(PETScOwner):
             system = self.problem.hyperelastic
             self.step_solver.pressure.set_mass(None if system is None else system.mass_term())
             self.step_solver.pressure.update(J, self._newton, self.problem.to_global, self._eliminated)
-            self.step_solver.pressure.set_constraint(self._constraint)
+            self.step_solver.pressure.set_constraint(self._constraint, self.problem.contact_blk)
         reason = self.step_solver.solve(J, self._newton.change, kinds, w.rhs, w.du, tol, self._rhs_ratio)
         pressure = self.step_solver.pressure
         self._missed = None if pressure is None or self._constraint is None or self.step_solver.fallback else \
@@ -827,6 +826,8 @@ class SCDNewtonSolver(PETScOwner):
                 reason = self.linear_solve(J, kinds, entry["tol"])
             entry.update(krylov_iterations=self.step_solver.iterations, ksp_reason=self.step_solver.reason,
                          **self.step_solver.fallback)
+            if self.step_solver.pressure is not None and len(self.step_solver.pressure.rounds) > 1:
+                entry["krylov_rounds"] = list(self.step_solver.pressure.rounds)
             result.inner_iterations += entry["krylov_iterations"]
             if reason < 0:
                 result.status = Status.DIVERGED_LINEAR_SOLVE
