@@ -135,6 +135,15 @@ class NewtonStepSolver(PETScOwner):
         """Name of the last solve's converged reason (e.g. ``CONVERGED_RTOL``)."""
         return ksp_converged_reason(self._solved_by)
 
+    def record(self) -> dict[str, typing.Any]:
+        """The last solve's part of a Newton step's history: ``krylov_iterations``, ``ksp_reason``,
+        :attr:`fallback`'s entries and, where :attr:`pressure` solved the uncondensed system more than
+        once, ``krylov_rounds`` (each solve's iterations)."""
+        record = {"krylov_iterations": self.iterations, "ksp_reason": self.reason, **self.fallback}
+        if self.pressure is not None and len(self.pressure.rounds) > 1:
+            record["krylov_rounds"] = list(self.pressure.rounds)
+        return record
+
     def solve(self, J: PETSc.Mat, change: PETSc.Mat, kinds: np.ndarray, rhs: PETSc.Vec, du: PETSc.Vec, tol: float,
               rhs_ratio: float = 1.0) -> int:  # fmt: skip
         """Solve J du = rhs to ``tol`` (Sect. 7); returns the KSP's converged reason.

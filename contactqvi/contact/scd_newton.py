@@ -824,10 +824,7 @@ class SCDNewtonSolver(PETScOwner):
             entry["tol"] = self.forcing_term(point.norm, None if last is None else last.norm, settled, own_target)
             with result.timings.phase("linear_solve"):
                 reason = self.linear_solve(J, kinds, entry["tol"])
-            entry.update(krylov_iterations=self.step_solver.iterations, ksp_reason=self.step_solver.reason,
-                         **self.step_solver.fallback)
-            if self.step_solver.pressure is not None and len(self.step_solver.pressure.rounds) > 1:
-                entry["krylov_rounds"] = list(self.step_solver.pressure.rounds)
+            entry.update(self.step_solver.record())
             result.inner_iterations += entry["krylov_iterations"]
             if reason < 0:
                 result.status = Status.DIVERGED_LINEAR_SOLVE
