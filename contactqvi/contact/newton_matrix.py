@@ -125,9 +125,14 @@ class NewtonMatrix(PETScOwner):
         self._holds_J = True
         return self.J
 
+    @property
+    def contact_dofs(self) -> np.ndarray:
+        """Owned local dofs (rows) of the contact nodes, node by node."""
+        return _contact_dofs_loc(self._contact_blk)
+
     def fixed_dofs(self, fixed: np.ndarray) -> np.ndarray:
         """Owned local dofs of the contact components marked in ``fixed`` ((m, 3) bool)."""
-        return _contact_dofs_loc(self._contact_blk)[fixed.ravel()]
+        return self.contact_dofs[fixed.ravel()]
 
     def restore(self) -> None:
         """Write A's kept values back into its storage: the object holds A again, bit for bit."""

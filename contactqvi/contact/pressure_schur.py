@@ -143,7 +143,6 @@ class PressureSchur(PETScOwner):
         self._condensed: PETSc.KSP | None = None  # J's own solver (:meth:`solve`)
         self._padded: tuple[PETSc.Vec, PETSc.Vec] = ()
         self._constrained = False
-        self._held = np.empty(0, dtype=np.int32)  # J's layout: the contact rows (:meth:`set_constraint`)
         #: the Krylov iterations of each solve of the uncondensed system in the last :meth:`solve`
         self.rounds: list[int] = []
         #: after a constrained :meth:`solve`: the linearised constraint's residual e_p / V_a that the
@@ -244,16 +243,14 @@ class PressureSchur(PETScOwner):
         self.augmented.setUp()
         self._rhs, self._solution = self.augmented.createVecs()
 
-    def set_constraint(self, pressure: np.ndarray | None, contact: np.ndarray) -> None:
+    def set_constraint(self, pressure: np.ndarray | None) -> None:
         """The mixed Newton method's linearised constraint for the next :meth:`solve`: ``pressure`` =
         U''(theta_a) (Jbar_a - theta_a) at the owned nodes, the pressure that its force g = L ``pressure``
         in the right-hand side stands for (docs/nearly_incompressible.md, Sect. 7), or None (the
-        condensed method, linear bodies); ``contact``: the owned local blocks (nodes) of the contact
-        rows, where J's residual must meet the test as well."""
+        condensed method, linear bodies)."""
         self._constrained = pressure is not None
         if self._constrained:
             self._pressure.c.array[:] = pressure
-            self._held = (3 * np.asarray(contact, dtype=np.int32)[:, None] + np.arange(3, dtype=np.int32)).ravel()
 
     def solve(self, ksp: PETSc.KSP, rhs: PETSc.Vec, du: PETSc.Vec) -> tuple[PETSc.KSP, int]:
         """du of J du = rhs (after :meth:`update`) by ``ksp`` (whose PC :meth:`context` is) on the
@@ -295,7 +292,7 @@ class PressureSchur(PETScOwner):
                 break
             self._J.mult(du, d.y)
             d.y.aypx(-1.0, rhs)
-            missed = self._held_norm(d.y) if self._constrained else d.y.norm()
+            missed = self._contact_norm(d.y) if self._constrained else d.y.norm()
             if missed <= target:
                 break
             ksp.setTolerances(rtol=ksp.getTolerances()[0] * MARGIN * target / missed)
@@ -314,9 +311,9 @@ class PressureSchur(PETScOwner):
         condensed.solve(rhs, du)
         return condensed, iterations + condensed.getIterationNumber()
 
-    def _held_norm(self, residual: PETSc.Vec) -> float:
-        """||J's residual|| over the contact rows of :meth:`set_constraint` (collective)."""
-        local = float(np.sum(residual.array_r[self._held] ** 2))
+    def _contact_norm(self, residual: PETSc.Vec) -> float:
+        """||J's residual|| over the contact nodes' rows (collective)."""
+        local = float(np.sum(residual.array_r[self._newton.contact_dofs] ** 2))
         return float(np.sqrt(residual.getComm().tompi4py().allreduce(local)))
 
     def _set_start(self, rhs: PETSc.Vec, du: PETSc.Vec) -> None:

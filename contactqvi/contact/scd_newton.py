@@ -645,7 +645,7 @@ class SCDNewtonSolver(PETScOwner):
             system = self.problem.hyperelastic
             self.step_solver.pressure.set_mass(None if system is None else system.mass_term())
             self.step_solver.pressure.update(J, self._newton, self.problem.to_global, self._eliminated)
-            self.step_solver.pressure.set_constraint(self._constraint, self.problem.contact_blk)
+            self.step_solver.pressure.set_constraint(self._constraint)
         reason = self.step_solver.solve(J, self._newton.change, kinds, w.rhs, w.du, tol, self._rhs_ratio)
         pressure = self.step_solver.pressure
         self._missed = None if pressure is None or self._constraint is None or self.step_solver.fallback else \
