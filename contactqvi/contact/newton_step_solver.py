@@ -113,7 +113,7 @@ class NewtonStepSolver(PETScOwner):
         self.ksp = create_ksp(comm, prefix, self._options, rtol=rtol)
         self.pressure = pressure
         if pressure is not None:
-            self.ksp.getPC().setPythonContext(pressure.context())
+            pressure.attach(self.ksp)
         self.reuse_pc, self.rebuild_iterations, self.initial_guess = reuse_pc, rebuild_iterations, initial_guess
         self._rebuilds = _smoothed_aggregation(prefix, self._options)
         self.galerkin: GalerkinUpdate | None = None
@@ -137,11 +137,12 @@ class NewtonStepSolver(PETScOwner):
 
     def record(self) -> dict[str, typing.Any]:
         """The last solve's part of a Newton step's history: ``krylov_iterations``, ``ksp_reason``,
-        :attr:`fallback`'s entries and, where :attr:`pressure` solved the uncondensed system more than
-        once, ``krylov_rounds`` (each solve's iterations)."""
+        :attr:`fallback`'s entries and, where :attr:`pressure`'s Krylov method went on past the
+        uncondensed system's own test, ``krylov_uncondensed`` (the iterations to that test)."""
         record = {"krylov_iterations": self.iterations, "ksp_reason": self.reason, **self.fallback}
-        if self.pressure is not None and len(self.pressure.rounds) > 1:
-            record["krylov_rounds"] = list(self.pressure.rounds)
+        first = None if self.pressure is None else self.pressure.uncondensed_iterations
+        if first is not None and first < self.iterations:
+            record["krylov_uncondensed"] = first
         return record
 
     def solve(self, J: PETSc.Mat, change: PETSc.Mat, kinds: np.ndarray, rhs: PETSc.Vec, du: PETSc.Vec, tol: float,

@@ -95,9 +95,9 @@ SCHUR_SCALE = 0.5
 #: the 2-ring of cells around it, as terms cancelled to round-off (bulk over shear modulus times
 #: eps of their row); the V-cycle takes J_r without its entries below this fraction of their row.
 CANCELLED = 1e-9
-#: :meth:`PressureSchur.solve`: the Krylov solves of the uncondensed system per Newton step, at most,
-#: and the margin of the tolerance each later one is cut by.
-ROUNDS, MARGIN = 4, 0.5
+#: :meth:`PressureSchur.converged`: an uncondensed residual this fraction of its right-hand side ends
+#: the solve whatever J's residual: round-off, beyond which the Krylov method gains nothing.
+ROUND_OFF = 1e-13
 
 
 class PressureSchur(PETScOwner):
@@ -143,8 +143,12 @@ class PressureSchur(PETScOwner):
         self._condensed: PETSc.KSP | None = None  # J's own solver (:meth:`solve`)
         self._padded: tuple[PETSc.Vec, PETSc.Vec] = ()
         self._constrained = False
-        #: the Krylov iterations of each solve of the uncondensed system in the last :meth:`solve`
-        self.rounds: list[int] = []
+        self._trial: PETSc.Vec | None = None  # the iterate :meth:`converged` builds
+        # :meth:`converged`'s tests, set by :meth:`solve`: the uncondensed residual's and J's
+        self._tests = _Tests()
+        #: the Krylov iteration of the last :meth:`solve` at which the uncondensed residual met rtol
+        #: (None: never)
+        self.uncondensed_iterations: int | None = None
         #: after a constrained :meth:`solve`: the linearised constraint's residual e_p / V_a that the
         #: solve left at the owned nodes (the Newton step's volume ratios take it, Sect. 7)
         self.missed = np.empty(0)
@@ -153,7 +157,7 @@ class PressureSchur(PETScOwner):
         viscous = [] if self._local is self._static else [self._local]
         return [self.cycle, self.P, self._full, self._kept, self.reduced, self._shear_volume, self._scales,
                 self._static, *viscous, self._schur, self._schur_solver, self._pressure, self._displacement,
-                self.augmented, self._rhs, self._solution, self._condensed, *self._padded]
+                self.augmented, self._rhs, self._solution, self._trial, self._condensed, *self._padded]
 
     def _summed(self, mass: tuple[float, typing.Any] | None) -> PETSc.Mat:
         """s S_loc(c) of :func:`~contactqvi.contact.local_schur.local_schur` for the mass term ``mass``."""
@@ -242,6 +246,7 @@ class PressureSchur(PETScOwner):
                                                   _Operator(self._mult), comm=J.getComm())
         self.augmented.setUp()
         self._rhs, self._solution = self.augmented.createVecs()
+        self._trial = self._rhs.duplicate()
 
     def set_constraint(self, pressure: np.ndarray | None) -> None:
         """The mixed Newton method's linearised constraint for the next :meth:`solve`: ``pressure`` =
@@ -267,10 +272,9 @@ class PressureSchur(PETScOwner):
         *Otherwise* the test is ||rhs - J du|| <= rtol ||rhs|| on the condensed residual, from (du, D P du).
 
         The uncondensed residual (e_u, Lambda e_p) leaves J's residual e_u + L D e_p: the pressure rows'
-        residual e_p comes back multiplied by the bulk modulus. So the solve goes on, from where it
-        stopped, with the uncondensed tolerance cut by what J's residual still misses (times
-        :data:`MARGIN`), until J's residual meets rtol (at most :data:`ROUNDS` times): over every row,
-        or in the mixed method over the contact rows (docs/nearly_incompressible.md, Sect. 7).
+        residual e_p comes back multiplied by the bulk modulus. So the Krylov method goes on past its own
+        test until J's residual meets rtol as well (:meth:`converged`): over every row, or in the mixed
+        method over the contact rows (docs/nearly_incompressible.md, Sect. 7).
 
         If the uncondensed solve fails, J itself is solved with the same sweep (:meth:`apply` to (r, 0),
         the Woodbury formula with S~), from ``du`` as given: an iterate far from equilibrium can carry a
@@ -282,26 +286,17 @@ class PressureSchur(PETScOwner):
         q, d = self._pressure, self._displacement
         self._set_start(rhs, du)
         ksp.setOperators(self.augmented)
-        rtol = ksp.getTolerances()[0]
-        target, self.rounds = rtol * rhs.norm(), []
-        for _ in range(ROUNDS):
-            ksp.solve(self._rhs, self._solution)
-            self.rounds.append(ksp.getIterationNumber())
-            self._split(self._solution, du, q.x)
-            if ksp.getConvergedReason() < 0:
-                break
-            self._J.mult(du, d.y)
-            d.y.aypx(-1.0, rhs)
-            missed = self._contact_norm(d.y) if self._constrained else d.y.norm()
-            if missed <= target:
-                break
-            ksp.setTolerances(rtol=ksp.getTolerances()[0] * MARGIN * target / missed)
-            ksp.setInitialGuessNonzero(True)
-        ksp.setTolerances(rtol=rtol)
+        rtol, atol = ksp.getTolerances()[:2]
+        rhs_norm = self._rhs.norm()
+        self._tests = _Tests(max(rtol * rhs_norm, atol), rtol * rhs.norm(), ROUND_OFF * rhs_norm, rhs)
+        self.uncondensed_iterations = None
+        ksp.solve(self._rhs, self._solution)
+        self._split(self._solution, du, q.x)
+        converged = ksp.getConvergedReason() >= 0
         if self._constrained:
-            self._set_missed(du, q.x, ksp.getConvergedReason() >= 0)
-        iterations = sum(self.rounds)
-        if ksp.getConvergedReason() >= 0:
+            self._set_missed(du, q.x, converged)
+        iterations = ksp.getIterationNumber()
+        if converged:
             return ksp, iterations
         condensed = self._condensed_solver(ksp)
         condensed.setOperators(self._J)
@@ -311,8 +306,33 @@ class PressureSchur(PETScOwner):
         condensed.solve(rhs, du)
         return condensed, iterations + condensed.getIterationNumber()
 
-    def _contact_norm(self, residual: PETSc.Vec) -> float:
-        """||J's residual|| over the contact nodes' rows (collective)."""
+    def converged(self, ksp: PETSc.KSP, its: int, rnorm: float) -> int:
+        """The convergence test of :meth:`solve`'s Krylov method (a petsc4py KSP convergence test; its
+        iteration ``its``, ``rnorm`` the uncondensed residual's norm): converged once rnorm meets rtol and
+        J's residual of the iterate (built only then) does too, or once rnorm is down to
+        :data:`ROUND_OFF`. Returns the KSP's converged reason (0: go on)."""
+        reasons = PETSc.KSP.ConvergedReason
+        tests = self._tests
+        if not np.isfinite(rnorm):
+            return reasons.DIVERGED_NANORINF
+        if rnorm > tests.uncondensed:
+            return reasons.ITERATING
+        if self.uncondensed_iterations is None:
+            self.uncondensed_iterations = its
+        if rnorm <= tests.round_off:
+            return reasons.CONVERGED_ATOL
+        ksp.buildSolution(self._trial)
+        self._split(self._trial, self._displacement.x, self._pressure.y)
+        return reasons.CONVERGED_RTOL if self._missed(self._displacement.x) <= tests.condensed else reasons.ITERATING
+
+    def _missed(self, du: PETSc.Vec) -> float:
+        """The norm of J's residual of ``du`` over the rows of J's test: the contact nodes' in the mixed
+        method, else every row (collective)."""
+        residual = self._displacement.y
+        self._J.mult(du, residual)
+        residual.aypx(-1.0, self._tests.rhs)
+        if not self._constrained:
+            return residual.norm()
         local = float(np.sum(residual.array_r[self._newton.contact_dofs] ** 2))
         return float(np.sqrt(residual.getComm().tompi4py().allreduce(local)))
 
@@ -421,9 +441,11 @@ class PressureSchur(PETScOwner):
             values[:n] = u.array_r
             values[n:] = p.array_r
 
-    def context(self) -> _Context:
-        """The context of a petsc4py ``python`` PC that applies :meth:`apply`."""
-        return _Context(self.apply)
+    def attach(self, ksp: PETSc.KSP) -> None:
+        """Make ``ksp`` (FGMRES with a ``python`` PC) :meth:`solve`'s Krylov method: its PC applies
+        :meth:`apply`, its convergence test is :meth:`converged`."""
+        ksp.getPC().setPythonContext(_Context(self.apply))
+        ksp.setConvergenceTest(self.converged)
 
 
 @dataclasses.dataclass
@@ -460,6 +482,17 @@ class _Scales(VectorSet):
     modulus: PETSc.Vec
     compliance: PETSc.Vec
     force: PETSc.Vec
+
+
+class _Tests(typing.NamedTuple):
+    """:meth:`PressureSchur.converged`'s tests in one :meth:`PressureSchur.solve`: the uncondensed
+    residual's norm at most ``uncondensed`` and J's residual of J du = ``rhs`` at most ``condensed``, or
+    the uncondensed residual's at most ``round_off``."""
+
+    uncondensed: float = 0.0
+    condensed: float = 0.0
+    round_off: float = 0.0
+    rhs: PETSc.Vec | None = None
 
 
 class _Operator:
