@@ -29,6 +29,7 @@ from contactqvi.case import parse_case
 from contactqvi.contact import LoadStep, build_contact_problem, solve_load_path
 from contactqvi.contact.hyperelastic import create_hyperelastic_system
 from contactqvi.contact.local_schur import local_schur
+from contactqvi.contact.pressure_schur import ROUND_OFF, PressureSchur
 from contactqvi.contact.scd_newton import checked_parameters
 from contactqvi.elasticity import elasticity_forms
 from contactqvi.laws import Coulomb, Frictionless
@@ -412,6 +413,39 @@ def test_frictional_nearly_incompressible_newton_steps():
     assert all(r.inner_iterations <= 40 * r.iterations for r in default), [r.inner_iterations for r in default]
     exact = _frictional_block_steps({"pressure_pc_type": "lu"})
     assert all(r.converged and r.iterations <= 10 for r in exact), [(r.status, r.iterations) for r in exact]
+
+
+def test_pressure_schur_solves_meet_both_tests(monkeypatch):
+    """Every Krylov solve of ``pc = "pressure_schur"`` on the frictional wavy block (the mixed method)
+    ends where both tests of PressureSchur.converged hold, by residuals computed anew from the solve's
+    result: the uncondensed residual within rtol of its right-hand side, and J's residual over the
+    contact nodes' rows within rtol of J's right-hand side, unless the uncondensed residual is down to
+    round-off (docs/nearly_incompressible.md Sect. 7)."""
+    ratios = []
+    solve = PressureSchur.solve
+
+    def checked(self: PressureSchur, ksp: PETSc.KSP, rhs: PETSc.Vec, du: PETSc.Vec):
+        solved_by, iterations = solve(self, ksp, rhs, du)
+        if solved_by is ksp:  # not J's own solve after a failed one
+            rtol, comm = ksp.getTolerances()[0], rhs.getComm().tompi4py()
+            residual, condensed = self.augmented.createVecLeft(), rhs.duplicate()
+            self.augmented.mult(ksp.getSolution(), residual)
+            residual.aypx(-1.0, ksp.getRhs())
+            self._J.mult(du, condensed)  # the Newton matrix the solve took (not owned here)
+            condensed.aypx(-1.0, rhs)
+            contact = np.sqrt(comm.allreduce(float(np.sum(condensed.array_r[self._newton.contact_dofs] ** 2))))
+            ratios.append((residual.norm() / ksp.getRhs().norm(), contact / (rtol * rhs.norm()), rtol))
+            residual.destroy()
+            condensed.destroy()
+        return solved_by, iterations
+
+    monkeypatch.setattr(PressureSchur, "solve", checked)
+    results = _frictional_block_steps({})
+    assert all(r.converged for r in results)
+    assert len(ratios) == sum(r.iterations for r in results), len(ratios)
+    assert all(uncondensed <= 1.001 * rtol for uncondensed, _, rtol in ratios), ratios
+    assert all(contact <= 1.001 or uncondensed <= ROUND_OFF for uncondensed, contact, _ in ratios), ratios
+    assert any(uncondensed <= 0.1 * rtol for uncondensed, _, rtol in ratios), ratios  # J's test decided
 
 
 def test_pressure_schur_krylov_counts_grow_far_less_than_gamg():
