@@ -46,6 +46,7 @@ class NewtonMatrix(PETScOwner):
 
     Attributes:
         J: the Newton matrix: the object ``A`` itself, whatever it holds now.
+        contact_dofs: owned local dofs (rows) of the contact nodes, node by node.
         rows: J on the rows it shares with no other matrix (the contact dofs and their
             neighbours; A's layout, zero rows elsewhere), as of the last :meth:`assemble`.
         change: J of this :meth:`assemble` minus J of the previous one (A before the
@@ -55,6 +56,7 @@ class NewtonMatrix(PETScOwner):
     def __init__(self, A: PETSc.Mat, contact_blk: np.ndarray):
         self.J = A
         self._contact_blk = np.asarray(contact_blk, dtype=np.int64)
+        self.contact_dofs = _contact_dofs_loc(self._contact_blk)
         self._coupled = _coupled_rows(A, self._contact_blk)
         self._rows_of_A = _rows_of(A, self._coupled)
         self.rows = self._rows_of_A.duplicate(copy=True)  # J = A before the first assemble
@@ -124,11 +126,6 @@ class NewtonMatrix(PETScOwner):
         _insert_rows(self.J, rows, self.change if self._holds_J else None)
         self._holds_J = True
         return self.J
-
-    @property
-    def contact_dofs(self) -> np.ndarray:
-        """Owned local dofs (rows) of the contact nodes, node by node."""
-        return _contact_dofs_loc(self._contact_blk)
 
     def fixed_dofs(self, fixed: np.ndarray) -> np.ndarray:
         """Owned local dofs of the contact components marked in ``fixed`` ((m, 3) bool)."""

@@ -323,9 +323,9 @@ class PressureSchur(PETScOwner):
             return reasons.CONVERGED_ATOL
         ksp.buildSolution(self._trial)
         self._split(self._trial, self._displacement.x, self._pressure.y)
-        return reasons.CONVERGED_RTOL if self._missed(self._displacement.x) <= tests.condensed else reasons.ITERATING
+        return reasons.CONVERGED_RTOL if self._condensed_norm(self._displacement.x) <= tests.condensed else reasons.ITERATING
 
-    def _missed(self, du: PETSc.Vec) -> float:
+    def _condensed_norm(self, du: PETSc.Vec) -> float:
         """The norm of J's residual of ``du`` over the rows of J's test: the contact nodes' in the mixed
         method, else every row (collective)."""
         residual = self._displacement.y
